@@ -1,0 +1,87 @@
+# Shared build settings and helper functions for every liftd target.
+
+set(LIFTD_WARNINGS -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wsign-conversion -Wnon-virtual-dtor
+                   -Wold-style-cast -Woverloaded-virtual)
+if(LIFTD_WERROR)
+  list(APPEND LIFTD_WARNINGS -Werror)
+endif()
+
+if(LIFTD_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
+if(LIFTD_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "LIFTD_FUZZ needs clang (use the 'fuzz' preset)")
+  endif()
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
+  add_custom_target(fuzzers)
+endif()
+
+# liftd_add_subdirectories(<dir>): add every immediate subfolder of <dir> that has a CMakeLists.txt.
+function(liftd_add_subdirectories dir)
+  file(GLOB children LIST_DIRECTORIES true RELATIVE ${CMAKE_CURRENT_SOURCE_DIR}/${dir} ${CMAKE_CURRENT_SOURCE_DIR}/${dir}/*)
+  list(SORT children)
+  foreach(child IN LISTS children)
+    if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${dir}/${child}/CMakeLists.txt)
+      add_subdirectory(${dir}/${child})
+    endif()
+  endforeach()
+endfunction()
+
+# liftd_library(<name> SOURCES ... [DEPS ...]): a static library liftd_<name> with the project's
+# warnings, the lib/ folder as include root (#include "dcp/frame.hpp") and alias liftd::<name>.
+function(liftd_library name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_library(liftd_${name} STATIC ${ARG_SOURCES})
+  add_library(liftd::${name} ALIAS liftd_${name})
+  target_include_directories(liftd_${name} PUBLIC ${PROJECT_SOURCE_DIR}/lib)
+  target_compile_options(liftd_${name} PRIVATE ${LIFTD_WARNINGS})
+  target_link_libraries(liftd_${name} PUBLIC ${ARG_DEPS})
+  set_target_properties(liftd_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+endfunction()
+
+# liftd_executable(<name> SOURCES ... [DEPS ...] [INSTALL]): a program in build/bin.
+function(liftd_executable name)
+  cmake_parse_arguments(ARG "INSTALL" "" "SOURCES;DEPS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_compile_options(${name} PRIVATE ${LIFTD_WARNINGS})
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS})
+  if(ARG_INSTALL)
+    install(TARGETS ${name} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  endif()
+endfunction()
+
+# liftd_test(<name> SOURCES ... [DEPS ...] [LABELS ...]): a GoogleTest binary whose cases are
+# registered with CTest one by one.
+function(liftd_test name)
+  if(NOT LIFTD_TESTS)
+    return()
+  endif()
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_compile_options(${name} PRIVATE ${LIFTD_WARNINGS})
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gmock GTest::gtest_main)
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+  set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tests)
+  gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
+                       PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT 300)
+endfunction()
+
+# liftd_fuzzer(<name> SOURCES ... [DEPS ...]): a libFuzzer target, built only with LIFTD_FUZZ,
+# run for LIFTD_FUZZ_SECONDS under ctest with the label "fuzz".
+function(liftd_fuzzer name)
+  if(NOT LIFTD_FUZZ)
+    return()
+  endif()
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS})
+  target_link_options(${name} PRIVATE -fsanitize=fuzzer)
+  set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/fuzz)
+  add_dependencies(fuzzers ${name})
+  add_test(NAME ${name} COMMAND ${name} -max_total_time=${LIFTD_FUZZ_SECONDS} -seed=1 -print_final_stats=1)
+  set_tests_properties(${name} PROPERTIES LABELS fuzz TIMEOUT 600)
+endfunction()
