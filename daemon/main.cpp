@@ -1,7 +1,168 @@
-// liftd entry point (placeholder until the foundation daemon lands).
+// liftd entry point: command line, configuration, logging, then the daemon frame.
 #include <cstdio>
+#include <exception>
+#include <iostream>
+#include <string>
+#include <string_view>
+#include <vector>
 
-int main() {
-  std::puts("liftd " "0.1.0");
-  return 0;
+#include "common/version.hpp"
+#include "config/config.hpp"
+#include "daemon/cli.hpp"
+#include "daemon/daemon.hpp"
+#include "log/log.hpp"
+#include "service/notify.hpp"
+
+namespace {
+
+using liftd::daemon::CommandLine;
+namespace exit_code = liftd::daemon::exit_code;
+namespace config = liftd::config;
+namespace log = liftd::log;
+
+// Both enums use the same names ("trace".."error"); convert by name, not by position.
+log::Level to_log_level(config::LogLevel level) {
+  return log::parse_level(config::to_string(level)).value_or(log::Level::info);
+}
+
+// Prints every problem of a configuration, one per line.
+void print_problems(std::FILE* out, std::string_view path,
+                    const std::vector<config::Problem>& problems) {
+  std::fprintf(out, "liftd: %.*s: %zu problem%s:\n", static_cast<int>(path.size()), path.data(),
+               problems.size(), problems.size() == 1 ? "" : "s");
+  for (const auto& problem : problems) {
+    std::fprintf(out, "  %s\n", config::to_string(problem).c_str());
+  }
+}
+
+int check_config(const std::string& path) {
+  const auto result = config::load_file(path);
+  if (!result.ok()) {
+    print_problems(stderr, path, result.problems);
+    return exit_code::kBadConfig;
+  }
+  std::printf("%s: configuration is valid\n%s", path.c_str(),
+              config::summary(result.config).c_str());
+  return exit_code::kOk;
+}
+
+// Loads the configuration the command line names; the defaults when simulating without one.
+std::optional<config::Config> load_config(const CommandLine& cl, bool to_log) {
+  if (cl.simulate && !cl.config_path) {
+    config::Config cfg;
+    cfg.position.source = config::PositionSource::sim;
+    return cfg;
+  }
+  const std::string path = cl.config_path.value_or(std::string(liftd::daemon::kDefaultConfigPath));
+  auto result = config::load_file(path);
+  if (!result.ok()) {
+    if (to_log) {
+      for (const auto& problem : result.problems) {
+        log::event(log::Level::error, "config", "config_invalid",
+                   {{"file", path}, {"key", problem.where}}, config::to_string(problem));
+      }
+      liftd::service::Notifier::from_environment().status(
+          "configuration invalid: " + std::to_string(result.problems.size()) + " problem(s) in " +
+          path + ", see the journal or run liftd --check-config " + path);
+    } else {
+      print_problems(stderr, path, result.problems);
+    }
+    return std::nullopt;
+  }
+  if (cl.simulate) result.config.position.source = config::PositionSource::sim;
+  return result.config;
+}
+
+int run_daemon(const CommandLine& cl) {
+  log::init({cl.log_level.value_or(log::Level::info), log::Backend::automatic,
+             std::string(log::kDefaultJournalSocket), "liftd"});
+  auto cfg = load_config(cl, true);
+  if (!cfg) return exit_code::kBadConfig;
+  log::set_level(cl.log_level.value_or(to_log_level(cfg->log.level)));
+  log::event(
+      log::Level::info, "daemon", "starting",
+      {{"version", std::string(liftd::kVersion)},
+       {"config", cl.config_path.value_or(
+                      cl.simulate ? "(defaults)" : std::string(liftd::daemon::kDefaultConfigPath))},
+       {"mode", cl.simulate ? "simulate" : "drive"}},
+      "liftd " + std::string(liftd::kVersion) + " starting");
+
+  liftd::daemon::Daemon daemon(*cfg, liftd::service::Notifier::from_environment(),
+                               liftd::service::watchdog_from_environment());
+  if (cl.simulate) {
+    const std::string status = "simulated lift (DCP" + std::to_string(cfg->sim.dcp) + ", " +
+                               std::to_string(cfg->floors.size()) + " floors), no drive link yet";
+    daemon.add_component({"sim",
+                          [status, &cfg] {
+                            log::event(log::Level::info, "sim", "sim_started",
+                                       {{"dcp", std::to_string(cfg->sim.dcp)},
+                                        {"floors", std::to_string(cfg->floors.size())}},
+                                       status);
+                            return true;
+                          },
+                          [] { log::write(log::Level::info, "sim", "simulated lift stopped"); }});
+    daemon.set_running_status(status);
+  } else {
+    const std::string status =
+        "no drive link yet: " + std::string(config::to_string(cfg->drive.kind)) + " on " +
+        cfg->drive.device + " is not attached in this build";
+    daemon.add_component({"drive",
+                          [status, &cfg] {
+                            log::event(log::Level::warn, "drive", "drive_not_attached",
+                                       {{"kind", std::string(config::to_string(cfg->drive.kind))},
+                                        {"device", cfg->drive.device}},
+                                       status);
+                            return true;
+                          },
+                          {}});
+    daemon.set_running_status(status);
+  }
+  const int code = daemon.run();
+  log::event(log::Level::info, "daemon", "stopped", {{"exit_code", std::to_string(code)}},
+             "liftd stopped");
+  log::flush();
+  return code;
+}
+
+int dispatch(const CommandLine& cl) {
+  switch (cl.mode) {
+    case CommandLine::Mode::help:
+      std::fputs(liftd::daemon::usage().c_str(), stdout);
+      return exit_code::kOk;
+    case CommandLine::Mode::version:
+      std::printf("liftd %.*s\n", static_cast<int>(liftd::kVersion.size()), liftd::kVersion.data());
+      return exit_code::kOk;
+    case CommandLine::Mode::print_reference:
+      std::fputs(config::reference_markdown().c_str(), stdout);
+      return exit_code::kOk;
+    case CommandLine::Mode::check_config:
+      return check_config(*cl.config_path);
+    case CommandLine::Mode::print_config: {
+      const auto cfg = load_config(cl, false);
+      if (!cfg) return exit_code::kBadConfig;
+      std::printf("%s\n", config::to_json(*cfg).dump(2).c_str());
+      return exit_code::kOk;
+    }
+    case CommandLine::Mode::run:
+      return run_daemon(cl);
+  }
+  return exit_code::kFailure;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string_view> args(argv + 1, argv + argc);
+  const auto parsed = liftd::daemon::parse_command_line(args);
+  if (!parsed.command_line) {
+    std::fprintf(stderr, "liftd: %s\nTry liftd --help.\n", parsed.error.c_str());
+    return exit_code::kBadConfig;
+  }
+  try {
+    return dispatch(*parsed.command_line);
+  } catch (const std::exception& error) {
+    log::write(log::Level::error, "daemon", std::string("fatal: ") + error.what());
+    log::flush();
+    return exit_code::kFailure;
+  }
 }

@@ -8,6 +8,7 @@ packages=(
   libasio-dev libspdlog-dev nlohmann-json3-dev libsystemd-dev
   googletest libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev clang-format
+  python3 python3-jsonschema
 )
 
 missing=()

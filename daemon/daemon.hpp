@@ -1,0 +1,90 @@
+// The daemon's frame: an io_context on the main thread, signal handling, systemd notification
+// and watchdog, and an ordered list of components (drive link, simulator, API server, ...)
+// that are started before READY=1 and stopped in reverse order on SIGTERM/SIGINT.
+#pragma once
+
+#include <asio/io_context.hpp>
+#include <asio/signal_set.hpp>
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "config/config.hpp"
+#include "service/notify.hpp"
+
+namespace liftd::daemon {
+
+/// One part of the daemon with a start and a stop step, run on the io_context's thread.
+struct Component {
+  std::string name;             ///< shown in logs ("dcp", "sim", "api")
+  std::function<bool()> start;  ///< returns false (after logging why) when it cannot start
+  std::function<void()> stop;   ///< undoes start; called only for started components
+};
+
+/// Exit codes of the liftd process.
+namespace exit_code {
+inline constexpr int kOk = 0;         ///< clean stop on SIGTERM/SIGINT
+inline constexpr int kFailure = 1;    ///< a component failed to start or an internal error
+inline constexpr int kBadConfig = 2;  ///< bad command line or configuration
+}  // namespace exit_code
+
+/// Runs the daemon: owns the io_context (run on the calling thread), the signal set, the
+/// notifier and the watchdog.
+class Daemon {
+ public:
+  /// A daemon for `config`, notifying through `notifier`, with the watchdog timeout systemd
+  /// asked for (nullopt: no watchdog).
+  Daemon(config::Config config, service::Notifier notifier,
+         std::optional<std::chrono::microseconds> watchdog_timeout);
+  ~Daemon();
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
+
+  /// The io_context every component posts its work to.
+  asio::io_context& io() { return io_; }
+  /// The validated configuration.
+  const config::Config& config() const { return config_; }
+
+  /// Adds a component; components start in the order added, stop in reverse.
+  void add_component(Component component);
+  /// Sets the probe that gates WATCHDOG=1 (e.g. "the DCP cycle advanced since last time").
+  /// Without one, every period counts as progress.
+  void set_progress_probe(std::function<bool()> probe);
+  /// The STATUS= text sent with READY=1 once every component has started.
+  void set_running_status(std::string status);
+  /// Sends a STATUS= line now (e.g. "link fault: drive not answering").
+  void report_status(std::string_view status);
+
+  /// Starts the components, sends READY=1 and runs the io_context until a stop is requested.
+  /// Returns the process exit code.
+  int run();
+  /// Begins a clean shutdown (STOPPING=1, components stopped in reverse, run() returns `code`).
+  void request_stop(std::string_view reason, int code = exit_code::kOk);
+
+ private:
+  void wait_for_signal();
+  void on_signal(int signal_number);
+  void stop_components();
+
+  config::Config config_;
+  asio::io_context io_;
+  asio::signal_set signals_;
+  service::Notifier notifier_;
+  std::optional<std::chrono::microseconds> watchdog_timeout_;
+  std::unique_ptr<service::Watchdog> watchdog_;
+  std::function<bool()> probe_;
+  std::vector<Component> components_;
+  std::size_t started_ = 0;
+  std::string running_status_ = "running";
+  bool stopping_ = false;
+  int exit_code_ = exit_code::kOk;
+};
+
+/// The name of a signal ("SIGTERM"), for logs.
+std::string signal_name(int signal_number);
+
+}  // namespace liftd::daemon

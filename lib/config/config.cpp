@@ -1,0 +1,934 @@
+// The schema table and everything derived from it: validation, defaults, the effective-config
+// dump and the Markdown reference. Add a key by adding one entry to schema() below.
+#include "config/config.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstring>
+#include <functional>
+#include <sstream>
+
+namespace liftd::config {
+namespace {
+
+using nlohmann::json;
+
+constexpr std::array<std::string_view, 5> kLogLevelNames{"trace", "debug", "info", "warn", "error"};
+constexpr std::array<std::string_view, 3> kDriveKindNames{"dcp", "uss", "sch001"};
+constexpr std::array<std::string_view, 3> kRs485Names{"auto", "required", "off"};
+constexpr std::array<std::string_view, 3> kPositionSourceNames{"sim", "api", "can"};
+constexpr std::array<std::string_view, 4> kRelevelDoorsNames{"open", "closed", "both", "never"};
+constexpr std::array<std::string_view, 5> kDataInfoTypeNames{"0", "1", "2", "3", "4"};
+
+// DCP 3.5.3.7: the DCP3 travelling speeds in the order an installation adds them.
+constexpr std::array<std::string_view, 7> kDcp3SpeedOrder{"V4", "V3", "V2", "V1", "V7", "V6", "V5"};
+// Every DCP speed name (DCP 3.5.3.7), to tell "not a speed" from "not used with this count".
+constexpr std::array<std::string_view, 11> kAllSpeedNames{"V0", "VN", "VF", "V1", "VI", "V2",
+                                                          "V3", "V4", "V5", "V6", "V7"};
+
+// DCP 5.12.9: I9 carries the position as a sign and six decimal digits of mm.
+constexpr std::int64_t kMaxLevelMm = 999999;
+// DCP 3.2: deceleration distances are 15-bit values in mm (0x7FFF means "not known").
+constexpr std::int64_t kMaxDecelMm = 0x7FFE;
+// sockaddr_un::sun_path is 108 bytes on Linux, including the terminating NUL.
+constexpr std::int64_t kMaxSocketPathLength = 107;
+// useradd/groupadd: names are at most 32 characters.
+constexpr std::int64_t kMaxGroupNameLength = 32;
+constexpr std::int64_t kFloorNameMaxChars = 16;
+constexpr std::size_t kMinFloors = 2;
+constexpr std::size_t kMaxFloors = 64;
+
+template <class E, std::size_t N>
+std::string_view enum_name(E value, const std::array<std::string_view, N>& names) {
+  return names.at(static_cast<std::size_t>(value));
+}
+
+template <class E, std::size_t N>
+std::optional<E> enum_from(std::string_view name, const std::array<std::string_view, N>& names) {
+  for (std::size_t i = 0; i < N; ++i) {
+    if (names[i] == name) return static_cast<E>(i);
+  }
+  return std::nullopt;
+}
+
+enum class Type : std::uint8_t { boolean, integer, string, choice, floors, speed_map };
+
+using Problems = std::vector<Problem>;
+
+// One row of the schema table.
+struct Key {
+  std::string path;
+  Type type = Type::integer;
+  std::int64_t min = 0;              // integer: smallest value; string: shortest length
+  std::int64_t max = 0;              // integer: largest value; string: longest length
+  std::vector<std::string> choices;  // choice: the allowed strings
+  std::string allowed_text;          // overrides the generated "allowed" column when set
+  std::string description;
+  // string: extra rule; returns what is wrong, or an empty string.
+  std::function<std::string(const std::string&)> check;
+  // Stores a value that passed validation.
+  std::function<void(Config&, const json&)> set;
+  // Reads the value back (defaults come from get(Config{})).
+  std::function<json(const Config&)> get;
+  // floors / speed_map: validates and stores in one go.
+  std::function<void(const json&, const std::string&, Config&, Problems&)> custom;
+};
+
+std::string json_quoted(std::string_view text) {
+  return json(std::string(text)).dump();
+}
+
+std::string show(const json& value) {
+  std::string text = value.dump(-1, ' ', false, json::error_handler_t::replace);
+  constexpr std::size_t kMaxShown = 60;
+  if (text.size() > kMaxShown) text = text.substr(0, kMaxShown) + "...";
+  return text;
+}
+
+std::string join_quoted(const std::vector<std::string>& items) {
+  std::string out;
+  for (const auto& item : items) {
+    if (!out.empty()) out += ", ";
+    out += json_quoted(item);
+  }
+  return out;
+}
+
+// The closest candidate within a small edit distance, for "did you mean".
+std::optional<std::string> closest(std::string_view word, const std::vector<std::string>& pool) {
+  std::optional<std::string> best;
+  std::size_t best_distance = std::max<std::size_t>(2, word.size() / 3) + 1;
+  for (const auto& candidate : pool) {
+    std::size_t d = edit_distance(word, candidate);
+    // A word that is a longer or shorter form of a candidate ("warning", "warn") is close too.
+    const std::string_view shorter = word.size() < candidate.size() ? word : candidate;
+    const std::string_view longer = word.size() < candidate.size() ? candidate : word;
+    constexpr std::size_t kMinPrefix = 3;
+    if (shorter.size() >= kMinPrefix && longer.substr(0, shorter.size()) == shorter) {
+      d = std::min<std::size_t>(d, 2);
+    }
+    if (d < best_distance) {
+      best_distance = d;
+      best = candidate;
+    }
+  }
+  return best;
+}
+
+std::string did_you_mean(std::string_view word, const std::vector<std::string>& pool) {
+  auto best = closest(word, pool);
+  return best ? " (did you mean " + json_quoted(*best) + "?)" : std::string{};
+}
+
+std::size_t utf8_length(std::string_view text) {
+  return static_cast<std::size_t>(std::count_if(text.begin(), text.end(), [](char c) {
+    return (static_cast<unsigned char>(c) & 0xC0U) != 0x80U;  // count lead bytes only
+  }));
+}
+
+bool is_integer(const json& value) {
+  return value.is_number_integer() || value.is_number_unsigned();
+}
+
+// Reads an integer key; false (and a problem) when it is not one or out of range.
+bool check_integer(const json& value, const std::string& where, std::int64_t min, std::int64_t max,
+                   Problems& problems) {
+  const std::string range = std::to_string(min) + ".." + std::to_string(max);
+  if (!is_integer(value)) {
+    problems.push_back({where, "expected an integer " + range + ", got " + show(value)});
+    return false;
+  }
+  const bool negative = !value.is_number_unsigned() && value.get<std::int64_t>() < 0;
+  if (!negative && value.get<std::uint64_t>() > static_cast<std::uint64_t>(max)) {
+    problems.push_back({where, show(value) + " is out of range: allowed " + range});
+    return false;
+  }
+  if (value.get<std::int64_t>() < min) {
+    problems.push_back({where, show(value) + " is out of range: allowed " + range});
+    return false;
+  }
+  return true;
+}
+
+std::string absolute_path_rule(const std::string& text) {
+  if (text.empty() || text.front() != '/') return "must be an absolute path (start with /)";
+  return {};
+}
+
+std::string group_name_rule(const std::string& text) {
+  // shadow-utils' default rule: a lower-case letter or _, then letters, digits, _ or -.
+  const auto ok_first = [](char c) { return (c >= 'a' && c <= 'z') || c == '_'; };
+  const auto ok_rest = [&](char c) { return ok_first(c) || (c >= '0' && c <= '9') || c == '-'; };
+  if (text.empty() || !ok_first(text.front()) ||
+      !std::all_of(text.begin() + 1, text.end(), ok_rest)) {
+    return "is not a valid group name ([a-z_][a-z0-9_-]*)";
+  }
+  return {};
+}
+
+std::string two_capitals_rule(const std::string& text) {
+  if (text.size() != 2 ||
+      !std::all_of(text.begin(), text.end(), [](char c) { return c >= 'A' && c <= 'Z'; })) {
+    return "must be exactly two capital letters A-Z";
+  }
+  return {};
+}
+
+// --- Typed key builders: one call per table row. ---------------------------------------------
+
+template <class Section, class T>
+Key int_key(std::string path, std::int64_t min, std::int64_t max, std::string description,
+            Section Config::*section, T Section::*member) {
+  Key key;
+  key.path = std::move(path);
+  key.type = Type::integer;
+  key.min = min;
+  key.max = max;
+  key.description = std::move(description);
+  key.set = [section, member](Config& c, const json& v) {
+    c.*section.*member = static_cast<T>(v.get<std::int64_t>());
+  };
+  key.get = [section, member](const Config& c) { return json(c.*section.*member); };
+  return key;
+}
+
+template <class Section>
+Key bool_key(std::string path, std::string description, Section Config::*section,
+             bool Section::*member) {
+  Key key;
+  key.path = std::move(path);
+  key.type = Type::boolean;
+  key.description = std::move(description);
+  key.set = [section, member](Config& c, const json& v) { c.*section.*member = v.get<bool>(); };
+  key.get = [section, member](const Config& c) { return json(c.*section.*member); };
+  return key;
+}
+
+template <class Section>
+Key string_key(std::string path, std::int64_t min_length, std::int64_t max_length,
+               std::string allowed_text, std::function<std::string(const std::string&)> check,
+               std::string description, Section Config::*section, std::string Section::*member) {
+  Key key;
+  key.path = std::move(path);
+  key.type = Type::string;
+  key.min = min_length;
+  key.max = max_length;
+  key.allowed_text = std::move(allowed_text);
+  key.check = std::move(check);
+  key.description = std::move(description);
+  key.set = [section, member](Config& c, const json& v) {
+    c.*section.*member = v.get<std::string>();
+  };
+  key.get = [section, member](const Config& c) { return json(c.*section.*member); };
+  return key;
+}
+
+template <class Section, class E, std::size_t N>
+Key enum_key(std::string path, const std::array<std::string_view, N>& names,
+             std::string description, Section Config::*section, E Section::*member) {
+  Key key;
+  key.path = std::move(path);
+  key.type = Type::choice;
+  for (auto name : names) key.choices.emplace_back(name);
+  key.description = std::move(description);
+  key.set = [section, member, &names](Config& c, const json& v) {
+    c.*section.*member = *enum_from<E>(v.get<std::string>(), names);
+  };
+  key.get = [section, member, &names](const Config& c) {
+    return json(std::string(enum_name(c.*section.*member, names)));
+  };
+  return key;
+}
+
+// --- Custom keys. ----------------------------------------------------------------------------
+
+void apply_floors(const json& value, const std::string& where, Config& config, Problems& problems) {
+  if (!value.is_array()) {
+    problems.push_back(
+        {where, "expected an array of {\"name\", \"level_mm\"} objects, got " + show(value)});
+    return;
+  }
+  if (value.size() < kMinFloors || value.size() > kMaxFloors) {
+    problems.push_back({where, "has " + std::to_string(value.size()) + " entries: allowed " +
+                                   std::to_string(kMinFloors) + ".." + std::to_string(kMaxFloors)});
+  }
+  const std::vector<std::string> members{"name", "level_mm"};
+  std::vector<Floor> floors;
+  bool all_good = true;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    const std::string at = where + "[" + std::to_string(i) + "]";
+    const json& entry = value[i];
+    if (!entry.is_object()) {
+      problems.push_back({at, "expected an object {\"name\", \"level_mm\"}, got " + show(entry)});
+      all_good = false;
+      continue;
+    }
+    for (const auto& [k, v] : entry.items()) {
+      if (std::find(members.begin(), members.end(), k) == members.end()) {
+        problems.push_back({at + "." + k, "unknown key" + did_you_mean(k, members)});
+        all_good = false;
+      }
+    }
+    Floor floor{"", 0};
+    bool good = true;
+    if (!entry.contains("name")) {
+      problems.push_back({at, "missing \"name\""});
+      good = false;
+    } else if (!entry["name"].is_string()) {
+      problems.push_back({at + ".name", "expected a string, got " + show(entry["name"])});
+      good = false;
+    } else {
+      floor.name = entry["name"].get<std::string>();
+      const std::size_t length = utf8_length(floor.name);
+      const bool control = std::any_of(floor.name.begin(), floor.name.end(), [](char c) {
+        return static_cast<unsigned char>(c) < 0x20U;
+      });
+      if (length < 1 || length > static_cast<std::size_t>(kFloorNameMaxChars) || control) {
+        problems.push_back(
+            {at + ".name", show(entry["name"]) + " is not allowed: 1..16 printable characters"});
+        good = false;
+      }
+    }
+    if (!entry.contains("level_mm")) {
+      problems.push_back({at, "missing \"level_mm\""});
+      good = false;
+    } else if (check_integer(entry["level_mm"], at + ".level_mm", -kMaxLevelMm, kMaxLevelMm,
+                             problems)) {
+      floor.level_mm = static_cast<std::int32_t>(entry["level_mm"].get<std::int64_t>());
+    } else {
+      good = false;
+    }
+    if (!good) {
+      all_good = false;
+      continue;
+    }
+    for (std::size_t j = 0; j < floors.size(); ++j) {
+      if (floors[j].name == floor.name) {
+        problems.push_back({at + ".name", json_quoted(floor.name) + " is already the name of " +
+                                              where + "[" + std::to_string(j) +
+                                              "]: names must be unique"});
+        all_good = false;
+      }
+    }
+    if (!floors.empty() && floor.level_mm <= floors.back().level_mm) {
+      problems.push_back({at + ".level_mm", std::to_string(floor.level_mm) +
+                                                " is not above the previous floor's " +
+                                                std::to_string(floors.back().level_mm) +
+                                                ": levels must increase strictly"});
+      all_good = false;
+    }
+    floors.push_back(std::move(floor));
+  }
+  if (all_good && value.size() >= kMinFloors && value.size() <= kMaxFloors) {
+    config.floors = std::move(floors);
+  }
+}
+
+void apply_speed_map(const json& value, const std::string& where, Config& config,
+                     Problems& problems) {
+  const std::vector<std::string> used = dcp3_speeds(config.travel.dcp3_speed_count);
+  std::string used_text;
+  for (const auto& s : used) used_text += (used_text.empty() ? "" : ", ") + s;
+  if (!value.is_object()) {
+    problems.push_back(
+        {where,
+         "expected an object of speed name -> mm (e.g. {\"V4\": 2500}), got " + show(value)});
+    return;
+  }
+  std::map<std::string, int> distances;
+  bool good = true;
+  for (const auto& [name, mm] : value.items()) {
+    const std::string at = where + "." + name;
+    if (std::find(used.begin(), used.end(), name) == used.end()) {
+      const bool is_speed =
+          std::find(kAllSpeedNames.begin(), kAllSpeedNames.end(), name) != kAllSpeedNames.end();
+      // DCP 3.5.3.7: the speed count decides which speed names an installation uses.
+      problems.push_back({at, (is_speed ? "is not used with travel.dcp3_speed_count " +
+                                              std::to_string(config.travel.dcp3_speed_count)
+                                        : std::string("is not a DCP3 travelling speed")) +
+                                  ": use " + used_text + " (DCP 3.5.3.7)" +
+                                  (is_speed ? "" : did_you_mean(name, used))});
+      good = false;
+      continue;
+    }
+    if (!check_integer(mm, at, 1, kMaxDecelMm, problems)) {
+      good = false;
+      continue;
+    }
+    distances[name] = static_cast<int>(mm.get<std::int64_t>());
+  }
+  for (const auto& speed : used) {
+    if (value.is_object() && !value.contains(speed)) {
+      problems.push_back({where, "has no distance for " + speed + ": every speed in use (" +
+                                     used_text + ") needs one"});
+      good = false;
+    }
+  }
+  if (good) config.travel.dcp3_decel_distance_mm = std::move(distances);
+}
+
+const std::vector<Key>& schema() {
+  static const std::vector<Key> table = [] {
+    std::vector<Key> t;
+    t.push_back(enum_key("log.level", kLogLevelNames,
+                         "least severe message logged (--log-level overrides it)", &Config::log,
+                         &LogConfig::level));
+    // drive
+    t.push_back(enum_key("drive.kind", kDriveKindNames,
+                         "protocol of the drive: DCP over RS485, Siemens USS, or SCH001 over CAN",
+                         &Config::drive, &DriveConfig::kind));
+    t.push_back(string_key("drive.device", 1, 4096, "absolute path", absolute_path_rule,
+                           "serial port of the drive link", &Config::drive, &DriveConfig::device));
+    t.push_back(enum_key("drive.rs485", kRs485Names,
+                         "kernel RS485 mode: auto = use where supported and warn where not; "
+                         "required = refuse to start without it; off = never",
+                         &Config::drive, &DriveConfig::rs485));
+    // dcp
+    t.push_back(string_key("dcp.manufacturer", 2, 2, "two capital letters A-Z", two_capitals_rule,
+                           "lift-controller maker code sent in I0 (DCP 5.12.2.3)", &Config::dcp,
+                           &DcpConfig::manufacturer));
+    t.push_back(string_key("dcp.language", 2, 2, "two capital letters A-Z (ISO 639)",
+                           two_capitals_rule,
+                           "language code sent in I0; the drive falls back to English "
+                           "(DCP 5.12.2)",
+                           &Config::dcp, &DcpConfig::language));
+    {
+      Key k;
+      k.path = "dcp.data_info_type";
+      k.type = Type::choice;
+      for (auto name : kDataInfoTypeNames) k.choices.emplace_back(name);
+      k.description =
+          "data-information-type set with I1: what the drive's data bytes carry (DCP 5.12.3)";
+      k.set = [](Config& c, const json& v) { c.dcp.data_info_type = v.get<std::string>()[0]; };
+      k.get = [](const Config& c) { return json(std::string(1, c.dcp.data_info_type)); };
+      t.push_back(std::move(k));
+    }
+    t.push_back(bool_key("dcp.extended_position",
+                         "ask for the extended I9 reply with the measured travel distance "
+                         "(DCP 5.12.9)",
+                         &Config::dcp, &DcpConfig::extended_position));
+    t.push_back(int_key("dcp.link_fault_frames", 1, 100,
+                        "consecutive bad or missing replies that make a link fault (DCP 7.3: 10)",
+                        &Config::dcp, &DcpConfig::link_fault_frames));
+    t.push_back(int_key("dcp.link_recover_frames", 1, 100,
+                        "consecutive good replies that end a link fault (DCP 7.3: 10)",
+                        &Config::dcp, &DcpConfig::link_recover_frames));
+    t.push_back(int_key("dcp.request_timeout_ms", 100, 10000,
+                        "how long to wait for the drive's reply to an I-message", &Config::dcp,
+                        &DcpConfig::request_timeout_ms));
+    // rt
+    t.push_back(int_key("rt.priority", 1, 99, "SCHED_FIFO priority of the cycle thread",
+                        &Config::rt, &RtConfig::priority));
+    t.push_back(int_key("rt.cpu", -1, 1023, "CPU the cycle thread is pinned to; -1 = none",
+                        &Config::rt, &RtConfig::cpu));
+    t.push_back(bool_key("rt.lock_memory", "lock all memory (mlockall) so the cycle never pages",
+                         &Config::rt, &RtConfig::lock_memory));
+    t.push_back(int_key("rt.flight_recorder_s", 1, 300,
+                        "seconds of link traffic kept in memory for fault analysis", &Config::rt,
+                        &RtConfig::flight_recorder_s));
+    // api
+    t.push_back(string_key("api.socket", 1, kMaxSocketPathLength,
+                           "absolute path, at most 107 bytes", absolute_path_rule,
+                           "Unix socket of the JSON API", &Config::api, &ApiConfig::socket));
+    t.push_back(string_key("api.socket_group", 1, kMaxGroupNameLength, "group name",
+                           group_name_rule, "group owning the API socket", &Config::api,
+                           &ApiConfig::socket_group));
+    t.push_back(string_key("api.read_group", 1, kMaxGroupNameLength, "group name", group_name_rule,
+                           "members may read state and watch events", &Config::api,
+                           &ApiConfig::read_group));
+    t.push_back(string_key("api.control_group", 1, kMaxGroupNameLength, "group name",
+                           group_name_rule, "members may send calls, travels and resets",
+                           &Config::api, &ApiConfig::control_group));
+    t.push_back(string_key("api.inputs_group", 1, kMaxGroupNameLength, "group name",
+                           group_name_rule,
+                           "members may send machine inputs (the I/O board's daemon)", &Config::api,
+                           &ApiConfig::inputs_group));
+    t.push_back(int_key("api.max_clients", 1, 256, "API connections served at once", &Config::api,
+                        &ApiConfig::max_clients));
+    t.push_back(int_key("api.idle_timeout_s", 0, 86400,
+                        "close a client silent this long; 0 = never", &Config::api,
+                        &ApiConfig::idle_timeout_s));
+    // inputs
+    t.push_back(int_key("inputs.timeout_ms", 50, 10000,
+                        "machine inputs older than this count as lost (safe stop)", &Config::inputs,
+                        &InputsConfig::timeout_ms));
+    {
+      Key k;
+      k.path = "floors";
+      k.type = Type::floors;
+      k.allowed_text =
+          "2..64 entries; name 1..16 characters, unique; level_mm -999999..999999, "
+          "strictly increasing";
+      k.description = "the building's floors, lowest first, level in mm above the lowest floor";
+      k.custom = apply_floors;
+      k.get = [](const Config& c) {
+        json out = json::array();
+        for (const auto& f : c.floors) out.push_back({{"name", f.name}, {"level_mm", f.level_mm}});
+        return out;
+      };
+      t.push_back(std::move(k));
+    }
+    t.push_back(enum_key("position.source", kPositionSourceNames,
+                         "where the car's absolute position comes from (--simulate forces sim)",
+                         &Config::position, &PositionConfig::source));
+    // travel
+    t.push_back(int_key("travel.level_tolerance_mm", 1, 50,
+                        "the car counts as level within this distance of the floor",
+                        &Config::travel, &TravelConfig::level_tolerance_mm));
+    t.push_back(int_key("travel.relevel_threshold_mm", 2, 100,
+                        "relevel once the car is further than this from the floor", &Config::travel,
+                        &TravelConfig::relevel_threshold_mm));
+    t.push_back(enum_key("travel.relevel_with_doors", kRelevelDoorsNames,
+                         "door state in which relevelling is allowed", &Config::travel,
+                         &TravelConfig::relevel_with_doors));
+    t.push_back(bool_key("travel.relevel_electric_stop",
+                         "relevel without remaining distance with electric stop: keep B0 until "
+                         "S6 and S1 are 0 (DCP 11)",
+                         &Config::travel, &TravelConfig::relevel_electric_stop));
+    t.push_back(bool_key("travel.use_start_parameters",
+                         "send I7 start parameters before a DCP4 travel (DCP 5.12.7)",
+                         &Config::travel, &TravelConfig::use_start_parameters));
+    t.push_back(int_key("travel.fast_start_timeout_ms", 100, 10000,
+                        "longest the car is held on an open brake in fast start (DCP 12)",
+                        &Config::travel, &TravelConfig::fast_start_timeout_ms));
+    t.push_back(int_key(
+        "travel.inspection_hold_ms", 100, 5000,
+        "hold-to-run: an inspection travel stops unless its command is repeated within this time",
+        &Config::travel, &TravelConfig::inspection_hold_ms));
+    t.push_back(int_key("travel.dcp3_speed_count", 1, 7,
+                        "travelling speeds of a DCP3 installation (DCP 3.5.3.7)", &Config::travel,
+                        &TravelConfig::dcp3_speed_count));
+    {
+      Key k;
+      k.path = "travel.dcp3_decel_distance_mm";
+      k.type = Type::speed_map;
+      k.allowed_text =
+          "one entry per speed in use (count 1: V4; 2: V4 V3; 3: + V2; 4: + V1; "
+          "5: + V7; 6: + V6; 7: + V5), 1..32766 mm";
+      k.description = "DCP3 fixed deceleration distance before the level, per speed";
+      k.custom = apply_speed_map;
+      k.get = [](const Config& c) { return json(c.travel.dcp3_decel_distance_mm); };
+      t.push_back(std::move(k));
+    }
+    t.push_back(int_key("sim.dcp", 3, 4, "DCP version the simulated drive speaks (--simulate)",
+                        &Config::sim, &SimConfig::dcp));
+    return t;
+  }();
+  return table;
+}
+
+std::vector<std::string> known_paths_and_sections() {
+  std::vector<std::string> out;
+  for (const auto& key : schema()) {
+    out.push_back(key.path);
+    const auto dot = key.path.find('.');
+    if (dot != std::string::npos) {
+      std::string section = key.path.substr(0, dot);
+      if (std::find(out.begin(), out.end(), section) == out.end()) out.push_back(section);
+    }
+  }
+  return out;
+}
+
+bool is_section(const std::string& name) {
+  return std::any_of(schema().begin(), schema().end(),
+                     [&](const Key& k) { return k.path.rfind(name + ".", 0) == 0; });
+}
+
+bool is_leaf(const std::string& path) {
+  return std::any_of(schema().begin(), schema().end(),
+                     [&](const Key& k) { return k.path == path; });
+}
+
+// Reports unknown keys and sections that are not objects.
+void find_unknown(const json& object, const std::string& prefix, Problems& problems) {
+  const std::vector<std::string> pool = known_paths_and_sections();
+  for (const auto& [name, value] : object.items()) {
+    const std::string path = prefix.empty() ? name : prefix + "." + name;
+    if (is_leaf(path)) continue;
+    if (is_section(path)) {
+      if (value.is_object()) {
+        find_unknown(value, path, problems);
+      } else {
+        problems.push_back({path, "expected an object (a section), got " + show(value)});
+      }
+      continue;
+    }
+    problems.push_back({path, "unknown key" + did_you_mean(path, pool)});
+  }
+}
+
+const json* find_value(const json& document, const std::string& path) {
+  const json* node = &document;
+  std::size_t start = 0;
+  while (true) {
+    const auto dot = path.find('.', start);
+    const std::string part = path.substr(start, dot == std::string::npos ? dot : dot - start);
+    if (!node->is_object()) return nullptr;
+    const auto it = node->find(part);
+    if (it == node->end()) return nullptr;
+    node = &*it;
+    if (dot == std::string::npos) return node;
+    start = dot + 1;
+  }
+}
+
+void apply_key(const Key& key, const json& value, Config& config, Problems& problems) {
+  switch (key.type) {
+    case Type::boolean:
+      if (!value.is_boolean()) {
+        problems.push_back({key.path, "expected true or false, got " + show(value)});
+        return;
+      }
+      break;
+    case Type::integer:
+      if (!check_integer(value, key.path, key.min, key.max, problems)) return;
+      break;
+    case Type::string: {
+      if (!value.is_string()) {
+        problems.push_back({key.path, "expected a string, got " + show(value)});
+        return;
+      }
+      const auto text = value.get<std::string>();
+      const auto length = static_cast<std::int64_t>(text.size());
+      if (length < key.min || length > key.max) {
+        problems.push_back({key.path, show(value) + " has " + std::to_string(length) +
+                                          " bytes: allowed " + std::to_string(key.min) + ".." +
+                                          std::to_string(key.max)});
+        return;
+      }
+      if (key.check) {
+        const std::string why = key.check(text);
+        if (!why.empty()) {
+          problems.push_back({key.path, show(value) + " " + why});
+          return;
+        }
+      }
+      break;
+    }
+    case Type::choice:
+      if (!value.is_string() || std::find(key.choices.begin(), key.choices.end(),
+                                          value.get<std::string>()) == key.choices.end()) {
+        problems.push_back(
+            {key.path, show(value) + " is not allowed: use one of " + join_quoted(key.choices) +
+                           (value.is_string() ? did_you_mean(value.get<std::string>(), key.choices)
+                                              : std::string{})});
+        return;
+      }
+      break;
+    case Type::floors:
+    case Type::speed_map:
+      key.custom(value, key.path, config, problems);
+      return;
+  }
+  key.set(config, value);
+}
+
+void check_cross_keys(const Config& config, const json& document, Problems& problems) {
+  // Relevelling inside the level tolerance would make the car hunt around the level.
+  if (config.travel.relevel_threshold_mm <= config.travel.level_tolerance_mm) {
+    const bool set_here = find_value(document, "travel.relevel_threshold_mm") != nullptr;
+    problems.push_back({set_here ? "travel.relevel_threshold_mm" : "travel.level_tolerance_mm",
+                        "relevel_threshold_mm (" +
+                            std::to_string(config.travel.relevel_threshold_mm) +
+                            ") must be greater than level_tolerance_mm (" +
+                            std::to_string(config.travel.level_tolerance_mm) + ")"});
+  }
+}
+
+// 1-based line and column of a byte offset, for parse errors.
+std::pair<std::size_t, std::size_t> line_column(std::string_view text, std::size_t offset) {
+  offset = std::min(offset, text.size());
+  std::size_t line = 1;
+  std::size_t column = 1;
+  for (std::size_t i = 0; i < offset; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  return {line, column};
+}
+
+std::string markdown_cell(std::string text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '|') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
+std::string type_name(const Key& key) {
+  switch (key.type) {
+    case Type::boolean:
+      return "boolean";
+    case Type::integer:
+      return "integer";
+    case Type::string:
+      return "string";
+    case Type::choice:
+      return "string";
+    case Type::floors:
+      return "array of {name, level_mm}";
+    case Type::speed_map:
+      return "object: speed -> mm";
+  }
+  return {};
+}
+
+std::string allowed_text(const Key& key) {
+  if (!key.allowed_text.empty()) return key.allowed_text;
+  switch (key.type) {
+    case Type::boolean:
+      return "true, false";
+    case Type::integer:
+      return std::to_string(key.min) + ".." + std::to_string(key.max);
+    case Type::choice: {
+      std::string out;
+      for (const auto& c : key.choices) out += (out.empty() ? "`" : ", `") + json_quoted(c) + "`";
+      return out;
+    }
+    default:
+      return {};
+  }
+}
+
+}  // namespace
+
+std::vector<Floor> default_floors() {
+  // Six floors 3 m apart: a small building for --simulate and the examples.
+  std::vector<Floor> floors;
+  constexpr int kFloorCount = 6;
+  constexpr std::int32_t kFloorHeightMm = 3000;
+  for (int i = 0; i < kFloorCount; ++i) floors.push_back({std::to_string(i), i * kFloorHeightMm});
+  return floors;
+}
+
+std::string to_string(const Problem& problem) {
+  return problem.where + ": " + problem.message;
+}
+
+std::vector<std::string> dcp3_speeds(int speed_count) {
+  std::vector<std::string> out;
+  for (int i = 0; i < speed_count && i < static_cast<int>(kDcp3SpeedOrder.size()); ++i) {
+    out.emplace_back(kDcp3SpeedOrder[static_cast<std::size_t>(i)]);
+  }
+  return out;
+}
+
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t above = row[j];
+      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + cost});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+LoadResult from_json(const json& document) {
+  LoadResult result;
+  if (!document.is_object()) {
+    result.problems.push_back({"(top level)", "expected a JSON object, got " + show(document)});
+    return result;
+  }
+  find_unknown(document, "", result.problems);
+  for (const auto& key : schema()) {
+    if (const json* value = find_value(document, key.path)) {
+      apply_key(key, *value, result.config, result.problems);
+    }
+  }
+  // A valid speed count with the default distances can still disagree: check them together.
+  if (find_value(document, "travel.dcp3_decel_distance_mm") == nullptr &&
+      find_value(document, "travel.dcp3_speed_count") != nullptr) {
+    for (const auto& key : schema()) {
+      if (key.type == Type::speed_map) {
+        apply_key(key, key.get(result.config), result.config, result.problems);
+      }
+    }
+  }
+  check_cross_keys(result.config, document, result.problems);
+  return result;
+}
+
+LoadResult parse(std::string_view text, std::string_view origin) {
+  // Track the keys of each open object to report duplicates, which JSON parsers drop silently.
+  struct Frame {
+    bool is_object;
+    std::vector<std::string> keys;
+    std::string name;
+  };
+  std::vector<Frame> stack;
+  std::string pending_key;
+  Problems duplicates;
+  const auto path_of = [&](const std::string& key) {
+    std::string out;
+    for (const auto& f : stack) {
+      if (!f.name.empty()) out += (out.empty() ? "" : ".") + f.name;
+    }
+    return out.empty() ? key : out + "." + key;
+  };
+  const json::parser_callback_t callback = [&](int /*depth*/, json::parse_event_t event,
+                                               json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start:
+      case json::parse_event_t::array_start:
+        stack.push_back({event == json::parse_event_t::object_start, {}, pending_key});
+        pending_key.clear();
+        break;
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        if (!stack.empty()) stack.pop_back();
+        break;
+      case json::parse_event_t::key: {
+        const auto key = parsed.get<std::string>();
+        if (!stack.empty() && stack.back().is_object) {
+          auto& keys = stack.back().keys;
+          if (std::find(keys.begin(), keys.end(), key) != keys.end()) {
+            duplicates.push_back({path_of(key), "duplicate key: only one value is allowed"});
+          }
+          keys.push_back(key);
+        }
+        pending_key = key;
+        break;
+      }
+      case json::parse_event_t::value:
+        pending_key.clear();
+        break;
+    }
+    return true;
+  };
+  json document;
+  try {
+    document = json::parse(text.begin(), text.end(), callback, true, false);
+  } catch (const json::parse_error& error) {
+    const auto [line, column] = line_column(text, error.byte == 0 ? 0 : error.byte - 1);
+    std::string what = error.what();
+    // nlohmann's text starts with "[json.exception.parse_error.101] parse error at line ..:";
+    // keep only the part after the last ": " (what was expected and found).
+    const auto colon = what.rfind(": ");
+    if (colon != std::string::npos) what = what.substr(colon + 2);
+    LoadResult result;
+    result.problems.push_back(
+        {std::string(origin) + ":" + std::to_string(line) + ":" + std::to_string(column),
+         "malformed JSON: " + what});
+    return result;
+  }
+  LoadResult result = from_json(document);
+  result.problems.insert(result.problems.begin(), duplicates.begin(), duplicates.end());
+  return result;
+}
+
+LoadResult load_file(const std::filesystem::path& path) {
+  const auto unreadable = [&](int error) {
+    LoadResult result;
+    result.problems.push_back(
+        {path.string(), std::string("cannot read the config file: ") + std::strerror(error)});
+    return result;
+  };
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return unreadable(errno);
+  std::string text;
+  char buffer[4096];
+  while (true) {
+    const ssize_t n = ::read(fd, buffer, sizeof(buffer));
+    if (n < 0) {
+      const int error = errno;
+      if (error == EINTR) continue;
+      ::close(fd);
+      return unreadable(error);
+    }
+    if (n == 0) break;
+    text.append(buffer, static_cast<std::size_t>(n));
+  }
+  ::close(fd);
+  return parse(text, path.string());
+}
+
+nlohmann::json to_json(const Config& config) {
+  json out = json::object();
+  for (const auto& key : schema()) {
+    std::string pointer = "/" + key.path;
+    std::replace(pointer.begin(), pointer.end(), '.', '/');
+    out[json::json_pointer(pointer)] = key.get(config);
+  }
+  return out;
+}
+
+std::string summary(const Config& config) {
+  std::ostringstream out;
+  out << "drive:    " << to_string(config.drive.kind) << " on " << config.drive.device << " (rs485 "
+      << to_string(config.drive.rs485) << ")\n";
+  out << "dcp:      maker " << config.dcp.manufacturer << ", language " << config.dcp.language
+      << ", data-information-type " << config.dcp.data_info_type << ", link fault after "
+      << config.dcp.link_fault_frames << " frames\n";
+  out << "floors:   " << config.floors.size();
+  if (!config.floors.empty()) {
+    out << ", " << json_quoted(config.floors.front().name) << " at "
+        << config.floors.front().level_mm << " mm to " << json_quoted(config.floors.back().name)
+        << " at " << config.floors.back().level_mm << " mm";
+  }
+  out << "\n";
+  out << "position: " << to_string(config.position.source) << "\n";
+  out << "api:      " << config.api.socket << " (group " << config.api.socket_group << ", at most "
+      << config.api.max_clients << " clients)\n";
+  out << "rt:       priority " << config.rt.priority << ", cpu "
+      << (config.rt.cpu < 0 ? std::string("any") : std::to_string(config.rt.cpu))
+      << ", lock memory " << (config.rt.lock_memory ? "yes" : "no") << "\n";
+  out << "log:      " << to_string(config.log.level) << "\n";
+  return out.str();
+}
+
+std::string reference_markdown() {
+  const Config defaults;
+  std::ostringstream out;
+  out << "| Key | Type | Default | Allowed | Description |\n";
+  out << "| --- | --- | --- | --- | --- |\n";
+  for (const auto& key : schema()) {
+    out << "| `" << key.path << "` | " << markdown_cell(type_name(key)) << " | `"
+        << markdown_cell(key.get(defaults).dump()) << "` | " << markdown_cell(allowed_text(key))
+        << " | " << markdown_cell(key.description) << " |\n";
+  }
+  return out.str();
+}
+
+std::vector<std::string> key_paths() {
+  std::vector<std::string> out;
+  for (const auto& key : schema()) out.push_back(key.path);
+  return out;
+}
+
+std::string_view to_string(LogLevel value) {
+  return enum_name(value, kLogLevelNames);
+}
+std::string_view to_string(DriveKind value) {
+  return enum_name(value, kDriveKindNames);
+}
+std::string_view to_string(Rs485Mode value) {
+  return enum_name(value, kRs485Names);
+}
+std::string_view to_string(PositionSource value) {
+  return enum_name(value, kPositionSourceNames);
+}
+std::string_view to_string(RelevelDoors value) {
+  return enum_name(value, kRelevelDoorsNames);
+}
+
+std::optional<LogLevel> parse_log_level(std::string_view name) {
+  return enum_from<LogLevel>(name, kLogLevelNames);
+}
+
+}  // namespace liftd::config

@@ -1,0 +1,191 @@
+// liftd configuration: the typed settings, loaded from JSON and validated against one schema
+// table (config/schema.cpp). Exceptions are used only while loading; the result is plain data.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace liftd::config {
+
+/// Log verbosity, lowest first.
+enum class LogLevel : std::uint8_t { trace, debug, info, warn, error };
+/// Which kind of drive the daemon talks to.
+enum class DriveKind : std::uint8_t { dcp, uss, sch001 };
+/// How the serial port's kernel RS485 mode is used.
+enum class Rs485Mode : std::uint8_t {
+  automatic,  ///< "auto": use it where the port supports it, warn where not
+  required,   ///< "required": refuse to start without it
+  off,        ///< "off": never switch it on (an external transceiver handles direction)
+};
+/// Where the car's absolute position comes from.
+enum class PositionSource : std::uint8_t { sim, api, can };
+/// With which door state relevelling is allowed.
+enum class RelevelDoors : std::uint8_t { open, closed, both, never };
+
+/// `log.*`
+struct LogConfig {
+  LogLevel level = LogLevel::info;  ///< log.level
+};
+
+/// `drive.*`
+struct DriveConfig {
+  DriveKind kind = DriveKind::dcp;         ///< drive.kind
+  std::string device = "/dev/ttyS1";       ///< drive.device
+  Rs485Mode rs485 = Rs485Mode::automatic;  ///< drive.rs485
+};
+
+/// `dcp.*`
+struct DcpConfig {
+  std::string manufacturer = "LI";  ///< dcp.manufacturer, sent in I0 (DCP 5.12.2.3)
+  std::string language = "EN";      ///< dcp.language, sent in I0
+  char data_info_type = '0';        ///< dcp.data_info_type, set with I1 (DCP 4.2)
+  bool extended_position = true;    ///< dcp.extended_position: ask for the extended I9
+  int link_fault_frames = 10;       ///< dcp.link_fault_frames (DCP 7.3: 10 frames)
+  int link_recover_frames = 10;     ///< dcp.link_recover_frames (DCP 7.3: 10 frames)
+  int request_timeout_ms = 2000;    ///< dcp.request_timeout_ms for an I-message reply
+};
+
+/// `rt.*`
+struct RtConfig {
+  int priority = 80;           ///< rt.priority (SCHED_FIFO)
+  int cpu = -1;                ///< rt.cpu, -1 = no pinning
+  bool lock_memory = true;     ///< rt.lock_memory (mlockall)
+  int flight_recorder_s = 30;  ///< rt.flight_recorder_s
+};
+
+/// `api.*`
+struct ApiConfig {
+  std::string socket = "/run/liftd/api.sock";   ///< api.socket
+  std::string socket_group = "liftd";           ///< api.socket_group
+  std::string read_group = "liftd";             ///< api.read_group
+  std::string control_group = "liftd-control";  ///< api.control_group
+  std::string inputs_group = "liftd-io";        ///< api.inputs_group
+  int max_clients = 32;                         ///< api.max_clients
+  int idle_timeout_s = 0;                       ///< api.idle_timeout_s, 0 = none
+};
+
+/// `inputs.*`
+struct InputsConfig {
+  int timeout_ms = 500;  ///< inputs.timeout_ms
+};
+
+/// One entry of `floors`.
+struct Floor {
+  std::string name;       ///< shown to people, 1..16 characters, unique
+  std::int32_t level_mm;  ///< mm above the lowest level, strictly increasing
+  /// Field-wise equality.
+  friend bool operator==(const Floor&, const Floor&) = default;
+};
+
+/// The default building: six floors 3 m apart, named "0".."5".
+std::vector<Floor> default_floors();
+
+/// `position.*`
+struct PositionConfig {
+  PositionSource source = PositionSource::api;  ///< position.source
+};
+
+/// `travel.*`
+struct TravelConfig {
+  int level_tolerance_mm = 5;                            ///< travel.level_tolerance_mm
+  int relevel_threshold_mm = 15;                         ///< travel.relevel_threshold_mm
+  RelevelDoors relevel_with_doors = RelevelDoors::both;  ///< travel.relevel_with_doors
+  bool relevel_electric_stop = false;                    ///< travel.relevel_electric_stop
+  bool use_start_parameters = true;                      ///< travel.use_start_parameters (I7)
+  int fast_start_timeout_ms = 3000;                      ///< travel.fast_start_timeout_ms
+  int inspection_hold_ms = 500;                          ///< travel.inspection_hold_ms
+  int dcp3_speed_count = 2;                              ///< travel.dcp3_speed_count
+  /// travel.dcp3_decel_distance_mm: speed name ("V4", "V3", ...) -> deceleration distance.
+  std::map<std::string, int> dcp3_decel_distance_mm = {{"V3", 1200}, {"V4", 2500}};
+};
+
+/// `sim.*`
+struct SimConfig {
+  int dcp = 4;  ///< sim.dcp: the simulated drive speaks DCP3 or DCP4
+};
+
+/// The whole configuration; every member mirrors a key of the JSON file. The member
+/// initialisers are the defaults (the schema table reads them from a default Config).
+struct Config {
+  LogConfig log;                                 ///< log.*
+  DriveConfig drive;                             ///< drive.*
+  DcpConfig dcp;                                 ///< dcp.*
+  RtConfig rt;                                   ///< rt.*
+  ApiConfig api;                                 ///< api.*
+  InputsConfig inputs;                           ///< inputs.*
+  std::vector<Floor> floors = default_floors();  ///< floors
+  PositionConfig position;                       ///< position.*
+  TravelConfig travel;                           ///< travel.*
+  SimConfig sim;                                 ///< sim.*
+};
+
+/// One thing wrong with a configuration, ready to print as "<where>: <message>".
+struct Problem {
+  std::string where;    ///< key path ("dcp.link_fault_frames"), or "file:line:col", or the path
+  std::string message;  ///< what is wrong and what is allowed
+};
+
+/// Formats a problem as one line.
+std::string to_string(const Problem& problem);
+
+/// The outcome of loading: the config (defaults where keys are missing) and every problem
+/// found. The config is only meaningful when `problems` is empty.
+struct LoadResult {
+  Config config;                  ///< the effective configuration
+  std::vector<Problem> problems;  ///< every problem, in file order where known
+  /// True when there is nothing wrong.
+  bool ok() const { return problems.empty(); }
+};
+
+/// Parses and validates JSON text; `origin` names it in messages (usually the file path).
+LoadResult parse(std::string_view text, std::string_view origin);
+
+/// Reads, parses and validates a file. An unreadable file is one problem naming the path
+/// and the errno text.
+LoadResult load_file(const std::filesystem::path& path);
+
+/// Validates a JSON document that is already parsed (shared by parse() and tests).
+LoadResult from_json(const nlohmann::json& document);
+
+/// The effective configuration as JSON, every key present (the API's `config` command).
+nlohmann::json to_json(const Config& config);
+
+/// A short human summary for `liftd --check-config`.
+std::string summary(const Config& config);
+
+/// The Markdown reference of every key (type, default, allowed values, description), generated
+/// from the schema table; docs/config.md embeds it.
+std::string reference_markdown();
+
+/// Every key path the schema knows, in table order.
+std::vector<std::string> key_paths();
+
+/// The name of an enum value as written in the JSON file.
+std::string_view to_string(LogLevel value);
+/// The name of an enum value as written in the JSON file.
+std::string_view to_string(DriveKind value);
+/// The name of an enum value as written in the JSON file.
+std::string_view to_string(Rs485Mode value);
+/// The name of an enum value as written in the JSON file.
+std::string_view to_string(PositionSource value);
+/// The name of an enum value as written in the JSON file.
+std::string_view to_string(RelevelDoors value);
+
+/// Parses a log level name ("trace".."error").
+std::optional<LogLevel> parse_log_level(std::string_view name);
+
+/// The DCP3 speeds an installation with `speed_count` travelling speeds uses, fastest first
+/// (DCP 3.5.3.7 table): 1 -> V4; 2 -> V4 V3; ... 7 -> V4 V3 V2 V1 V7 V6 V5.
+std::vector<std::string> dcp3_speeds(int speed_count);
+
+/// Levenshtein distance, used for "did you mean" suggestions.
+std::size_t edit_distance(std::string_view a, std::string_view b);
+
+}  // namespace liftd::config

@@ -1,0 +1,143 @@
+// The systemd files: the unit passes `systemd-analyze verify` without a single warning and has
+// the settings the task requires; sysusers.d and tmpfiles.d apply cleanly to a scratch root.
+#include <sys/stat.h>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "daemon/process.hpp"
+#include "daemon/test_socket.hpp"
+
+namespace liftd {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::HasSubstr;
+using testing::Process;
+using testing::TestSocket;
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream out;
+  out << in.rdbuf();
+  return out.str();
+}
+
+std::string find_tool(const std::string& name) {
+  for (const char* dir : {"/usr/bin", "/bin", "/usr/sbin", "/sbin"}) {
+    const std::string path = std::string(dir) + "/" + name;
+    if (::access(path.c_str(), X_OK) == 0) return path;
+  }
+  return {};
+}
+
+struct ToolRun {
+  int code;
+  std::string output;  // stdout + stderr
+};
+
+ToolRun run(const std::vector<std::string>& args, const std::string& dir) {
+  Process p(args, {"PATH=/usr/bin:/bin:/usr/sbin:/sbin", "SYSTEMD_LOG_COLOR=0"}, dir, "tool");
+  const auto code = p.wait(60s);
+  return {code.value_or(-1), p.out() + p.err()};
+}
+
+// The unit with ExecStart pointing at the binary just built (verify checks it is executable).
+std::string unit_for_this_build(const std::string& dir) {
+  std::string unit = read_text(LIFTD_UNIT);
+  const std::string key = "ExecStart=";
+  const auto start = unit.find(key);
+  const auto end = unit.find(' ', start);
+  unit.replace(start + key.size(), end - start - key.size(), LIFTD_BINARY);
+  const std::string path = dir + "/liftd.service";
+  std::ofstream(path) << unit;
+  return path;
+}
+
+TEST(SystemdUnit, VerifiesWithoutWarnings) {
+  const std::string tool = find_tool("systemd-analyze");
+  if (tool.empty()) GTEST_SKIP() << "systemd-analyze is not installed on this machine";
+  TestSocket scratch;
+  // First make sure the tool works here at all, on a unit that is certainly correct.
+  const std::string baseline = scratch.dir() + "/baseline.service";
+  std::ofstream(baseline) << "[Unit]\nDescription=baseline\n[Service]\nExecStart=/bin/true\n";
+  const ToolRun check = run({tool, "verify", baseline}, scratch.dir());
+  if (check.code != 0 || !check.output.empty()) {
+    GTEST_SKIP() << "systemd-analyze verify cannot run in this environment (exit " << check.code
+                 << "): " << check.output;
+  }
+  const ToolRun result = run({tool, "verify", unit_for_this_build(scratch.dir())}, scratch.dir());
+  EXPECT_EQ(result.code, 0) << result.output;
+  // verify exits 0 on unknown or misspelt settings; it only prints them. Demand silence.
+  EXPECT_EQ(result.output, "");
+}
+
+TEST(SystemdUnit, HasTheRequiredSettings) {
+  const std::string unit = read_text(LIFTD_UNIT);
+  // Legend: a line the unit must contain, and why.
+  const std::vector<std::string> required = {
+      "Type=notify",     // READY=1 after startup
+      "WatchdogSec=5s",  // liftd pings at half of it
+      "Restart=on-failure",
+      "RestartPreventExitStatus=2",  // a bad config does not loop
+      "User=liftd",
+      "Group=liftd",
+      "SupplementaryGroups=dialout",  // serial ports
+      "RuntimeDirectory=liftd",       // /run/liftd for the API socket
+      "ProtectSystem=strict",
+      "ProtectHome=yes",
+      "PrivateTmp=yes",
+      "NoNewPrivileges=yes",
+      "RestrictAddressFamilies=AF_UNIX AF_CAN",
+      "LimitRTPRIO=99",         // rt.priority up to 99
+      "LimitMEMLOCK=infinity",  // rt.lock_memory
+      "AmbientCapabilities=CAP_SYS_NICE CAP_IPC_LOCK",
+      "DeviceAllow=char-ttyS rw",
+  };
+  for (const auto& line : required) {
+    EXPECT_THAT(unit, HasSubstr("\n" + line + "\n")) << line;
+  }
+  EXPECT_THAT(unit, HasSubstr("/liftd --config /etc/liftd/liftd.json\n"));
+  // SCHED_FIFO must stay possible.
+  EXPECT_THAT(unit, ::testing::Not(HasSubstr("\nRestrictRealtime=yes")));
+}
+
+TEST(SystemdFiles, SysusersAndTmpfilesApplyToAScratchRoot) {
+  const std::string sysusers = find_tool("systemd-sysusers");
+  const std::string tmpfiles = find_tool("systemd-tmpfiles");
+  if (sysusers.empty() || tmpfiles.empty()) {
+    GTEST_SKIP() << "systemd-sysusers or systemd-tmpfiles is not installed on this machine";
+  }
+  if (::geteuid() != 0) GTEST_SKIP() << "needs root to chown inside the scratch root";
+  TestSocket scratch;
+  const std::string root = scratch.dir() + "/root";
+  std::filesystem::create_directories(root + "/etc");
+  const ToolRun users =
+      run({sysusers, "--root=" + root, std::string(LIFTD_SOURCE_DIR) + "/systemd/liftd.sysusers"},
+          scratch.dir());
+  ASSERT_EQ(users.code, 0) << users.output;
+  const std::string group = read_text(root + "/etc/group");
+  for (const char* name : {"liftd:", "liftd-control:", "liftd-io:"}) {
+    EXPECT_THAT(group, HasSubstr(name)) << name;
+  }
+  EXPECT_THAT(read_text(root + "/etc/passwd"), HasSubstr("liftd:x:"));
+
+  const ToolRun dirs = run({tmpfiles, "--root=" + root, "--create",
+                            std::string(LIFTD_SOURCE_DIR) + "/systemd/liftd.tmpfiles"},
+                           scratch.dir());
+  ASSERT_EQ(dirs.code, 0) << dirs.output;
+  struct stat info {};
+  ASSERT_EQ(::stat((root + "/etc/liftd").c_str(), &info), 0);
+  EXPECT_TRUE(S_ISDIR(info.st_mode));
+  EXPECT_EQ(info.st_mode & 07777U, 0750U);
+  std::filesystem::remove_all(root);
+}
+
+}  // namespace
+}  // namespace liftd
