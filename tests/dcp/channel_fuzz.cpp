@@ -1,0 +1,54 @@
+// libFuzzer target: any byte stream through the channel parser (two bytes per 15 ms cycle, with
+// stalls chosen by the input), every completed frame through the decoder of its mode.
+#include <cstdlib>
+
+#include "dcp/channel.hpp"
+#include "dcp/display.hpp"
+#include "dcp/messages.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace liftd::dcp;
+  using namespace std::chrono_literals;
+  ChannelParser parser;
+  DisplayModel display;
+  liftd::MonoTime now{};
+  for (std::size_t i = 0; i < size; ++i) {
+    // Every 0xFF byte also stalls the stream for a second, so both timeouts are reached.
+    if (data[i] == 0xFF) now += 1000ms;
+    if (i % 2 == 0) now += 15ms;
+    const ParseStatus status = parser.feed(data[i], now);
+    if (status == ParseStatus::Bad && to_string(parser.error()).empty()) abort();
+    if (status == ParseStatus::Reset && to_string(parser.reset_reason()).empty()) abort();
+    if (status != ParseStatus::Complete) continue;
+    const ChannelFrame& frame = parser.frame();
+    if (frame.length > kMaxChannelPayload) abort();
+    switch (frame.mode) {
+      case ChannelMode::Expanded: {
+        const auto drive = decode_drive_message(frame.payload());
+        if (drive.ok()) {
+          const auto again = encode(drive.value);
+          if (!again.ok()) abort();
+          const auto back = decode_drive_message(again.value.bytes());
+          if (!back.ok() || !(back.value == drive.value)) abort();
+        }
+        const auto master = decode_master_message(frame.payload());
+        if (master.ok()) {
+          const auto again = encode(master.value);
+          if (!again.ok()) abort();
+          const auto back = decode_master_message(again.value.bytes());
+          if (!back.ok() || !(back.value == master.value)) abort();
+        }
+        break;
+      }
+      case ChannelMode::DriveError:
+        (void)decode_drive_error(frame.payload());
+        break;
+      case ChannelMode::Remote:
+        (void)display.apply(frame.payload());
+        (void)decode_keypad(frame.payload());
+        break;
+    }
+  }
+  (void)parser.poll(now + 2000ms);
+  return 0;
+}
