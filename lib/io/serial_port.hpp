@@ -1,0 +1,147 @@
+// An RS485/RS232 serial port (termios) with non-blocking writes and deadline reads.
+// Opening may allocate and reports rich errors; everything after open is noexcept, allocation
+// free and suitable for the real-time cycle.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "common/mono_time.hpp"
+#include "io/expected.hpp"
+
+namespace liftd::io {
+
+/// Parity bit of each character.
+enum class Parity : std::uint8_t {
+  None,  ///< no parity bit (DCP 7.1: 8N1)
+  Even,  ///< even parity (USS: 8E1)
+  Odd,   ///< odd parity
+};
+
+/// How the kernel's RS485 mode (TIOCSRS485: driver enable on RTS while sending) is used.
+enum class Rs485Mode : std::uint8_t {
+  Auto,      ///< enable it where the driver supports it; carry on without it otherwise
+  Required,  ///< enable it or fail to open
+  Off,       ///< leave the port's RS485 setting alone (RS232 adapters, auto-direction RS485)
+};
+
+/// Line settings of a serial port.
+struct SerialSettings {
+  std::uint32_t baud = 38400;         ///< DCP 7.1: 38400 baud; any rate via termios2/BOTHER
+  std::uint8_t data_bits = 8;         ///< 5..8
+  Parity parity = Parity::None;       ///< DCP: none; USS: even
+  std::uint8_t stop_bits = 1;         ///< 1 or 2
+  Rs485Mode rs485 = Rs485Mode::Auto;  ///< kernel RS485 mode policy
+  bool low_latency = true;            ///< ask the driver for ASYNC_LOW_LATENCY where it has it
+};
+
+/// Why an open (or pty creation) failed: the device, the call that failed and errno.
+struct OpenError {
+  std::string device;    ///< path that was opened
+  std::string call;      ///< the failing call, e.g. "open", "TCSETS2", "TIOCSRS485"
+  int error_number = 0;  ///< errno of the failing call (0 when the failure is not a syscall's)
+  std::string detail;    ///< extra words when errno alone does not explain it (may be empty)
+
+  /// One readable line: "<device>: <call>: <strerror>[ (<detail>)]".
+  std::string message() const;
+};
+
+/// What the port ended up with after open, for the non-real-time side to log once.
+struct PortFeatures {
+  bool rs485_enabled = false;        ///< kernel RS485 mode is on (RTS on send, no delays)
+  int rs485_errno = 0;               ///< why it is off in Auto mode (ENOTTY: driver lacks it)
+  bool low_latency_enabled = false;  ///< ASYNC_LOW_LATENCY is set
+  int low_latency_errno = 0;         ///< why it is not (ENOTTY/EINVAL: driver lacks it)
+};
+
+/// Outcome class of one I/O call.
+enum class IoStatus : std::uint8_t {
+  Ok,          ///< done: all bytes written / buffer filled / flushed
+  Timeout,     ///< deadline passed before the buffer was full (bytes says how many arrived)
+  WouldBlock,  ///< the kernel buffer is full: only part of the frame was written
+  DeviceLost,  ///< the device is gone or hung up (EIO, ENODEV, ENXIO, POLLHUP/POLLERR, EOF)
+  Error,       ///< any other failure (error_number has errno)
+};
+
+/// Result of one I/O call.
+struct IoResult {
+  IoStatus status = IoStatus::Ok;  ///< outcome
+  std::size_t bytes = 0;           ///< bytes moved
+  int error_number = 0;            ///< errno for DeviceLost / Error, else 0
+};
+
+/// Short name of an I/O status for logs ("ok", "timeout", ...).
+std::string_view to_string(IoStatus status) noexcept;
+
+/// An open serial port; move-only, closes on destruction. The file descriptor is non-blocking.
+class SerialPort {
+ public:
+  /// A closed port.
+  SerialPort() noexcept = default;
+  /// Takes the other port's descriptor; the other is closed afterwards.
+  SerialPort(SerialPort&& other) noexcept;
+  /// Closes this port, then takes the other's descriptor.
+  SerialPort& operator=(SerialPort&& other) noexcept;
+  SerialPort(const SerialPort&) = delete;
+  SerialPort& operator=(const SerialPort&) = delete;
+  /// Closes the descriptor.
+  ~SerialPort();
+
+  /// Opens `path` exclusively (TIOCEXCL), in raw mode with `settings`, flushes both directions,
+  /// applies the RS485 and low-latency policy. Errors name the device, the call and errno.
+  static Expected<SerialPort, OpenError> open(std::string_view path,
+                                              const SerialSettings& settings);
+
+  /// Takes ownership of an already configured descriptor (e.g. a pty master) and makes it
+  /// non-blocking. No termios changes.
+  static SerialPort adopt(int fd) noexcept;
+
+  /// True while a descriptor is held.
+  bool is_open() const noexcept { return fd_ >= 0; }
+  /// The descriptor (for poll loops of callers); -1 when closed.
+  int fd() const noexcept { return fd_; }
+  /// What RS485 / low-latency settings took effect at open.
+  const PortFeatures& features() const noexcept { return features_; }
+
+  /// Writes the whole frame without blocking. Ok when every byte went to the kernel.
+  IoResult write_frame(std::span<const std::uint8_t> frame) noexcept;
+
+  /// Reads until `buffer` is full or the monotonic `deadline` passes (ppoll). Ok when full,
+  /// Timeout with the partial count otherwise, DeviceLost on hang-up.
+  IoResult read_until(std::span<std::uint8_t> buffer, MonoTime deadline) noexcept;
+
+  /// Reads whatever is available now, without waiting (up to buffer.size()).
+  IoResult read_available(std::span<std::uint8_t> buffer) noexcept;
+
+  /// Discards unread input (tcflush TCIFLUSH), then reads away anything still queued.
+  /// `bytes` says how many were dropped. Reports DeviceLost when the device has gone.
+  IoResult flush_input() noexcept;
+
+  /// Waits until the port is readable or `deadline` passes. Ok (readable), Timeout, or
+  /// DeviceLost as soon as the device reports a hang-up or error (even with data pending).
+  IoResult wait_readable(MonoTime deadline) noexcept;
+
+  /// Closes the descriptor (no-op when closed). May block briefly while a real UART drains.
+  void close() noexcept;
+
+  /// Gives the descriptor up without closing it; the port is closed afterwards.
+  int release() noexcept;
+
+ private:
+  explicit SerialPort(int fd) noexcept : fd_(fd) {}
+
+  int fd_ = -1;
+  PortFeatures features_{};
+};
+
+/// Sets raw mode and the line settings on any tty descriptor (used for both pty ends too).
+/// Returns 0 or an errno; `failed_call` names the call that failed.
+int configure_tty(int fd, const SerialSettings& settings, const char** failed_call) noexcept;
+
+/// Whether an errno from a read/write/ioctl means the device has gone away.
+bool is_device_lost_errno(int error_number) noexcept;
+
+}  // namespace liftd::io

@@ -1,0 +1,301 @@
+#include "rt/cycle_runner.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <string_view>
+#include <utility>
+
+namespace liftd::rt {
+namespace {
+
+constexpr auto kKeeperTick = std::chrono::milliseconds(5);  // keeper's polling interval
+constexpr auto kReportInterval = std::chrono::seconds(1);   // overruns: one report a second
+
+timespec to_timespec(MonoTime t) noexcept {
+  constexpr std::int64_t kNsPerS = 1'000'000'000;
+  const auto ns = t.count();
+  return timespec{static_cast<time_t>(ns / kNsPerS), static_cast<long>(ns % kNsPerS)};
+}
+
+void sleep_until(MonoTime when) noexcept {
+  const timespec ts = to_timespec(when);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+
+void set_text(CycleEvent& event, std::string_view text) noexcept {
+  const std::size_t n = std::min(text.size(), event.text.size() - 1);
+  std::copy_n(text.data(), n, event.text.data());
+  event.text[n] = '\0';
+}
+
+std::size_t recorder_capacity(const CycleConfig& config) {
+  const auto period = std::max<std::int64_t>(config.period.count(), 1);
+  const auto cycles =
+      static_cast<std::size_t>(std::max<std::int64_t>(config.recorder_span.count() / period, 1));
+  // Each cycle writes a sent frame and a reply (or missing) record.
+  return 2 * cycles;
+}
+
+}  // namespace
+
+std::string describe(const CycleEvent& event) {
+  const std::string text(event.text.data());
+  switch (event.kind) {
+    case CycleEventKind::ThreadStatus:
+      return "cycle thread: " + text;
+    case CycleEventKind::PortOpened:
+      return "serial port opened: " + text;
+    case CycleEventKind::PortOpenFailed:
+      return "serial port open failed, retrying: " + text;
+    case CycleEventKind::PortLost:
+      return "serial port lost (" +
+             std::string(event.error_number != 0 ? std::strerror(event.error_number) : "hang-up") +
+             "), reopening";
+    case CycleEventKind::Overruns:
+      return "cycle overrun: " + std::to_string(event.count) +
+             " cycle(s) skipped since the last report (woke too late to send in time)";
+  }
+  return "unknown cycle event";
+}
+
+CycleRunner::CycleRunner(CycleConfig config, CycleEngine& engine)
+    : config_(std::move(config)), engine_(engine), recorder_(recorder_capacity(config_)) {}
+
+CycleRunner::~CycleRunner() {
+  stop();
+}
+
+int CycleRunner::start() {
+  if (started_) return EBUSY;
+  stop_.store(false);
+  port_wanted_.store(true);
+  if (const int err = thread_.start(config_.thread, [this] { cycle_loop(); }); err != 0) return err;
+  started_ = true;
+  if (const std::string text = thread_.status().describe(); !text.empty()) {
+    CycleEvent e;
+    e.kind = CycleEventKind::ThreadStatus;
+    e.time = mono_now();
+    e.error_number = thread_.status().sched_errno;
+    set_text(e, text);
+    keeper_events_.try_push(e);  // before the keeper exists: this thread is its producer now
+  }
+  keeper_ = std::thread([this] { keeper_loop(); });
+  return 0;
+}
+
+void CycleRunner::stop() noexcept {
+  if (!started_) return;
+  stop_.store(true);
+  thread_.join();
+  if (keeper_.joinable()) keeper_.join();
+  port_.close();
+  port_ready_.store(false);
+  if (const int fd = offered_fd_.exchange(-1); fd >= 0) ::close(fd);
+  if (const int fd = dead_fd_.exchange(-1); fd >= 0) ::close(fd);
+  started_ = false;
+}
+
+bool CycleRunner::poll_event(CycleEvent& out) noexcept {
+  return cycle_events_.try_pop(out) || keeper_events_.try_pop(out);
+}
+
+CycleStats CycleRunner::stats() const {
+  CycleStats s;
+  auto get = [](const std::atomic<std::uint64_t>& a) { return a.load(std::memory_order_relaxed); };
+  s.counters.cycles = get(counters_.cycles);
+  s.counters.frames_sent = get(counters_.frames_sent);
+  s.counters.good_replies = get(counters_.good_replies);
+  s.counters.bad_replies = get(counters_.bad_replies);
+  s.counters.missing_replies = get(counters_.missing_replies);
+  s.counters.partial_replies = get(counters_.partial_replies);
+  s.counters.overruns = get(counters_.overruns);
+  s.counters.skipped_cycles = get(counters_.skipped_cycles);
+  s.counters.port_losses = get(counters_.port_losses);
+  s.counters.port_opens = get(counters_.port_opens);
+  s.counters.send_failures = get(counters_.send_failures);
+  s.counters.stray_bytes = get(counters_.stray_bytes);
+  s.wake_lateness = wake_lateness_.copy();
+  s.reply_latency = reply_latency_.copy();
+  s.work_time = work_time_.copy();
+  return s;
+}
+
+void CycleRunner::cycle_loop() noexcept {
+  MonoTime next = mono_now() + config_.period;
+  last_overrun_report_ = next - kReportInterval;  // the first overrun is reported at once
+  while (!stop_.load(std::memory_order_relaxed)) {
+    sleep_until(next);
+    const MonoTime wake = mono_now();
+    const MonoTime late = wake - next;
+    wake_lateness_.record(late);
+    if (late > config_.send_window) {
+      // Too late to get the frame out inside the window: skip rather than send late, and skip
+      // every period that has already passed as well.
+      const auto skipped = static_cast<std::uint64_t>(late / config_.period) + 1;
+      bump(counters_.overruns);
+      bump(counters_.skipped_cycles, skipped);
+      pending_overruns_ += skipped;
+      recorder_.record(wake, Direction::Event, record_flag::kSkipped, {});
+      next += config_.period * static_cast<std::int64_t>(skipped);
+    } else {
+      run_one_cycle(wake, next);
+      work_time_.record(mono_now() - wake);
+      bump(counters_.cycles);
+      next += config_.period;
+    }
+    report_overruns(wake);
+    progress_.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
+void CycleRunner::report_overruns(MonoTime now) noexcept {
+  if (pending_overruns_ == 0 || now - last_overrun_report_ < kReportInterval) return;
+  CycleEvent e;
+  e.kind = CycleEventKind::Overruns;
+  e.time = now;
+  e.count = pending_overruns_;
+  if (cycle_events_.try_push(e)) {
+    pending_overruns_ = 0;
+    last_overrun_report_ = now;
+  }
+}
+
+void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
+  if (const int fd = offered_fd_.exchange(-1, std::memory_order_acq_rel); fd >= 0) {
+    port_ = io::SerialPort::adopt(fd);
+    port_ready_.store(true, std::memory_order_relaxed);
+    bump(counters_.port_opens);
+    engine_.on_port_ready(wake);
+  }
+  if (port_.is_open()) {
+    const io::IoResult flushed = port_.flush_input();
+    if (flushed.status == io::IoStatus::DeviceLost) {
+      lose_port(wake, flushed.error_number);
+    } else {
+      bump(counters_.stray_bytes, flushed.bytes);
+      const std::span<const std::uint8_t> frame = engine_.frame_to_send(wake);
+      if (!frame.empty()) {
+        const MonoTime sent_at = mono_now();
+        const io::IoResult written = port_.write_frame(frame);
+        if (written.status == io::IoStatus::Ok) {
+          bump(counters_.frames_sent);
+          recorder_.record(sent_at, Direction::Tx, record_flag::kSent, frame);
+          const MonoTime deadline =
+              std::min(sent_at + config_.reply_deadline, planned + config_.period);
+          const std::size_t size = std::min(engine_.reply_size(), kMaxReply);
+          const std::span<std::uint8_t> reply(reply_.data(), size);
+          const io::IoResult got = port_.read_until(reply, deadline);
+          const MonoTime now = mono_now();
+          const auto partial = reply.first(got.bytes);
+          if (got.status == io::IoStatus::Ok) {
+            reply_latency_.record(now - sent_at);
+            const bool good = engine_.on_reply(reply, now);
+            bump(good ? counters_.good_replies : counters_.bad_replies);
+            recorder_.record(now, Direction::Rx,
+                             good ? record_flag::kReply : record_flag::kReply | record_flag::kBad,
+                             reply);
+          } else if (got.status == io::IoStatus::DeviceLost) {
+            if (got.bytes > 0) {
+              recorder_.record(now, Direction::Rx, record_flag::kMissing | record_flag::kPartial,
+                               partial);
+            }
+            lose_port(now, got.error_number);
+          } else {
+            bump(counters_.missing_replies);
+            std::uint8_t flags = record_flag::kMissing;
+            if (got.bytes > 0) {
+              bump(counters_.partial_replies);
+              flags |= record_flag::kPartial;
+            }
+            recorder_.record(now, Direction::Rx, flags, partial);
+            engine_.on_no_reply(now);
+          }
+        } else if (written.status == io::IoStatus::DeviceLost) {
+          recorder_.record(sent_at, Direction::Tx, record_flag::kSendFailed, frame);
+          lose_port(sent_at, written.error_number);
+        } else {
+          bump(counters_.send_failures);
+          bump(counters_.missing_replies);
+          recorder_.record(sent_at, Direction::Tx, record_flag::kSendFailed, frame);
+          engine_.on_no_reply(mono_now());
+        }
+      }
+    }
+  }
+  engine_.after_cycle(mono_now());
+}
+
+void CycleRunner::lose_port(MonoTime now, int error_number) noexcept {
+  port_ready_.store(false, std::memory_order_relaxed);
+  // Closing a tty may wait for output to drain: leave that to the keeper thread.
+  if (const int old = dead_fd_.exchange(port_.release(), std::memory_order_acq_rel); old >= 0) {
+    ::close(old);  // the keeper has not collected the previous one yet (rare)
+  }
+  port_wanted_.store(true, std::memory_order_release);
+  bump(counters_.port_losses);
+  recorder_.record(now, Direction::Event, record_flag::kPortLost, {});
+  CycleEvent e;
+  e.kind = CycleEventKind::PortLost;
+  e.time = now;
+  e.error_number = error_number;
+  cycle_events_.try_push(e);
+  engine_.on_port_lost(now);
+}
+
+void CycleRunner::keeper_loop() {
+  auto backoff = config_.reopen_backoff_min;
+  MonoTime next_attempt = mono_now();
+  int last_reported_errno = -1;
+  while (!stop_.load(std::memory_order_relaxed)) {
+    const MonoTime now = mono_now();
+    if (const int dead = dead_fd_.exchange(-1, std::memory_order_acq_rel); dead >= 0) {
+      ::close(dead);
+      // Give a replugged adapter time to come back before the first attempt.
+      backoff = config_.reopen_backoff_min;
+      next_attempt = now + backoff;
+    }
+    if (port_wanted_.load(std::memory_order_acquire) &&
+        offered_fd_.load(std::memory_order_acquire) < 0 && now >= next_attempt) {
+      auto opened = io::SerialPort::open(config_.device_path, config_.serial);
+      CycleEvent e;
+      e.time = now;
+      if (opened.ok()) {
+        const io::PortFeatures& f = opened.value().features();
+        std::string text = config_.device_path;
+        text += f.rs485_enabled ? ", rs485 mode on" : "";
+        if (f.rs485_errno != 0) {
+          text += ", rs485 mode not supported by the driver (" +
+                  std::string(std::strerror(f.rs485_errno)) + ")";
+        }
+        text += f.low_latency_enabled ? ", low latency on" : ", low latency not available";
+        e.kind = CycleEventKind::PortOpened;
+        set_text(e, text);
+        keeper_events_.try_push(e);
+        last_reported_errno = -1;
+        backoff = config_.reopen_backoff_min;
+        port_wanted_.store(false, std::memory_order_release);
+        offered_fd_.store(opened.value().release(), std::memory_order_release);
+      } else {
+        // Report the first failure and every change of reason, not every retry.
+        if (opened.error().error_number != last_reported_errno) {
+          e.kind = CycleEventKind::PortOpenFailed;
+          e.error_number = opened.error().error_number;
+          set_text(e, opened.error().message());
+          keeper_events_.try_push(e);
+          last_reported_errno = opened.error().error_number;
+        }
+        next_attempt = now + backoff;
+        backoff = std::min(backoff * 2, config_.reopen_backoff_max);
+      }
+    }
+    std::this_thread::sleep_for(kKeeperTick);
+  }
+}
+
+}  // namespace liftd::rt

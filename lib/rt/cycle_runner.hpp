@@ -1,0 +1,194 @@
+// The real-time cycle of one serial link: every period send the engine's frame, wait for the
+// reply until a deadline, feed the engine. Protocol independent; the engine decides the bytes.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <thread>
+
+#include "common/mono_time.hpp"
+#include "io/serial_port.hpp"
+#include "rt/flight_recorder.hpp"
+#include "rt/histogram.hpp"
+#include "rt/rt_thread.hpp"
+#include "rt/spsc_queue.hpp"
+
+namespace liftd::rt {
+
+/// The protocol side of a cycle (a DCP or USS master). Called only from the cycle thread;
+/// every method must be allocation free, lock free and non-blocking.
+class CycleEngine {
+ public:
+  virtual ~CycleEngine() = default;
+  /// The frame to send now (6 bytes for DCP). An empty span sends nothing this cycle.
+  /// The bytes must stay valid until the next call.
+  virtual std::span<const std::uint8_t> frame_to_send(MonoTime now) noexcept = 0;
+  /// Bytes of a complete reply (DCP 2: 6).
+  virtual std::size_t reply_size() const noexcept = 0;
+  /// A complete reply arrived in time. Return false if it is unusable (e.g. bad checksum):
+  /// the cycle counts it as a bad reply.
+  virtual bool on_reply(std::span<const std::uint8_t> reply, MonoTime now) noexcept = 0;
+  /// No complete reply by the deadline (late, short or missing).
+  virtual void on_no_reply(MonoTime now) noexcept = 0;
+  /// The device went away (or is not there); nothing is sent until it is back.
+  virtual void on_port_lost(MonoTime now) noexcept = 0;
+  /// The device is (back) open; the next cycle sends again. Start re-initialising here.
+  virtual void on_port_ready(MonoTime /*now*/) noexcept {}
+  /// End of every cycle, also without a port: publish snapshots, drain requests.
+  virtual void after_cycle(MonoTime /*now*/) noexcept {}
+};
+
+/// Parameters of one link's cycle.
+struct CycleConfig {
+  std::string device_path;    ///< serial device, e.g. /dev/ttyS1 or a pty slave
+  io::SerialSettings serial;  ///< line settings (DCP 7.1: 38400 8N1)
+  /// DCP 7.2: one transfer cycle every 15 ms.
+  std::chrono::nanoseconds period = std::chrono::milliseconds(15);
+  /// DCP 7.2: the drive's reply must be complete (its driver off) by 13.625 ms after our start.
+  std::chrono::nanoseconds reply_deadline = std::chrono::microseconds(13625);
+  /// Latest wake-up lateness at which we still send. DCP 7.2: our driver must be off by
+  /// 2.0624 ms and 6 bytes at 38400 baud take 1.5625 ms, so the frame must start by 0.5 ms.
+  std::chrono::nanoseconds send_window = std::chrono::microseconds(500);
+  RtThreadOptions thread;  ///< SCHED_FIFO priority, memory locking, affinity
+  std::chrono::nanoseconds reopen_backoff_min =
+      std::chrono::milliseconds(100);  ///< first retry after a loss
+  std::chrono::nanoseconds reopen_backoff_max =
+      std::chrono::seconds(2);  ///< retry interval cap (doubling)
+  /// How much traffic the flight recorder keeps (default 30 s = 2000 cycles of 15 ms).
+  std::chrono::nanoseconds recorder_span = std::chrono::seconds(30);
+};
+
+/// Kinds of events the cycle reports to the non-real-time side.
+enum class CycleEventKind : std::uint8_t {
+  ThreadStatus,    ///< real-time wishes refused at start (text in describe())
+  PortOpened,      ///< device opened (error_number: RS485/low-latency notes in text)
+  PortOpenFailed,  ///< open failed; will retry (text names device, call and errno)
+  PortLost,        ///< device lost (error_number = errno)
+  Overruns,        ///< `count` cycles skipped since the last report (at most once a second)
+};
+
+/// One event. Plain data so it can cross the SPSC queue without allocation.
+struct CycleEvent {
+  CycleEventKind kind = CycleEventKind::PortLost;  ///< what happened
+  MonoTime time{};                                 ///< when
+  int error_number = 0;                            ///< errno where relevant
+  std::uint64_t count = 0;                         ///< e.g. skipped cycles
+  std::array<char, 240> text{};                    ///< message (filled off the cycle thread)
+};
+
+/// A readable line for an event (for the log).
+std::string describe(const CycleEvent& event);
+
+/// Counters of the cycle, copied out by stats().
+struct CycleCounters {
+  std::uint64_t cycles = 0;           ///< cycles completed (sent or not)
+  std::uint64_t frames_sent = 0;      ///< frames written completely
+  std::uint64_t good_replies = 0;     ///< complete, in time, accepted by the engine
+  std::uint64_t bad_replies = 0;      ///< complete, in time, rejected by the engine
+  std::uint64_t missing_replies = 0;  ///< not complete by the deadline (incl. partial)
+  std::uint64_t partial_replies = 0;  ///< of the missing ones: some bytes came
+  std::uint64_t overruns = 0;         ///< wake-ups too late to send
+  std::uint64_t skipped_cycles = 0;   ///< cycles not run because of overruns
+  std::uint64_t port_losses = 0;      ///< device losses
+  std::uint64_t port_opens = 0;       ///< successful opens (first one included)
+  std::uint64_t send_failures = 0;    ///< frames the port refused
+  std::uint64_t stray_bytes = 0;      ///< bytes flushed before sending
+};
+
+/// A copy of the cycle's statistics, taken on any thread.
+struct CycleStats {
+  CycleCounters counters;       ///< counters
+  HistogramData wake_lateness;  ///< wake-up minus planned time, 1 us bins
+  HistogramData reply_latency;  ///< send start to complete reply, 10 us bins
+  HistogramData work_time;      ///< wake-up to end of cycle work, 1 us bins
+};
+
+/// Runs the cycle on its own real-time thread and a helper thread that (re)opens the device.
+class CycleRunner {
+ public:
+  /// Everything is allocated here; `engine` must outlive the runner.
+  CycleRunner(CycleConfig config, CycleEngine& engine);
+  CycleRunner(const CycleRunner&) = delete;
+  CycleRunner& operator=(const CycleRunner&) = delete;
+  /// Stops and joins both threads.
+  ~CycleRunner();
+
+  /// Starts the threads. Returns 0 or the errno of a failed thread start. A missing device is
+  /// not an error: it is retried with backoff.
+  int start();
+  /// Stops the cycle and closes the port (idempotent).
+  void stop() noexcept;
+
+  /// Non-real-time side: pops the next event. Call from one thread only.
+  bool poll_event(CycleEvent& out) noexcept;
+
+  /// What the cycle thread got (SCHED_FIFO, memory lock, affinity); valid after start().
+  const RtThreadStatus& thread_status() const noexcept { return thread_.status(); }
+  /// Any thread: counters and histograms.
+  CycleStats stats() const;
+  /// Any thread: the flight recorder (copy() it, then write_text()).
+  const FlightRecorder& recorder() const noexcept { return recorder_; }
+  /// Any thread: goes up every period while the cycle thread is alive (systemd watchdog).
+  std::uint64_t progress() const noexcept { return progress_.load(std::memory_order_relaxed); }
+  /// Any thread: true while a port is open on the cycle thread.
+  bool port_ready() const noexcept { return port_ready_.load(std::memory_order_relaxed); }
+  /// The configuration in use.
+  const CycleConfig& config() const noexcept { return config_; }
+
+ private:
+  static constexpr std::size_t kMaxReply = 256;  // USS A: a telegram is at most 256 bytes
+  static constexpr std::size_t kEventSlots = 64;
+
+  void cycle_loop() noexcept;
+  void run_one_cycle(MonoTime wake, MonoTime planned) noexcept;
+  void lose_port(MonoTime now, int error_number) noexcept;
+  void keeper_loop();
+  void report_overruns(MonoTime now) noexcept;
+  static void bump(std::atomic<std::uint64_t>& a, std::uint64_t by = 1) noexcept {
+    a.store(a.load(std::memory_order_relaxed) + by, std::memory_order_relaxed);
+  }
+
+  CycleConfig config_;
+  CycleEngine& engine_;
+
+  // Cycle thread state.
+  io::SerialPort port_;
+  std::array<std::uint8_t, kMaxReply> reply_{};
+  std::uint64_t pending_overruns_ = 0;
+  MonoTime last_overrun_report_{};
+
+  // Shared with the keeper thread: a freshly opened descriptor, a dead one to close, and
+  // whether the cycle wants a port.
+  std::atomic<int> offered_fd_{-1};
+  std::atomic<int> dead_fd_{-1};
+  std::atomic<bool> port_wanted_{true};
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> port_ready_{false};
+  std::atomic<std::uint64_t> progress_{0};
+
+  // Statistics (written by the cycle thread only).
+  struct Counters {
+    std::atomic<std::uint64_t> cycles{0}, frames_sent{0}, good_replies{0}, bad_replies{0},
+        missing_replies{0}, partial_replies{0}, overruns{0}, skipped_cycles{0}, port_losses{0},
+        port_opens{0}, send_failures{0}, stray_bytes{0};
+  } counters_;
+  Histogram<5000> wake_lateness_{std::chrono::microseconds(1)};   // 0..5 ms in 1 us bins
+  Histogram<1500> reply_latency_{std::chrono::microseconds(10)};  // 0..15 ms in 10 us bins
+  Histogram<5000> work_time_{std::chrono::microseconds(1)};       // 0..5 ms in 1 us bins
+  FlightRecorder recorder_;
+
+  // Events: one queue per producing thread, both drained by poll_event().
+  SpscQueue<CycleEvent, kEventSlots> cycle_events_;
+  SpscQueue<CycleEvent, kEventSlots> keeper_events_;
+
+  RtThread thread_;
+  std::thread keeper_;
+  bool started_ = false;
+};
+
+}  // namespace liftd::rt

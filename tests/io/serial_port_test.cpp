@@ -1,0 +1,221 @@
+// SerialPort and PtyPair over real pseudo-terminals: settings, errors, deadline reads,
+// flushing and device-loss detection.
+#include "io/serial_port.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <chrono>
+#include <thread>
+
+#include "io/pty.hpp"
+
+namespace liftd::io {
+namespace {
+
+using std::chrono::milliseconds;
+
+PtyPair make_pty() {
+  auto pty = PtyPair::create();
+  if (!pty.ok()) ADD_FAILURE() << pty.error().message();
+  return std::move(pty).value();
+}
+
+TEST(IoSerialPort, OpensAPtySlaveAtEveryRequiredRate) {
+  // Legend: the rates the brief names (DCP 7.1 38400; USS A: 9600..187500, 187500 needs BOTHER),
+  // each with the framing its protocol uses.
+  struct Case {
+    std::uint32_t baud;
+    Parity parity;
+  };
+  const Case cases[] = {{9600, Parity::None},  {19200, Parity::Even},  {38400, Parity::None},
+                        {57600, Parity::None}, {115200, Parity::None}, {187500, Parity::Even}};
+  PtyPair pty = make_pty();
+  for (const auto& c : cases) {
+    SerialSettings s;
+    s.baud = c.baud;
+    s.parity = c.parity;
+    auto port = SerialPort::open(pty.slave_path(), s);
+    ASSERT_TRUE(port.ok()) << c.baud << ": " << port.error().message();
+    EXPECT_TRUE(port.value().is_open());
+  }
+}
+
+TEST(IoSerialPort, MissingDeviceErrorNamesDeviceCallAndErrno) {
+  auto port = SerialPort::open("/dev/liftd-no-such-tty", SerialSettings{});
+  ASSERT_FALSE(port.ok());
+  EXPECT_EQ(port.error().device, "/dev/liftd-no-such-tty");
+  EXPECT_EQ(port.error().call, "open");
+  EXPECT_EQ(port.error().error_number, ENOENT);
+  EXPECT_EQ(port.error().message(), "/dev/liftd-no-such-tty: open: No such file or directory");
+}
+
+TEST(IoSerialPort, NotATtyIsRefusedAtTermiosSetup) {
+  auto port = SerialPort::open("/dev/null", SerialSettings{});
+  ASSERT_FALSE(port.ok());
+  EXPECT_EQ(port.error().error_number, ENOTTY);
+  EXPECT_NE(port.error().message().find("/dev/null: TIOCEXCL"), std::string::npos);
+}
+
+TEST(IoSerialPort, RejectsImpossibleFraming) {
+  PtyPair pty = make_pty();
+  SerialSettings s;
+  s.data_bits = 9;
+  auto port = SerialPort::open(pty.slave_path(), s);
+  ASSERT_FALSE(port.ok());
+  EXPECT_EQ(port.error().call, "settings");
+  EXPECT_EQ(port.error().error_number, EINVAL);
+}
+
+TEST(IoSerialPort, SecondOpenIsRefusedWhileExclusive) {
+  PtyPair pty = make_pty();
+  auto first = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(first.ok());
+  if (geteuid() != 0) {
+    auto second = SerialPort::open(pty.slave_path(), SerialSettings{});
+    ASSERT_FALSE(second.ok());
+    EXPECT_EQ(second.error().error_number, EBUSY);
+    return;
+  }
+  // Root (CAP_SYS_ADMIN) may ignore TIOCEXCL, so try the second open as an ordinary user.
+  ASSERT_EQ(chmod(pty.slave_path().c_str(), 0666), 0);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    constexpr uid_t kNobody = 65534;
+    if (setgid(kNobody) != 0 || setuid(kNobody) != 0) _exit(100);
+    auto second = SerialPort::open(pty.slave_path(), SerialSettings{});
+    _exit(second.ok() ? 0 : second.error().error_number);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), EBUSY);
+}
+
+TEST(IoSerialPort, Rs485AutoCarriesOnAndSaysWhyRequiredFails) {
+  PtyPair pty = make_pty();
+  SerialSettings s;
+  s.rs485 = Rs485Mode::Auto;
+  {
+    auto port = SerialPort::open(pty.slave_path(), s);
+    ASSERT_TRUE(port.ok()) << port.error().message();
+    EXPECT_FALSE(port.value().features().rs485_enabled);
+    EXPECT_NE(port.value().features().rs485_errno, 0);  // a pty has no RS485 mode
+    EXPECT_FALSE(port.value().features().low_latency_enabled);
+  }
+  s.rs485 = Rs485Mode::Required;
+  auto port = SerialPort::open(pty.slave_path(), s);
+  ASSERT_FALSE(port.ok());
+  EXPECT_EQ(port.error().call, "TIOCSRS485");
+  EXPECT_NE(port.error().message().find("rs485 mode required"), std::string::npos);
+  s.rs485 = Rs485Mode::Off;
+  auto off = SerialPort::open(pty.slave_path(), s);
+  ASSERT_TRUE(off.ok());
+  EXPECT_EQ(off.value().features().rs485_errno, 0);
+}
+
+TEST(IoSerialPort, FrameGoesThroughBothWaysUnchanged) {
+  // Raw mode: CR, LF, XON/XOFF, DEL and 0xFF must pass untouched.
+  PtyPair pty = make_pty();
+  auto port = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(port.ok());
+  SerialPort master = pty.take_master();
+  const std::array<std::uint8_t, 6> frame{0x0D, 0x0A, 0x11, 0x13, 0x7F, 0xFF};
+  ASSERT_EQ(port.value().write_frame(frame).status, IoStatus::Ok);
+  std::array<std::uint8_t, 6> got{};
+  const IoResult r = master.read_until(got, mono_now() + milliseconds(500));
+  ASSERT_EQ(r.status, IoStatus::Ok);
+  EXPECT_EQ(got, frame);
+  ASSERT_EQ(master.write_frame(frame).status, IoStatus::Ok);
+  got = {};
+  ASSERT_EQ(port.value().read_until(got, mono_now() + milliseconds(500)).status, IoStatus::Ok);
+  EXPECT_EQ(got, frame);
+}
+
+TEST(IoSerialPort, ReadUntilTimesOutWithThePartialCount) {
+  PtyPair pty = make_pty();
+  auto port = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(port.ok());
+  const std::array<std::uint8_t, 2> two{0x61, 0x80};
+  ASSERT_EQ(::write(pty.master_fd(), two.data(), two.size()), 2);
+  std::array<std::uint8_t, 6> buf{};
+  const MonoTime start = mono_now();
+  const IoResult r = port.value().read_until(buf, start + milliseconds(30));
+  const MonoTime took = mono_now() - start;
+  EXPECT_EQ(r.status, IoStatus::Timeout);
+  EXPECT_EQ(r.bytes, 2U);
+  EXPECT_EQ(buf[0], 0x61);
+  EXPECT_GE(took, milliseconds(30));  // it waited for the deadline, not less
+  EXPECT_LT(took, milliseconds(1000));
+}
+
+TEST(IoSerialPort, ReadUntilCollectsBytesArrivingInPieces) {
+  PtyPair pty = make_pty();
+  auto port = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(port.ok());
+  const int master = pty.master_fd();
+  std::thread sender([master] {
+    for (std::uint8_t b = 1; b <= 6; ++b) {
+      (void)!::write(master, &b, 1);
+      std::this_thread::sleep_for(milliseconds(2));
+    }
+  });
+  std::array<std::uint8_t, 6> buf{};
+  const IoResult r = port.value().read_until(buf, mono_now() + milliseconds(2000));
+  sender.join();
+  EXPECT_EQ(r.status, IoStatus::Ok);
+  EXPECT_EQ(buf, (std::array<std::uint8_t, 6>{1, 2, 3, 4, 5, 6}));
+}
+
+TEST(IoSerialPort, FlushInputDropsStrayBytes) {
+  PtyPair pty = make_pty();
+  auto port = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(port.ok());
+  const std::array<std::uint8_t, 3> junk{1, 2, 3};
+  ASSERT_EQ(::write(pty.master_fd(), junk.data(), junk.size()), 3);
+  std::this_thread::sleep_for(milliseconds(20));  // let the pty deliver them
+  EXPECT_EQ(port.value().flush_input().status, IoStatus::Ok);
+  std::array<std::uint8_t, 1> buf{};
+  EXPECT_EQ(port.value().read_until(buf, mono_now() + milliseconds(20)).status, IoStatus::Timeout);
+}
+
+TEST(IoSerialPort, HangUpIsReportedAsDeviceLostEverywhere) {
+  // Legend: after the far end closes, each operation must answer DeviceLost, never Timeout.
+  PtyPair pty = make_pty();
+  auto port = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(port.ok());
+  pty.close();
+  std::array<std::uint8_t, 6> buf{};
+  EXPECT_EQ(port.value().read_until(buf, mono_now() + milliseconds(200)).status,
+            IoStatus::DeviceLost);
+  EXPECT_EQ(port.value().flush_input().status, IoStatus::DeviceLost);
+  EXPECT_EQ(port.value().wait_readable(mono_now() + milliseconds(200)).status,
+            IoStatus::DeviceLost);
+  EXPECT_EQ(port.value().write_frame(buf).status, IoStatus::DeviceLost);
+}
+
+TEST(IoSerialPort, DeviceLostErrnos) {
+  for (int e : {EIO, ENODEV, ENXIO, EPIPE, ESHUTDOWN}) EXPECT_TRUE(is_device_lost_errno(e)) << e;
+  for (int e : {EAGAIN, EINTR, EINVAL, EBADF}) EXPECT_FALSE(is_device_lost_errno(e)) << e;
+  EXPECT_EQ(to_string(IoStatus::DeviceLost), "device-lost");
+}
+
+TEST(IoPty, SlavePathIsAPtsDeviceAndReleaseKeepsItOpen) {
+  PtyPair pty = make_pty();
+  EXPECT_EQ(pty.slave_path().rfind("/dev/pts/", 0), 0U);
+  EXPECT_GE(pty.master_fd(), 0);
+  SerialPort master = pty.take_master();
+  EXPECT_EQ(pty.master_fd(), -1);
+  const int fd = master.release();
+  EXPECT_GE(fd, 0);
+  EXPECT_FALSE(master.is_open());
+  ::close(fd);
+}
+
+}  // namespace
+}  // namespace liftd::io

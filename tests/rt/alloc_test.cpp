@@ -1,0 +1,160 @@
+// No allocation inside the cycle: malloc and operator new are hooked for the whole test
+// binary and count calls made on the cycle thread while counting is switched on.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+#include <thread>
+
+#include "echo_engine.hpp"
+#include "fake_responder.hpp"
+#include "io/pty.hpp"
+#include "rt/cycle_runner.hpp"
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define LIFTD_ALLOC_HOOKS 0  // the sanitizers own malloc; the hooks would fight them
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define LIFTD_ALLOC_HOOKS 0
+#else
+#define LIFTD_ALLOC_HOOKS 1
+#endif
+#else
+#define LIFTD_ALLOC_HOOKS 1
+#endif
+
+namespace {
+
+thread_local bool t_counting = false;  // set on the cycle thread only
+std::atomic<std::uint64_t> g_mallocs{0};
+std::atomic<std::uint64_t> g_news{0};
+
+[[maybe_unused]] void note_malloc() noexcept {
+  if (t_counting) g_mallocs.fetch_add(1, std::memory_order_relaxed);
+}
+
+}  // namespace
+
+#if LIFTD_ALLOC_HOOKS
+extern "C" {
+void* __libc_malloc(std::size_t size);
+void* __libc_calloc(std::size_t count, std::size_t size);
+void* __libc_realloc(void* ptr, std::size_t size);
+void* __libc_memalign(std::size_t alignment, std::size_t size);
+
+void* malloc(std::size_t size) {
+  note_malloc();
+  return __libc_malloc(size);
+}
+void* calloc(std::size_t count, std::size_t size) {
+  note_malloc();
+  return __libc_calloc(count, size);
+}
+void* realloc(void* ptr, std::size_t size) {
+  note_malloc();
+  return __libc_realloc(ptr, size);
+}
+void* aligned_alloc(std::size_t alignment, std::size_t size) {
+  note_malloc();
+  return __libc_memalign(alignment, size);
+}
+int posix_memalign(void** out, std::size_t alignment, std::size_t size) {
+  note_malloc();
+  *out = __libc_memalign(alignment, size);
+  return *out != nullptr ? 0 : ENOMEM;
+}
+}  // extern "C"
+
+void* operator new(std::size_t size) {
+  if (t_counting) g_news.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = __libc_malloc(size != 0 ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+// The default deletes call free(), which matches __libc_malloc.
+void* operator new[](std::size_t size) {
+  return ::operator new(size);
+}
+#endif
+
+namespace liftd::rt {
+namespace {
+
+using std::chrono::milliseconds;
+
+// Switches counting on for the cycle thread after a warm-up; the flag then stays on for every
+// later cycle, including cycles without a port.
+class CountingEngine : public testing::EchoEngine {
+ public:
+  explicit CountingEngine(std::uint64_t warm_up) : warm_up_(warm_up) {}
+  std::span<const std::uint8_t> frame_to_send(MonoTime now) noexcept override {
+    if (++frames_ == warm_up_) {
+      t_counting = true;
+      counting_.store(true);
+    }
+    if (t_counting) counted_frames_.fetch_add(1, std::memory_order_relaxed);
+    return EchoEngine::frame_to_send(now);
+  }
+  std::atomic<bool> counting_{false};
+  std::atomic<std::uint64_t> counted_frames_{0};
+
+ private:
+  std::uint64_t warm_up_;
+  std::uint64_t frames_ = 0;
+};
+
+TEST(RtCycleAlloc, NoAllocationOnTheCycleThreadAfterWarmUpNorAfterDeviceLoss) {
+  if (!LIFTD_ALLOC_HOOKS) GTEST_SKIP() << "allocation hooks are off under sanitizers";
+  // The hooks really count: an allocation on a counting thread is seen.
+  void* (*volatile malloc_fn)(std::size_t) = &std::malloc;  // volatile: not optimised away
+  t_counting = true;
+  void* by_new = ::operator new(16);
+  void* by_malloc = malloc_fn(16);
+  t_counting = false;
+  ::operator delete(by_new);
+  std::free(by_malloc);
+  ASSERT_EQ(g_news.load(), 1U);
+  ASSERT_GE(g_mallocs.load(), 1U);
+  g_news = 0;
+  g_mallocs = 0;
+
+  auto pty = io::PtyPair::create();
+  ASSERT_TRUE(pty.ok());
+  testing::FakeResponder responder(pty.value().master_fd(), std::chrono::microseconds(1500));
+  ASSERT_EQ(responder.start(), 0);
+  CountingEngine engine(50);
+  CycleConfig config;
+  config.device_path = pty.value().slave_path();
+  config.thread.priority = 20;
+  config.thread.lock_memory = false;
+  config.send_window = milliseconds(3);
+  CycleRunner runner(config, engine);
+  ASSERT_EQ(runner.start(), 0);
+  // 300 counted cycles of normal traffic (statistics, recorder, snapshots of stats read from
+  // this thread meanwhile).
+  ASSERT_TRUE([&] {
+    for (int i = 0; i < 2000 && engine.counted_frames_.load() < 300; ++i) {
+      (void)runner.stats();
+      (void)runner.recorder().copy();
+      std::this_thread::sleep_for(milliseconds(5));
+    }
+    return engine.counted_frames_.load() >= 300;
+  }());
+  EXPECT_EQ(g_mallocs.load(), 0U) << "malloc calls on the cycle thread";
+  EXPECT_EQ(g_news.load(), 0U) << "operator new calls on the cycle thread";
+
+  // Device loss: the loss path and the cycles without a port must not allocate either.
+  responder.stop();
+  pty.value().close();
+  std::this_thread::sleep_for(milliseconds(300));
+  EXPECT_EQ(runner.stats().counters.port_losses, 1U);
+  const std::uint64_t mallocs = g_mallocs.load();
+  const std::uint64_t news = g_news.load();
+  runner.stop();
+  EXPECT_EQ(mallocs, 0U);
+  EXPECT_EQ(news, 0U);
+  EXPECT_TRUE(engine.counting_.load());
+}
+
+}  // namespace
+}  // namespace liftd::rt

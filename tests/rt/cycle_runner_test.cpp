@@ -1,0 +1,477 @@
+// The cycle over real pty pairs: long clean runs, injected faults and their exact counts,
+// device loss and reappearance, a missing device at start, overruns and late replies.
+// Timing on the shared test machine is noisy: assertions are on counts and protocol
+// behaviour, with margins where the kernel's scheduling decides.
+#include "rt/cycle_runner.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <sstream>
+#include <thread>
+#include <vector>
+
+#include "echo_engine.hpp"
+#include "fake_responder.hpp"
+#include "fault_proxy.hpp"
+#include "io/pty.hpp"
+
+namespace liftd::rt {
+namespace {
+
+using std::chrono::milliseconds;
+using testing::EchoEngine;
+using testing::FakeResponder;
+using testing::Fault;
+using testing::FaultProxy;
+
+constexpr int kTestPriority = 20;  // SCHED_FIFO where permitted; normal scheduling otherwise
+
+CycleConfig test_config(const std::string& path) {
+  CycleConfig c;
+  c.device_path = path;
+  c.thread.priority = kTestPriority;
+  c.thread.lock_memory = false;  // the test process is not ours to pin into RAM
+  // The shared test machine may wake us a few ms late; the spec's 0.5 ms window would turn
+  // that into skipped cycles, which this test does not study (RtCycle.Overrun... does).
+  c.send_window = milliseconds(3);
+  return c;
+}
+
+bool wait_for(const std::function<bool()>& done, milliseconds timeout) {
+  const MonoTime end = mono_now() + timeout;
+  while (mono_now() < end) {
+    if (done()) return true;
+    std::this_thread::sleep_for(milliseconds(5));
+  }
+  return done();
+}
+
+std::vector<CycleEvent> drain(CycleRunner& runner) {
+  std::vector<CycleEvent> events;
+  CycleEvent e;
+  while (runner.poll_event(e)) events.push_back(e);
+  return events;
+}
+
+std::size_t count_kind(const std::vector<CycleEvent>& events, CycleEventKind kind) {
+  std::size_t n = 0;
+  for (const auto& e : events) n += e.kind == kind ? 1 : 0;
+  return n;
+}
+
+io::PtyPair make_pty() {
+  auto pty = io::PtyPair::create();
+  if (!pty.ok()) ADD_FAILURE() << pty.error().message();
+  return std::move(pty).value();
+}
+
+// A directory with a symlink standing for a udev name (/dev/serial/by-id/...), so a test can
+// point the "device" at a new pty, as a replugged USB adapter would reappear.
+class DeviceLink {
+ public:
+  DeviceLink()
+      : dir_(std::filesystem::temp_directory_path() /
+             ("liftd-rt-" + std::to_string(getpid()) + "-" + std::to_string(counter_++))) {
+    std::filesystem::create_directories(dir_);
+  }
+  ~DeviceLink() { std::filesystem::remove_all(dir_); }
+  std::string path() const { return (dir_ / "tty").string(); }
+  void point_to(const std::string& target) {
+    const auto tmp = dir_ / "tty.new";
+    std::filesystem::remove(tmp);
+    std::filesystem::create_symlink(target, tmp);
+    std::filesystem::rename(tmp, dir_ / "tty");  // atomic replace
+  }
+
+ private:
+  static inline int counter_ = 0;
+  std::filesystem::path dir_;
+};
+
+TEST(RtCycle, TwoThousandCyclesWithoutErrorsAtFifteenMsSpacing) {
+  constexpr std::uint64_t kCycles = 2000;  // 30 s: the flight recorder's default span
+  io::PtyPair pty = make_pty();
+  FakeResponder responder(pty.master_fd(), std::chrono::microseconds(2000), kTestPriority);
+  ASSERT_EQ(responder.start(), 0);
+  EchoEngine engine;
+  CycleRunner runner(test_config(pty.slave_path()), engine);
+  ASSERT_EQ(runner.start(), 0);
+  ASSERT_TRUE(wait_for([&] { return runner.stats().counters.cycles >= kCycles; },
+                       milliseconds(kCycles * 15 * 2)));
+  runner.stop();
+  responder.stop();
+
+  const CycleStats s = runner.stats();
+  const CycleCounters& c = s.counters;
+  // Zero errors is the expectation on a quiet machine. This test also runs on shared, noisy
+  // machines where the pty's delivery work (a normal-priority kernel worker) or the whole VM
+  // can stall for tens of ms; replies then arrive late. Allow those (at most 2 %), show them,
+  // and insist that every rejected reply is an intact late answer, never a corrupt or
+  // misattributed one.
+  if (c.bad_replies + c.missing_replies > 0) {
+    const auto all = runner.recorder().copy();
+    std::ostringstream around;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      if ((all[i].flags & (record_flag::kBad | record_flag::kMissing)) == 0) continue;
+      const std::size_t from = i > 2 ? i - 2 : 0;
+      write_text(around, std::span(all).subspan(from, std::min<std::size_t>(4, all.size() - from)));
+    }
+    std::printf("late or missing replies on this machine:\n%s", around.str().c_str());
+  }
+  EXPECT_EQ(engine.corrupt_.load(), 0U);
+  EXPECT_EQ(engine.stale_.load(), c.bad_replies);
+  EXPECT_LE(c.bad_replies + c.missing_replies, kCycles / 50);
+  EXPECT_EQ(c.port_losses, 0U);
+  EXPECT_EQ(c.port_opens, 1U);
+  // The first cycle may come before the keeper has opened the port; every other sends.
+  EXPECT_GE(c.frames_sent + 1, c.cycles);
+  EXPECT_EQ(c.good_replies + c.bad_replies + c.missing_replies, c.frames_sent);
+  EXPECT_EQ(engine.good_.load(), c.good_replies);
+  EXPECT_EQ(engine.after_.load(), c.cycles);
+  EXPECT_LE(c.overruns, c.cycles / 100) << "scheduling too noisy even for a 3 ms window";
+  // The reply cannot be faster than the responder's delay.
+  EXPECT_GE(s.reply_latency.percentile_us(0.01), 2000.0);
+  EXPECT_LT(s.reply_latency.percentile_us(0.5), 13625.0);
+
+  // Mean spacing of the sent frames over the whole run: absolute-time sleeps make it 15 ms
+  // no matter how late single wake-ups were (each skipped cycle would add 15 ms).
+  const auto records = runner.recorder().copy();
+  std::vector<MonoTime> sends;
+  for (const auto& r : records) {
+    if (r.direction == Direction::Tx) sends.push_back(r.time);
+  }
+  ASSERT_GT(sends.size(), kCycles - 10);
+  const double mean_ms =
+      std::chrono::duration<double, std::milli>(sends.back() - sends.front()).count() /
+      static_cast<double>(sends.size() - 1);
+  EXPECT_NEAR(
+      mean_ms, 15.0,
+      0.1 + 15.0 * static_cast<double>(c.skipped_cycles) / static_cast<double>(sends.size()));
+  // The recorder holds the last 30 s: 2000 cycles, two records each.
+  EXPECT_EQ(runner.recorder().capacity(), 4000U);
+  std::ostringstream dump;
+  write_text(dump, records);
+  EXPECT_NE(dump.str().find(" tx 01 "), std::string::npos);
+  EXPECT_NE(dump.str().find("  reply\n"), std::string::npos);
+
+  const auto events = drain(runner);
+  EXPECT_EQ(count_kind(events, CycleEventKind::PortOpened), 1U);
+  EXPECT_EQ(count_kind(events, CycleEventKind::PortLost), 0U);
+}
+
+TEST(RtCycle, InjectedFaultsProduceTheExpectedCountsThenHangUpIsALoss) {
+  // Legend: every 10th reply (index 5, 15, 25, ...) gets the next fault of this list.
+  // What the master must count for each:
+  //   FlipBit    -> 1 bad reply (checksum)
+  //   DropByte   -> 1 missing reply, partial (5 of 6 bytes)
+  //   Truncate   -> 1 missing reply, partial (3 of 6 bytes)
+  //   ExtraBytes -> a good reply, 2 stray bytes flushed before the next send
+  //   Stall      -> 2 missing replies, then the stale reply is read in the cycle after next
+  //                 and rejected (1 bad); the two delayed replies behind it are flushed
+  //   Silence    -> 1 missing reply, nothing partial
+  const std::array<Fault, 6> kPlan = {Fault::FlipBit,    Fault::DropByte, Fault::Truncate,
+                                      Fault::ExtraBytes, Fault::Stall,    Fault::Silence};
+  io::PtyPair side_a = make_pty();  // the master's port: runner on the slave, proxy on master
+  io::PtyPair side_b = make_pty();  // the responder's port: responder on the master
+  io::SerialSettings raw;
+  raw.rs485 = io::Rs485Mode::Off;
+  auto b_slave = io::SerialPort::open(side_b.slave_path(), raw);
+  ASSERT_TRUE(b_slave.ok()) << b_slave.error().message();
+  FakeResponder responder(side_b.master_fd(), std::chrono::microseconds(1000), kTestPriority);
+  FaultProxy proxy(
+      side_a.master_fd(), b_slave.value().fd(),
+      [&kPlan](std::uint64_t i) {
+        return i % 10 == 5 ? kPlan[(i / 10) % kPlan.size()] : Fault::None;
+      },
+      kTestPriority);
+  ASSERT_EQ(responder.start(), 0);
+  ASSERT_EQ(proxy.start(), 0);
+  EchoEngine engine;
+  CycleRunner runner(test_config(side_a.slave_path()), engine);
+  ASSERT_EQ(runner.start(), 0);
+
+  ASSERT_TRUE(wait_for([&] { return proxy.requests() >= 600; }, milliseconds(20000)));
+  proxy.heal();
+  const std::uint64_t healed_at = proxy.requests();
+  ASSERT_TRUE(wait_for([&] { return proxy.requests() >= healed_at + 10; }, milliseconds(2000)));
+
+  // Now the far end hangs up: close the pty master the runner's slave belongs to.
+  proxy.stop();
+  const CycleCounters before = runner.stats().counters;
+  side_a.close();
+  ASSERT_TRUE(
+      wait_for([&] { return runner.stats().counters.port_losses == 1; }, milliseconds(1000)));
+  std::this_thread::sleep_for(milliseconds(100));
+  runner.stop();
+  responder.stop();
+
+  const auto n = [&proxy](Fault f) { return proxy.applied(f); };
+  for (Fault f : kPlan) EXPECT_GE(n(f), 9U) << static_cast<int>(f);
+  const CycleCounters& c = before;
+  // `before` may be taken while one frame waits for its reply.
+  EXPECT_LE(c.frames_sent - (c.good_replies + c.bad_replies + c.missing_replies), 1U);
+  EXPECT_EQ(engine.bad_.load(), c.bad_replies);
+  EXPECT_EQ(c.port_losses, 0U);
+
+  // Judge every cycle from the flight recorder: the reply record after each sent frame is that
+  // frame's outcome. Request index i carries sequence number i + 1 (the pty loses nothing).
+  struct Outcome {
+    std::uint8_t flags = 0;
+    std::uint16_t length = 0;
+    bool seen = false;
+  };
+  std::vector<Outcome> outcome(proxy.requests() + 2);
+  const auto records = runner.recorder().copy();
+  for (std::size_t i = 0; i + 1 < records.size(); ++i) {
+    if (records[i].direction != Direction::Tx || records[i + 1].direction != Direction::Rx)
+      continue;
+    const std::size_t seq = std::size_t{records[i].bytes[1]} << 8 | records[i].bytes[2];
+    if (seq == 0 || seq > outcome.size()) continue;
+    outcome[seq - 1] = Outcome{records[i + 1].flags, records[i + 1].length, true};
+  }
+  const auto is = [](const Outcome& o, std::uint8_t flags, std::uint16_t length) {
+    return o.seen && o.flags == flags && o.length == length;
+  };
+  constexpr std::uint8_t kGood = record_flag::kReply;
+  constexpr std::uint8_t kBad = record_flag::kReply | record_flag::kBad;
+  constexpr std::uint8_t kMissing = record_flag::kMissing;
+  constexpr std::uint8_t kPartial = record_flag::kMissing | record_flag::kPartial;
+  std::array<std::uint64_t, testing::kFaultKinds> as_legend{};
+  std::uint64_t clean = 0;
+  std::uint64_t clean_good = 0;
+  for (std::uint64_t i = 0; i + 2 < outcome.size() && i < healed_at; ++i) {
+    if (i % 10 == 5) {
+      const Fault f = kPlan[(i / 10) % kPlan.size()];
+      bool ok = false;
+      switch (f) {
+        case Fault::FlipBit:
+          ok = is(outcome[i], kBad, 6);
+          break;
+        case Fault::DropByte:
+          ok = is(outcome[i], kPartial, 5);
+          break;
+        case Fault::Truncate:
+          ok = is(outcome[i], kPartial, 3);
+          break;
+        case Fault::ExtraBytes:
+          ok = is(outcome[i], kGood, 6);
+          break;
+        case Fault::Silence:
+          ok = is(outcome[i], kMissing, 0);
+          break;
+        case Fault::Stall:
+          ok = is(outcome[i], kMissing, 0) && is(outcome[i + 1], kMissing, 0) &&
+               is(outcome[i + 2], kBad, 6);
+          break;
+        case Fault::None:
+          break;
+      }
+      as_legend[static_cast<std::size_t>(f)] += ok ? 1U : 0U;
+    } else if (i % 10 != 6 && i % 10 != 7 && outcome[i].seen) {
+      ++clean;  // neither faulted nor behind a stall
+      clean_good += is(outcome[i], kGood, 6) ? 1U : 0U;
+    }
+  }
+  // A loaded machine can delay a reply past its deadline on its own, which changes that one
+  // cycle's outcome: allow one such cycle per fault kind, and 2 % of the clean cycles.
+  for (Fault f : kPlan) {
+    EXPECT_GE(as_legend[static_cast<std::size_t>(f)] + 1, n(f)) << "fault " << static_cast<int>(f);
+  }
+  EXPECT_GE(clean_good, clean - clean / 50);
+  EXPECT_GE(clean, 400U);
+  // Extra bytes are flushed (and counted) before the next send.
+  EXPECT_GE(c.stray_bytes, 2 * (as_legend[static_cast<std::size_t>(Fault::ExtraBytes)]));
+  // Only flipped bits corrupt a reply; everything else the machine does only delays it.
+  EXPECT_LE(engine.corrupt_.load(), n(Fault::FlipBit));
+  EXPECT_GE(engine.corrupt_.load() + 1, n(Fault::FlipBit));
+
+  const CycleCounters after = runner.stats().counters;
+  EXPECT_EQ(after.port_losses, 1U);
+  EXPECT_EQ(engine.lost_.load(), 1U);
+  const auto events = drain(runner);
+  EXPECT_EQ(count_kind(events, CycleEventKind::PortLost), 1U);
+  // The flight recorder marks the loss.
+  bool saw_loss = false;
+  for (const auto& r : runner.recorder().copy()) {
+    saw_loss = saw_loss || (r.flags & record_flag::kPortLost) != 0;
+  }
+  EXPECT_TRUE(saw_loss);
+}
+
+TEST(RtCycle, RecoversFromDeviceLossAndReappearanceWithoutRestart) {
+  DeviceLink link;
+  auto first = std::make_unique<io::PtyPair>(make_pty());
+  link.point_to(first->slave_path());
+  auto responder =
+      std::make_unique<FakeResponder>(first->master_fd(), std::chrono::microseconds(1500));
+  ASSERT_EQ(responder->start(), 0);
+  EchoEngine engine;
+  CycleRunner runner(test_config(link.path()), engine);
+  ASSERT_EQ(runner.start(), 0);
+  ASSERT_TRUE(wait_for([&] { return engine.good_.load() >= 30; }, milliseconds(3000)));
+
+  // Unplug: the device and its node disappear.
+  responder->stop();
+  first->close();
+  ASSERT_TRUE(wait_for([&] { return engine.lost_.load() == 1; }, milliseconds(1000)));
+  EXPECT_FALSE(runner.port_ready());
+  const std::uint64_t sent_at_loss = runner.stats().counters.frames_sent;
+  std::this_thread::sleep_for(milliseconds(150));
+  // Nothing is sent while the port state is unknown.
+  EXPECT_EQ(runner.stats().counters.frames_sent, sent_at_loss);
+
+  // Replug: a new device under the same name.
+  io::PtyPair second = make_pty();
+  FakeResponder responder2(second.master_fd(), std::chrono::microseconds(1500));
+  ASSERT_EQ(responder2.start(), 0);
+  link.point_to(second.slave_path());
+  const std::uint64_t good_before = engine.good_.load();
+  ASSERT_TRUE(
+      wait_for([&] { return engine.good_.load() >= good_before + 30; }, milliseconds(5000)));
+  runner.stop();
+  responder2.stop();
+
+  const CycleCounters c = runner.stats().counters;
+  EXPECT_EQ(c.port_losses, 1U);
+  EXPECT_EQ(c.port_opens, 2U);
+  EXPECT_EQ(engine.ready_.load(), 2U);
+  EXPECT_EQ(engine.corrupt_.load(), 0U);  // late answers possible on a noisy machine
+  const auto events = drain(runner);
+  EXPECT_EQ(count_kind(events, CycleEventKind::PortOpened), 2U);
+  EXPECT_EQ(count_kind(events, CycleEventKind::PortLost), 1U);
+}
+
+TEST(RtCycle, MissingDeviceAtStartIsRetriedNotFatal) {
+  DeviceLink link;  // the symlink does not exist yet
+  EchoEngine engine;
+  CycleConfig config = test_config(link.path());
+  CycleRunner runner(config, engine);
+  ASSERT_EQ(runner.start(), 0);
+  std::this_thread::sleep_for(milliseconds(250));
+  EXPECT_FALSE(runner.port_ready());
+  EXPECT_EQ(runner.stats().counters.frames_sent, 0U);
+  EXPECT_GT(runner.progress(), 5U);  // the watchdog sees the cycle alive without a port
+  EXPECT_GT(engine.after_.load(), 5U);
+  auto events = drain(runner);
+  ASSERT_EQ(count_kind(events, CycleEventKind::PortOpenFailed),
+            1U);  // reported once, not per retry
+  for (const auto& e : events) {
+    if (e.kind == CycleEventKind::PortOpenFailed) {
+      EXPECT_EQ(describe(e), "serial port open failed, retrying: " + link.path() +
+                                 ": open: No such file or directory");
+    }
+  }
+
+  io::PtyPair pty = make_pty();
+  FakeResponder responder(pty.master_fd(), std::chrono::microseconds(1500));
+  ASSERT_EQ(responder.start(), 0);
+  link.point_to(pty.slave_path());
+  // Backoff 100, 200, 400, 800 ms...: the next attempt comes within a second.
+  EXPECT_TRUE(wait_for([&] { return engine.good_.load() >= 10; }, milliseconds(4000)));
+  runner.stop();
+  events = drain(runner);
+  ASSERT_EQ(count_kind(events, CycleEventKind::PortOpened), 1U);
+  for (const auto& e : events) {
+    if (e.kind == CycleEventKind::PortOpened) {
+      EXPECT_NE(describe(e).find("rs485 mode not supported by the driver"), std::string::npos);
+    }
+  }
+}
+
+TEST(RtCycle, RefusedRealTimeSchedulingIsReportedOnceAndTheCycleStillRuns) {
+  DeviceLink link;  // no device: only the thread matters here
+  EchoEngine engine;
+  CycleConfig config = test_config(link.path());
+  config.thread.priority = 1000;  // outside SCHED_FIFO's range: refused like EPERM would be
+  CycleRunner runner(config, engine);
+  ASSERT_EQ(runner.start(), 0);
+  EXPECT_FALSE(runner.thread_status().realtime);
+  EXPECT_TRUE(wait_for([&] { return runner.progress() >= 3; }, milliseconds(1000)));
+  runner.stop();
+  const auto events = drain(runner);
+  ASSERT_EQ(count_kind(events, CycleEventKind::ThreadStatus), 1U);
+  for (const auto& e : events) {
+    if (e.kind == CycleEventKind::ThreadStatus) {
+      EXPECT_EQ(e.error_number, EINVAL);
+      EXPECT_EQ(describe(e).rfind("cycle thread: SCHED_FIFO refused (EINVAL", 0), 0U)
+          << describe(e);
+    }
+  }
+}
+
+// Burns CPU for a while inside one cycle to force a wake-up far too late to send.
+class StallingEngine : public EchoEngine {
+ public:
+  void after_cycle(MonoTime now) noexcept override {
+    EchoEngine::after_cycle(now);
+    if (++cycles_ == 20) {
+      const MonoTime until = mono_now() + milliseconds(37);
+      while (mono_now() < until) {
+      }
+    }
+  }
+
+ private:
+  int cycles_ = 0;
+};
+
+TEST(RtCycle, OverrunSkipsLateCyclesCountsThemAndReportsOnce) {
+  // Legend: cycle 20 ends ~37 ms after its wake-up, so the next planned wake-up (15 ms) is
+  // ~22-24 ms in the past: one overrun, skipping that cycle and the one after it (2 periods).
+  io::PtyPair pty = make_pty();
+  FakeResponder responder(pty.master_fd(), std::chrono::microseconds(1000), kTestPriority);
+  ASSERT_EQ(responder.start(), 0);
+  StallingEngine engine;
+  CycleRunner runner(test_config(pty.slave_path()), engine);
+  ASSERT_EQ(runner.start(), 0);
+  ASSERT_TRUE(wait_for([&] { return runner.stats().counters.cycles >= 60; }, milliseconds(5000)));
+  runner.stop();
+  responder.stop();
+  const CycleCounters c = runner.stats().counters;
+  EXPECT_EQ(c.overruns, 1U);
+  EXPECT_EQ(c.skipped_cycles, 2U);
+  EXPECT_EQ(c.missing_replies, 0U);
+  const auto events = drain(runner);
+  ASSERT_EQ(count_kind(events, CycleEventKind::Overruns), 1U);
+  for (const auto& e : events) {
+    if (e.kind == CycleEventKind::Overruns) {
+      EXPECT_EQ(e.count, 2U);
+    }
+  }
+  std::size_t skipped_records = 0;
+  for (const auto& r : runner.recorder().copy()) {
+    skipped_records += (r.flags & record_flag::kSkipped) != 0 ? 1 : 0;
+  }
+  EXPECT_EQ(skipped_records, 1U);
+}
+
+TEST(RtCycle, ReplyAfterTheDeadlineCountsAsNoReply) {
+  // DCP 7.2: a reply not complete by 13.625 ms is lost. The responder answers after 13.9 ms,
+  // so no reply may ever be taken, and the late bytes are flushed before the next send.
+  io::PtyPair pty = make_pty();
+  FakeResponder responder(pty.master_fd(), std::chrono::microseconds(13900), kTestPriority);
+  ASSERT_EQ(responder.start(), 0);
+  EchoEngine engine;
+  CycleRunner runner(test_config(pty.slave_path()), engine);
+  ASSERT_EQ(runner.start(), 0);
+  ASSERT_TRUE(
+      wait_for([&] { return runner.stats().counters.frames_sent >= 100; }, milliseconds(5000)));
+  runner.stop();
+  responder.stop();
+  const CycleCounters c = runner.stats().counters;
+  EXPECT_EQ(c.good_replies, 0U);
+  EXPECT_EQ(engine.good_.load(), 0U);
+  // A late answer normally lands between the deadline and the next send and is flushed; on a
+  // loaded machine it may slip past the next send and be read (and rejected) as stale.
+  EXPECT_EQ(engine.corrupt_.load(), 0U);
+  EXPECT_EQ(c.missing_replies + c.bad_replies, c.frames_sent);
+  EXPECT_GE(c.missing_replies, c.frames_sent / 2);
+  EXPECT_GE(c.stray_bytes, 6 * (c.frames_sent / 4));
+}
+
+}  // namespace
+}  // namespace liftd::rt
