@@ -1,0 +1,45 @@
+// Floors of the installation and the "next possible stop" (DCP 11.1.2.1: the lift controller
+// must know which floors it can still serve while travelling). Fixed capacity, no allocation.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+
+#include "lift/inputs.hpp"
+
+namespace liftd::lift {
+
+/// Largest number of floors one installation may have (fixed storage, no allocation).
+inline constexpr std::size_t kMaxFloors = 128;
+
+/// Floor levels in mm from the lowest level, strictly increasing.
+class FloorTable {
+ public:
+  /// Replaces the table; false (table unchanged) if empty, too long or not strictly increasing.
+  bool assign(std::span<const std::int64_t> levels_mm) noexcept;
+  /// Number of floors.
+  std::size_t size() const noexcept { return size_; }
+  /// Level of floor `index` (0 = lowest); index must be < size().
+  std::int64_t level_mm(std::size_t index) const noexcept { return levels_mm_[index]; }
+  /// The floor whose level is within `tolerance_mm` of the position, if any.
+  std::optional<std::size_t> floor_at(std::int64_t position_mm,
+                                      std::uint32_t tolerance_mm) const noexcept;
+  /// The floor nearest to the position (ties go to the lower floor); nullopt if the table is empty.
+  std::optional<std::size_t> nearest(std::int64_t position_mm) const noexcept;
+
+ private:
+  std::array<std::int64_t, kMaxFloors> levels_mm_{};
+  std::size_t size_ = 0;
+};
+
+/// The nearest floor ahead in `direction` whose level is at least `decel_distance_mm +
+/// margin_mm` away from the position, i.e. where the car can still stop. nullopt when stationary
+/// (Direction::None) or when no floor ahead is far enough.
+std::optional<std::size_t> next_possible_stop(const FloorTable& floors, std::int64_t position_mm,
+                                              Direction direction, std::uint32_t decel_distance_mm,
+                                              std::uint32_t margin_mm) noexcept;
+
+}  // namespace liftd::lift

@@ -1,0 +1,229 @@
+#include "travel/controller.hpp"
+
+namespace liftd::travel {
+
+namespace {
+// After an auto relevelling could not start or was aborted, wait this long before the next try.
+constexpr std::chrono::milliseconds kRelevelRetry{1000};
+
+bool speed_in(std::span<const dcp::Speed> speeds, dcp::Speed speed) noexcept {
+  for (const auto s : speeds) {
+    if (s == speed) return true;
+  }
+  return false;
+}
+}  // namespace
+
+bool TravelController::busy() const noexcept {
+  return pending_.has_value() || dcp4_.active() || dcp3_.active() || inspection_.active() ||
+         relevel_.active();
+}
+
+TravelKind TravelController::active_kind() const noexcept {
+  if (dcp4_.active()) return dcp4_.kind();
+  if (dcp3_.active()) return dcp3_.kind();
+  if (inspection_.active()) return inspection_.kind();
+  if (relevel_.active()) return TravelKind::Relevel;
+  return TravelKind::None;
+}
+
+Direction TravelController::direction() const noexcept {
+  if (dcp4_.active()) return dcp4_.direction();
+  if (dcp3_.active()) return dcp3_.direction();
+  if (inspection_.active()) return inspection_.direction();
+  if (relevel_.active()) return relevel_.direction();
+  return Direction::None;
+}
+
+std::optional<std::uint32_t> TravelController::decel_distance_mm() const noexcept {
+  if (dcp4_.active()) return dcp4_.decel_distance_mm(last_);
+  return last_.decel_distance_mm;
+}
+
+StartResult TravelController::start(const TravelRequest& request) noexcept {
+  if (busy() || last_.status.travel_active) return StartResult::Busy;
+  if (last_.inputs.inspection || last_.inputs.recall) return StartResult::InspectionMode;
+  const dcp::Protocol protocol = last_.protocol;
+  if (protocol == dcp::Protocol::ComChan) return StartResult::WrongProtocol;
+  Direction direction = request.direction;
+  if (last_.position_mm && direction == Direction::None &&
+      request.target_mm != *last_.position_mm) {
+    direction = request.target_mm > *last_.position_mm ? Direction::Up : Direction::Down;
+  }
+  const auto distance_mm = [&]() -> std::int64_t {
+    const std::int64_t d = request.target_mm - *last_.position_mm;
+    return d < 0 ? -d : d;
+  };
+
+  switch (request.kind) {
+    case TravelKind::Dcp4Distance:
+    case TravelKind::Dcp4Relevel:
+      if (protocol != dcp::Protocol::Dcp4) return StartResult::WrongProtocol;
+      if (request.kind == TravelKind::Dcp4Distance && request.speed != dcp::Speed::V4 &&
+          request.speed != dcp::Speed::V3) {
+        return StartResult::BadSpeed;  // DCP 11.1.1: V4' or V3'
+      }
+      if (request.kind == TravelKind::Dcp4Relevel && request.fast_start) {
+        return StartResult::BadSpeed;
+      }
+      if (!last_.position_mm) return StartResult::NoPosition;
+      if (distance_mm() <= static_cast<std::int64_t>(config_.level_tolerance_mm)) {
+        return StartResult::AlreadyThere;
+      }
+      break;
+    case TravelKind::Dcp3Speed:
+      if (protocol == dcp::Protocol::Dcp3) {
+        if (!speed_in(dcp::dcp3_travel_speeds(config_.dcp3_speed_count), request.speed)) {
+          return StartResult::BadSpeed;  // DCP 3.5.3.7 table
+        }
+      } else if (request.speed != dcp::Speed::V4 && request.speed != dcp::Speed::V3) {
+        return StartResult::BadSpeed;  // DCP 3.5.3.7: V7, V6, V5, V2, V1 not in DCP4
+      }
+      [[fallthrough]];
+    case TravelKind::Dcp3Crawl:
+      if (direction == Direction::None) return StartResult::NoDirection;
+      if (config_.dcp3_reference == Dcp3Reference::Position && !last_.position_mm) {
+        return StartResult::NoPosition;
+      }
+      break;
+    case TravelKind::Relevel:
+      if (request.fast_start) return StartResult::BadSpeed;
+      if (direction == Direction::None) return StartResult::NoDirection;
+      break;
+    case TravelKind::Inspection:
+    case TravelKind::Recall:
+    case TravelKind::None:
+      return StartResult::InspectionMode;  // button driven, not by request
+  }
+  pending_ = request;
+  pending_direction_ = direction;
+  return StartResult::Accepted;
+}
+
+void TravelController::begin_pending(const CycleInput& in) noexcept {
+  if (!pending_) return;
+  const TravelRequest request = *pending_;
+  pending_.reset();
+  switch (request.kind) {
+    case TravelKind::Dcp4Distance:
+    case TravelKind::Dcp4Relevel:
+      dcp4_.begin(request, in, config_);
+      break;
+    case TravelKind::Dcp3Speed:
+    case TravelKind::Dcp3Crawl:
+      dcp3_.begin(request, pending_direction_, in);
+      break;
+    case TravelKind::Relevel:
+      relevel_.begin(request, pending_direction_, in);
+      break;
+    default:
+      break;
+  }
+  // The auto relevelling reference: only where the target is a real level.
+  if (request.kind == TravelKind::Dcp4Distance ||
+      ((request.kind == TravelKind::Dcp3Speed || request.kind == TravelKind::Dcp3Crawl) &&
+       config_.dcp3_reference == Dcp3Reference::Position)) {
+    home_level_mm_ = request.target_mm;
+  } else if (request.kind != TravelKind::Dcp4Relevel) {
+    home_level_mm_.reset();
+  }
+}
+
+void TravelController::stop() noexcept {
+  pending_.reset();
+  dcp4_.request_stop(AbortCause::StopRequested);
+  dcp3_.request_stop(AbortCause::StopRequested);
+  relevel_.request_stop(AbortCause::StopRequested);
+}
+
+void TravelController::fast_stop() noexcept {
+  pending_.reset();
+  if (dcp4_.active()) dcp4_.request_fast_stop();
+  if (dcp3_.active()) dcp3_.request_fast_stop();
+  relevel_.request_stop(AbortCause::StopRequested);
+}
+
+ExtendResult TravelController::extend_target(std::int64_t target_mm) noexcept {
+  if (!dcp4_.active()) return ExtendResult::NoDistanceTravel;
+  const ExtendResult result = dcp4_.extend(target_mm, last_, config_);
+  if (result == ExtendResult::Accepted) home_level_mm_ = target_mm;
+  return result;
+}
+
+void TravelController::abort_all_immediately() noexcept {
+  dcp4_.abort_immediate();
+  dcp3_.abort_immediate();
+  relevel_.abort_immediate();
+  if (inspection_.active()) inspection_.abort_immediate();
+}
+
+void TravelController::maybe_auto_relevel(const CycleInput& in) noexcept {
+  if (!config_.auto_relevel || busy() || !home_level_mm_ || !in.position_mm) return;
+  if (in.protocol != dcp::Protocol::Dcp4 || in.status.travel_active) return;
+  if (in.inputs.inspection || in.inputs.recall || in.now < relevel_blocked_until_) return;
+  const std::int64_t drift = *home_level_mm_ - *in.position_mm;
+  const std::int64_t magnitude = drift < 0 ? -drift : drift;
+  if (magnitude <= static_cast<std::int64_t>(config_.relevel_threshold_mm) ||
+      magnitude > static_cast<std::int64_t>(config_.relevel_zone_mm)) {
+    return;
+  }
+  GateProfile profile;
+  profile.door_bridge_allowed = true;
+  profile.position_required = true;
+  if (CommandGate::forbidding(in, profile, true) != AbortCause::None) {
+    relevel_blocked_until_ = in.now + kRelevelRetry;
+    return;
+  }
+  TravelRequest request;
+  request.kind = TravelKind::Dcp4Relevel;
+  request.speed = dcp::Speed::VN;
+  request.target_mm = *home_level_mm_;
+  dcp4_.begin(request, in, config_);
+}
+
+CycleOutput TravelController::step(const CycleInput& in) noexcept {
+  last_ = in;
+  StepContext ctx{config_, in, events_};
+  const bool fault = in.link_up && in.status.general_fault;
+  if (fault != fault_seen_) {  // DCP 9.1.6: report S3 edges
+    fault_seen_ = fault;
+    ctx.emit(fault ? Event::Type::DriveFault : Event::Type::DriveFaultCleared, active_kind(),
+             fault ? AbortCause::DriveFault : AbortCause::None, 0);
+  }
+
+  // Inspection / recall switched on during a normal travel: end it at once (DCP 9.1.1).
+  if ((in.inputs.inspection || in.inputs.recall) &&
+      (dcp4_.active() || dcp3_.active() || relevel_.active() || pending_)) {
+    const TravelKind kind = active_kind();
+    pending_.reset();
+    dcp4_.abort_immediate();
+    dcp3_.abort_immediate();
+    relevel_.abort_immediate();
+    if (kind != TravelKind::None) ctx.emit(Event::Type::Aborted, kind, AbortCause::ModeChanged, 0);
+  }
+  begin_pending(in);
+  maybe_auto_relevel(in);
+
+  Demand demand;
+  if (dcp4_.active()) {
+    demand = dcp4_.step(ctx);
+  } else if (dcp3_.active()) {
+    demand = dcp3_.step(ctx);
+  } else if (relevel_.active()) {
+    demand = relevel_.step(ctx);
+  } else if (inspection_.active() || in.inputs.inspection || in.inputs.recall) {
+    demand = inspection_.step(ctx);
+  }
+
+  const TravelKind kind = active_kind();
+  GateResult gated = gate_.apply(demand, in);
+  if (gated.violation != AbortCause::None) {
+    if (kind == TravelKind::Dcp4Relevel) relevel_blocked_until_ = in.now + kRelevelRetry;
+    abort_all_immediately();
+    ctx.emit(Event::Type::Aborted, kind, gated.violation, 0);
+  }
+  gated.output.channel_request = ctx.channel_request;
+  return gated.output;
+}
+
+}  // namespace liftd::travel

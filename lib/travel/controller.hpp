@@ -1,0 +1,80 @@
+// The travel controller: owns one state machine per travel type and the command gate, runs the
+// active machine once per 15 ms cycle and hands out events. Sans-I/O: time and inputs come in
+// with CycleInput, the next frame's command and data word go out with CycleOutput.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "travel/dcp3_travel.hpp"
+#include "travel/dcp4_travel.hpp"
+#include "travel/gate.hpp"
+#include "travel/inspection_travel.hpp"
+#include "travel/relevel_travel.hpp"
+#include "travel/step_context.hpp"
+
+namespace liftd::travel {
+
+/// Runs travels. All calls come from the cycle thread (or one thread in tests); nothing here
+/// allocates, locks, logs or throws.
+class TravelController {
+ public:
+  /// A controller with the given tunables.
+  explicit TravelController(const TravelConfig& config = {}) noexcept : config_(config) {}
+
+  /// Queues a travel; it starts in the next step(). Validated against the last cycle's input.
+  StartResult start(const TravelRequest& request) noexcept;
+  /// Controlled stop of the running travel (stop message, wait for S6 and S1).
+  void stop() noexcept;
+  /// DCP 13: fast stop of the running travel.
+  void fast_stop() noexcept;
+  /// DCP4 target extension of the running distance travel.
+  ExtendResult extend_target(std::int64_t target_mm) noexcept;
+  /// The level the car should stand at (auto relevelling reference); set after every travel to
+  /// its target, or by the caller.
+  void set_home_level(std::optional<std::int64_t> level_mm) noexcept { home_level_mm_ = level_mm; }
+
+  /// One 15 ms cycle.
+  CycleOutput step(const CycleInput& in) noexcept;
+  /// Takes the oldest event, if any.
+  std::optional<Event> pop_event() noexcept { return events_.pop(); }
+  /// Events lost to a full ring.
+  std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
+
+  /// Kind of the running travel (None when idle).
+  TravelKind active_kind() const noexcept;
+  /// Direction of the running travel (None when idle).
+  Direction direction() const noexcept;
+  /// Deceleration distance known now (data bytes, or I7's Sv during a DCP4 travel).
+  std::optional<std::uint32_t> decel_distance_mm() const noexcept;
+  /// The DCP4 distance machine, for tests and diagnostics.
+  const Dcp4Travel& dcp4() const noexcept { return dcp4_; }
+  /// The DCP3 speed / crawl machine, for tests and diagnostics.
+  const Dcp3Travel& dcp3() const noexcept { return dcp3_; }
+  /// The inspection / recall machine, for tests and diagnostics.
+  const InspectionTravel& inspection() const noexcept { return inspection_; }
+  /// The relevelling (no remaining distance) machine, for tests and diagnostics.
+  const RelevelTravel& relevel() const noexcept { return relevel_; }
+
+ private:
+  bool busy() const noexcept;
+  void begin_pending(const CycleInput& in) noexcept;
+  void maybe_auto_relevel(const CycleInput& in) noexcept;
+  void abort_all_immediately() noexcept;
+
+  TravelConfig config_;
+  CommandGate gate_;
+  EventQueue events_;
+  Dcp4Travel dcp4_;
+  Dcp3Travel dcp3_;
+  InspectionTravel inspection_;
+  RelevelTravel relevel_;
+  std::optional<TravelRequest> pending_;
+  Direction pending_direction_ = Direction::None;
+  std::optional<std::int64_t> home_level_mm_;
+  MonoTime relevel_blocked_until_{};
+  CycleInput last_{};
+  bool fault_seen_ = false;
+};
+
+}  // namespace liftd::travel

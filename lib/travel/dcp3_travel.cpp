@@ -1,0 +1,194 @@
+#include "travel/dcp3_travel.hpp"
+
+namespace liftd::travel {
+
+void Dcp3Travel::begin(const TravelRequest& request, Direction direction,
+                       const CycleInput& in) noexcept {
+  kind_ = request.kind;
+  speed_ = kind_ == TravelKind::Dcp3Crawl ? dcp::Speed::V0 : request.speed;
+  direction_ = direction;
+  target_mm_ = request.target_mm;
+  fast_start_ = request.fast_start;
+  go_sent_ = false;
+  brake_seen_open_ = false;
+  travel_seen_ = false;
+  end_cause_ = AbortCause::None;
+  protocol_ = in.protocol;
+  now_ = in.now;
+  enter(fast_start_ ? State::FastStartHold : State::SpeedMessage, in.now);
+}
+
+void Dcp3Travel::enter(State state, MonoTime now) noexcept {
+  state_ = state;
+  entered_ = now;
+  cycles_in_state_ = 0;
+}
+
+void Dcp3Travel::request_stop(AbortCause cause) noexcept {
+  if (state_ == State::Idle || state_ == State::TravelEnd || state_ == State::ControlledAbort) {
+    return;
+  }
+  end_cause_ = cause;
+  enter(State::ControlledAbort, now_);
+}
+
+void Dcp3Travel::request_fast_stop() noexcept {
+  if (state_ == State::Travel || state_ == State::Creep || state_ == State::FastStartGo) {
+    end_cause_ = AbortCause::StopRequested;
+    enter(State::FastStop, now_);
+  } else {
+    request_stop(AbortCause::StopRequested);
+  }
+}
+
+Demand Dcp3Travel::demand(std::uint8_t message, std::uint16_t data_word) const noexcept {
+  Demand out;
+  out.command = command_byte(message, direction_);
+  out.data_word = data_word;
+  out.profile.doors_locked_required =
+      !(state_ == State::FastStartHold ||
+        (state_ == State::ControlledAbort && fast_start_ && !go_sent_));
+  return out;
+}
+
+bool Dcp3Travel::decel_point(const StepContext& ctx) const noexcept {
+  if (ctx.config.dcp3_reference == Dcp3Reference::ShaftSignals) {
+    return ctx.in.inputs.dcp3_decel_point;
+  }
+  if (!ctx.in.position_mm) return false;
+  const auto svx = ctx.config.dcp3_decel_distance_mm[speed_index(speed_)];
+  return remaining_mm(target_mm_, *ctx.in.position_mm, direction_) <=
+         static_cast<std::int64_t>(svx);
+}
+
+bool Dcp3Travel::at_level(const StepContext& ctx) const noexcept {
+  if (ctx.config.dcp3_reference == Dcp3Reference::ShaftSignals) {
+    return ctx.in.inputs.dcp3_at_level;
+  }
+  if (!ctx.in.position_mm) return false;
+  return remaining_mm(target_mm_, *ctx.in.position_mm, direction_) <=
+         static_cast<std::int64_t>(ctx.config.level_tolerance_mm);
+}
+
+void Dcp3Travel::finish(StepContext& ctx) noexcept {
+  if (end_cause_ == AbortCause::None) {
+    ctx.emit(Event::Type::Finished, kind_, AbortCause::None, target_mm_);
+  } else {
+    ctx.emit(Event::Type::Aborted, kind_, end_cause_, target_mm_);
+  }
+  if (go_sent_) ctx.request_position_after_stop();  // DCP 5.12.9: I9 after every stop
+  state_ = State::Idle;
+}
+
+Demand Dcp3Travel::step(StepContext& ctx) noexcept {
+  const CycleInput& in = ctx.in;
+  const TravelConfig& config = ctx.config;
+  now_ = in.now;
+  if (in.status.brake_open) brake_seen_open_ = true;
+  if (in.status.travel_active && !travel_seen_ &&
+      (state_ == State::Travel || state_ == State::FastStartGo || state_ == State::Creep)) {
+    travel_seen_ = true;
+    ctx.emit(Event::Type::Started, kind_, AbortCause::None, target_mm_);
+  }
+  ++cycles_in_state_;
+  const auto since_ms = elapsed_ms(in.now, entered_);
+  const std::uint8_t after_fast_start = after_fast_start_nibble(protocol_);
+
+  switch (state_) {
+    case State::Idle:
+      return {};
+
+    case State::FastStartHold:
+      if (cycles_in_state_ == 1) {
+        ctx.emit(Event::Type::FastStartArmed, kind_, AbortCause::None, target_mm_);
+      }
+      if (in.inputs.door_reversal) {  // DCP 12.2: stop sequence on door reversal
+        request_stop(AbortCause::DoorReversal);
+        return demand(nibble::kStop, 0);
+      }
+      if (since_ms >= config.fast_start_timeout_ms) {  // DCP 12.1.2
+        request_stop(AbortCause::FastStartTimeout);
+        return demand(nibble::kStop, 0);
+      }
+      if (cycles_in_state_ > speed_cycles(config) && in.inputs.doors_locked &&
+          in.inputs.doors_closed) {
+        enter(State::FastStartGo, in.now);
+        go_sent_ = true;
+        ++cycles_in_state_;
+        return demand(after_fast_start, dcp::speed_word(speed_));
+      }
+      return demand(nibble::kSpeed, dcp::speed_word(dcp::Speed::VF));  // DCP 12.1.1
+
+    case State::FastStartGo:
+      if (cycles_in_state_ <= speed_cycles(config)) {
+        return demand(after_fast_start, dcp::speed_word(speed_));  // DCP 12.1.3
+      }
+      enter(State::Travel, in.now);
+      return step(ctx);
+
+    case State::SpeedMessage:
+      if (cycles_in_state_ <= speed_cycles(config)) {
+        return demand(nibble::kSpeed, dcp::speed_word(speed_));
+      }
+      enter(State::Travel, in.now);
+      go_sent_ = true;
+      return step(ctx);
+
+    case State::Travel:
+      if (!brake_seen_open_ && since_ms >= config.start_timeout_ms) {
+        request_stop(AbortCause::DriveDidNotStart);
+        return demand(nibble::kStop, 0);
+      }
+      if (speed_ == dcp::Speed::V0) {
+        if (since_ms >= config.crawl_timeout_ms) {
+          request_stop(AbortCause::LevelNotReached);
+          return demand(nibble::kStop, 0);
+        }
+        // DCP 10.3 step 3: B1 and B2 withdrawn together at the level; the drive positions.
+        if (at_level(ctx)) {
+          enter(State::TravelEnd, in.now);
+          return demand(nibble::kStop, 0);
+        }
+        return demand(nibble::kTravel, 0);
+      }
+      if (decel_point(ctx)) {  // DCP 10.1.1 step 3: B1 off at SVx before the level
+        enter(State::Creep, in.now);
+        return step(ctx);
+      }
+      return demand(nibble::kTravel, 0);
+
+    case State::Creep:
+      if (since_ms >= config.crawl_timeout_ms) {
+        request_stop(AbortCause::LevelNotReached);
+        return demand(nibble::kStop, 0);
+      }
+      if (at_level(ctx)) {  // DCP 10.1.1 steps 4, 5: B2 off at the level, B0 until S1 = 0
+        enter(State::TravelEnd, in.now);
+        return demand(nibble::kStop, 0);
+      }
+      return demand(nibble::kDistance, 0);
+
+    case State::FastStop:
+      if (!in.status.brake_open) {
+        enter(State::TravelEnd, in.now);
+        return step(ctx);
+      }
+      return demand(after_fast_start, dcp::speed_word(dcp::Speed::VF));  // DCP 13.1
+
+    case State::TravelEnd:
+    case State::ControlledAbort:
+      if (!in.status.brake_open && !in.status.travel_active) {
+        finish(ctx);
+        return {};
+      }
+      if (since_ms >= config.stop_timeout_ms) {
+        end_cause_ = AbortCause::DriveDidNotStop;
+        finish(ctx);
+        return {};
+      }
+      return demand(nibble::kStop, 0);
+  }
+  return {};
+}
+
+}  // namespace liftd::travel

@@ -1,0 +1,296 @@
+#include "travel/dcp4_travel.hpp"
+
+namespace liftd::travel {
+
+namespace {
+// DCP 7.2: the new distance must reach the drive at least 30 ms before the deceleration point,
+// even if one exchange is repeated; add one cycle until our frame leaves and one for the repeat.
+constexpr std::int64_t kExtensionLeadMs = 30 + 15 + 15;
+// DCP 5.12.7: Ss has 5 BCD digits in cm.
+constexpr std::int64_t kMaxI7DistanceCm = 99999;
+}  // namespace
+
+void Dcp4Travel::begin(const TravelRequest& request, const CycleInput& in,
+                       const TravelConfig& config) noexcept {
+  kind_ = request.kind;
+  speed_ = kind_ == TravelKind::Dcp4Relevel ? dcp::Speed::VN : request.speed;
+  target_mm_ = request.target_mm;
+  const std::int64_t position = in.position_mm.value_or(request.target_mm);
+  direction_ = request.target_mm >= position ? Direction::Up : Direction::Down;
+  fast_start_ = request.fast_start && kind_ == TravelKind::Dcp4Distance;
+  load_percent_ = fast_start_ ? std::nullopt : request.load_percent;  // DCP 5.12.8: not with VF
+  brake_seen_open_ = false;
+  travel_seen_ = false;
+  go_sent_ = false;
+  end_cause_ = AbortCause::None;
+  i7_decel_mm_.reset();
+  i7_reply_.reset();
+  last_position_mm_.reset();
+  speed_mm_per_s_ = 0;
+  if (kind_ == TravelKind::Dcp4Distance && config.use_i7) {
+    enter(State::StartParameters, in.now);
+  } else if (fast_start_) {
+    enter(State::FastStartHold, in.now);
+  } else if (load_percent_) {
+    enter(State::Load, in.now);
+  } else {
+    enter(State::SpeedMessage, in.now);
+  }
+}
+
+void Dcp4Travel::enter(State state, MonoTime now) noexcept {
+  state_ = state;
+  entered_ = now;
+  cycles_in_state_ = 0;
+}
+
+void Dcp4Travel::request_stop(AbortCause cause) noexcept {
+  if (state_ == State::Idle || state_ == State::TravelEnd || state_ == State::ControlledAbort) {
+    return;
+  }
+  end_cause_ = cause;
+  state_ = State::ControlledAbort;
+  cycles_in_state_ = 0;
+  entered_ = last_time_;
+}
+
+void Dcp4Travel::request_fast_stop() noexcept {
+  if (state_ == State::Distance || state_ == State::FastStartGo) {
+    end_cause_ = AbortCause::StopRequested;
+    state_ = State::FastStop;
+    cycles_in_state_ = 0;
+    entered_ = last_time_;
+  } else {
+    request_stop(AbortCause::StopRequested);
+  }
+}
+
+std::optional<std::uint32_t> Dcp4Travel::decel_distance_mm(const CycleInput& in) const noexcept {
+  if (in.decel_distance_mm) return in.decel_distance_mm;
+  return i7_decel_mm_;
+}
+
+ExtendResult Dcp4Travel::extend(std::int64_t target_mm, const CycleInput& in,
+                                const TravelConfig& config) noexcept {
+  if (kind_ != TravelKind::Dcp4Distance) return ExtendResult::NoDistanceTravel;
+  switch (state_) {
+    case State::StartParameters:
+    case State::FastStartHold:
+    case State::Load:
+    case State::SpeedMessage:
+    case State::Distance:
+      break;
+    default:
+      return ExtendResult::NoDistanceTravel;
+  }
+  const bool further =
+      direction_ == Direction::Up ? target_mm > target_mm_ : target_mm < target_mm_;
+  if (!further) return ExtendResult::NotFurther;
+  if (state_ != State::Distance) {  // nothing moving yet: the new target simply replaces the old
+    target_mm_ = target_mm;
+    return ExtendResult::Accepted;
+  }
+  if (in.status.advance_warning) return ExtendResult::AdvanceWarning;  // DCP 9.1.5
+  const auto decel_mm = decel_distance_mm(in);
+  if (!decel_mm || !in.position_mm) return ExtendResult::DecelUnknown;
+  const std::int64_t remaining = remaining_mm(target_mm_, *in.position_mm, direction_);
+  const std::int64_t lead_mm = speed_mm_per_s_ * kExtensionLeadMs / 1000;
+  // DCP 11.1.2 note: only while the remaining distance exceeds the deceleration distance.
+  if (remaining <= static_cast<std::int64_t>(*decel_mm) +
+                       static_cast<std::int64_t>(config.extension_margin_mm) + lead_mm) {
+    return ExtendResult::TooLate;
+  }
+  target_mm_ = target_mm;
+  return ExtendResult::Accepted;
+}
+
+Demand Dcp4Travel::speed_demand(std::uint8_t message, dcp::Speed speed) const noexcept {
+  Demand demand;
+  demand.command = command_byte(message, direction_);
+  demand.data_word = dcp::speed_word(speed);
+  demand.profile.doors_locked_required = !(state_ == State::FastStartHold);
+  demand.profile.door_bridge_allowed = kind_ == TravelKind::Dcp4Relevel;
+  demand.profile.position_required = true;
+  return demand;
+}
+
+Demand Dcp4Travel::distance_demand(std::uint8_t message, const StepContext& ctx) const noexcept {
+  Demand demand;
+  demand.command = command_byte(message, direction_);
+  const std::int64_t position = ctx.in.position_mm.value_or(target_mm_);
+  demand.data_word =
+      dcp::remaining_distance_word(remaining_mm(target_mm_, position, direction_),
+                                   dcp::remaining_distance_width(ctx.config.data_info_type));
+  demand.profile.doors_locked_required =
+      !(state_ == State::FastStartHold ||
+        (state_ == State::ControlledAbort && fast_start_ && !go_sent_));
+  demand.profile.door_bridge_allowed = kind_ == TravelKind::Dcp4Relevel;
+  demand.profile.position_required = true;
+  return demand;
+}
+
+void Dcp4Travel::finish(StepContext& ctx) noexcept {
+  if (end_cause_ == AbortCause::None && ctx.in.position_mm) {
+    const std::int64_t off = remaining_mm(target_mm_, *ctx.in.position_mm, direction_);
+    if ((off < 0 ? -off : off) > static_cast<std::int64_t>(ctx.config.arrival_tolerance_mm)) {
+      end_cause_ = AbortCause::StoppedOffLevel;
+    }
+  }
+  if (end_cause_ == AbortCause::None) {
+    ctx.emit(Event::Type::Finished, kind_, AbortCause::None, target_mm_);
+  } else {
+    ctx.emit(Event::Type::Aborted, kind_, end_cause_, target_mm_);
+  }
+  if (go_sent_) ctx.request_position_after_stop();  // DCP 5.12.9: I9 after every stop
+  state_ = State::Idle;
+}
+
+Demand Dcp4Travel::step(StepContext& ctx) noexcept {
+  const CycleInput& in = ctx.in;
+  const TravelConfig& config = ctx.config;
+  // Speed estimate for the extension lead (position delta over the last cycle).
+  if (in.position_mm && last_position_mm_ && in.now > last_time_) {
+    const std::int64_t delta = *in.position_mm - *last_position_mm_;
+    const std::int64_t dt_us =
+        std::chrono::duration_cast<std::chrono::microseconds>(in.now - last_time_).count();
+    speed_mm_per_s_ = (delta < 0 ? -delta : delta) * 1'000'000 / dt_us;
+  }
+  last_position_mm_ = in.position_mm;
+  last_time_ = in.now;
+  if (in.status.brake_open) brake_seen_open_ = true;
+  if (in.status.travel_active && !travel_seen_ &&
+      (state_ == State::Distance || state_ == State::FastStartGo)) {
+    travel_seen_ = true;
+    ctx.emit(Event::Type::Started, kind_, AbortCause::None, target_mm_);
+  }
+  ++cycles_in_state_;
+  const auto since_ms = elapsed_ms(in.now, entered_);
+
+  switch (state_) {
+    case State::Idle:
+      return {};
+
+    case State::StartParameters: {
+      if (cycles_in_state_ == 1) {
+        ChannelRequest request;
+        request.kind = ChannelRequest::Kind::StartParameters;
+        request.vmax = speed_;
+        const std::int64_t distance_cm =
+            (remaining_mm(target_mm_, in.position_mm.value_or(target_mm_), direction_) + 5) / 10;
+        request.desired_distance_cm = static_cast<std::uint32_t>(
+            distance_cm < 0 ? 0
+                            : (distance_cm > kMaxI7DistanceCm ? kMaxI7DistanceCm : distance_cm));
+        ctx.channel_request = request;
+      }
+      const bool replied =
+          in.channel_reply && in.channel_reply->kind == ChannelRequest::Kind::StartParameters;
+      if (replied) {
+        i7_reply_ = in.channel_reply;
+        i7_decel_mm_ = in.channel_reply->decel_distance_cm * 10U;  // cm -> mm
+      }
+      if (replied || since_ms >= config.i7_timeout_ms) {
+        if (fast_start_) {
+          enter(State::FastStartHold, in.now);
+        } else if (load_percent_) {
+          enter(State::Load, in.now);
+        } else {
+          enter(State::SpeedMessage, in.now);
+        }
+      }
+      return {};
+    }
+
+    case State::Load: {
+      if (cycles_in_state_ == 1) {
+        ChannelRequest request;
+        request.kind = ChannelRequest::Kind::Load;
+        request.load_percent = *load_percent_;
+        ctx.channel_request = request;
+      }
+      const bool replied = in.channel_reply && in.channel_reply->kind == ChannelRequest::Kind::Load;
+      if (replied || since_ms >= config.i8_timeout_ms) enter(State::SpeedMessage, in.now);
+      return {};
+    }
+
+    case State::FastStartHold: {
+      if (cycles_in_state_ == 1) {
+        ctx.emit(Event::Type::FastStartArmed, kind_, AbortCause::None, target_mm_);
+      }
+      if (in.inputs.door_reversal) {  // DCP 12.2: doors reopening, stop sequence
+        request_stop(AbortCause::DoorReversal);
+        return distance_demand(nibble::kStop, ctx);
+      }
+      if (since_ms >= config.fast_start_timeout_ms) {  // DCP 12.1.2: time limited
+        request_stop(AbortCause::FastStartTimeout);
+        return distance_demand(nibble::kStop, ctx);
+      }
+      if (cycles_in_state_ > speed_cycles(config) && in.inputs.doors_locked &&
+          in.inputs.doors_closed) {
+        enter(State::FastStartGo, in.now);
+        go_sent_ = true;
+        ++cycles_in_state_;
+        return speed_demand(nibble::kAfterFastStartDcp4, speed_);
+      }
+      // DCP 12.1.1: activation by a VF speed message (B3 + B0); 12.1.2: then the remaining
+      // distance 0x0000 while the car is held at the level. The stop message of 12.2.2
+      // (B2 = 0) stays distinct from this hold.
+      if (cycles_in_state_ <= speed_cycles(config)) {
+        return speed_demand(nibble::kSpeed, dcp::Speed::VF);
+      }
+      Demand hold = distance_demand(nibble::kDistance, ctx);
+      hold.data_word = 0x0000;
+      return hold;
+    }
+
+    case State::FastStartGo:
+      if (cycles_in_state_ <= speed_cycles(config)) {
+        return speed_demand(nibble::kAfterFastStartDcp4, speed_);
+      }
+      enter(State::Distance, in.now);
+      return distance_demand(nibble::kDistance, ctx);
+
+    case State::SpeedMessage:
+      if (cycles_in_state_ <= speed_cycles(config)) {
+        return speed_demand(nibble::kSpeed, speed_);
+      }
+      enter(State::Distance, in.now);
+      go_sent_ = true;
+      return distance_demand(nibble::kDistance, ctx);
+
+    case State::Distance:
+      if (!brake_seen_open_ && since_ms >= config.start_timeout_ms) {
+        request_stop(AbortCause::DriveDidNotStart);
+        return distance_demand(nibble::kStop, ctx);
+      }
+      // DCP 11.1.2 step 4: B2 withdrawn only once S6 fell at the level.
+      if ((brake_seen_open_ && !in.status.brake_open) ||
+          (travel_seen_ && !in.status.travel_active)) {
+        enter(State::TravelEnd, in.now);
+        return step(ctx);
+      }
+      return distance_demand(nibble::kDistance, ctx);
+
+    case State::FastStop:
+      if (!in.status.brake_open) {
+        enter(State::TravelEnd, in.now);
+        return step(ctx);
+      }
+      return speed_demand(nibble::kAfterFastStartDcp4, dcp::Speed::VF);  // DCP 13.1
+
+    case State::TravelEnd:
+    case State::ControlledAbort:
+      if (!in.status.brake_open && !in.status.travel_active) {
+        finish(ctx);
+        return {};
+      }
+      if (since_ms >= config.stop_timeout_ms) {
+        end_cause_ = AbortCause::DriveDidNotStop;
+        finish(ctx);
+        return {};
+      }
+      return distance_demand(nibble::kStop, ctx);
+  }
+  return {};
+}
+
+}  // namespace liftd::travel

@@ -1,0 +1,47 @@
+#include "travel/gate.hpp"
+
+namespace liftd::travel {
+
+namespace cb = dcp::command_bit;
+
+namespace {
+constexpr std::uint8_t kMotionBits = cb::kDriveEnable | cb::kTravel | cb::kStopSwitch;
+}  // namespace
+
+AbortCause CommandGate::forbidding(const CycleInput& in, const GateProfile& profile,
+                                   bool starting) noexcept {
+  if (!in.link_up) return AbortCause::LinkDown;            // DCP 7.3 / protocol notes 1
+  if (!in.handshake_done) return AbortCause::NoHandshake;  // DCP 5.12.2: no travel without I0
+  if (!in.inputs.valid) return AbortCause::InputsLost;
+  if (in.status.general_fault) return AbortCause::DriveFault;              // DCP 9.1.6
+  if (!in.inputs.safety_chain_closed) return AbortCause::SafetyChainOpen;  // DCP 9.1.1
+  if (profile.doors_locked_required && !in.inputs.doors_locked &&
+      !(profile.door_bridge_allowed && in.inputs.door_zone_bridge)) {
+    return AbortCause::DoorsNotLocked;
+  }
+  if (profile.position_required && !in.position_mm) return AbortCause::PositionLost;
+  if (starting && !in.status.ready) return AbortCause::DriveNotReady;            // DCP 9.1.3
+  if (starting && in.status.advance_warning) return AbortCause::AdvanceWarning;  // DCP 9.1.5
+  return AbortCause::None;
+}
+
+GateResult CommandGate::apply(const Demand& demand, const CycleInput& in) noexcept {
+  GateResult result;
+  // B7 belongs to the link layer (DCP 3.1); the sequencers never set it.
+  const auto command = static_cast<std::uint8_t>(demand.command & ~cb::kReplyChecksumError);
+  if ((command & kMotionBits) != 0) {
+    result.violation = forbidding(in, demand.profile, !enable_on_);
+  }
+  if (result.violation == AbortCause::None) {
+    result.output.command = command;
+    result.output.data_word = demand.data_word;
+  }
+  enable_on_ = (result.output.command & cb::kDriveEnable) != 0;
+  // DCP 9.1.7: the brake follows S6 at once; without a link, the last status is stale: close it.
+  result.output.brake_open = in.link_up && in.status.brake_open;
+  // DCP 9.1.4 / 10.1.1 step 5: contactors on while we enable the drive or it reports S1.
+  result.output.contactors_on = enable_on_ || (in.link_up && in.status.travel_active);
+  return result;
+}
+
+}  // namespace liftd::travel

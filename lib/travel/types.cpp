@@ -1,0 +1,81 @@
+#include "travel/types.hpp"
+
+namespace liftd::travel {
+
+namespace {
+void put(ChannelText& text, char c) noexcept {
+  if (text.size < text.chars.size()) text.chars[text.size++] = c;
+}
+// Writes `value` as `digits` ASCII decimal digits (the spec's "BCD" text fields), clamped to the
+// largest value that fits.
+void put_digits(ChannelText& text, std::uint64_t value, int digits) noexcept {
+  std::uint64_t limit = 1;
+  for (int i = 0; i < digits; ++i) limit *= 10;
+  if (value >= limit) value = limit - 1;
+  std::uint64_t divisor = limit / 10;
+  for (int i = 0; i < digits; ++i) {
+    put(text, static_cast<char>('0' + static_cast<int>((value / divisor) % 10)));
+    divisor /= 10;
+  }
+}
+}  // namespace
+
+ChannelText ChannelRequest::body() const noexcept {
+  ChannelText text;
+  put(text, 'I');
+  switch (kind) {
+    case Kind::StartParameters:
+      // DCP 11.1.2.1: Vmax '1' = V3, '2' = V4; Ss 5 digits in cm.
+      put(text, '7');
+      put(text, vmax == dcp::Speed::V3 ? '1' : '2');
+      put_digits(text, desired_distance_cm, 5);
+      break;
+    case Kind::Load:
+      // DCP 5.12.8: load in percent of rated load, 3 digits.
+      put(text, '8');
+      put_digits(text, load_percent, 3);
+      break;
+    case Kind::Position:
+      // DCP 5.12.9: sign ('+', '-', 'E' invalid) and 6 digits, mm from the lowest level.
+      put(text, '9');
+      if (!position_mm) {
+        put(text, 'E');
+        put_digits(text, 0, 6);
+      } else {
+        put(text, *position_mm < 0 ? '-' : '+');
+        const std::int64_t magnitude = *position_mm < 0 ? -*position_mm : *position_mm;
+        put_digits(text, static_cast<std::uint64_t>(magnitude), 6);
+      }
+      break;
+  }
+  return text;
+}
+
+std::optional<std::string_view> validate(const TravelConfig& config) noexcept {
+  if (!dcp::data_info_type_from_char(static_cast<char>(config.data_info_type))) {
+    return "data_info_type";
+  }
+  if (config.speed_message_cycles == 0) return "speed_message_cycles";
+  if (config.i7_timeout_ms == 0) return "i7_timeout_ms";
+  if (config.i8_timeout_ms == 0) return "i8_timeout_ms";
+  if (config.start_timeout_ms == 0) return "start_timeout_ms";
+  if (config.stop_timeout_ms == 0) return "stop_timeout_ms";
+  if (config.fast_start_timeout_ms == 0) return "fast_start_timeout_ms";
+  if (config.crawl_timeout_ms == 0) return "crawl_timeout_ms";
+  if (config.relevel_threshold_mm <= config.level_tolerance_mm) return "relevel_threshold_mm";
+  if (config.arrival_tolerance_mm < config.level_tolerance_mm) return "arrival_tolerance_mm";
+  if (config.relevel_zone_mm <= config.relevel_threshold_mm) return "relevel_zone_mm";
+  // DCP 3.5.3.7: installations have 1 to 7 travelling speeds.
+  if (config.dcp3_speed_count < 1 || config.dcp3_speed_count > 7) return "dcp3_speed_count";
+  return std::nullopt;
+}
+
+std::size_t speed_index(dcp::Speed speed) noexcept {
+  const auto word = dcp::speed_word(speed);
+  // DCP 3.5.3.7: exactly one of the eleven bits G0..G10 is set in a speed word.
+  std::size_t index = 0;
+  while (index < dcp::kAllSpeeds.size() && (word >> index) != 1U) ++index;
+  return index < dcp::kAllSpeeds.size() ? index : 0;
+}
+
+}  // namespace liftd::travel

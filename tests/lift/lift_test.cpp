@@ -1,0 +1,155 @@
+// Floors, next possible stop and the calls queue (DCP 11.1.2.1: which floors can still be served).
+#include <gtest/gtest.h>
+
+#include <optional>
+#include <vector>
+
+#include "lift/lift_model.hpp"
+
+namespace liftd::lift {
+namespace {
+
+// Five floors, 3 m apart, the lowest at 0.
+const std::vector<std::int64_t> kLevels = {0, 3000, 6000, 9000, 12000};
+
+FloorTable table() {
+  FloorTable floors;
+  EXPECT_TRUE(floors.assign(kLevels));
+  return floors;
+}
+
+TEST(FloorTable, RejectsEmptyOrNotStrictlyIncreasing) {
+  FloorTable floors;
+  EXPECT_FALSE(floors.assign({}));
+  const std::vector<std::int64_t> equal = {0, 3000, 3000};
+  EXPECT_FALSE(floors.assign(equal));
+  const std::vector<std::int64_t> falling = {0, 3000, 2000};
+  EXPECT_FALSE(floors.assign(falling));
+  const std::vector<std::int64_t> too_many(kMaxFloors + 1, 0);
+  EXPECT_FALSE(floors.assign(too_many));
+  EXPECT_EQ(floors.size(), 0U);
+  EXPECT_TRUE(floors.assign(kLevels));
+  EXPECT_FALSE(floors.assign(falling));
+  EXPECT_EQ(floors.size(), 5U);  // a rejected table leaves the old one
+}
+
+TEST(FloorTable, FloorAtUsesTheLevelTolerance) {
+  const FloorTable floors = table();
+  // Legend: position, tolerance -> floor (nullopt: between floors).
+  struct Case {
+    std::int64_t position_mm;
+    std::uint32_t tolerance_mm;
+    std::optional<std::size_t> floor;
+  };
+  const std::vector<Case> cases = {
+      {0, 5, 0},
+      {5, 5, 0},
+      {6, 5, std::nullopt},
+      {-5, 5, 0},
+      {2996, 5, 1},
+      {3004, 5, 1},
+      {4500, 5, std::nullopt},
+      {12000, 0, 4},
+      {12001, 0, std::nullopt},
+  };
+  for (const auto& c : cases) {
+    EXPECT_EQ(floors.floor_at(c.position_mm, c.tolerance_mm), c.floor) << c.position_mm;
+  }
+}
+
+TEST(NextPossibleStop, TableOfPositionsDirectionsAndDecelerationDistances) {
+  const FloorTable floors = table();
+  // Legend: position, direction, deceleration distance, margin -> next possible stop.
+  // A floor counts when its level is at least decel + margin ahead.
+  struct Case {
+    std::int64_t position_mm;
+    Direction direction;
+    std::uint32_t decel_mm;
+    std::uint32_t margin_mm;
+    std::optional<std::size_t> expected;
+  };
+  const std::vector<Case> cases = {
+      {0, Direction::Up, 1430, 100, 1},               // DCP example Sv 143 cm: floor 1 is 3 m away
+      {1500, Direction::Up, 1430, 100, 2},            // 1500 mm left < 1530 needed: floor 2
+      {1470, Direction::Up, 1430, 100, 1},            // exactly 1530 mm left: still possible
+      {1471, Direction::Up, 1430, 100, 2},            // 1529 mm left: too late, next is floor 2
+      {4000, Direction::Up, 2500, 0, 3},              // DCP example Sv 250 cm at V4
+      {10000, Direction::Up, 2500, 0, std::nullopt},  // nothing ahead far enough
+      {10000, Direction::Down, 2500, 100, 2},         // 6000 is 4 m below
+      {7000, Direction::Down, 800, 100, 2},           // 1 m to floor 2: fine
+      {6500, Direction::Down, 800, 100, 1},           // 500 mm to floor 2: too close
+      {100, Direction::Down, 0, 0, 0},
+      {-50, Direction::Down, 0, 0, std::nullopt},
+      {5000, Direction::None, 0, 0, std::nullopt},  // stationary: nothing "ahead"
+  };
+  for (const auto& c : cases) {
+    EXPECT_EQ(next_possible_stop(floors, c.position_mm, c.direction, c.decel_mm, c.margin_mm),
+              c.expected)
+        << c.position_mm;
+  }
+}
+
+TEST(CallQueue, ServesInOrderAndCancels) {
+  CallQueue calls;
+  EXPECT_EQ(calls.add(3, 5), CallError::None);
+  EXPECT_EQ(calls.add(1, 5), CallError::None);
+  EXPECT_EQ(calls.add(4, 5), CallError::None);
+  EXPECT_EQ(calls.add(1, 5), CallError::AlreadyQueued);
+  EXPECT_EQ(calls.add(5, 5), CallError::NoSuchFloor);
+  EXPECT_EQ(calls.front(), std::optional<std::size_t>(3));
+  EXPECT_TRUE(calls.cancel(1));
+  EXPECT_FALSE(calls.cancel(1));
+  calls.pop_front();
+  EXPECT_EQ(calls.front(), std::optional<std::size_t>(4));
+  calls.pop_front();
+  EXPECT_FALSE(calls.front().has_value());
+  calls.pop_front();  // harmless on empty
+  EXPECT_EQ(calls.size(), 0U);
+}
+
+TEST(CallQueue, FullQueueRefuses) {
+  CallQueue calls;
+  for (std::size_t i = 0; i < kMaxFloors; ++i) EXPECT_EQ(calls.add(i, kMaxFloors), CallError::None);
+  EXPECT_EQ(calls.size(), kMaxFloors);
+  EXPECT_EQ(calls.add(0, kMaxFloors), CallError::AlreadyQueued);
+}
+
+TEST(LiftModel, PublishesCurrentFloorAndNextPossibleStop) {
+  LiftModel model({.level_tolerance_mm = 5, .stop_margin_mm = 100});
+  ASSERT_TRUE(model.set_floors(kLevels));
+  // Legend: position, direction, decel -> current floor, next possible stop.
+  struct Case {
+    std::optional<std::int64_t> position_mm;
+    Direction direction;
+    std::optional<std::uint32_t> decel_mm;
+    std::optional<std::size_t> current;
+    std::optional<std::size_t> next;
+  };
+  const std::vector<Case> cases = {
+      {3002, Direction::None, std::nullopt, 1, 1},             // standing at floor 1
+      {4400, Direction::None, std::nullopt, std::nullopt, 1},  // stopped between: nearest
+      {3500, Direction::Up, 1430, std::nullopt, 2},
+      {4600, Direction::Up, 1430, std::nullopt, 3},
+      {4600, Direction::Up, std::nullopt, std::nullopt, std::nullopt},  // decel unknown
+      {std::nullopt, Direction::Up, 1430, std::nullopt, std::nullopt},  // position invalid
+  };
+  for (const auto& c : cases) {
+    model.update(c.position_mm, c.direction, c.decel_mm);
+    EXPECT_EQ(model.current_floor(), c.current) << c.position_mm.value_or(-1);
+    EXPECT_EQ(model.next_possible_stop(), c.next) << c.position_mm.value_or(-1);
+  }
+}
+
+TEST(LiftModel, NewFloorTableClearsCalls) {
+  LiftModel model;
+  ASSERT_TRUE(model.set_floors(kLevels));
+  EXPECT_EQ(model.add_call(2), CallError::None);
+  EXPECT_EQ(model.add_call(9), CallError::NoSuchFloor);
+  EXPECT_EQ(model.calls().size(), 1U);
+  const std::vector<std::int64_t> two = {0, 4000};
+  ASSERT_TRUE(model.set_floors(two));
+  EXPECT_EQ(model.calls().size(), 0U);
+}
+
+}  // namespace
+}  // namespace liftd::lift

@@ -1,0 +1,735 @@
+// Each travel type against the scripted drive, with a fake clock: the exact command bytes and
+// data words in the order of the DCP 1.0.0.13 figures' numbered steps (chapters 9 to 13).
+#include <gtest/gtest.h>
+
+#include "fake_drive.hpp"
+
+namespace liftd::travel::test {
+namespace {
+
+using dcp::Protocol;
+using dcp::Speed;
+using Type = Event::Type;
+
+// Legend for the command bytes below (DCP 3.1, 3.5): B0 0x01 enable, B1 0x02 travel, B2 0x04
+// stop switch, B3 0x08 speed in data bytes, B4 0x10 direction down.
+//   0x09 speed message up, 0x19 speed message down, 0x05 B2+B0 (remaining distance in DCP4),
+//   0x07 B2+B1+B0 travel, 0x03 B1+B0 relevelling, 0x01 B0 only (stop), 0x0D / 0x0F speed after
+//   fast start (DCP4 / DCP3), 0x00 idle.
+
+TravelRequest dcp4_request(std::int64_t target_mm, Speed speed = Speed::V4) {
+  TravelRequest request;
+  request.kind = TravelKind::Dcp4Distance;
+  request.speed = speed;
+  request.target_mm = target_mm;
+  return request;
+}
+
+TEST(Dcp4Travel, LongV4TravelFollowsFigure11_3) {
+  Rig rig(Protocol::Dcp4);
+  rig.cycle();  // controller learns the idle state
+  ASSERT_EQ(rig.controller.start(dcp4_request(10000)), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_to_idle());
+
+  // I7 first (DCP 11.1.2.1 example 2: V4, 1000 cm), then I9 after the stop.
+  ASSERT_TRUE(rig.records[1].channel_request.has_value());
+  EXPECT_EQ(body_text(*rig.records[1].channel_request), "I7201000");
+  // Step 1 speed message V4 (G7 = 0x0080), steps 2..4 B2+B0, then B0 until S1 = 0, then idle.
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x00, 0x09, 0x05, 0x01, 0x00}));
+  const std::size_t speed_at = rig.first(0x09);
+  EXPECT_EQ(rig.records[speed_at].data_word, 0x0080);
+  EXPECT_EQ(rig.count(0x09), 2U);  // speed_message_cycles
+  // The remaining distance every cycle, from the position the controller saw (15-bit, mm).
+  for (const auto& r : rig.records) {
+    if (r.command != 0x05) continue;
+    EXPECT_EQ(r.data_word,
+              dcp::remaining_distance_word(10000 - r.position_mm, dcp::DistanceWidth::Bits15));
+  }
+  // B2 held until S6 fell (DCP 11.1.2 step 4): the last 0x05 frame still saw S6 = 1 or the
+  // first frame after it saw S6 = 0.
+  const std::size_t stop_at = rig.first(0x01);
+  EXPECT_TRUE(rig.records[stop_at - 1].status.brake_open);
+  EXPECT_FALSE(rig.records[stop_at].status.brake_open);
+  // B0 held until S1 = 0 (11.1.4 step 5).
+  const std::size_t idle_at = rig.first(0x00, stop_at);
+  EXPECT_TRUE(rig.records[idle_at - 1].status.travel_active);
+  EXPECT_FALSE(rig.records[idle_at].status.travel_active);
+  ASSERT_TRUE(rig.records[idle_at].channel_request.has_value());
+  EXPECT_EQ(body_text(*rig.records[idle_at].channel_request), "I9+010000");
+  EXPECT_EQ(rig.event_types(), (std::vector<Type>{Type::Started, Type::Finished}));
+  EXPECT_NEAR(rig.drive.position_mm(), 10000.0, 1.0);
+}
+
+TEST(Dcp4Travel, KeepsI7FiguresAndDrivesContactorsAndBrakeFromStatus) {
+  Rig rig(Protocol::Dcp4);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp4_request(10000)), StartResult::Accepted);
+  std::vector<CycleOutput> outs;
+  for (int i = 0; i < 4000; ++i) {
+    outs.push_back(rig.cycle());
+    if (rig.controller.dcp4().start_parameters()) break;
+  }
+  ASSERT_TRUE(rig.controller.dcp4().start_parameters().has_value());
+  EXPECT_EQ(rig.controller.dcp4().start_parameters()->min_distance_cm, 520U);  // Sg
+  EXPECT_EQ(*rig.controller.decel_distance_mm(), 2500U);  // Sv until the data bytes say more
+  while (rig.controller.active_kind() != TravelKind::None || rig.drive.status().travel_active) {
+    outs.push_back(rig.cycle());
+    ASSERT_LT(outs.size(), 4000U);
+  }
+  for (std::size_t i = 0; i < outs.size(); ++i) {
+    const auto& seen = rig.records[rig.records.size() - outs.size() + i].status;
+    EXPECT_EQ(outs[i].brake_open, seen.brake_open) << i;  // DCP 9.1.7
+    EXPECT_EQ(outs[i].contactors_on, (outs[i].command & 0x01) != 0 || seen.travel_active) << i;
+  }
+}
+
+TEST(Dcp4Travel, DriveFaultEdgesAreReported) {
+  Rig rig(Protocol::Dcp4);
+  rig.cycle();
+  rig.drive.status().general_fault = true;
+  rig.cycle();
+  rig.cycle();
+  rig.drive.status().general_fault = false;
+  rig.cycle();
+  EXPECT_EQ(rig.event_types(), (std::vector<Type>{Type::DriveFault, Type::DriveFaultCleared}));
+}
+
+TEST(TravelConfigCheck, NamesTheFirstBadField) {
+  // Legend: a change to the defaults -> the field reported (nullopt: valid).
+  struct Case {
+    void (*change)(TravelConfig&);
+    std::optional<std::string_view> field;
+  };
+  const std::vector<Case> cases = {
+      {[](TravelConfig&) {}, std::nullopt},
+      {[](TravelConfig& c) { c.speed_message_cycles = 0; }, "speed_message_cycles"},
+      {[](TravelConfig& c) { c.dcp3_speed_count = 8; }, "dcp3_speed_count"},
+      {[](TravelConfig& c) { c.dcp3_speed_count = 0; }, "dcp3_speed_count"},
+      {[](TravelConfig& c) { c.relevel_threshold_mm = 2; }, "relevel_threshold_mm"},
+      {[](TravelConfig& c) { c.relevel_zone_mm = 10; }, "relevel_zone_mm"},
+      {[](TravelConfig& c) { c.stop_timeout_ms = 0; }, "stop_timeout_ms"},
+      {[](TravelConfig& c) { c.data_info_type = static_cast<dcp::DataInfoType>('9'); },
+       "data_info_type"},
+  };
+  for (const auto& c : cases) {
+    TravelConfig config;
+    c.change(config);
+    EXPECT_EQ(validate(config), c.field);
+  }
+}
+
+TEST(Dcp4Travel, DownwardV3TravelKeepsB4SetThroughout) {
+  TravelConfig config;
+  config.use_i7 = false;
+  Rig rig(Protocol::Dcp4, config);
+  rig.drive.set_position_mm(9000);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp4_request(3000, Speed::V3)), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_to_idle());
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x19, 0x15, 0x11, 0x00}));
+  EXPECT_EQ(rig.records[rig.first(0x19)].data_word, 0x0040);  // V3 = G6
+  EXPECT_NEAR(rig.drive.position_mm(), 3000.0, 1.0);
+}
+
+TEST(Dcp4Travel, LoadIsSentWithI8BeforeTheSpeedMessage) {
+  TravelConfig config;
+  config.use_i7 = false;
+  Rig rig(Protocol::Dcp4, config);
+  rig.cycle();
+  TravelRequest request = dcp4_request(3000);
+  request.load_percent = 25;
+  ASSERT_EQ(rig.controller.start(request), StartResult::Accepted);
+  rig.cycle();
+  ASSERT_TRUE(rig.records.back().channel_request.has_value());
+  EXPECT_EQ(body_text(*rig.records.back().channel_request), "I8025");
+  EXPECT_EQ(rig.records.back().command, 0x00);
+  ASSERT_TRUE(rig.run_to_idle());
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x00, 0x09, 0x05, 0x01, 0x00}));
+}
+
+TEST(Dcp4Travel, StartsWithoutI8ReplyAfterTimeout) {
+  TravelConfig config;
+  config.use_i7 = false;
+  config.i8_timeout_ms = 300;
+  Rig rig(Protocol::Dcp4, config);
+  rig.answer_channel = false;
+  rig.cycle();
+  TravelRequest request = dcp4_request(3000);
+  request.load_percent = 50;
+  ASSERT_EQ(rig.controller.start(request), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_until([&] { return rig.records.back().command == 0x09; }));
+  // DCP 5.12.8.3: go without the reply; 300 ms = 20 cycles of waiting.
+  EXPECT_EQ(rig.first(0x09), 22U);
+}
+
+TEST(Dcp4Travel, SixteenBitRemainingDistanceForDataInfoType3) {
+  TravelConfig config;
+  config.use_i7 = false;
+  config.data_info_type = dcp::DataInfoType::Decel16;
+  Rig rig(Protocol::Dcp4, config);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp4_request(40000)), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_until([&] { return rig.records.back().command == 0x05; }));
+  EXPECT_EQ(rig.records.back().data_word, 40000);  // 0x9C40: above the 15-bit limit
+}
+
+TEST(Dcp4Travel, FifteenBitRemainingDistanceClampsAt7FFF) {
+  TravelConfig config;
+  config.use_i7 = false;
+  Rig rig(Protocol::Dcp4, config);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp4_request(40000)), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_until([&] { return rig.records.back().command == 0x05; }));
+  EXPECT_EQ(rig.records.back().data_word, 0x7FFF);  // DCP 3.5.3.4
+}
+
+TEST(Dcp4Travel, TargetExtensionRules) {
+  Rig rig(Protocol::Dcp4);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp4_request(10000)), StartResult::Accepted);
+  rig.cycle();
+  // Not further in the travel direction: refused at any time.
+  EXPECT_EQ(rig.controller.extend_target(9000), ExtendResult::NotFurther);
+  ASSERT_TRUE(rig.run_until([&] { return rig.drive.speed_mm_s() > 1000; }));
+  // Far from the deceleration point: accepted, and the next frame carries the new distance.
+  ASSERT_EQ(rig.controller.extend_target(15000), ExtendResult::Accepted);
+  rig.cycle();
+  EXPECT_EQ(rig.records.back().data_word, 15000 - rig.records.back().position_mm);
+  // S2 set: DCP 9.1.5 forbids extending.
+  rig.drive.status().advance_warning = true;
+  rig.cycle();
+  EXPECT_EQ(rig.controller.extend_target(16000), ExtendResult::AdvanceWarning);
+  rig.drive.status().advance_warning = false;
+  rig.cycle();
+  // Inside deceleration distance + lead: too late (DCP 7.2, 11.1.2 note).
+  ASSERT_TRUE(rig.run_until([&] {
+    const auto decel = rig.controller.decel_distance_mm();
+    return decel && 15000 - rig.drive.position_mm() < *decel + 10.0;
+  }));
+  EXPECT_EQ(rig.controller.extend_target(20000), ExtendResult::TooLate);
+  ASSERT_TRUE(rig.run_to_idle());
+  EXPECT_NEAR(rig.drive.position_mm(), 15000.0, 1.0);
+}
+
+TEST(Dcp4Travel, ExtensionLeadCoversThirtyMsPlusTwoCycles) {
+  // Hand-made cycles: the car runs at 1600 mm/s (24 mm per 15 ms cycle), the drive reports a
+  // deceleration distance of 1600 mm. Lead = 1600 mm/s * (30 ms + 2 cycles) = 96 mm (DCP 7.2),
+  // margin 0: an extension is accepted while remaining > 1600 + 96 mm.
+  // Legend: remaining distance when asking -> result.
+  struct Case {
+    std::int64_t remaining_mm;
+    ExtendResult expected;
+  };
+  const std::vector<Case> cases = {
+      {5000, ExtendResult::Accepted},
+      {1697, ExtendResult::Accepted},
+      {1696, ExtendResult::TooLate},
+      {1600, ExtendResult::TooLate},
+  };
+  for (const auto& c : cases) {
+    TravelConfig config;
+    config.use_i7 = false;
+    config.speed_message_cycles = 1;
+    config.extension_margin_mm = 0;
+    TravelController controller(config);
+    CycleInput in;
+    in.link_up = true;
+    in.handshake_done = true;
+    in.protocol = Protocol::Dcp4;
+    in.status.ready = true;
+    in.inputs.valid = in.inputs.safety_chain_closed = true;
+    in.inputs.doors_closed = in.inputs.doors_locked = true;
+    const std::int64_t target = 30000;
+    std::int64_t position = target - c.remaining_mm - 24 * 5;
+    in.position_mm = position;
+    controller.step(in);
+    ASSERT_EQ(controller.start(dcp4_request(target)), StartResult::Accepted);
+    for (int i = 0; i < 5; ++i) {  // speed message, then B2 + B0 while the car runs
+      in.now += kCycle;
+      position += 24;
+      in.position_mm = position;
+      in.status.travel_active = in.status.brake_open = true;
+      in.decel_distance_mm = 1600;
+      controller.step(in);
+    }
+    ASSERT_EQ(controller.dcp4().state(), Dcp4Travel::State::Distance);
+    EXPECT_EQ(controller.extend_target(target + 1000), c.expected) << c.remaining_mm;
+  }
+}
+
+TEST(Dcp4Travel, DriveStoppingShortIsReportedAsOffLevel) {
+  // Hand-made cycles: the drive drops S6 and then S1 600 mm before the target.
+  TravelConfig config;
+  config.use_i7 = false;
+  config.speed_message_cycles = 1;
+  TravelController controller(config);
+  CycleInput in;
+  in.link_up = in.handshake_done = true;
+  in.protocol = Protocol::Dcp4;
+  in.status.ready = true;
+  in.inputs.valid = in.inputs.safety_chain_closed = true;
+  in.inputs.doors_closed = in.inputs.doors_locked = true;
+  in.position_mm = 0;
+  controller.step(in);
+  ASSERT_EQ(controller.start(dcp4_request(3000)), StartResult::Accepted);
+  std::vector<std::uint8_t> commands;
+  auto cycle = [&] {
+    in.now += kCycle;
+    commands.push_back(controller.step(in).command);
+  };
+  cycle();  // speed message
+  in.status.travel_active = in.status.brake_open = true;
+  for (int i = 0; i < 5; ++i) cycle();
+  in.position_mm = 2400;
+  in.status.brake_open = false;  // drive stops on its own
+  cycle();
+  cycle();
+  in.status.travel_active = false;
+  cycle();
+  EXPECT_EQ(commands,
+            (std::vector<std::uint8_t>{0x09, 0x05, 0x05, 0x05, 0x05, 0x05, 0x01, 0x01, 0x00}));
+  std::optional<Event> last;
+  while (auto e = controller.pop_event()) last = e;
+  ASSERT_TRUE(last.has_value());
+  EXPECT_EQ(last->type, Type::Aborted);
+  EXPECT_EQ(last->cause, AbortCause::StoppedOffLevel);
+}
+
+TEST(Dcp4Relevel, AutoRelevelOnDriftWithVnAndRemainingDistance) {
+  TravelConfig config;
+  config.relevel_threshold_mm = 15;
+  Rig rig(Protocol::Dcp4, config);
+  rig.controller.set_home_level(0);
+  rig.drive.set_position_mm(-10);  // within threshold: nothing
+  for (int i = 0; i < 5; ++i) rig.cycle();
+  EXPECT_EQ(rig.command_runs(), (std::vector<std::uint8_t>{0x00}));
+  rig.drive.set_position_mm(-30);  // rope stretch: 30 mm below the level
+  ASSERT_TRUE(rig.run_until([&] { return rig.records.back().command == 0x09; }));
+  EXPECT_EQ(rig.records.back().data_word, 0x0002);  // VN = G1, no I7 for VN'
+  EXPECT_FALSE(rig.records.back().channel_request.has_value());
+  rig.cycle();
+  rig.cycle();
+  EXPECT_EQ(rig.records.back().command, 0x05);
+  EXPECT_EQ(rig.records.back().data_word, 30);
+  ASSERT_TRUE(rig.run_to_idle());
+  EXPECT_EQ(rig.command_runs(5), (std::vector<std::uint8_t>{0x09, 0x05, 0x01, 0x00}));
+  EXPECT_NEAR(rig.drive.position_mm(), 0.0, 1.0);
+  ASSERT_FALSE(rig.events.empty());
+  EXPECT_EQ(rig.events.back().kind, TravelKind::Dcp4Relevel);
+  EXPECT_EQ(rig.events.back().type, Type::Finished);
+}
+
+TEST(Dcp4Relevel, OnRequestDownward) {
+  Rig rig(Protocol::Dcp4);
+  rig.drive.set_position_mm(5040);
+  rig.cycle();
+  TravelRequest request;
+  request.kind = TravelKind::Dcp4Relevel;
+  request.target_mm = 5000;
+  ASSERT_EQ(rig.controller.start(request), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_to_idle());
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x19, 0x15, 0x11, 0x00}));
+  EXPECT_NEAR(rig.drive.position_mm(), 5000.0, 1.0);
+}
+
+TravelRequest dcp3_request(Speed speed, Direction direction, std::int64_t target_mm = 0) {
+  TravelRequest request;
+  request.kind = speed == Speed::V0 ? TravelKind::Dcp3Crawl : TravelKind::Dcp3Speed;
+  request.speed = speed;
+  request.direction = direction;
+  request.target_mm = target_mm;
+  return request;
+}
+
+TEST(Dcp3Travel, V4TravelWithShaftSignalsFollowsFigure10_1) {
+  Rig rig(Protocol::Dcp3);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp3_request(Speed::V4, Direction::Up)), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_until([&] { return rig.drive.speed_mm_s() >= 1600.0; }));
+  rig.input.inputs.dcp3_decel_point = true;  // the SV4 magnet of the target floor
+  ASSERT_TRUE(rig.run_until([&] { return rig.drive.speed_mm_s() <= 60.0; }));
+  rig.cycle();
+  rig.input.inputs.dcp3_at_level = true;
+  ASSERT_TRUE(rig.run_to_idle());
+  // 1: speed V4, 2: B1 (+B2, DCP 8.2 (2b)), 3: B1 off at SV4, 4: B2 positions, 5: B0 until S1=0.
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x09, 0x07, 0x05, 0x01, 0x00}));
+  EXPECT_EQ(rig.records[rig.first(0x09)].data_word, 0x0080);
+  const std::size_t idle_at = rig.first(0x00, rig.first(0x01));
+  EXPECT_FALSE(rig.records[idle_at].status.travel_active);
+  EXPECT_TRUE(rig.records[idle_at - 1].status.travel_active);
+  EXPECT_FALSE(rig.records[idle_at].channel_request.has_value());  // no I9 in DCP3
+  EXPECT_EQ(rig.event_types(), (std::vector<Type>{Type::Started, Type::Finished}));
+}
+
+TEST(Dcp3Travel, IntermediateSpeedByPositionClearsB1AtSvx) {
+  TravelConfig config;
+  config.dcp3_reference = Dcp3Reference::Position;
+  config.dcp3_decel_distance_mm[speed_index(Speed::V2)] = 600;  // SV2
+  config.dcp3_speed_count = 3;                                  // V4, V3, V2 (DCP 3.5.3.7)
+  Rig rig(Protocol::Dcp3, config);
+  rig.with_position = true;
+  rig.drive.set_position_mm(10000);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp3_request(Speed::V2, Direction::None, 6000)),
+            StartResult::Accepted);
+  ASSERT_TRUE(rig.run_to_idle());
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x19, 0x17, 0x15, 0x11, 0x00}));
+  EXPECT_EQ(rig.records[rig.first(0x19)].data_word, 0x0020);  // V2 = G5
+  const std::size_t creep_at = rig.first(0x15);
+  EXPECT_LE(rig.records[creep_at].position_mm - 6000, 600);
+  EXPECT_GT(rig.records[creep_at - 1].position_mm - 6000, 600);
+  EXPECT_NEAR(rig.drive.position_mm(), 6000.0, 10.0);
+}
+
+TEST(Dcp3Travel, SpeedsOutsideTheInstallationsCountAreRefused) {
+  // Legend: speed count, speed, accepted? (DCP 3.5.3.7 table)
+  struct Case {
+    int count;
+    Speed speed;
+    bool accepted;
+  };
+  const std::vector<Case> cases = {
+      {1, Speed::V4, true},  {1, Speed::V3, false}, {2, Speed::V3, true},  {3, Speed::V1, false},
+      {4, Speed::V1, true},  {5, Speed::V7, true},  {5, Speed::V6, false}, {7, Speed::V5, true},
+      {7, Speed::VI, false}, {7, Speed::VF, false},
+  };
+  for (const auto& c : cases) {
+    TravelConfig config;
+    config.dcp3_speed_count = c.count;
+    Rig rig(Protocol::Dcp3, config);
+    rig.cycle();
+    const auto result = rig.controller.start(dcp3_request(c.speed, Direction::Up));
+    EXPECT_EQ(result == StartResult::Accepted, c.accepted)
+        << c.count << " " << dcp::to_string(c.speed);
+  }
+}
+
+TEST(Dcp3Travel, CrawlTravelFollowsFigure10_3) {
+  Rig rig(Protocol::Dcp3);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp3_request(Speed::V0, Direction::Down)), StartResult::Accepted);
+  for (int i = 0; i < 40; ++i) rig.cycle();
+  rig.input.inputs.dcp3_at_level = true;
+  ASSERT_TRUE(rig.run_to_idle());
+  // 1: speed V0, 2: B1+B2, 3: both withdrawn, 4: B0 until S6 = 0 and S1 = 0.
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x19, 0x17, 0x11, 0x00}));
+  EXPECT_EQ(rig.records[rig.first(0x19)].data_word, 0x0001);
+  const std::size_t idle_at = rig.first(0x00, rig.first(0x11));
+  EXPECT_FALSE(rig.records[idle_at].status.brake_open);
+  EXPECT_FALSE(rig.records[idle_at].status.travel_active);
+}
+
+TEST(Dcp3Travel, CrawlWithoutLevelSignalStopsAfterCrawlTimeout) {
+  TravelConfig config;
+  config.crawl_timeout_ms = 1500;
+  Rig rig(Protocol::Dcp3, config);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp3_request(Speed::V0, Direction::Down)), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_to_idle());
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x19, 0x17, 0x11, 0x00}));
+  EXPECT_EQ(rig.count(0x17), 100U);  // 1500 ms of B1 + B2
+  EXPECT_EQ(rig.events.back().cause, AbortCause::LevelNotReached);
+}
+
+TEST(Dcp3Travel, Dcp4DriveRunsDcp3TravelWithV4Only) {
+  Rig rig(Protocol::Dcp4);
+  rig.cycle();
+  EXPECT_EQ(rig.controller.start(dcp3_request(Speed::V2, Direction::Up)), StartResult::BadSpeed);
+  EXPECT_EQ(rig.controller.start(dcp3_request(Speed::V3, Direction::Up)), StartResult::Accepted);
+}
+
+TEST(Inspection, ViTravelCrawlAtEndZoneAndB0OffOnRelease) {
+  Rig rig(Protocol::Dcp4);
+  rig.input.inputs.inspection = true;
+  for (int i = 0; i < 3; ++i) rig.cycle();  // stationary: B0 off
+  rig.input.inputs.button_up = true;
+  ASSERT_TRUE(rig.run_until([&] { return rig.drive.speed_mm_s() >= 300.0; }));
+  rig.input.inputs.end_zone_top = true;
+  for (int i = 0; i < 10; ++i) rig.cycle();
+  rig.input.inputs.button_up = false;
+  rig.cycle();
+  const std::size_t released_at = rig.records.size() - 1;
+  EXPECT_EQ(rig.records[released_at].command, 0x00);  // the same cycle (DCP 9.2.1.1 step 4)
+  ASSERT_TRUE(rig.run_to_idle());
+  EXPECT_EQ(rig.command_runs(), (std::vector<std::uint8_t>{0x00, 0x09, 0x07, 0x05, 0x00}));
+  EXPECT_EQ(rig.records[rig.first(0x09)].data_word, 0x0010);  // VI = G4
+  EXPECT_EQ(rig.event_types(), (std::vector<Type>{Type::Started, Type::Finished}));
+  EXPECT_EQ(rig.events.back().kind, TravelKind::Inspection);
+  // I9 after the stop, also for VI travels (DCP 5.12.9).
+  bool i9 = false;
+  for (std::size_t i = released_at; i < rig.records.size(); ++i) {
+    i9 = i9 || (rig.records[i].channel_request &&
+                rig.records[i].channel_request->kind == ChannelRequest::Kind::Position);
+  }
+  EXPECT_TRUE(i9);
+}
+
+TEST(Inspection, FromInsideEndZoneStartsWithB2OnlyAfterViMessage) {
+  Rig rig(Protocol::Dcp3);
+  rig.input.inputs.recall = true;
+  rig.input.inputs.end_zone_bottom = true;
+  rig.input.inputs.button_down = true;
+  for (int i = 0; i < 20; ++i) rig.cycle();
+  // DCP 9.2.1.2: VI speed message, then B2 only (crawl V0), direction down.
+  EXPECT_EQ(rig.command_runs(), (std::vector<std::uint8_t>{0x19, 0x15}));
+  EXPECT_EQ(rig.records[0].data_word, 0x0010);
+  EXPECT_EQ(rig.controller.active_kind(), TravelKind::Recall);
+  EXPECT_NEAR(rig.drive.speed_mm_s(), 60.0, 0.1);
+}
+
+TEST(Inspection, BothButtonsOrDirectionChangeDropB0) {
+  Rig rig(Protocol::Dcp3);
+  rig.input.inputs.inspection = true;
+  rig.input.inputs.button_up = true;
+  for (int i = 0; i < 10; ++i) rig.cycle();
+  EXPECT_EQ(rig.records.back().command, 0x07);
+  rig.input.inputs.button_down = true;
+  rig.cycle();
+  EXPECT_EQ(rig.records.back().command, 0x00);
+  rig.input.inputs.button_up = false;  // down only, but the drive still reports S1
+  rig.cycle();
+  EXPECT_EQ(rig.records.back().command, 0x00);
+  ASSERT_TRUE(rig.run_until([&] { return rig.records.back().command == 0x19; }));
+  EXPECT_FALSE(rig.records.back().status.travel_active);
+}
+
+TEST(Inspection, StartRequestsAreRefusedInInspectionMode) {
+  Rig rig(Protocol::Dcp4);
+  rig.input.inputs.inspection = true;
+  rig.cycle();
+  EXPECT_EQ(rig.controller.start(dcp4_request(3000)), StartResult::InspectionMode);
+}
+
+TEST(Inspection, SwitchingToInspectionEndsANormalTravelAtOnce) {
+  TravelConfig config;
+  config.use_i7 = false;
+  Rig rig(Protocol::Dcp4, config);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp4_request(10000)), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_until([&] { return rig.drive.speed_mm_s() > 500; }));
+  rig.input.inputs.inspection = true;
+  rig.cycle();
+  EXPECT_EQ(rig.records.back().command, 0x00);
+  ASSERT_FALSE(rig.events.empty());
+  EXPECT_EQ(rig.events.back().cause, AbortCause::ModeChanged);
+}
+
+TravelRequest relevel_request(Direction direction) {
+  TravelRequest request;
+  request.kind = TravelKind::Relevel;
+  request.direction = direction;
+  return request;
+}
+
+TEST(Relevel, WithElectricStopFollowsFigure9_6) {
+  Rig rig(Protocol::Dcp3);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(relevel_request(Direction::Up)), StartResult::Accepted);
+  for (int i = 0; i < 30; ++i) rig.cycle();
+  rig.input.inputs.dcp3_at_level = true;
+  ASSERT_TRUE(rig.run_to_idle());
+  // 1: speed VN, 2: B1 without B2, 3: B1 off, B0 held, 4: B0 off after S6 = 0 and S1 = 0.
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x09, 0x03, 0x01, 0x00}));
+  EXPECT_EQ(rig.records[rig.first(0x09)].data_word, 0x0002);
+  const std::size_t idle_at = rig.first(0x00, rig.first(0x01));
+  EXPECT_FALSE(rig.records[idle_at].status.brake_open);
+  EXPECT_FALSE(rig.records[idle_at].status.travel_active);
+}
+
+TEST(Relevel, WithoutElectricStopClearsB1AndB0Together) {
+  TravelConfig config;
+  config.relevel_electric_stop = false;
+  Rig rig(Protocol::Dcp3, config);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(relevel_request(Direction::Down)), StartResult::Accepted);
+  for (int i = 0; i < 30; ++i) rig.cycle();
+  rig.input.inputs.dcp3_at_level = true;
+  ASSERT_TRUE(rig.run_to_idle());
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x19, 0x13, 0x00}));
+  EXPECT_EQ(rig.event_types(), (std::vector<Type>{Type::Started, Type::Finished}));
+}
+
+TEST(FastStart, Dcp4HoldThenGoWhenDoorsLocked) {
+  Rig rig(Protocol::Dcp4);
+  rig.input.inputs.doors_locked = false;
+  rig.input.inputs.doors_closed = false;
+  rig.cycle();
+  TravelRequest request = dcp4_request(8000);
+  request.fast_start = true;
+  request.load_percent = 40;  // DCP 5.12.8: never sent with fast start
+  ASSERT_EQ(rig.controller.start(request), StartResult::Accepted);
+  for (int i = 0; i < 30; ++i) rig.cycle();
+  EXPECT_TRUE(rig.drive.status().brake_open);  // car held with open brake
+  EXPECT_NEAR(rig.drive.position_mm(), 0.0, 0.01);
+  rig.input.inputs.doors_closed = true;
+  rig.input.inputs.doors_locked = true;
+  ASSERT_TRUE(rig.run_to_idle());
+  // I7, VF speed message (B3+B0), hold with remaining distance 0, go (1101 + V4), distance.
+  EXPECT_EQ(rig.command_runs(1),
+            (std::vector<std::uint8_t>{0x00, 0x09, 0x05, 0x0D, 0x05, 0x01, 0x00}));
+  const std::size_t vf_at = rig.first(0x09);
+  EXPECT_EQ(rig.records[vf_at].data_word, 0x0004);
+  EXPECT_EQ(rig.records[rig.first(0x05)].data_word, 0x0000);  // DCP 12.1.2
+  EXPECT_EQ(rig.records[rig.first(0x0D)].data_word, 0x0080);
+  for (const auto& r : rig.records) {
+    if (r.channel_request) {
+      EXPECT_NE(r.channel_request->kind, ChannelRequest::Kind::Load);
+    }
+  }
+  EXPECT_NEAR(rig.drive.position_mm(), 8000.0, 1.0);
+  EXPECT_EQ(rig.event_types(),
+            (std::vector<Type>{Type::FastStartArmed, Type::Started, Type::Finished}));
+}
+
+TEST(FastStart, Dcp3HoldIsTheVfSpeedMessageThenGoWith1111) {
+  Rig rig(Protocol::Dcp3);
+  rig.input.inputs.doors_locked = false;
+  rig.cycle();
+  TravelRequest request = dcp3_request(Speed::V3, Direction::Up);
+  request.fast_start = true;
+  ASSERT_EQ(rig.controller.start(request), StartResult::Accepted);
+  for (int i = 0; i < 20; ++i) rig.cycle();
+  rig.input.inputs.doors_locked = true;
+  for (int i = 0; i < 5; ++i) rig.cycle();
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x09, 0x0F, 0x07}));
+  EXPECT_EQ(rig.records[rig.first(0x09)].data_word, 0x0004);
+  EXPECT_EQ(rig.records[rig.first(0x0F)].data_word, 0x0040);
+}
+
+TEST(FastStart, DoorReversalAbortsControlledAndWaitsForS6) {
+  TravelConfig config;
+  config.use_i7 = false;
+  Rig rig(Protocol::Dcp4, config);
+  rig.input.inputs.doors_locked = false;
+  rig.cycle();
+  TravelRequest request = dcp4_request(8000);
+  request.fast_start = true;
+  ASSERT_EQ(rig.controller.start(request), StartResult::Accepted);
+  for (int i = 0; i < 20; ++i) rig.cycle();
+  ASSERT_TRUE(rig.drive.status().brake_open);
+  rig.input.inputs.door_reversal = true;
+  ASSERT_TRUE(rig.run_to_idle());
+  // DCP 12.2.2: stop message (B2 = 0, B1 = 0, B0 = 1) until S6 and S1 are 0, then idle.
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x09, 0x05, 0x01, 0x00}));
+  const std::size_t idle_at = rig.first(0x00, rig.first(0x01));
+  EXPECT_FALSE(rig.records[idle_at].status.brake_open);
+  ASSERT_FALSE(rig.events.empty());
+  EXPECT_EQ(rig.events.back().type, Type::Aborted);
+  EXPECT_EQ(rig.events.back().cause, AbortCause::DoorReversal);
+}
+
+TEST(FastStart, TimeoutAbortsControlled) {
+  TravelConfig config;
+  config.use_i7 = false;
+  config.fast_start_timeout_ms = 1500;
+  Rig rig(Protocol::Dcp3, config);
+  rig.input.inputs.doors_locked = false;
+  rig.cycle();
+  TravelRequest request = dcp3_request(Speed::V4, Direction::Up);
+  request.fast_start = true;
+  ASSERT_EQ(rig.controller.start(request), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_to_idle());
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x09, 0x01, 0x00}));
+  // 1500 ms = 100 cycles of VF hold.
+  EXPECT_EQ(rig.count(0x09), 100U);
+  EXPECT_EQ(rig.events.back().cause, AbortCause::FastStartTimeout);
+}
+
+TEST(FastStop, Dcp4SendsSpeedAfterFastStartWithVf) {
+  TravelConfig config;
+  config.use_i7 = false;
+  Rig rig(Protocol::Dcp4, config);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp4_request(20000)), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_until([&] { return rig.drive.speed_mm_s() >= 1600; }));
+  rig.controller.fast_stop();
+  ASSERT_TRUE(rig.run_to_idle());
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x09, 0x05, 0x0D, 0x01, 0x00}));
+  EXPECT_EQ(rig.records[rig.first(0x0D)].data_word, 0x0004);  // DCP 13.1
+  EXPECT_LT(rig.drive.position_mm(), 20000.0 - 500.0);
+  EXPECT_EQ(rig.events.back().cause, AbortCause::StopRequested);
+}
+
+TEST(FastStop, Dcp3SendsSpeedAfterFastStartWithVf) {
+  Rig rig(Protocol::Dcp3);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp3_request(Speed::V4, Direction::Down)), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_until([&] { return rig.drive.speed_mm_s() >= 1000; }));
+  rig.controller.fast_stop();
+  ASSERT_TRUE(rig.run_to_idle());
+  EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x19, 0x17, 0x1F, 0x11, 0x00}));
+  EXPECT_EQ(rig.records[rig.first(0x1F)].data_word, 0x0004);
+}
+
+TEST(Supervision, DriveThatNeverOpensTheBrakeIsStoppedAfterStartTimeout) {
+  TravelConfig config;
+  config.use_i7 = false;
+  config.start_timeout_ms = 600;
+  FakeDriveConfig drive_config;
+  drive_config.preflux_cycles = 100000;  // never opens the brake
+  Rig rig(Protocol::Dcp4, config, drive_config);
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp4_request(5000)), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_until([&] { return rig.records.back().command == 0x01; }));
+  EXPECT_EQ(rig.count(0x05), 40U);  // 600 ms of B2 + B0
+  ASSERT_TRUE(rig.run_to_idle());
+  EXPECT_EQ(rig.events.back().cause, AbortCause::DriveDidNotStart);
+}
+
+TEST(StartChecks, RequestsThatCannotRunAreRefused) {
+  // Legend: protocol, request, expected result.
+  struct Case {
+    Protocol protocol;
+    TravelRequest request;
+    StartResult expected;
+  };
+  TravelRequest vn_distance = dcp4_request(3000, Speed::VN);
+  TravelRequest here = dcp4_request(2);
+  TravelRequest crawl_no_direction = dcp3_request(Speed::V0, Direction::None);
+  const std::vector<Case> cases = {
+      {Protocol::Dcp3, dcp4_request(3000), StartResult::WrongProtocol},
+      {Protocol::ComChan, dcp3_request(Speed::V4, Direction::Up), StartResult::WrongProtocol},
+      {Protocol::Dcp4, vn_distance, StartResult::BadSpeed},
+      {Protocol::Dcp4, here, StartResult::AlreadyThere},
+      {Protocol::Dcp3, crawl_no_direction, StartResult::NoDirection},
+  };
+  for (const auto& c : cases) {
+    Rig rig(c.protocol);
+    rig.cycle();
+    EXPECT_EQ(rig.controller.start(c.request), c.expected);
+  }
+  Rig rig(Protocol::Dcp4);
+  rig.with_position = false;
+  rig.cycle();
+  EXPECT_EQ(rig.controller.start(dcp4_request(3000)), StartResult::NoPosition);
+  Rig busy(Protocol::Dcp4);
+  busy.cycle();
+  EXPECT_EQ(busy.controller.start(dcp4_request(3000)), StartResult::Accepted);
+  EXPECT_EQ(busy.controller.start(dcp4_request(6000)), StartResult::Busy);
+}
+
+TEST(ChannelRequestBody, MatchesTheSpecsTextLayout) {
+  // Legend: request -> body between 0x1C and ETX (DCP 5.12.7 .. 5.12.9).
+  ChannelRequest i7;
+  i7.vmax = Speed::V4;
+  i7.desired_distance_cm = 300;
+  EXPECT_EQ(body_text(i7), "I7200300");  // DCP 11.1.2.1 example 1
+  i7.vmax = Speed::V3;
+  i7.desired_distance_cm = 123456;  // clamps to 5 digits
+  EXPECT_EQ(body_text(i7), "I7199999");
+  ChannelRequest i8;
+  i8.kind = ChannelRequest::Kind::Load;
+  i8.load_percent = 100;
+  EXPECT_EQ(body_text(i8), "I8100");
+  ChannelRequest i9;
+  i9.kind = ChannelRequest::Kind::Position;
+  i9.position_mm = 12345;
+  EXPECT_EQ(body_text(i9), "I9+012345");
+  i9.position_mm = -20;
+  EXPECT_EQ(body_text(i9), "I9-000020");
+  i9.position_mm.reset();
+  EXPECT_EQ(body_text(i9), "I9E000000");
+}
+
+}  // namespace
+}  // namespace liftd::travel::test
