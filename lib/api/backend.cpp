@@ -1,0 +1,189 @@
+#include "api/backend.hpp"
+
+#include <cstdio>
+#include <ctime>
+
+namespace liftd::api {
+
+const std::array<InputFlag, 21> kInputFlags = {{
+    {"safety_chain", &Inputs::safety_chain, "safety chain closed"},
+    {"doors_closed", &Inputs::doors_closed, "all doors closed"},
+    {"doors_locked", &Inputs::doors_locked, "all doors locked"},
+    {"inspection", &Inputs::inspection, "inspection switch on"},
+    {"recall", &Inputs::recall, "recall (test control) switch on"},
+    {"button_up", &Inputs::button_up, "inspection/recall up button pressed"},
+    {"button_down", &Inputs::button_down, "inspection/recall down button pressed"},
+    {"zone_level", &Inputs::zone_level, "car inside the stopping zone of a level"},
+    {"zone_door", &Inputs::zone_door, "car inside the door (unlocking) zone"},
+    {"relevel_up", &Inputs::relevel_up, "car below the level beyond tolerance"},
+    {"relevel_down", &Inputs::relevel_down, "car above the level beyond tolerance"},
+    {"end_zone_top", &Inputs::end_zone_top, "car in the top end zone"},
+    {"end_zone_bottom", &Inputs::end_zone_bottom, "car in the bottom end zone"},
+    {"decel_v4_up", &Inputs::decel_v4_up, "DCP3 deceleration point V4, up"},
+    {"decel_v4_down", &Inputs::decel_v4_down, "DCP3 deceleration point V4, down"},
+    {"decel_v3_up", &Inputs::decel_v3_up, "DCP3 deceleration point V3, up"},
+    {"decel_v3_down", &Inputs::decel_v3_down, "DCP3 deceleration point V3, down"},
+    {"decel_v2_up", &Inputs::decel_v2_up, "DCP3 deceleration point V2, up"},
+    {"decel_v2_down", &Inputs::decel_v2_down, "DCP3 deceleration point V2, down"},
+    {"decel_v1_up", &Inputs::decel_v1_up, "DCP3 deceleration point V1, up"},
+    {"decel_v1_down", &Inputs::decel_v1_down, "DCP3 deceleration point V1, down"},
+}};
+
+void InputUpdate::apply_to(Inputs& inputs) const {
+  for (std::size_t i = 0; i < kInputFlags.size(); ++i) {
+    if (flags[i]) inputs.*(kInputFlags[i].member) = *flags[i];
+  }
+  if (position_mm) inputs.position_mm = position_mm;
+}
+
+std::string_view to_string(LinkState state) noexcept {
+  switch (state) {
+    case LinkState::Down:
+      return "down";
+    case LinkState::Init:
+      return "init";
+    case LinkState::Up:
+      return "up";
+    case LinkState::Fault:
+      return "fault";
+  }
+  return "down";
+}
+
+namespace {
+
+std::string_view mode_name(dcp::Protocol protocol) {
+  switch (protocol) {
+    case dcp::Protocol::ComChan:
+      return "ComChan";
+    case dcp::Protocol::Dcp3:
+      return "DCP3";
+    case dcp::Protocol::Dcp4:
+      return "DCP4";
+  }
+  return "ComChan";
+}
+
+template <typename T>
+nlohmann::json or_null(const std::optional<T>& value) {
+  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+}
+
+std::string hex_bytes(const dcp::FrameBytes& bytes) {
+  std::string out;
+  char buf[4];
+  for (std::size_t i = 0; i < bytes.size(); ++i) {
+    std::snprintf(buf, sizeof buf, i == 0 ? "%02X" : " %02X", bytes[i]);
+    out += buf;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string format_utc(std::chrono::system_clock::time_point time) {
+  using namespace std::chrono;
+  const auto ms_total = duration_cast<milliseconds>(time.time_since_epoch()).count();
+  auto seconds = static_cast<std::time_t>(ms_total / 1000);
+  auto ms = ms_total % 1000;
+  if (ms < 0) {
+    ms += 1000;
+    --seconds;
+  }
+  std::tm tm{};
+  gmtime_r(&seconds, &tm);
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
+                tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ms));
+  return buf;
+}
+
+nlohmann::json to_json(const dcp::Status& s) {
+  return {{"ready", s.ready},
+          {"travel_active", s.travel_active},
+          {"advance_warning", s.advance_warning},
+          {"general_fault", s.general_fault},
+          {"below_levelling", s.below_levelling},
+          {"accepted", s.accepted},
+          {"brake_open", s.brake_open},
+          {"message_error", s.message_error}};
+}
+
+nlohmann::json to_json(const dcp::ExtendedStatus& e) {
+  return {{"below_unlocking_speed", e.below_unlocking_speed},
+          {"below_border_speed", e.below_border_speed},
+          {"below_overspeed", e.below_overspeed},
+          {"weight_bits", e.weight_bits},
+          {"emergency_reduced_voltage", e.emergency_reduced_voltage},
+          {"emergency_direction_down", e.emergency_direction_down},
+          {"motor_temperature_limit", e.motor_temperature_limit},
+          {"drive_temperature_limit", e.drive_temperature_limit}};
+}
+
+nlohmann::json to_json(const StatusSnapshot& s) {
+  nlohmann::json faults = nlohmann::json::array();
+  for (const auto& f : s.faults) {
+    faults.push_back({{"code", f.code}, {"text", f.text}, {"since", format_utc(f.since)}});
+  }
+  return {
+      {"link", {{"state", to_string(s.link)}}},
+      {"drive",
+       {{"mode", s.drive_mode ? nlohmann::json(mode_name(*s.drive_mode)) : nlohmann::json(nullptr)},
+        {"status", to_json(s.drive_status)},
+        {"extended", s.extended ? to_json(*s.extended) : nlohmann::json(nullptr)}}},
+      {"car", {{"position_mm", or_null(s.position_mm)}, {"floor", or_null(s.floor)}}},
+      {"travel",
+       {{"state", s.travel_state},
+        {"direction", or_null(s.travel_direction)},
+        {"target_floor", or_null(s.target_floor)}}},
+      {"faults", std::move(faults)},
+      {"rt",
+       {{"realtime", s.rt.realtime},
+        {"policy", s.rt.policy},
+        {"priority", s.rt.priority},
+        {"memory_locked", s.rt.memory_locked}}},
+  };
+}
+
+nlohmann::json to_json(const StatsSnapshot& s) {
+  return {{"link",
+           {{"frames_sent", s.frames_sent},
+            {"replies_good", s.replies_good},
+            {"checksum_errors", s.checksum_errors},
+            {"missing_replies", s.missing_replies},
+            {"repeats", s.repeats},
+            {"link_losses", s.link_losses}}},
+          {"cycle",
+           {{"cycles", s.cycles},
+            {"overruns", s.overruns},
+            {"max_lateness_us", s.max_lateness_us},
+            {"max_work_us", s.max_work_us}}}};
+}
+
+nlohmann::json to_json(const TraceEntry& e) {
+  const auto t_us = std::chrono::duration_cast<std::chrono::microseconds>(e.at).count();
+  return {{"t_us", t_us},
+          {"tx", hex_bytes(e.tx)},
+          {"rx", e.rx ? nlohmann::json(hex_bytes(*e.rx)) : nlohmann::json(nullptr)}};
+}
+
+nlohmann::json to_json(const DisplaySnapshot& d) {
+  nlohmann::json cursor = nullptr;
+  if (d.cursor_line && d.cursor_column) {
+    cursor = {{"line", *d.cursor_line}, {"column", *d.cursor_column}};
+  }
+  return {{"lines", d.lines}, {"cursor", std::move(cursor)}};
+}
+
+nlohmann::json to_json(const PowerSetting& p) {
+  return {{"supply", p.emergency ? "emergency" : "mains"}, {"saving", p.saving}};
+}
+
+nlohmann::json to_json(const Inputs& inputs) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& flag : kInputFlags) out[std::string(flag.name)] = inputs.*(flag.member);
+  out["position_mm"] = or_null(inputs.position_mm);
+  return out;
+}
+
+}  // namespace liftd::api

@@ -1,0 +1,188 @@
+// What the API server needs from the rest of the daemon: snapshots to read and commands to
+// forward. The daemon implements Backend; the tests use a fake.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "api/result.hpp"
+#include "common/mono_time.hpp"
+#include "dcp/frame.hpp"
+
+namespace liftd::api {
+
+/// State of the DCP link as reported in status.link.state.
+enum class LinkState : std::uint8_t {
+  Down,   ///< no replies from the drive
+  Init,   ///< replies arrive, I0 exchange not finished
+  Up,     ///< I0 done, process data flowing
+  Fault,  ///< link supervision tripped (e.g. 10 lost frames); drive enable is off
+};
+/// "down", "init", "up", "fault".
+std::string_view to_string(LinkState state) noexcept;
+
+/// One active fault.
+struct FaultInfo {
+  std::string code;                             ///< snake_case, stable, e.g. "link_timeout"
+  std::string text;                             ///< human-readable explanation
+  std::chrono::system_clock::time_point since;  ///< when it became active (wall clock)
+};
+
+/// Real-time scheduling the cycle thread obtained.
+struct RtInfo {
+  bool realtime = false;       ///< true when the requested SCHED_FIFO priority was obtained
+  std::string policy;          ///< "SCHED_FIFO", "SCHED_OTHER", ...
+  int priority = 0;            ///< scheduling priority obtained
+  bool memory_locked = false;  ///< mlockall() succeeded
+};
+
+/// Everything `status` reports, filled by the backend.
+struct StatusSnapshot {
+  LinkState link = LinkState::Down;             ///< link.state
+  std::optional<dcp::Protocol> drive_mode;      ///< drive.mode; nullopt before I0
+  dcp::Status drive_status{};                   ///< drive.status, last good reply
+  std::optional<dcp::ExtendedStatus> extended;  ///< drive.extended; nullopt if never seen
+  std::optional<std::int64_t> position_mm;      ///< car.position_mm; nullopt if unknown
+  std::optional<int> floor;                     ///< car.floor (0 = lowest); nullopt between
+  std::string travel_state = "idle";            ///< travel.state, snake_case
+  std::optional<std::string> travel_direction;  ///< travel.direction: "up", "down" or null
+  std::optional<int> target_floor;              ///< travel.target_floor or null
+  std::vector<FaultInfo> faults;                ///< active faults, oldest first
+  RtInfo rt{};                                  ///< rt
+};
+
+/// Counters and timing for `stats`.
+struct StatsSnapshot {
+  std::uint64_t frames_sent = 0;      ///< master frames sent
+  std::uint64_t replies_good = 0;     ///< replies with a good checksum
+  std::uint64_t checksum_errors = 0;  ///< replies with a bad checksum
+  std::uint64_t missing_replies = 0;  ///< cycles without a complete reply
+  std::uint64_t repeats = 0;          ///< replies with S7 set (drive saw our frame corrupt)
+  std::uint64_t link_losses = 0;      ///< times the link supervision tripped
+  std::uint64_t cycles = 0;           ///< cycles run
+  std::uint64_t overruns = 0;         ///< cycles started late by more than a period
+  std::uint64_t max_lateness_us = 0;  ///< worst wake-up lateness
+  std::uint64_t max_work_us = 0;      ///< worst time spent inside one cycle
+};
+
+/// One cycle of the DCP frame trace.
+struct TraceEntry {
+  MonoTime at{};                      ///< when the master frame was sent (monotonic)
+  dcp::FrameBytes tx{};               ///< master frame
+  std::optional<dcp::FrameBytes> rx;  ///< drive reply; nullopt if none arrived in time
+};
+
+/// Contents of the drive's remote display (DCP 5.7: up to 4 lines of 20 characters).
+struct DisplaySnapshot {
+  std::vector<std::string> lines;    ///< UTF-8, one string per line
+  std::optional<int> cursor_line;    ///< 0-based; nullopt when no cursor is shown
+  std::optional<int> cursor_column;  ///< 0-based
+};
+
+/// Power supply state for I6 (DCP 5.12.6).
+struct PowerSetting {
+  bool emergency = false;  ///< false: mains 'N', true: emergency 'U'
+  int saving = 0;          ///< energy saving mode '0', '1' or '2'
+};
+
+/// Inputs from the machine (safety chain, doors, switches, DCP3 shaft signals, position).
+struct Inputs {
+  bool safety_chain = false;                ///< safety chain closed
+  bool doors_closed = false;                ///< all doors closed
+  bool doors_locked = false;                ///< all doors locked
+  bool inspection = false;                  ///< inspection switch on
+  bool recall = false;                      ///< recall (test control) switch on
+  bool button_up = false;                   ///< inspection/recall up button pressed
+  bool button_down = false;                 ///< inspection/recall down button pressed
+  bool zone_level = false;                  ///< car inside the stopping zone of a level
+  bool zone_door = false;                   ///< car inside the door (unlocking) zone
+  bool relevel_up = false;                  ///< car below the level beyond tolerance (relevel up)
+  bool relevel_down = false;                ///< car above the level beyond tolerance (relevel down)
+  bool end_zone_top = false;                ///< car in the top end zone
+  bool end_zone_bottom = false;             ///< car in the bottom end zone
+  bool decel_v4_up = false;                 ///< DCP3 deceleration point for V4, travelling up
+  bool decel_v4_down = false;               ///< DCP3 deceleration point for V4, travelling down
+  bool decel_v3_up = false;                 ///< DCP3 deceleration point for V3, travelling up
+  bool decel_v3_down = false;               ///< DCP3 deceleration point for V3, travelling down
+  bool decel_v2_up = false;                 ///< DCP3 deceleration point for V2, travelling up
+  bool decel_v2_down = false;               ///< DCP3 deceleration point for V2, travelling down
+  bool decel_v1_up = false;                 ///< DCP3 deceleration point for V1, travelling up
+  bool decel_v1_down = false;               ///< DCP3 deceleration point for V1, travelling down
+  std::optional<std::int64_t> position_mm;  ///< absolute car position; nullopt = unknown
+};
+
+/// A partial update of Inputs: fields left empty keep their value.
+struct InputUpdate {
+  std::array<std::optional<bool>, 21> flags{};  ///< indexed like kInputFlags
+  std::optional<std::int64_t> position_mm;      ///< new position, if given
+  /// Writes the given fields into `inputs`.
+  void apply_to(Inputs& inputs) const;
+};
+
+/// Name and member of one boolean input, in the order of InputUpdate::flags.
+struct InputFlag {
+  std::string_view name;         ///< field name in the API
+  bool Inputs::*member;          ///< where it lives in Inputs
+  std::string_view description;  ///< one line for docs and help
+};
+/// Every boolean input, in wire-name order of the docs.
+extern const std::array<InputFlag, 21> kInputFlags;
+
+/// DCP I9 carries a sign and 6 digits of millimetres (DCP 5.12.9): the position range we accept.
+inline constexpr std::int64_t kMaxPositionMm = 999'999;
+
+/// The daemon's side of the API. Every method is called on the io_context's thread; every
+/// Responder must be called exactly once on that thread.
+class Backend {
+ public:
+  virtual ~Backend() = default;
+  /// Current state for `status` and the `state` event.
+  virtual StatusSnapshot status() = 0;
+  /// Link and cycle counters for `stats`.
+  virtual StatsSnapshot stats() = 0;
+  /// The newest `max_entries` trace entries, oldest first.
+  virtual std::vector<TraceEntry> trace(std::size_t max_entries) = 0;
+  /// Current contents of the drive's remote display.
+  virtual DisplaySnapshot display() = 0;
+  /// The effective configuration (as loaded and defaulted) for `config`.
+  virtual nlohmann::json config() = 0;
+  /// Sends a keypad button (DCP 5.8; button 1..5 is bit 0x04 << (button - 1)).
+  virtual void key(int button, Responder done) = 0;
+  /// Asks the drive for a fault reset (I2 'R', DCP 5.12.4).
+  virtual void drive_reset(Responder done) = 0;
+  /// Sets the power supply mode (I6, DCP 5.12.6); the result is the mode the drive reports.
+  virtual void power(PowerSetting setting, Responder done) = 0;
+  /// Sends the car load for the next travel (I8, DCP 5.12.8), percent of rated load.
+  virtual void load(int percent, Responder done) = 0;
+  /// Applies an input update from the I/O board; the result is to_json() of all inputs after it.
+  virtual void update_inputs(const InputUpdate& update, Responder done) = 0;
+};
+
+/// JSON of a status snapshot, as in the `status` result and `state` event.
+nlohmann::json to_json(const StatusSnapshot& status);
+/// JSON of the backend's stats (the server adds "api").
+nlohmann::json to_json(const StatsSnapshot& stats);
+/// JSON of one trace entry: {"t_us":..,"tx":"hex bytes","rx":"hex bytes"|null}.
+nlohmann::json to_json(const TraceEntry& entry);
+/// JSON of the display.
+nlohmann::json to_json(const DisplaySnapshot& display);
+/// JSON of a power setting: {"supply":"mains"|"emergency","saving":0..2}.
+nlohmann::json to_json(const PowerSetting& power);
+/// JSON of the inputs: every flag by name plus position_mm (null if unknown).
+nlohmann::json to_json(const Inputs& inputs);
+/// JSON of the drive status bits by name.
+nlohmann::json to_json(const dcp::Status& status);
+/// JSON of the extended status bits by name.
+nlohmann::json to_json(const dcp::ExtendedStatus& extended);
+/// "2026-11-22T03:00:00.123Z"
+std::string format_utc(std::chrono::system_clock::time_point time);
+
+}  // namespace liftd::api

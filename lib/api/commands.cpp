@@ -1,0 +1,174 @@
+#include "api/commands.hpp"
+
+#include <string>
+
+#include "common/version.hpp"
+
+namespace liftd::api {
+namespace {
+
+ArgSpec flag_arg(std::string name, std::string description) {
+  ArgSpec spec;
+  spec.name = std::move(name);
+  spec.type = ArgType::Bool;
+  spec.description = std::move(description);
+  return spec;
+}
+
+ArgSpec int_arg(std::string name, bool required, std::int64_t min, std::int64_t max,
+                std::string description) {
+  ArgSpec spec;
+  spec.name = std::move(name);
+  spec.type = ArgType::Integer;
+  spec.required = required;
+  spec.min = min;
+  spec.max = max;
+  spec.description = std::move(description);
+  return spec;
+}
+
+ArgSpec choice_arg(std::string name, bool required, std::vector<std::string> choices,
+                   std::string description) {
+  ArgSpec spec;
+  spec.name = std::move(name);
+  spec.type = ArgType::String;
+  spec.required = required;
+  spec.choices = std::move(choices);
+  spec.description = std::move(description);
+  return spec;
+}
+
+template <typename T>
+T arg_or(const nlohmann::json& request, const char* name, T fallback) {
+  const auto it = request.find(name);
+  return it == request.end() ? fallback : it->get<T>();
+}
+
+}  // namespace
+
+void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
+                          std::function<nlohmann::json()> api_stats) {
+  Backend* b = &backend;
+
+  dispatcher.add({"status",
+                  Access::Read,
+                  {},
+                  "link, drive, car, travel, faults, scheduling",
+                  [b](const Call&, Responder done) { done(Result::ok(to_json(b->status()))); }});
+
+  dispatcher.add({"watch",
+                  Access::Read,
+                  {[] {
+                    ArgSpec spec =
+                        flag_arg("enable", "true starts the event stream, false stops it");
+                    spec.required = true;
+                    return spec;
+                  }()},
+                  "start or stop the event stream on this connection",
+                  [b](const Call& call, Responder done) {
+                    const bool enable = call.request.at("enable").get<bool>();
+                    call.session.set_watching(enable);
+                    done(Result::ok({{"watching", enable}}));
+                    // A new watcher starts from the current state, then sees changes.
+                    if (enable) call.session.send_event(event_line("state", to_json(b->status())));
+                  }});
+
+  dispatcher.add({"stats",
+                  Access::Read,
+                  {},
+                  "link counters, cycle timing, API counters",
+                  [b, api_stats](const Call&, Responder done) {
+                    nlohmann::json out = to_json(b->stats());
+                    out["api"] = api_stats ? api_stats() : nlohmann::json::object();
+                    done(Result::ok(std::move(out)));
+                  }});
+
+  dispatcher.add(
+      {"trace",
+       Access::Read,
+       {int_arg("count", false, 1, kMaxTraceEntries, "newest frames to return (default 100)")},
+       "the newest DCP frames sent and received",
+       [b](const Call& call, Responder done) {
+         const auto count = arg_or<std::int64_t>(call.request, "count", 100);
+         nlohmann::json frames = nlohmann::json::array();
+         for (const auto& entry : b->trace(static_cast<std::size_t>(count))) {
+           frames.push_back(to_json(entry));
+         }
+         done(Result::ok({{"frames", std::move(frames)}}));
+       }});
+
+  dispatcher.add(
+      {"display", Access::Read, {}, "the drive's remote display", [b](const Call&, Responder done) {
+         done(Result::ok(to_json(b->display())));
+       }});
+
+  dispatcher.add(
+      {"config", Access::Read, {}, "the effective configuration", [b](const Call&, Responder done) {
+         done(Result::ok({{"config", b->config()}}));
+       }});
+
+  dispatcher.add(
+      {"version", Access::Read, {}, "daemon and API version", [](const Call&, Responder done) {
+         done(Result::ok({{"version", std::string(kVersion)}, {"api", kApiVersion}}));
+       }});
+
+  // DCP 5.6.3: the remote keypad has buttons "1" to "5".
+  dispatcher.add({"key",
+                  Access::Control,
+                  {int_arg("key", true, 1, 5, "keypad button 1..5")},
+                  "press a button of the drive's remote keypad",
+                  [b](const Call& call, Responder done) {
+                    b->key(call.request.at("key").get<int>(), std::move(done));
+                  }});
+
+  dispatcher.add({"drive_reset",
+                  Access::Control,
+                  {},
+                  "ask the drive for a fault reset (I2 'R')",
+                  [b](const Call&, Responder done) { b->drive_reset(std::move(done)); }});
+
+  // DCP 5.12.6: supply 'N' mains or 'U' emergency; energy saving '0', '1' or '2'.
+  dispatcher.add({"power",
+                  Access::Control,
+                  {choice_arg("supply", true, {"mains", "emergency"}, "power supply"),
+                   int_arg("saving", false, 0, 2, "energy saving mode (default 0)")},
+                  "set the power supply mode (I6)",
+                  [b](const Call& call, Responder done) {
+                    PowerSetting setting;
+                    setting.emergency = call.request.at("supply").get<std::string>() == "emergency";
+                    setting.saving = arg_or<int>(call.request, "saving", 0);
+                    b->power(setting, std::move(done));
+                  }});
+
+  // DCP 5.12.8: three BCD digits of percent of the rated load.
+  dispatcher.add({"load",
+                  Access::Control,
+                  {int_arg("percent", true, 0, 999, "car load in percent of rated load")},
+                  "send the car load for the next travel (I8)",
+                  [b](const Call& call, Responder done) {
+                    b->load(call.request.at("percent").get<int>(), std::move(done));
+                  }});
+
+  ArgSchema input_args;
+  for (const auto& flag : kInputFlags) {
+    input_args.push_back(flag_arg(std::string(flag.name), std::string(flag.description)));
+  }
+  input_args.push_back(int_arg("position_mm", false, -kMaxPositionMm, kMaxPositionMm,
+                               "absolute car position in mm from the lowest level"));
+  dispatcher.add({"inputs", Access::Inputs, std::move(input_args),
+                  "update machine inputs (omitted fields keep their value)",
+                  [b](const Call& call, Responder done) {
+                    InputUpdate update;
+                    for (std::size_t i = 0; i < kInputFlags.size(); ++i) {
+                      const auto it = call.request.find(kInputFlags[i].name);
+                      if (it != call.request.end()) update.flags[i] = it->get<bool>();
+                    }
+                    if (const auto it = call.request.find("position_mm");
+                        it != call.request.end()) {
+                      update.position_mm = it->get<std::int64_t>();
+                    }
+                    b->update_inputs(update, std::move(done));
+                  }});
+}
+
+}  // namespace liftd::api

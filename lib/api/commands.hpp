@@ -1,0 +1,22 @@
+// The built-in commands (status, watch, stats, trace, display, key, drive_reset, power, load,
+// config, version, inputs), each one table entry on a Dispatcher.
+#pragma once
+
+#include <functional>
+
+#include <nlohmann/json.hpp>
+
+#include "api/backend.hpp"
+#include "api/dispatcher.hpp"
+
+namespace liftd::api {
+
+/// Most trace entries one `trace` request returns.
+inline constexpr std::int64_t kMaxTraceEntries = 1000;
+
+/// Adds every built-in command to `dispatcher`, served by `backend`. `api_stats` supplies the
+/// server's own counters for `stats` ("api" object); it may be empty.
+void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
+                          std::function<nlohmann::json()> api_stats = {});
+
+}  // namespace liftd::api

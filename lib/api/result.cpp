@@ -1,0 +1,96 @@
+#include "api/result.hpp"
+
+namespace liftd::api {
+
+std::string_view to_string(ErrorCode code) noexcept {
+  switch (code) {
+    case ErrorCode::BadJson:
+      return "bad_json";
+    case ErrorCode::BadRequest:
+      return "bad_request";
+    case ErrorCode::UnknownCmd:
+      return "unknown_cmd";
+    case ErrorCode::Forbidden:
+      return "forbidden";
+    case ErrorCode::NotReady:
+      return "not_ready";
+    case ErrorCode::Busy:
+      return "busy";
+    case ErrorCode::Fault:
+      return "fault";
+    case ErrorCode::TooLarge:
+      return "too_large";
+    case ErrorCode::Timeout:
+      return "timeout";
+    case ErrorCode::Internal:
+      return "internal";
+  }
+  return "internal";
+}
+
+Result Result::ok(nlohmann::json value) {
+  return Result(std::move(value));
+}
+
+Result Result::fail(ErrorCode code, std::string message, std::string field) {
+  return Result(Error{code, std::move(message), std::move(field)});
+}
+
+std::string dump_compact(const nlohmann::json& value) {
+  return value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+std::string reply_line(const nlohmann::json& id, const Result& result) {
+  nlohmann::json reply = nlohmann::json::object();
+  reply["id"] = id;
+  reply["ok"] = result.is_ok();
+  if (result.is_ok()) {
+    reply["result"] = result.value();
+  } else {
+    const Error& error = result.error();
+    nlohmann::json body = {{"code", to_string(error.code)}, {"message", error.message}};
+    if (!error.field.empty()) body["field"] = error.field;
+    reply["error"] = std::move(body);
+  }
+  std::string line = dump_compact(reply);
+  line.push_back('\n');
+  return line;
+}
+
+std::string event_line(std::string_view name, const nlohmann::json& data) {
+  nlohmann::json event = {{"event", name}, {"data", data}};
+  std::string line = dump_compact(event);
+  line.push_back('\n');
+  return line;
+}
+
+int json_nesting_depth(std::string_view text, int limit) noexcept {
+  int depth = 0;
+  int deepest = 0;
+  bool in_string = false;
+  bool escaped = false;
+  for (char c : text) {
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+      continue;
+    }
+    if (c == '"') {
+      in_string = true;
+    } else if (c == '{' || c == '[') {
+      ++depth;
+      if (depth > deepest) deepest = depth;
+      if (deepest > limit) return limit + 1;
+    } else if ((c == '}' || c == ']') && depth > 0) {
+      --depth;
+    }
+  }
+  return deepest;
+}
+
+}  // namespace liftd::api

@@ -1,0 +1,47 @@
+// Argument schemas of API commands: one table entry per field, validated generically.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "api/result.hpp"
+
+namespace liftd::api {
+
+/// JSON type an argument must have.
+enum class ArgType : std::uint8_t {
+  Bool,     ///< true or false
+  Integer,  ///< a JSON number without fraction or exponent, within [min, max]
+  String,   ///< a string, one of `choices` when that is not empty
+  Any,      ///< any JSON value
+};
+
+/// One argument of a command.
+struct ArgSpec {
+  std::string name;                                             ///< field name in the request
+  ArgType type = ArgType::Any;                                  ///< required JSON type
+  bool required = false;                                        ///< must be present
+  std::int64_t min = std::numeric_limits<std::int64_t>::min();  ///< Integer: lowest allowed
+  std::int64_t max = std::numeric_limits<std::int64_t>::max();  ///< Integer: highest allowed
+  std::vector<std::string> choices;                             ///< String: allowed values
+  std::string description;                                      ///< one line, for help and docs
+};
+
+/// The arguments of one command (fields other than "cmd" and "id").
+using ArgSchema = std::vector<ArgSpec>;
+
+/// What a value for `spec` must look like, e.g. "an integer 0..999" or "one of \"mains\",
+/// \"emergency\"".
+std::string describe_allowed(const ArgSpec& spec);
+
+/// Checks a request object against a schema: every field other than "cmd" and "id" must be in
+/// the schema with the right type and range, and every required field present. Returns the first
+/// violation as a bad_request error naming the field, or nullopt.
+std::optional<Error> validate_args(const nlohmann::json& request, const ArgSchema& schema);
+
+}  // namespace liftd::api

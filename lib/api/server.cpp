@@ -1,0 +1,542 @@
+#include "api/server.hpp"
+
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <cstring>
+#include <deque>
+#include <set>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include <spdlog/spdlog.h>
+
+#include "api/access.hpp"
+#include "api/commands.hpp"
+#include "common/version.hpp"
+
+namespace liftd::api {
+
+using Socket = asio::local::stream_protocol::socket;
+using SteadyClock = std::chrono::steady_clock;
+
+namespace {
+
+/// Bytes read from a socket per read call.
+constexpr std::size_t kReadChunkBytes = 4096;
+/// How long a connection being closed may take to flush its last error line.
+constexpr std::chrono::seconds kFlushGrace{1};
+/// Pause before accepting again after accept() failed (e.g. out of file descriptors).
+constexpr std::chrono::milliseconds kAcceptRetry{100};
+
+void default_log(LogLevel level, std::string_view message) {
+  switch (level) {
+    case LogLevel::Debug:
+      spdlog::debug("{}", message);
+      break;
+    case LogLevel::Info:
+      spdlog::info("{}", message);
+      break;
+    case LogLevel::Warn:
+      spdlog::warn("{}", message);
+      break;
+    case LogLevel::Error:
+      spdlog::error("{}", message);
+      break;
+  }
+}
+
+std::string errno_text(int error) {
+  return std::strerror(error);
+}
+
+class Session;
+
+}  // namespace
+
+class Server::Impl : public std::enable_shared_from_this<Server::Impl> {
+ public:
+  Impl(asio::io_context& io, Backend& backend, ServerConfig config, LogFn log)
+      : io_(io),
+        backend_(backend),
+        config_(std::move(config)),
+        log_(log ? std::move(log) : LogFn(default_log)),
+        policy_(
+            AccessPolicy::resolve(config_.read_group, config_.control_group, config_.inputs_group)),
+        dispatcher_(DispatchLimits{config_.max_depth, config_.max_in_flight}),
+        acceptor_(io),
+        retry_timer_(io) {}
+
+  void register_builtins() {
+    std::weak_ptr<Impl> weak = weak_from_this();
+    add_builtin_commands(dispatcher_, backend_, [weak]() {
+      const auto self = weak.lock();
+      return self ? to_json(self->counters()) : nlohmann::json::object();
+    });
+  }
+
+  void start();
+  void stop();
+  void publish(std::string_view event, const nlohmann::json& data);
+  ServerCounters counters() const;
+  void accept_next();
+  void on_accept(const asio::error_code& ec, Socket socket);
+  void reject(Socket socket, ErrorCode code, const std::string& message);
+  void remove(const std::shared_ptr<Session>& session) { sessions_.erase(session); }
+
+  asio::io_context& io_;
+  Backend& backend_;
+  ServerConfig config_;
+  LogFn log_;
+  AccessPolicy policy_;
+  Dispatcher dispatcher_;
+  asio::local::stream_protocol::acceptor acceptor_;
+  asio::steady_timer retry_timer_;
+  std::set<std::shared_ptr<Session>> sessions_;
+  ServerCounters counters_{};
+  std::uint64_t next_session_id_ = 1;
+  bool listening_ = false;
+  bool created_socket_file_ = false;
+};
+
+namespace {
+
+/// One connected client.
+class Session final : public std::enable_shared_from_this<Session>, public SessionControl {
+ public:
+  Session(std::shared_ptr<Server::Impl> server, Socket socket, Peer peer, std::uint64_t id)
+      : server_(std::move(server)),
+        socket_(std::move(socket)),
+        timer_(server_->io_),
+        peer_(peer),
+        id_(id),
+        last_request_(SteadyClock::now()) {}
+
+  void start() {
+    nlohmann::json hello = {{"version", std::string(kVersion)},
+                            {"api", kApiVersion},
+                            {"access", peer_.access.to_json()},
+                            {"max_line_bytes", server_->config_.max_line_bytes}};
+    enqueue(std::make_shared<const std::string>(event_line("hello", hello)), false);
+    read_more();
+    arm_timer();
+  }
+
+  /// Closes the socket now and forgets the session.
+  void close(std::string_view reason) {
+    if (closed_) return;
+    closed_ = true;
+    if (watching_) --server_->counters_.watchers;
+    watching_ = false;
+    --server_->counters_.clients;
+    server_->log_(LogLevel::Debug, describe() + " closed: " + std::string(reason));
+    asio::error_code ignored;
+    timer_.cancel();
+    socket_.shutdown(asio::socket_base::shutdown_both, ignored);
+    socket_.close(ignored);
+    queue_.clear();
+    queued_bytes_ = 0;
+    server_->remove(shared_from_this());
+  }
+
+  /// Queues a line; drops the client if its queue is full.
+  void enqueue(std::shared_ptr<const std::string> line, bool is_event) {
+    if (closed_) return;
+    const ServerConfig& cfg = server_->config_;
+    if (queue_.size() + 1 > cfg.write_queue_max_messages ||
+        queued_bytes_ + line->size() > cfg.write_queue_max_bytes) {
+      ++server_->counters_.dropped;
+      server_->log_(LogLevel::Warn, describe() + " dropped: it does not read fast enough (" +
+                                        std::to_string(queue_.size()) + " lines, " +
+                                        std::to_string(queued_bytes_) + " bytes queued" +
+                                        (is_event ? ", while watching" : "") + ")");
+      close("write queue full");
+      return;
+    }
+    queued_bytes_ += line->size();
+    queue_.push_back(std::move(line));
+    if (!writing_) write_next();
+  }
+
+  void set_watching(bool enable) override {
+    if (enable == watching_) return;
+    watching_ = enable;
+    if (enable) {
+      ++server_->counters_.watchers;
+    } else {
+      --server_->counters_.watchers;
+    }
+  }
+  bool watching() const override { return watching_; }
+  void send_event(std::string line) override {
+    enqueue(std::make_shared<const std::string>(std::move(line)), true);
+  }
+  std::size_t requests_in_flight() const override { return in_flight_; }
+
+ private:
+  std::string describe() const {
+    return "api client #" + std::to_string(id_) + " (pid " + std::to_string(peer_.pid) + ", uid " +
+           std::to_string(peer_.uid) + ")";
+  }
+
+  void read_more() {
+    socket_.async_read_some(asio::buffer(chunk_),
+                            [self = shared_from_this()](const asio::error_code& ec, std::size_t n) {
+                              self->on_read(ec, n);
+                            });
+  }
+
+  void on_read(const asio::error_code& ec, std::size_t n) {
+    if (closed_) return;
+    if (ec) {
+      close(ec == asio::error::eof ? "client disconnected" : "read failed: " + ec.message());
+      return;
+    }
+    if (closing_) return;
+    if (pending_.empty() && n > 0) partial_since_ = SteadyClock::now();
+    pending_.append(chunk_.data(), n);
+    const std::size_t max_line = server_->config_.max_line_bytes;
+    std::size_t start = 0;
+    while (!closed_ && !closing_) {
+      const std::size_t newline = pending_.find('\n', start);
+      if (newline == std::string::npos) break;
+      std::string_view line(pending_.data() + start, newline - start);
+      start = newline + 1;
+      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      if (line.size() > max_line) {
+        fail_and_close(ErrorCode::TooLarge, too_large_message());
+        break;
+      }
+      last_request_ = SteadyClock::now();
+      if (line.find_first_not_of(" \t") == std::string_view::npos) continue;
+      handle(line);
+    }
+    if (closed_) return;
+    pending_.erase(0, start);
+    if (!closing_ && pending_.size() > max_line) {
+      fail_and_close(ErrorCode::TooLarge, too_large_message());
+    }
+    if (closed_) return;
+    if (start > 0 && !pending_.empty()) partial_since_ = SteadyClock::now();
+    if (!closing_) read_more();
+    arm_timer();
+  }
+
+  std::string too_large_message() const {
+    return "request line longer than " + std::to_string(server_->config_.max_line_bytes) +
+           " bytes; closing";
+  }
+
+  void handle(std::string_view line) {
+    ++server_->counters_.requests;
+    ++in_flight_;
+    // Holds the session weakly: a backend may answer after the client (or the server) is gone.
+    std::weak_ptr<Session> weak = shared_from_this();
+    server_->dispatcher_.handle_line(line, peer_, *this, [weak](std::string reply, bool ok) {
+      const auto self = weak.lock();
+      if (!self || self->closed_) return;
+      if (!ok) ++self->server_->counters_.errors;
+      --self->in_flight_;
+      self->enqueue(std::make_shared<const std::string>(std::move(reply)), false);
+      if (!self->closed_) self->arm_timer();
+    });
+  }
+
+  /// Sends an error with a null id, then closes once it is written (or after a grace period).
+  void fail_and_close(ErrorCode code, const std::string& message) {
+    ++server_->counters_.errors;
+    enqueue(std::make_shared<const std::string>(reply_line(nullptr, Result::fail(code, message))),
+            false);
+    if (closed_) return;
+    closing_ = true;
+    close_deadline_ = SteadyClock::now() + kFlushGrace;
+    server_->log_(LogLevel::Info, describe() + ": " + message);
+    arm_timer();
+  }
+
+  void write_next() {
+    if (queue_.empty() || closed_) {
+      writing_ = false;
+      if (closing_ && !closed_) close("closed after error");
+      return;
+    }
+    writing_ = true;
+    const auto line = queue_.front();
+    asio::async_write(socket_, asio::buffer(*line),
+                      [self = shared_from_this(), line](const asio::error_code& ec, std::size_t) {
+                        if (self->closed_) return;
+                        if (ec) {
+                          self->close("write failed: " + ec.message());
+                          return;
+                        }
+                        self->queued_bytes_ -= line->size();
+                        self->queue_.pop_front();
+                        self->write_next();
+                      });
+  }
+
+  /// The moment the connection must be closed, if any.
+  std::optional<SteadyClock::time_point> deadline() const {
+    const ServerConfig& cfg = server_->config_;
+    if (closing_) return close_deadline_;
+    if (!pending_.empty()) return partial_since_ + cfg.partial_line_timeout;
+    if (cfg.idle_timeout.count() > 0 && !watching_ && in_flight_ == 0) {
+      return last_request_ + cfg.idle_timeout;
+    }
+    return std::nullopt;
+  }
+
+  void arm_timer() {
+    const auto due = deadline();
+    if (due == armed_) return;
+    armed_ = due;
+    if (!due) {
+      timer_.cancel();
+      return;
+    }
+    timer_.expires_at(*due);
+    timer_.async_wait([self = shared_from_this()](const asio::error_code& ec) {
+      if (!ec) self->on_timer();
+    });
+  }
+
+  void on_timer() {
+    if (closed_) return;
+    armed_.reset();
+    const auto now = SteadyClock::now();
+    const auto due = deadline();
+    if (!due || now < *due) {
+      arm_timer();
+      return;
+    }
+    if (closing_) {
+      close("client did not take its last error line");
+      return;
+    }
+    ++server_->counters_.timeouts;
+    const ServerConfig& cfg = server_->config_;
+    if (!pending_.empty()) {
+      fail_and_close(ErrorCode::Timeout, "request line not finished with a newline within " +
+                                             std::to_string(cfg.partial_line_timeout.count()) +
+                                             " ms; closing");
+    } else {
+      fail_and_close(ErrorCode::Timeout, "no request for " +
+                                             std::to_string(cfg.idle_timeout.count()) +
+                                             " ms; closing idle connection");
+    }
+  }
+
+  std::shared_ptr<Server::Impl> server_;
+  Socket socket_;
+  asio::steady_timer timer_;
+  Peer peer_;
+  std::uint64_t id_;
+  std::array<char, kReadChunkBytes> chunk_{};
+  std::string pending_;
+  std::deque<std::shared_ptr<const std::string>> queue_;
+  std::size_t queued_bytes_ = 0;
+  std::size_t in_flight_ = 0;
+  bool writing_ = false;
+  bool watching_ = false;
+  bool closing_ = false;
+  bool closed_ = false;
+  SteadyClock::time_point last_request_;
+  SteadyClock::time_point partial_since_{};
+  SteadyClock::time_point close_deadline_{};
+  std::optional<SteadyClock::time_point> armed_;
+};
+
+/// Throws unless `path` is free: removes a socket file nobody listens on.
+void clear_stale_socket(const std::string& path) {
+  struct stat st {};
+  if (lstat(path.c_str(), &st) != 0) {
+    if (errno == ENOENT) return;
+    throw std::runtime_error("api: cannot inspect " + path + ": " + errno_text(errno));
+  }
+  if (!S_ISSOCK(st.st_mode)) {
+    throw std::runtime_error("api: " + path + " exists and is not a socket; not removing it");
+  }
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) throw std::runtime_error("api: socket(): " + errno_text(errno));
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+  const int rc = ::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr);
+  const int error = errno;
+  ::close(fd);
+  if (rc == 0) {
+    throw std::runtime_error("api: another process is listening on " + path +
+                             " (is liftd already running?)");
+  }
+  if (error != ECONNREFUSED) {
+    throw std::runtime_error("api: cannot probe " + path + ": " + errno_text(error));
+  }
+  if (::unlink(path.c_str()) != 0) {
+    throw std::runtime_error("api: cannot remove stale socket " + path + ": " + errno_text(errno));
+  }
+}
+
+}  // namespace
+
+void Server::Impl::start() {
+  if (listening_) return;
+  const std::string& path = config_.socket_path;
+  if (path.empty() || path.size() >= sizeof(sockaddr_un{}.sun_path)) {
+    throw std::runtime_error("api: socket path \"" + path + "\" is empty or too long");
+  }
+  std::optional<gid_t> socket_gid;
+  if (!config_.socket_group.empty()) socket_gid = resolve_group(config_.socket_group);
+  clear_stale_socket(path);
+  asio::error_code ec;
+  acceptor_.open(asio::local::stream_protocol(), ec);
+  if (!ec) acceptor_.bind(asio::local::stream_protocol::endpoint(path), ec);
+  if (ec) {
+    acceptor_.close();
+    throw std::runtime_error("api: cannot bind " + path + ": " + ec.message() +
+                             " (does the directory exist?)");
+  }
+  created_socket_file_ = true;
+  // Nobody can connect before listen(), so fixing the mode and group here leaves no window.
+  if (::chmod(path.c_str(), static_cast<mode_t>(config_.socket_mode)) != 0) {
+    const int error = errno;
+    stop();
+    throw std::runtime_error("api: chmod " + path + ": " + errno_text(error));
+  }
+  if (socket_gid && ::chown(path.c_str(), static_cast<uid_t>(-1), *socket_gid) != 0) {
+    const int error = errno;
+    stop();
+    throw std::runtime_error("api: cannot give " + path + " to group " + config_.socket_group +
+                             ": " + errno_text(error));
+  }
+  acceptor_.listen(asio::socket_base::max_listen_connections, ec);
+  if (ec) {
+    stop();
+    throw std::runtime_error("api: listen on " + path + ": " + ec.message());
+  }
+  listening_ = true;
+  log_(LogLevel::Info, "api: listening on " + path);
+  accept_next();
+}
+
+void Server::Impl::stop() {
+  asio::error_code ignored;
+  acceptor_.close(ignored);
+  retry_timer_.cancel();
+  const auto sessions = std::vector<std::shared_ptr<Session>>(sessions_.begin(), sessions_.end());
+  for (const auto& session : sessions) session->close("server stopping");
+  sessions_.clear();
+  if (created_socket_file_) {
+    ::unlink(config_.socket_path.c_str());
+    created_socket_file_ = false;
+  }
+  if (listening_) log_(LogLevel::Info, "api: stopped");
+  listening_ = false;
+}
+
+void Server::Impl::accept_next() {
+  acceptor_.async_accept([self = shared_from_this()](const asio::error_code& ec, Socket socket) {
+    self->on_accept(ec, std::move(socket));
+  });
+}
+
+void Server::Impl::on_accept(const asio::error_code& ec, Socket socket) {
+  if (!listening_ || ec == asio::error::operation_aborted) return;
+  if (ec) {
+    log_(LogLevel::Warn, "api: accept failed: " + ec.message());
+    retry_timer_.expires_after(kAcceptRetry);
+    retry_timer_.async_wait([self = shared_from_this()](const asio::error_code& wait_ec) {
+      if (!wait_ec && self->listening_) self->accept_next();
+    });
+    return;
+  }
+  accept_next();
+  const auto creds = peer_credentials(socket.native_handle());
+  if (!creds) {
+    reject(std::move(socket), ErrorCode::Forbidden, "peer credentials unavailable");
+    return;
+  }
+  if (sessions_.size() >= config_.max_clients) {
+    reject(std::move(socket), ErrorCode::Busy,
+           "too many clients (limit " + std::to_string(config_.max_clients) + "); try later");
+    return;
+  }
+  Peer peer;
+  peer.pid = creds->pid;
+  peer.uid = creds->uid;
+  peer.gid = creds->gid;
+  peer.access = policy_.access_for(creds->uid, creds->groups);
+  ++counters_.connections;
+  ++counters_.clients;
+  auto session =
+      std::make_shared<Session>(shared_from_this(), std::move(socket), peer, next_session_id_++);
+  sessions_.insert(session);
+  log_(LogLevel::Debug, "api: client pid " + std::to_string(peer.pid) + " uid " +
+                            std::to_string(peer.uid) + " connected");
+  session->start();
+}
+
+void Server::Impl::reject(Socket socket, ErrorCode code, const std::string& message) {
+  ++counters_.rejected;
+  log_(LogLevel::Warn, "api: connection refused: " + message);
+  auto held = std::make_shared<Socket>(std::move(socket));
+  auto line = std::make_shared<const std::string>(reply_line(nullptr, Result::fail(code, message)));
+  // The line fits an empty socket buffer, so this completes at once; then the socket closes.
+  asio::async_write(*held, asio::buffer(*line), [held, line](const asio::error_code&, std::size_t) {
+    asio::error_code ignored;
+    held->shutdown(asio::socket_base::shutdown_both, ignored);
+    held->close(ignored);
+  });
+}
+
+void Server::Impl::publish(std::string_view event, const nlohmann::json& data) {
+  ++counters_.events;
+  if (counters_.watchers == 0) return;
+  const auto line = std::make_shared<const std::string>(event_line(event, data));
+  std::vector<std::shared_ptr<Session>> watchers;
+  for (const auto& session : sessions_) {
+    if (session->watching()) watchers.push_back(session);
+  }
+  for (const auto& session : watchers) session->enqueue(line, true);
+}
+
+ServerCounters Server::Impl::counters() const {
+  return counters_;
+}
+
+Server::Server(asio::io_context& io, Backend& backend, ServerConfig config, LogFn log)
+    : impl_(std::make_shared<Impl>(io, backend, std::move(config), std::move(log))) {
+  impl_->register_builtins();
+}
+
+Server::~Server() {
+  impl_->stop();
+}
+
+void Server::start() {
+  impl_->start();
+}
+void Server::stop() {
+  impl_->stop();
+}
+Dispatcher& Server::dispatcher() {
+  return impl_->dispatcher_;
+}
+void Server::publish(std::string_view event, const nlohmann::json& data) {
+  impl_->publish(event, data);
+}
+ServerCounters Server::counters() const {
+  return impl_->counters();
+}
+
+nlohmann::json to_json(const ServerCounters& c) {
+  return {{"clients", c.clients},   {"watchers", c.watchers}, {"connections", c.connections},
+          {"rejected", c.rejected}, {"requests", c.requests}, {"errors", c.errors},
+          {"dropped", c.dropped},   {"timeouts", c.timeouts}, {"events", c.events}};
+}
+
+}  // namespace liftd::api

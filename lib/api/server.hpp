@@ -1,0 +1,91 @@
+// The JSON-lines API server on a Unix stream socket. Runs on an io_context the daemon owns and
+// never creates threads; every public method must be called on that io_context's thread.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include <asio.hpp>
+#include <nlohmann/json.hpp>
+
+#include "api/backend.hpp"
+#include "api/dispatcher.hpp"
+
+namespace liftd::api {
+
+/// Server settings (the daemon fills them from its config file).
+struct ServerConfig {
+  std::string socket_path = "/run/liftd/api.sock";  ///< where to listen
+  std::string socket_group;      ///< group owning the socket file; empty: the daemon's group
+  unsigned socket_mode = 0660;   ///< file mode of the socket (owner and group may connect)
+  std::string read_group;        ///< members may run read commands; empty: root only
+  std::string control_group;     ///< members may run control and read commands
+  std::string inputs_group;      ///< members may send inputs and run read commands
+  std::size_t max_clients = 16;  ///< more connections get `busy` and are closed
+  std::size_t max_line_bytes = 64 * 1024;           ///< longest request line; longer: `too_large`
+  int max_depth = 32;                               ///< deepest JSON nesting in a request
+  std::size_t max_in_flight = 32;                   ///< unanswered requests per client
+  std::size_t write_queue_max_bytes = 1024 * 1024;  ///< per client; beyond it the client is dropped
+  std::size_t write_queue_max_messages = 4096;      ///< per client; beyond it the client is dropped
+  /// A client that sends nothing for this long (and is not watching) is closed; 0 disables.
+  std::chrono::milliseconds idle_timeout{std::chrono::minutes(10)};
+  /// A request line must be complete this long after its first byte arrived.
+  std::chrono::milliseconds partial_line_timeout{std::chrono::seconds(5)};
+};
+
+/// Severity of a server log line.
+enum class LogLevel : std::uint8_t { Debug, Info, Warn, Error };
+/// Where the server logs; by default spdlog's default logger.
+using LogFn = std::function<void(LogLevel level, std::string_view message)>;
+
+/// Counters the server keeps (also reported by `stats` as "api").
+struct ServerCounters {
+  std::uint64_t connections = 0;  ///< connections accepted since start
+  std::uint64_t rejected = 0;     ///< connections refused (max clients, no credentials)
+  std::uint64_t requests = 0;     ///< request lines handled
+  std::uint64_t errors = 0;       ///< replies with ok:false
+  std::uint64_t dropped = 0;      ///< clients dropped because their write queue was full
+  std::uint64_t timeouts = 0;     ///< clients closed by the idle or partial-line timeout
+  std::uint64_t events = 0;       ///< events published
+  std::size_t clients = 0;        ///< clients connected now
+  std::size_t watchers = 0;       ///< clients watching now
+};
+
+/// The API server.
+class Server {
+ public:
+  /// Registers the built-in commands; listens only after start(). Resolves the access groups
+  /// here: throws std::runtime_error naming an unknown group.
+  Server(asio::io_context& io, Backend& backend, ServerConfig config, LogFn log = {});
+  ~Server();
+  Server(const Server&) = delete;
+  Server& operator=(const Server&) = delete;
+
+  /// Binds and listens. A stale socket file (nothing listening) is removed; if another process
+  /// listens there, or the path is not a socket, throws std::runtime_error saying so.
+  void start();
+  /// Closes the listener and every client and removes the socket file. Idempotent.
+  void stop();
+
+  /// The command table: add later commands (travel, stop, ...) here before or after start().
+  Dispatcher& dispatcher();
+  /// Sends {"event":name,"data":data} to every watching client.
+  void publish(std::string_view event, const nlohmann::json& data);
+  /// Current counters.
+  ServerCounters counters() const;
+
+  class Impl;
+
+ private:
+  std::shared_ptr<Impl> impl_;
+};
+
+/// The counters as the "api" object of `stats`.
+nlohmann::json to_json(const ServerCounters& counters);
+
+}  // namespace liftd::api

@@ -1,0 +1,354 @@
+// The request handler without a socket: parsing, ids, schema validation, access, error codes.
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "api/commands.hpp"
+#include "api/dispatcher.hpp"
+#include "api/fake_backend.hpp"
+#include "common/version.hpp"
+
+namespace liftd::api {
+namespace {
+
+using nlohmann::json;
+using testing::FakeBackend;
+
+class FakeSession : public SessionControl {
+ public:
+  void set_watching(bool enable) override { watching_ = enable; }
+  bool watching() const override { return watching_; }
+  void send_event(std::string line) override { events.push_back(std::move(line)); }
+  std::size_t requests_in_flight() const override { return in_flight; }
+  std::vector<std::string> events;
+  std::size_t in_flight = 1;
+
+ private:
+  bool watching_ = false;
+};
+
+class DispatcherTest : public ::testing::Test {
+ protected:
+  DispatcherTest() { add_builtin_commands(dispatcher_, backend_); }
+
+  /// Handles `line` as `access` and returns the parsed reply (null if none was sent yet).
+  json handle(std::string_view line, AccessSet access = {true, true, true}) {
+    Peer peer;
+    peer.uid = 1000;
+    peer.access = access;
+    // The reply lands in a member: a deferred responder may answer after handle() returned.
+    reply_ = nullptr;
+    dispatcher_.handle_line(line, peer, session_, [this](std::string text, bool ok) {
+      EXPECT_EQ(text.back(), '\n');
+      reply_ = json::parse(text);
+      EXPECT_EQ(reply_.at("ok").get<bool>(), ok);
+    });
+    return reply_;
+  }
+  static std::string code_of(const json& reply) { return reply.at("error").at("code"); }
+
+  json reply_;  // declared first: outlives the responders the backend may still hold
+  FakeBackend backend_;
+  Dispatcher dispatcher_;
+  FakeSession session_;
+};
+
+TEST_F(DispatcherTest, EchoesIdsOfEveryJsonType) {
+  // Legend: the id given in the request, and what the reply's id must be.
+  const std::vector<std::pair<std::string, json>> cases = {
+      {R"({"cmd":"version","id":7})", 7},
+      {R"({"cmd":"version","id":-1.5})", -1.5},
+      {R"({"cmd":"version","id":"abc"})", "abc"},
+      {R"({"cmd":"version","id":{"a":[1,2]}})", json{{"a", {1, 2}}}},
+      {R"({"cmd":"version","id":[1,"x"]})", json::array({1, "x"})},
+      {R"({"cmd":"version","id":null})", nullptr},
+      {R"({"cmd":"version"})", nullptr},
+      {R"({"cmd":"nope","id":"err-id"})", "err-id"},  // echoed on errors too
+  };
+  for (const auto& [line, id] : cases) {
+    const json reply = handle(line);
+    EXPECT_EQ(reply.at("id"), id) << line;
+  }
+}
+
+TEST_F(DispatcherTest, VersionReportsDaemonAndApiVersion) {
+  const json reply = handle(R"({"cmd":"version","id":1})");
+  ASSERT_TRUE(reply.at("ok").get<bool>());
+  EXPECT_EQ(reply.at("result").at("api"), kApiVersion);
+  EXPECT_EQ(reply.at("result").at("version"), std::string(kVersion));
+}
+
+TEST_F(DispatcherTest, RejectsMalformedRequestsWithTheRightCode) {
+  // Legend: request line, expected error code, expected field named ("" = none).
+  struct Case {
+    const char* line;
+    const char* code;
+    const char* field;
+  };
+  const Case cases[] = {
+      {"{", "bad_json", ""},                                             // truncated object
+      {"cmd=status", "bad_json", ""},                                    // not JSON at all
+      {"{\"cmd\":\"status\"} x", "bad_json", ""},                        // trailing garbage
+      {"\"\xff\xfe\"", "bad_json", ""},                                  // invalid UTF-8
+      {"[1,2]", "bad_request", ""},                                      // array, not object
+      {"42", "bad_request", ""},                                         // number, not object
+      {"{}", "bad_request", "cmd"},                                      // no cmd
+      {R"({"cmd":5})", "bad_request", "cmd"},                            // cmd not a string
+      {R"({"cmd":"frobnicate"})", "unknown_cmd", "cmd"},                 // no such command
+      {R"({"cmd":"status","verbose":true})", "bad_request", "verbose"},  // unknown field
+      {R"({"cmd":"watch"})", "bad_request", "enable"},                   // missing required field
+      {R"({"cmd":"watch","enable":1})", "bad_request", "enable"},        // int for bool
+      {R"({"cmd":"load","percent":"50"})", "bad_request", "percent"},    // string for int
+      {R"({"cmd":"load","percent":50.5})", "bad_request", "percent"},    // fraction
+      {R"({"cmd":"load","percent":1000})", "bad_request", "percent"},    // above 999
+      {R"({"cmd":"load","percent":-1})", "bad_request", "percent"},      // below 0
+      {R"({"cmd":"load","percent":18446744073709551615})", "bad_request", "percent"},
+      {R"({"cmd":"key","key":0})", "bad_request", "key"},  // buttons are 1..5
+      {R"({"cmd":"key","key":6})", "bad_request", "key"},
+      {R"({"cmd":"power","supply":"battery"})", "bad_request", "supply"},  // not a choice
+      {R"({"cmd":"power","supply":"mains","saving":3})", "bad_request", "saving"},
+      {R"({"cmd":"trace","count":0})", "bad_request", "count"},
+      {R"({"cmd":"trace","count":1001})", "bad_request", "count"},
+      {R"({"cmd":"inputs","doors_open":true})", "bad_request", "doors_open"},
+      {R"({"cmd":"inputs","safety_chain":"yes"})", "bad_request", "safety_chain"},
+      {R"({"cmd":"inputs","position_mm":1000000})", "bad_request", "position_mm"},
+  };
+  for (const auto& c : cases) {
+    const json reply = handle(c.line);
+    ASSERT_FALSE(reply.is_null()) << c.line;
+    EXPECT_FALSE(reply.at("ok").get<bool>()) << c.line;
+    EXPECT_EQ(code_of(reply), c.code) << c.line;
+    if (*c.field != '\0') {
+      EXPECT_EQ(reply.at("error").at("field"), c.field) << c.line;
+    }
+    if (*c.field != '\0' && std::string(c.code) == "bad_request") {
+      EXPECT_NE(reply.at("error").at("message").get<std::string>().find(c.field), std::string::npos)
+          << "message must name the field: " << c.line;
+    }
+  }
+}
+
+TEST_F(DispatcherTest, BadRequestMessageSaysWhatIsAllowed) {
+  EXPECT_EQ(handle(R"({"cmd":"load","percent":1000})").at("error").at("message"),
+            "field \"percent\" must be an integer 0..999");
+  EXPECT_EQ(handle(R"({"cmd":"power","supply":"x"})").at("error").at("message"),
+            "field \"supply\" must be one of \"mains\", \"emergency\"");
+  EXPECT_EQ(handle(R"({"cmd":"status","x":1})").at("error").at("message"),
+            "unknown field \"x\" (this command takes no arguments)");
+}
+
+TEST_F(DispatcherTest, RejectsNestingDeeperThanTheLimit) {
+  std::string deep = R"({"cmd":"status","id":)" + std::string(40, '[') + std::string(40, ']') + "}";
+  EXPECT_EQ(code_of(handle(deep)), "bad_json");
+  // Brackets inside strings do not count.
+  std::string in_string = R"({"cmd":"version","id":")" + std::string(100, '[') + "\"}";
+  EXPECT_TRUE(handle(in_string).at("ok").get<bool>());
+}
+
+TEST_F(DispatcherTest, ChecksAccessPerCommandLevel) {
+  // Legend: command line, access level it needs.
+  const std::vector<std::pair<std::string, Access>> cases = {
+      {R"({"cmd":"status"})", Access::Read},
+      {R"({"cmd":"watch","enable":false})", Access::Read},
+      {R"({"cmd":"stats"})", Access::Read},
+      {R"({"cmd":"trace"})", Access::Read},
+      {R"({"cmd":"display"})", Access::Read},
+      {R"({"cmd":"config"})", Access::Read},
+      {R"({"cmd":"version"})", Access::Read},
+      {R"({"cmd":"key","key":1})", Access::Control},
+      {R"({"cmd":"drive_reset"})", Access::Control},
+      {R"({"cmd":"power","supply":"mains"})", Access::Control},
+      {R"({"cmd":"load","percent":10})", Access::Control},
+      {R"({"cmd":"inputs","safety_chain":true})", Access::Inputs},
+  };
+  const AccessSet only_read{true, false, false};
+  const AccessSet only_control{true, true, false};
+  const AccessSet only_inputs{true, false, true};
+  const AccessSet nothing{false, false, false};
+  for (const auto& [line, level] : cases) {
+    EXPECT_EQ(handle(line, only_read).at("ok").get<bool>(), level == Access::Read) << line;
+    EXPECT_EQ(handle(line, only_control).at("ok").get<bool>(), level != Access::Inputs) << line;
+    EXPECT_EQ(handle(line, only_inputs).at("ok").get<bool>(), level != Access::Control) << line;
+    EXPECT_EQ(code_of(handle(line, nothing)), "forbidden") << line;
+  }
+}
+
+TEST_F(DispatcherTest, ForbiddenIsCheckedBeforeArguments) {
+  // A peer without access learns nothing about argument rules.
+  EXPECT_EQ(code_of(handle(R"({"cmd":"load","percent":"x"})", AccessSet{true, false, false})),
+            "forbidden");
+}
+
+TEST_F(DispatcherTest, PassesBackendErrorsThrough) {
+  // Legend: the backend's error code, as the client must see it.
+  for (const auto code : {ErrorCode::NotReady, ErrorCode::Busy, ErrorCode::Fault}) {
+    backend_.control_result = Result::fail(code, "drive says no");
+    const json reply = handle(R"({"cmd":"drive_reset","id":3})");
+    EXPECT_EQ(code_of(reply), to_string(code));
+    EXPECT_EQ(reply.at("error").at("message"), "drive says no");
+    EXPECT_EQ(reply.at("id"), 3);
+  }
+}
+
+TEST_F(DispatcherTest, ForwardsControlArgumentsToTheBackend) {
+  handle(R"({"cmd":"key","key":3})");
+  handle(R"({"cmd":"drive_reset"})");
+  handle(R"({"cmd":"power","supply":"emergency","saving":2})");
+  handle(R"({"cmd":"power","supply":"mains"})");
+  handle(R"({"cmd":"load","percent":75})");
+  EXPECT_EQ(backend_.calls, (std::vector<std::string>{"key 3", "drive_reset", "power emergency 2",
+                                                      "power mains 0", "load 75"}));
+}
+
+TEST_F(DispatcherTest, InputsKeepOmittedFields) {
+  handle(R"({"cmd":"inputs","safety_chain":true,"doors_closed":true,"position_mm":1200})");
+  const json reply = handle(R"({"cmd":"inputs","doors_closed":false})");
+  ASSERT_TRUE(reply.at("ok").get<bool>());
+  EXPECT_EQ(reply.at("result").at("safety_chain"), true);
+  EXPECT_EQ(reply.at("result").at("doors_closed"), false);
+  EXPECT_EQ(reply.at("result").at("position_mm"), 1200);
+  EXPECT_EQ(reply.at("result").at("zone_level"), false);
+  EXPECT_EQ(reply.at("result").size(), kInputFlags.size() + 1);
+}
+
+TEST_F(DispatcherTest, StatusNamesEveryField) {
+  backend_.status_snapshot.drive_status = dcp::Status::from_byte(0x45);  // S0 S2 S6
+  backend_.status_snapshot.faults.push_back(
+      {"link_timeout", "no reply for 150 ms", std::chrono::system_clock::time_point{}});
+  const json r = handle(R"({"cmd":"status"})").at("result");
+  EXPECT_EQ(r.at("link").at("state"), "up");
+  EXPECT_EQ(r.at("drive").at("mode"), "DCP4");
+  EXPECT_EQ(r.at("drive").at("status"), (json{{"ready", true},
+                                              {"travel_active", false},
+                                              {"advance_warning", true},
+                                              {"general_fault", false},
+                                              {"below_levelling", false},
+                                              {"accepted", false},
+                                              {"brake_open", true},
+                                              {"message_error", false}}));
+  EXPECT_EQ(r.at("drive").at("extended").at("below_unlocking_speed"), false);
+  EXPECT_EQ(r.at("car"), (json{{"position_mm", 3000}, {"floor", 1}}));
+  EXPECT_EQ(r.at("travel").at("state"), "idle");
+  EXPECT_EQ(r.at("faults").at(0).at("since"), "1970-01-01T00:00:00.000Z");
+  EXPECT_EQ(r.at("rt").at("policy"), "SCHED_FIFO");
+}
+
+TEST_F(DispatcherTest, StatusUsesNullForUnknowns) {
+  backend_.status_snapshot = StatusSnapshot{};
+  const json r = handle(R"({"cmd":"status"})").at("result");
+  EXPECT_EQ(r.at("link").at("state"), "down");
+  EXPECT_TRUE(r.at("drive").at("mode").is_null());
+  EXPECT_TRUE(r.at("drive").at("extended").is_null());
+  EXPECT_TRUE(r.at("car").at("position_mm").is_null());
+  EXPECT_TRUE(r.at("car").at("floor").is_null());
+}
+
+TEST_F(DispatcherTest, TraceReturnsNewestFramesAsHex) {
+  for (int i = 0; i < 5; ++i) {
+    TraceEntry e;
+    e.at = std::chrono::milliseconds(15 * i);
+    e.tx = {0x01, 0x00, 0x00, 0x00, 0x00, 0x01};
+    if (i != 4) e.rx = dcp::FrameBytes{0x21, 0x7F, 0xFF, 0x00, 0x00, 0xA1};
+    backend_.trace_entries.push_back(e);
+  }
+  const json frames = handle(R"({"cmd":"trace","count":2})").at("result").at("frames");
+  ASSERT_EQ(frames.size(), 2U);
+  EXPECT_EQ(frames[0],
+            (json{{"t_us", 45000}, {"tx", "01 00 00 00 00 01"}, {"rx", "21 7F FF 00 00 A1"}}));
+  EXPECT_TRUE(frames[1].at("rx").is_null());
+}
+
+TEST_F(DispatcherTest, WatchTogglesTheSessionAndSendsCurrentState) {
+  EXPECT_EQ(handle(R"({"cmd":"watch","enable":true})").at("result").at("watching"), true);
+  EXPECT_TRUE(session_.watching());
+  ASSERT_EQ(session_.events.size(), 1U);
+  EXPECT_EQ(json::parse(session_.events[0]).at("event"), "state");
+  handle(R"({"cmd":"watch","enable":false})");
+  EXPECT_FALSE(session_.watching());
+  EXPECT_EQ(session_.events.size(), 1U);
+}
+
+TEST_F(DispatcherTest, HandlerExceptionBecomesInternal) {
+  dispatcher_.add({"explode", Access::Read, {}, "throws", [](const Call&, Responder) {
+                     throw std::runtime_error("boom");
+                   }});
+  const json reply = handle(R"({"cmd":"explode","id":9})");
+  EXPECT_EQ(code_of(reply), "internal");
+  EXPECT_EQ(reply.at("id"), 9);
+}
+
+TEST_F(DispatcherTest, DroppedResponderBecomesInternal) {
+  dispatcher_.add({"forget", Access::Read, {}, "never answers", [](const Call&, Responder) {}});
+  EXPECT_EQ(code_of(handle(R"({"cmd":"forget"})")), "internal");
+}
+
+TEST_F(DispatcherTest, AnswersLaterForAsynchronousHandlers) {
+  backend_.defer = true;
+  json reply = handle(R"({"cmd":"load","percent":5,"id":"later"})");
+  EXPECT_TRUE(reply.is_null());
+  ASSERT_EQ(backend_.deferred.size(), 1U);
+  int sends = 0;
+  Peer peer;
+  peer.access = {true, true, true};
+  dispatcher_.handle_line(R"({"cmd":"drive_reset","id":2})", peer, session_,
+                          [&](std::string text, bool) {
+                            ++sends;
+                            reply = json::parse(text);
+                          });
+  backend_.deferred[1](Result::ok({{"done", true}}));
+  backend_.deferred[1](Result::ok());  // a second answer is ignored
+  EXPECT_EQ(sends, 1);
+  EXPECT_EQ(reply.at("id"), 2);
+  EXPECT_EQ(reply.at("result").at("done"), true);
+  // A responder dropped unanswered still replies (internal), so no client waits forever.
+  backend_.deferred.clear();
+  EXPECT_EQ(code_of(reply_), "internal");
+  EXPECT_EQ(reply_.at("id"), "later");
+}
+
+TEST_F(DispatcherTest, TooManyRequestsInFlightIsBusy) {
+  session_.in_flight = DispatchLimits{}.max_in_flight + 1;
+  EXPECT_EQ(code_of(handle(R"({"cmd":"status"})")), "busy");
+}
+
+TEST_F(DispatcherTest, AddingACommandIsOneEntry) {
+  ArgSpec floor;
+  floor.name = "floor";
+  floor.type = ArgType::Integer;
+  floor.required = true;
+  floor.min = 0;
+  floor.max = 63;
+  dispatcher_.add({"travel",
+                   Access::Control,
+                   {floor},
+                   "travel to a floor",
+                   [](const Call& call, Responder done) {
+                     done(Result::ok({{"floor", call.request.at("floor")}}));
+                   }});
+  EXPECT_EQ(handle(R"({"cmd":"travel","floor":4})").at("result").at("floor"), 4);
+  EXPECT_EQ(code_of(handle(R"({"cmd":"travel","floor":64})")), "bad_request");
+  EXPECT_EQ(code_of(handle(R"({"cmd":"travel","floor":4})", AccessSet{true, false, false})),
+            "forbidden");
+  EXPECT_THROW(dispatcher_.add({"travel", Access::Read, {}, "", [](const Call&, Responder) {}}),
+               std::invalid_argument);
+}
+
+TEST(JsonNestingDepth, CountsOutsideStringsOnly) {
+  // Legend: text, its nesting depth.
+  const std::vector<std::pair<std::string, int>> cases = {
+      {"{}", 1},
+      {"[[]]", 2},
+      {R"({"a":[{"b":1}]})", 3},
+      {R"({"a":"[[[["})", 1},
+      {R"({"a":"\"[[["})", 1},
+      {"1", 0},
+      {"]]]]", 0},
+  };
+  for (const auto& [text, depth] : cases) EXPECT_EQ(json_nesting_depth(text, 32), depth) << text;
+  EXPECT_EQ(json_nesting_depth(std::string(100, '['), 32), 33);
+}
+
+}  // namespace
+}  // namespace liftd::api

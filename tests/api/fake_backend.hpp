@@ -1,0 +1,78 @@
+// A scripted Backend for the API tests, the fuzz target and the benchmark.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "api/backend.hpp"
+
+namespace liftd::api::testing {
+
+/// Answers from fixed snapshots; control commands succeed, fail with `control_result`, or are
+/// held in `deferred` until the test answers them.
+class FakeBackend : public Backend {
+ public:
+  FakeBackend() {
+    status_snapshot.link = LinkState::Up;
+    status_snapshot.drive_mode = dcp::Protocol::Dcp4;
+    status_snapshot.drive_status.ready = true;
+    status_snapshot.extended = dcp::ExtendedStatus{};
+    status_snapshot.position_mm = 3000;
+    status_snapshot.floor = 1;
+    status_snapshot.rt = RtInfo{true, "SCHED_FIFO", 80, true};
+    config_json = {{"serial", {{"device", "/dev/ttyS1"}}}};
+    display_snapshot.lines = {"Speed    0.00 m/s", "Menu 1", "", ""};
+  }
+
+  StatusSnapshot status() override { return status_snapshot; }
+  StatsSnapshot stats() override { return stats_snapshot; }
+  std::vector<TraceEntry> trace(std::size_t max_entries) override {
+    const std::size_t n = std::min(max_entries, trace_entries.size());
+    return {trace_entries.end() - static_cast<std::ptrdiff_t>(n), trace_entries.end()};
+  }
+  DisplaySnapshot display() override { return display_snapshot; }
+  nlohmann::json config() override { return config_json; }
+  void key(int button, Responder done) override {
+    answer("key " + std::to_string(button), Result::ok(), std::move(done));
+  }
+  void drive_reset(Responder done) override {
+    answer("drive_reset", Result::ok(), std::move(done));
+  }
+  void power(PowerSetting setting, Responder done) override {
+    answer(std::string("power ") + (setting.emergency ? "emergency " : "mains ") +
+               std::to_string(setting.saving),
+           Result::ok(to_json(setting)), std::move(done));
+  }
+  void load(int percent, Responder done) override {
+    answer("load " + std::to_string(percent), Result::ok(), std::move(done));
+  }
+  void update_inputs(const InputUpdate& update, Responder done) override {
+    update.apply_to(inputs_state);
+    answer("inputs", Result::ok(to_json(inputs_state)), std::move(done));
+  }
+
+  StatusSnapshot status_snapshot;         ///< what status() returns
+  StatsSnapshot stats_snapshot;           ///< what stats() returns
+  std::vector<TraceEntry> trace_entries;  ///< what trace() picks from
+  DisplaySnapshot display_snapshot;       ///< what display() returns
+  nlohmann::json config_json;             ///< what config() returns
+  Inputs inputs_state;                    ///< updated by update_inputs()
+  std::optional<Result> control_result;   ///< set: control commands answer this
+  bool defer = false;                     ///< true: hold control responders in `deferred`
+  std::vector<Responder> deferred;        ///< held responders
+  std::vector<std::string> calls;         ///< control calls seen, e.g. "load 50"
+
+ private:
+  void answer(std::string call, Result fallback, Responder done) {
+    calls.push_back(std::move(call));
+    if (defer) {
+      deferred.push_back(std::move(done));
+      return;
+    }
+    done(control_result ? *control_result : std::move(fallback));
+  }
+};
+
+}  // namespace liftd::api::testing

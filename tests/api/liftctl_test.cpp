@@ -1,0 +1,118 @@
+// liftctl against the in-process server: output, exit codes, and its messages when the daemon
+// is missing.
+#include <sys/wait.h>
+
+#include <cstdio>
+
+#include "api/test_support.hpp"
+
+namespace liftd::api::testing {
+namespace {
+
+struct RunResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+RunResult run(const std::string& command_line) {
+  RunResult r;
+  std::FILE* pipe = ::popen((command_line + " 2>&1").c_str(), "r");
+  if (pipe == nullptr) return r;
+  char buf[4096];
+  std::size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) r.output.append(buf, n);
+  const int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+class Liftctl : public ServerFixture {
+ protected:
+  std::string liftctl(const std::string& args) const {
+    return std::string(LIFTCTL_PATH) + " --socket " + socket_path() + " " + args;
+  }
+};
+
+TEST_F(Liftctl, StatusPrintsASummary) {
+  start_server();
+  const RunResult r = run(liftctl("status"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("link:     up"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("car:      floor 1, position 3000 mm"), std::string::npos) << r.output;
+}
+
+TEST_F(Liftctl, JsonPrintsTheRawResult) {
+  start_server();
+  const RunResult r = run(liftctl("--json status"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(nlohmann::json::parse(r.output).at("drive").at("mode"), "DCP4");
+}
+
+TEST_F(Liftctl, SocketComesFromTheEnvironment) {
+  start_server();
+  const RunResult r = run("LIFTD_SOCKET=" + socket_path() + " " + LIFTCTL_PATH + " version");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("api: 1"), std::string::npos) << r.output;
+}
+
+TEST_F(Liftctl, ControlCommandsReachTheBackend) {
+  start_server();
+  EXPECT_EQ(run(liftctl("key 2")).exit_code, 0);
+  EXPECT_EQ(run(liftctl("reset")).exit_code, 0);
+  EXPECT_EQ(run(liftctl("power emergency 1")).exit_code, 0);
+  EXPECT_EQ(run(liftctl("load 80")).exit_code, 0);
+  EXPECT_EQ(on_io([this] { return backend_.calls; }),
+            (std::vector<std::string>{"key 2", "drive_reset", "power emergency 1", "load 80"}));
+}
+
+TEST_F(Liftctl, ErrorReplyExitsWithOne) {
+  start_server();
+  const RunResult r = run(liftctl("key 9"));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("bad_request: field \"key\" must be an integer 1..5"), std::string::npos)
+      << r.output;
+}
+
+TEST_F(Liftctl, RawSendsAnyRequest) {
+  start_server();
+  const RunResult r = run(liftctl(R"(raw '{"cmd":"inputs","doors_closed":true,"id":"io"}')"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto reply = nlohmann::json::parse(r.output);
+  EXPECT_EQ(reply.at("id"), "io");
+  EXPECT_EQ(reply.at("result").at("doors_closed"), true);
+}
+
+TEST_F(Liftctl, WatchPrintsPlainLinesWhenNotATerminal) {
+  start_server();
+  // stdout is a pipe here: one plain line per event; SIGINT after a second ends it.
+  const RunResult r = run("timeout -s INT 1 " + liftctl("watch"));
+  EXPECT_NE(r.output.find("state link=up mode=DCP4"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("\x1b["), std::string::npos) << "no terminal escapes into a pipe";
+}
+
+TEST_F(Liftctl, SaysWhenTheSocketIsMissing) {
+  const RunResult r = run(liftctl("status"));
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_NE(r.output.find("liftd is not running"), std::string::npos) << r.output;
+}
+
+TEST_F(Liftctl, SaysWhenNothingListens) {
+  {
+    asio::io_context other;
+    asio::local::stream_protocol::acceptor stale(
+        other, asio::local::stream_protocol::endpoint(socket_path()));
+  }
+  const RunResult r = run(liftctl("status"));
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_NE(r.output.find("nothing listens"), std::string::npos) << r.output;
+}
+
+TEST_F(Liftctl, RejectsBadUsage) {
+  EXPECT_EQ(run(liftctl("")).exit_code, 2);
+  EXPECT_EQ(run(liftctl("frobnicate")).exit_code, 2);
+  EXPECT_EQ(run(liftctl("key")).exit_code, 2);
+  EXPECT_EQ(run(liftctl("raw 'not json'")).exit_code, 2);
+}
+
+}  // namespace
+}  // namespace liftd::api::testing

@@ -1,0 +1,417 @@
+// The server through a real Unix socket in a temp dir, with the fake backend.
+#include <fcntl.h>
+#include <sys/stat.h>
+
+#include <fstream>
+#include <vector>
+
+#include "api/test_support.hpp"
+#include "common/version.hpp"
+
+namespace liftd::api::testing {
+namespace {
+
+using nlohmann::json;
+
+class ApiServer : public ServerFixture {};
+
+TEST_F(ApiServer, GreetsWithVersionAndAccess) {
+  start_server();
+  Client client(socket_path());
+  ASSERT_TRUE(client.connected());
+  const auto hello = client.read_json();
+  ASSERT_TRUE(hello);
+  EXPECT_EQ(hello->at("event"), "hello");
+  EXPECT_EQ(hello->at("data").at("version"), std::string(kVersion));
+  EXPECT_EQ(hello->at("data").at("api"), 1);
+  EXPECT_EQ(hello->at("data").at("access"), json::array({"read", "control", "inputs"}));
+  EXPECT_EQ(hello->at("data").at("max_line_bytes"), 65536);
+}
+
+TEST_F(ApiServer, EchoesIdsOfNumbersStringsAndObjects) {
+  start_server();
+  auto client = connect();
+  for (const json& id : {json(1), json(2.5), json("req-7"), json{{"seq", 3}, {"from", "disp"}}}) {
+    const json reply = client->call({{"cmd", "status"}, {"id", id}});
+    EXPECT_EQ(reply.at("id"), id);
+    EXPECT_TRUE(reply.at("ok").get<bool>());
+    EXPECT_EQ(reply.at("result").at("link").at("state"), "up");
+  }
+}
+
+TEST_F(ApiServer, ReportsErrorCodesOverTheSocket) {
+  start_server();
+  auto client = connect();
+  // Legend: request line, expected error code.
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"{\"cmd\":", "bad_json"},
+      {R"({"cmd":"status","x":1})", "bad_request"},
+      {R"({"cmd":"nope"})", "unknown_cmd"},
+  };
+  for (const auto& [line, code] : cases) {
+    ASSERT_TRUE(client->send(line + "\n"));
+    const auto reply = client->read_json();
+    ASSERT_TRUE(reply) << line;
+    EXPECT_EQ(reply->at("error").at("code"), code) << line;
+  }
+  for (const auto code : {ErrorCode::NotReady, ErrorCode::Busy, ErrorCode::Fault}) {
+    on_io([&] { backend_.control_result = Result::fail(code, "no"); });
+    EXPECT_EQ(client->call({{"cmd", "drive_reset"}}).at("error").at("code"), to_string(code));
+  }
+  on_io([this] {
+    server_->dispatcher().add({"crash", Access::Read, {}, "", [](const Call&, Responder) {
+                                 throw std::logic_error("x");
+                               }});
+  });
+  EXPECT_EQ(client->call({{"cmd", "crash"}}).at("error").at("code"), "internal");
+  // forbidden: see access_test.cpp (needs another uid); too_large and timeout below.
+  EXPECT_EQ(counters().errors, 7U);
+}
+
+TEST_F(ApiServer, MalformedJsonLeavesTheConnectionUsable) {
+  start_server();
+  auto client = connect();
+  ASSERT_TRUE(client->send("{this is not json}\n"));
+  const auto bad = client->read_json();
+  ASSERT_TRUE(bad);
+  EXPECT_EQ(bad->at("ok"), false);
+  EXPECT_EQ(bad->at("error").at("code"), "bad_json");
+  EXPECT_TRUE(bad->at("id").is_null());
+  const json good = client->call({{"cmd", "version"}, {"id", 2}});
+  EXPECT_EQ(good.at("ok"), true);
+  EXPECT_EQ(good.at("id"), 2);
+}
+
+TEST_F(ApiServer, AnswersPipelinedRequestsInOrderAndIgnoresBlankLines) {
+  start_server();
+  auto client = connect();
+  std::string batch;
+  for (int i = 0; i < 100; ++i) batch += json{{"cmd", "version"}, {"id", i}}.dump() + "\r\n\n";
+  ASSERT_TRUE(client->send(batch));
+  for (int i = 0; i < 100; ++i) {
+    const auto reply = client->read_json();
+    ASSERT_TRUE(reply);
+    EXPECT_EQ(reply->at("id"), i);
+  }
+}
+
+TEST_F(ApiServer, OversizedLineGetsTooLargeThenClose) {
+  ServerConfig config = default_config();
+  config.max_line_bytes = 1024;
+  start_server(config);
+  auto client = connect();
+  // Exactly at the limit is fine.
+  std::string at_limit = R"({"cmd":"version","id":")";
+  at_limit += std::string(1024 - at_limit.size() - 2, 'a') + "\"}";
+  ASSERT_EQ(at_limit.size(), 1024U);
+  EXPECT_EQ(client->call(json::parse(at_limit)).at("ok"), true);
+  // One byte more, and no newline needed for the server to give up.
+  std::string over = R"({"cmd":"version","id":")" + std::string(1100, 'b');
+  ASSERT_TRUE(client->send(over));
+  const auto reply = client->read_json();
+  ASSERT_TRUE(reply);
+  EXPECT_EQ(reply->at("error").at("code"), "too_large");
+  EXPECT_TRUE(client->wait_closed());
+}
+
+TEST_F(ApiServer, HugeLineDoesNotGrowMemoryBeyondTheLimit) {
+  start_server();
+  auto client = connect();
+  // 1 MiB without a newline: the server answers too_large after 64 KiB and closes, so the
+  // rest of the send may fail; that is expected.
+  client->send(std::string(1 << 20, ' '));
+  const auto reply = client->read_json();
+  ASSERT_TRUE(reply);
+  EXPECT_EQ(reply->at("error").at("code"), "too_large");
+  EXPECT_TRUE(client->wait_closed());
+}
+
+TEST_F(ApiServer, AssemblesARequestFromPartialWrites) {
+  start_server();
+  auto client = connect();
+  const std::string line = R"({"cmd":"version","id":"pieces"})"
+                           "\n";
+  for (char c : line) {
+    ASSERT_TRUE(client->send(std::string(1, c)));
+    std::this_thread::sleep_for(1ms);
+  }
+  const auto reply = client->read_json();
+  ASSERT_TRUE(reply);
+  EXPECT_EQ(reply->at("id"), "pieces");
+}
+
+TEST_F(ApiServer, PartialLineTimesOut) {
+  ServerConfig config = default_config();
+  config.partial_line_timeout = 200ms;
+  start_server(config);
+  auto client = connect();
+  const auto sent_at = std::chrono::steady_clock::now();
+  ASSERT_TRUE(client->send(R"({"cmd":"sta)"));
+  const auto reply = client->read_json(10s);
+  const auto elapsed = std::chrono::steady_clock::now() - sent_at;
+  ASSERT_TRUE(reply);
+  EXPECT_EQ(reply->at("error").at("code"), "timeout");
+  EXPECT_GE(elapsed, 190ms);  // a timer never fires early; the upper bound is the machine's
+  EXPECT_TRUE(client->wait_closed());
+  EXPECT_EQ(counters().timeouts, 1U);
+}
+
+TEST_F(ApiServer, IdleClientIsClosedButWatcherIsNot) {
+  ServerConfig config = default_config();
+  config.idle_timeout = 200ms;
+  start_server(config);
+  auto idle = connect();
+  auto watcher = connect();
+  EXPECT_EQ(watcher->call({{"cmd", "watch"}, {"enable", true}}).at("ok"), true);
+  const auto reply = idle->read_json(10s);
+  ASSERT_TRUE(reply);
+  EXPECT_EQ(reply->at("error").at("code"), "timeout");
+  EXPECT_TRUE(idle->wait_closed());
+  std::this_thread::sleep_for(300ms);
+  EXPECT_EQ(watcher->call({{"cmd", "status"}, {"id", 1}}).at("id"), 1);
+}
+
+TEST_F(ApiServer, ServesManyClientsAtOnce) {
+  ServerConfig config = default_config();
+  config.max_clients = 40;
+  start_server(config);
+  std::vector<std::unique_ptr<Client>> clients;
+  for (int i = 0; i < 32; ++i) {
+    clients.push_back(connect());
+    ASSERT_TRUE(clients.back()->connected());
+  }
+  // Interleave: every client sends 20 requests before anyone reads.
+  for (int round = 0; round < 20; ++round) {
+    for (std::size_t c = 0; c < clients.size(); ++c) {
+      ASSERT_TRUE(clients[c]->send_json({{"cmd", "status"}, {"id", {c, round}}}));
+    }
+  }
+  for (std::size_t c = 0; c < clients.size(); ++c) {
+    for (int round = 0; round < 20; ++round) {
+      const auto reply = clients[c]->read_json();
+      ASSERT_TRUE(reply);
+      EXPECT_EQ(reply->at("id"), (json{c, round}));
+    }
+  }
+  EXPECT_EQ(counters().clients, 32U);
+  EXPECT_EQ(counters().requests, 32U * 20U);
+}
+
+TEST_F(ApiServer, RefusesClientsBeyondMaxWithBusy) {
+  ServerConfig config = default_config();
+  config.max_clients = 3;
+  start_server(config);
+  std::vector<std::unique_ptr<Client>> clients;
+  for (int i = 0; i < 3; ++i) clients.push_back(connect());
+  Client extra(socket_path());
+  ASSERT_TRUE(extra.connected());  // the kernel accepts; the server refuses at once
+  const auto reply = extra.read_json();
+  ASSERT_TRUE(reply);
+  EXPECT_EQ(reply->at("ok"), false);
+  EXPECT_EQ(reply->at("error").at("code"), "busy");
+  EXPECT_TRUE(extra.wait_closed());
+  EXPECT_EQ(counters().rejected, 1U);
+  // A freed slot can be used again.
+  clients.pop_back();
+  ASSERT_TRUE(eventually([this] { return server_->counters().clients == 2; }));
+  auto again = connect();
+  EXPECT_EQ(again->call({{"cmd", "version"}}).at("ok"), true);
+}
+
+TEST_F(ApiServer, WatchStreamsEventsUntilDisabled) {
+  start_server();
+  auto client = connect();
+  EXPECT_EQ(client->call({{"cmd", "watch"}, {"enable", true}, {"id", 1}}).at("result"),
+            (json{{"watching", true}}));
+  // The current state follows the reply at once.
+  const auto state = client->read_json();
+  ASSERT_TRUE(state);
+  EXPECT_EQ(state->at("event"), "state");
+  EXPECT_EQ(state->at("data").at("link").at("state"), "up");
+  on_io([this] { server_->publish("drive_error", {{"text", "E12 overcurrent"}}); });
+  const auto event = client->read_json();
+  ASSERT_TRUE(event);
+  EXPECT_EQ(*event, (json{{"event", "drive_error"}, {"data", {{"text", "E12 overcurrent"}}}}));
+  EXPECT_EQ(client->call({{"cmd", "watch"}, {"enable", false}}).at("ok"), true);
+  on_io([this] { server_->publish("fault", {{"code", "x"}}); });
+  EXPECT_EQ(client->call({{"cmd", "version"}, {"id", "after"}}).at("id"), "after");
+  EXPECT_FALSE(client->read_line(100ms));  // no event arrived after the stop
+}
+
+TEST_F(ApiServer, SlowWatcherIsDroppedWhileAnotherKeepsItsStream) {
+  ServerConfig config = default_config();
+  config.write_queue_max_bytes = 64 * 1024;
+  config.write_queue_max_messages = 256;
+  start_server(config);
+  auto slow = connect();
+  auto fast = connect();
+  for (auto* c : {slow.get(), fast.get()}) {
+    ASSERT_EQ(c->call({{"cmd", "watch"}, {"enable", true}}).at("ok"), true);
+    ASSERT_TRUE(c->read_json());  // the initial state event
+  }
+  // The slow watcher now stops reading. Publish 2 MiB in batches; the fast one reads each batch.
+  const std::string payload(1000, 'x');
+  constexpr int kBatches = 40;
+  constexpr int kPerBatch = 50;
+  int expected = 0;
+  for (int batch = 0; batch < kBatches; ++batch) {
+    on_io([&] {
+      for (int i = 0; i < kPerBatch; ++i) {
+        server_->publish("travel", {{"seq", batch * kPerBatch + i}, {"pad", payload}});
+      }
+    });
+    for (int i = 0; i < kPerBatch; ++i) {
+      const auto event = fast->read_json();
+      ASSERT_TRUE(event) << "fast watcher lost its stream at event " << expected;
+      ASSERT_EQ(event->at("data").at("seq"), expected);
+      ++expected;
+    }
+  }
+  const ServerCounters c = counters();
+  EXPECT_EQ(c.dropped, 1U);
+  EXPECT_EQ(c.clients, 1U);
+  EXPECT_EQ(c.watchers, 1U);
+  EXPECT_TRUE(slow->wait_closed());
+}
+
+TEST_F(ApiServer, ClientThatNeverReadsRepliesIsDropped) {
+  ServerConfig config = default_config();
+  config.write_queue_max_bytes = 16 * 1024;
+  start_server(config);
+  auto hog = connect();
+  auto other = connect();
+  // The in-flight limit does not stop this: each reply is queued at once. Without reading,
+  // replies fill the socket buffer, then the queue: the server must drop the client.
+  const std::string request = json{{"cmd", "status"}}.dump() + "\n";
+  std::string many;
+  for (int i = 0; i < 200; ++i) many += request;
+  for (int i = 0; i < 100 && !hog->eof(); ++i) {
+    if (!hog->send(many)) break;
+  }
+  ASSERT_TRUE(eventually([this] { return server_->counters().dropped == 1; }));
+  EXPECT_EQ(other->call({{"cmd", "version"}, {"id", 5}}).at("id"), 5);
+}
+
+TEST_F(ApiServer, AsyncRepliesKeepTheirIds) {
+  start_server();
+  on_io([this] { backend_.defer = true; });
+  auto client = connect();
+  ASSERT_TRUE(client->send_json({{"cmd", "drive_reset"}, {"id", "first"}}));
+  ASSERT_TRUE(client->send_json({{"cmd", "load"}, {"percent", 40}, {"id", "second"}}));
+  ASSERT_TRUE(eventually([this] { return backend_.deferred.size() == 2; }));
+  // Requests that do not wait on the backend are answered meanwhile.
+  EXPECT_EQ(client->call({{"cmd", "version"}, {"id", "third"}}).at("id"), "third");
+  on_io([this] {
+    backend_.deferred[1](Result::ok());
+    backend_.deferred[0](Result::fail(ErrorCode::NotReady, "link down"));
+  });
+  EXPECT_EQ(client->read_json()->at("id"), "second");
+  const auto first = client->read_json();
+  EXPECT_EQ(first->at("id"), "first");
+  EXPECT_EQ(first->at("error").at("code"), "not_ready");
+}
+
+TEST_F(ApiServer, ResponderOutlivingTheClientIsHarmless) {
+  start_server();
+  on_io([this] { backend_.defer = true; });
+  {
+    auto client = connect();
+    ASSERT_TRUE(client->send_json({{"cmd", "drive_reset"}}));
+    ASSERT_TRUE(eventually([this] { return backend_.deferred.size() == 1; }));
+  }
+  ASSERT_TRUE(eventually([this] { return server_->counters().clients == 0; }));
+  on_io([this] { backend_.deferred[0](Result::ok()); });
+  auto next = connect();
+  EXPECT_EQ(next->call({{"cmd", "version"}}).at("ok"), true);
+}
+
+TEST_F(ApiServer, StatsIncludeApiCounters) {
+  start_server();
+  auto client = connect();
+  client->call({{"cmd", "nope"}});
+  const json stats = client->call({{"cmd", "stats"}}).at("result");
+  EXPECT_EQ(stats.at("api").at("clients"), 1);
+  EXPECT_EQ(stats.at("api").at("requests"), 2);
+  EXPECT_EQ(stats.at("api").at("errors"), 1);
+  EXPECT_TRUE(stats.at("link").contains("checksum_errors"));
+  EXPECT_TRUE(stats.at("cycle").contains("overruns"));
+}
+
+// --- the socket file -----------------------------------------------------------------------
+
+TEST_F(ApiServer, SocketFileGetsTheConfiguredMode) {
+  start_server();
+  struct stat st {};
+  ASSERT_EQ(::stat(socket_path().c_str(), &st), 0);
+  EXPECT_TRUE(S_ISSOCK(st.st_mode));
+  EXPECT_EQ(st.st_mode & 0777, 0660U);
+  stop_server();
+  EXPECT_NE(::access(socket_path().c_str(), F_OK), 0) << "stop() removes the socket file";
+}
+
+TEST_F(ApiServer, RemovesAStaleSocketFile) {
+  {
+    // A socket file nobody listens on, as a crashed daemon leaves behind.
+    asio::io_context other;
+    asio::local::stream_protocol::acceptor stale(
+        other, asio::local::stream_protocol::endpoint(socket_path()));
+  }
+  ASSERT_EQ(::access(socket_path().c_str(), F_OK), 0);
+  start_server();
+  auto client = connect();
+  EXPECT_EQ(client->call({{"cmd", "version"}}).at("ok"), true);
+}
+
+TEST_F(ApiServer, RefusesWhenAnotherServerListens) {
+  start_server();
+  asio::io_context io2;
+  FakeBackend backend2;
+  Server second(io2, backend2, default_config(), [](LogLevel, std::string_view) {});
+  try {
+    second.start();
+    FAIL() << "second server started";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("another process is listening"), std::string::npos)
+        << e.what();
+  }
+  // The first one still works and its socket file is untouched.
+  auto client = connect();
+  EXPECT_EQ(client->call({{"cmd", "version"}}).at("ok"), true);
+}
+
+TEST_F(ApiServer, RefusesToReplaceARegularFile) {
+  std::ofstream(socket_path()) << "precious";
+  asio::io_context io2;
+  Server server(io2, backend_, default_config(), [](LogLevel, std::string_view) {});
+  EXPECT_THROW(server.start(), std::runtime_error);
+  std::ifstream in(socket_path());
+  std::string content;
+  in >> content;
+  EXPECT_EQ(content, "precious");
+}
+
+TEST_F(ApiServer, UnknownGroupIsAClearStartupError) {
+  ServerConfig config = default_config();
+  config.control_group = "liftd-no-such-group-xyz";
+  try {
+    Server server(io_, backend_, config, [](LogLevel, std::string_view) {});
+    FAIL() << "constructed with an unknown group";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("liftd-no-such-group-xyz"), std::string::npos);
+  }
+}
+
+TEST_F(ApiServer, MissingDirectoryIsAClearStartupError) {
+  ServerConfig config = default_config();
+  config.socket_path = dir_ + "/missing/api.sock";
+  Server server(io_, backend_, config, [](LogLevel, std::string_view) {});
+  try {
+    server.start();
+    FAIL() << "started in a missing directory";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot bind"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace liftd::api::testing

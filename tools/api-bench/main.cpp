@@ -1,0 +1,208 @@
+// api-bench: requests per second and latency of `status` with 1, 8 and 32 clients.
+//   api-bench                   in-process server with a fake backend in a temp dir
+//   api-bench --socket PATH     against a running liftd
+//   api-bench --serve PATH      only serve the fake backend at PATH (for trying liftctl)
+//   --seconds N                 measuring time per client count (default 2)
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <asio.hpp>
+
+#include "api/fake_backend.hpp"
+#include "api/server.hpp"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+int connect_to(const std::string& path) {
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+  if (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+/// Reads until `lines` newlines arrived; false on EOF/error.
+bool read_lines(int fd, int lines, std::string& buffer) {
+  while (lines > 0) {
+    const auto nl = buffer.find('\n');
+    if (nl != std::string::npos) {
+      buffer.erase(0, nl + 1);
+      --lines;
+      continue;
+    }
+    char chunk[16384];
+    const ssize_t n = ::recv(fd, chunk, sizeof chunk, 0);
+    if (n <= 0) return false;
+    buffer.append(chunk, static_cast<std::size_t>(n));
+  }
+  return true;
+}
+
+struct ClientResult {
+  std::vector<double> latencies_us;
+  bool failed = false;
+};
+
+/// One client: request, wait for the reply, repeat until `until`.
+void run_client(const std::string& path, Clock::time_point start, Clock::time_point until,
+                ClientResult& result) {
+  const int fd = connect_to(path);
+  if (fd < 0) {
+    result.failed = true;
+    return;
+  }
+  std::string buffer;
+  if (!read_lines(fd, 1, buffer)) result.failed = true;  // greeting
+  std::this_thread::sleep_until(start);
+  static const std::string request = "{\"cmd\":\"status\",\"id\":1}\n";
+  while (!result.failed && Clock::now() < until) {
+    const auto t0 = Clock::now();
+    if (::send(fd, request.data(), request.size(), MSG_NOSIGNAL) !=
+            static_cast<ssize_t>(request.size()) ||
+        !read_lines(fd, 1, buffer)) {
+      result.failed = true;
+      break;
+    }
+    result.latencies_us.push_back(
+        std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
+  }
+  ::close(fd);
+}
+
+double percentile(std::vector<double>& v, double p) {
+  if (v.empty()) return 0;
+  const auto k = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+bool bench(const std::string& path, int clients, double seconds) {
+  std::vector<ClientResult> results(static_cast<std::size_t>(clients));
+  std::vector<std::thread> threads;
+  const auto start = Clock::now() + std::chrono::milliseconds(200);
+  const auto until =
+      start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+  for (auto& r : results) {
+    threads.emplace_back([&path, start, until, &r] { run_client(path, start, until, r); });
+  }
+  for (auto& t : threads) t.join();
+  std::vector<double> all;
+  for (const auto& r : results) {
+    if (r.failed) {
+      std::fprintf(stderr, "api-bench: a client failed (max_clients too low?)\n");
+      return false;
+    }
+    all.insert(all.end(), r.latencies_us.begin(), r.latencies_us.end());
+  }
+  const double rate = static_cast<double>(all.size()) / seconds;
+  const double p50 = percentile(all, 0.50);
+  const double p99 = percentile(all, 0.99);
+  std::printf("%7d %12.0f %10.1f %10.1f %10zu\n", clients, rate, p50, p99, all.size());
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string external;
+  std::string serve_path;
+  double seconds = 2.0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--socket" && i + 1 < argc) {
+      external = argv[++i];
+    } else if (arg == "--serve" && i + 1 < argc) {
+      serve_path = argv[++i];
+    } else if (arg == "--seconds" && i + 1 < argc) {
+      seconds = std::atof(argv[++i]);
+    } else {
+      std::fprintf(stderr, "usage: api-bench [--socket PATH | --serve PATH] [--seconds N]\n");
+      return 2;
+    }
+  }
+
+  asio::io_context io;
+  liftd::api::testing::FakeBackend backend;
+  std::unique_ptr<liftd::api::Server> server;
+  std::string dir;
+  std::string path = external;
+  if (external.empty()) {
+    liftd::api::ServerConfig config;
+    if (serve_path.empty()) {
+      char tmpl[] = "/tmp/liftd-api-bench-XXXXXX";
+      dir = ::mkdtemp(tmpl);
+      config.socket_path = dir + "/api.sock";
+    } else {
+      config.socket_path = serve_path;
+    }
+    config.max_clients = 64;
+    path = config.socket_path;
+    server = std::make_unique<liftd::api::Server>(io, backend, config,
+                                                  [](liftd::api::LogLevel, std::string_view) {});
+    server->start();
+  }
+  if (!serve_path.empty()) {
+    // Serve until SIGINT/SIGTERM, publishing the state once a second so watchers see traffic.
+    asio::signal_set signals(io, SIGINT, SIGTERM);
+    signals.async_wait([&](const asio::error_code&, int) {
+      server->stop();
+      io.stop();
+    });
+    asio::steady_timer tick(io);
+    std::function<void()> arm = [&] {
+      tick.expires_after(std::chrono::seconds(1));
+      tick.async_wait([&](const asio::error_code& ec) {
+        if (ec) return;
+        backend.status_snapshot.position_mm = *backend.status_snapshot.position_mm + 10;
+        server->publish("state", liftd::api::to_json(backend.status_snapshot));
+        arm();
+      });
+    };
+    arm();
+    std::printf("api-bench: serving a fake backend on %s (Ctrl-C to stop)\n", path.c_str());
+    std::fflush(stdout);
+    io.run();
+    return 0;
+  }
+
+  std::optional<asio::executor_work_guard<asio::io_context::executor_type>> work;
+  std::thread io_thread;
+  if (server) {
+    work.emplace(io.get_executor());
+    io_thread = std::thread([&io] { io.run(); });
+  }
+  std::printf("api-bench: status round trips on %s, %.1f s per client count\n", path.c_str(),
+              seconds);
+  std::printf("%7s %12s %10s %10s %10s\n", "clients", "requests/s", "p50 us", "p99 us", "requests");
+  bool ok = true;
+  for (const int clients : {1, 8, 32}) ok = bench(path, clients, seconds) && ok;
+  if (server) {
+    asio::post(io, [&] { server->stop(); });
+    work.reset();
+    io_thread.join();
+    server.reset();
+    std::filesystem::remove_all(dir);
+  }
+  return ok ? 0 : 1;
+}
