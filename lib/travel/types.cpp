@@ -78,4 +78,128 @@ std::size_t speed_index(dcp::Speed speed) noexcept {
   return index < dcp::kAllSpeeds.size() ? index : 0;
 }
 
+std::string_view to_string(TravelKind kind) noexcept {
+  switch (kind) {
+    case TravelKind::None:
+      return "none";
+    case TravelKind::Dcp4Distance:
+      return "distance";
+    case TravelKind::Dcp4Relevel:
+      return "relevel_distance";
+    case TravelKind::Dcp3Speed:
+      return "speed";
+    case TravelKind::Dcp3Crawl:
+      return "crawl";
+    case TravelKind::Inspection:
+      return "inspection";
+    case TravelKind::Recall:
+      return "recall";
+    case TravelKind::Relevel:
+      return "relevel";
+  }
+  return "none";
+}
+
+std::string_view to_string(AbortCause cause) noexcept {
+  switch (cause) {
+    case AbortCause::None:
+      return "none";
+    case AbortCause::LinkDown:
+      return "link_down";
+    case AbortCause::NoHandshake:
+      return "no_handshake";
+    case AbortCause::DriveNotReady:
+      return "drive_not_ready";
+    case AbortCause::AdvanceWarning:
+      return "advance_warning";
+    case AbortCause::DriveFault:
+      return "drive_fault";
+    case AbortCause::SafetyChainOpen:
+      return "safety_chain_open";
+    case AbortCause::DoorsNotLocked:
+      return "doors_not_locked";
+    case AbortCause::PositionLost:
+      return "position_lost";
+    case AbortCause::InputsLost:
+      return "inputs_lost";
+    case AbortCause::DoorReversal:
+      return "door_reversal";
+    case AbortCause::FastStartTimeout:
+      return "fast_start_timeout";
+    case AbortCause::StopRequested:
+      return "stop_requested";
+    case AbortCause::DriveDidNotStart:
+      return "drive_did_not_start";
+    case AbortCause::DriveDidNotStop:
+      return "drive_did_not_stop";
+    case AbortCause::ModeChanged:
+      return "mode_changed";
+    case AbortCause::StoppedOffLevel:
+      return "stopped_off_level";
+    case AbortCause::LevelNotReached:
+      return "level_not_reached";
+  }
+  return "none";
+}
+
+std::string_view to_string(Event::Type type) noexcept {
+  switch (type) {
+    case Event::Type::Started:
+      return "started";
+    case Event::Type::Finished:
+      return "finished";
+    case Event::Type::Aborted:
+      return "aborted";
+    case Event::Type::TargetExtended:
+      return "target_extended";
+    case Event::Type::FastStartArmed:
+      return "fast_start_armed";
+    case Event::Type::DriveFault:
+      return "drive_fault";
+    case Event::Type::DriveFaultCleared:
+      return "drive_fault_cleared";
+  }
+  return "started";
+}
+
+std::string_view to_string(StartResult result) noexcept {
+  switch (result) {
+    case StartResult::Accepted:
+      return "accepted";
+    case StartResult::Busy:
+      return "a travel is running or the drive still reports S1";
+    case StartResult::WrongProtocol:
+      return "travel type not available with this drive's DCP type";
+    case StartResult::BadSpeed:
+      return "speed not allowed for this travel or installation";
+    case StartResult::NoPosition:
+      return "no valid car position";
+    case StartResult::AlreadyThere:
+      return "the car is already at that level";
+    case StartResult::NoDirection:
+      return "direction unknown";
+    case StartResult::InspectionMode:
+      return "inspection or recall is switched on";
+  }
+  return "accepted";
+}
+
+std::string_view to_string(ExtendResult result) noexcept {
+  switch (result) {
+    case ExtendResult::Accepted:
+      return "accepted";
+    case ExtendResult::NoDistanceTravel:
+      return "no DCP4 distance travel running";
+    case ExtendResult::NotFurther:
+      return "a running travel can only be extended further in its direction";
+    case ExtendResult::AdvanceWarning:
+      return "advance warning (S2) set: no extension (DCP 9.1.5)";
+    case ExtendResult::DecelUnknown:
+      return "deceleration distance unknown";
+    case ExtendResult::TooLate:
+      return "too late: the car can no longer stop beyond its current target";
+  }
+  return "accepted";
+}
+
 }  // namespace liftd::travel

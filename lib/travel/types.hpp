@@ -237,4 +237,11 @@ enum class StartResult : std::uint8_t {
   InspectionMode,  ///< inspection / recall switched on: only button travels
 };
 
+/// snake_case names for the API and the journal.
+std::string_view to_string(TravelKind kind) noexcept;
+std::string_view to_string(AbortCause cause) noexcept;
+std::string_view to_string(Event::Type type) noexcept;
+std::string_view to_string(StartResult result) noexcept;
+std::string_view to_string(ExtendResult result) noexcept;
+
 }  // namespace liftd::travel

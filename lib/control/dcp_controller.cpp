@@ -1,0 +1,624 @@
+#include "control/dcp_controller.hpp"
+
+#include <stdexcept>
+
+#include "travel/gate.hpp"
+
+namespace liftd::control {
+namespace {
+
+using travel::AbortCause;
+using travel::TravelKind;
+
+constexpr std::size_t index(FaultCode code) noexcept {
+  return static_cast<std::size_t>(code);
+}
+
+std::string_view abort_text(AbortCause cause) noexcept {
+  switch (cause) {
+    case AbortCause::LinkDown:
+      return "link to the drive is not up";
+    case AbortCause::NoHandshake:
+      return "no valid I0 handshake with the drive yet";
+    case AbortCause::DriveNotReady:
+      return "drive not ready (S0 = 0)";
+    case AbortCause::AdvanceWarning:
+      return "drive advance warning (S2 = 1)";
+    case AbortCause::DriveFault:
+      return "drive general fault (S3 = 1)";
+    case AbortCause::SafetyChainOpen:
+      return "safety chain open";
+    case AbortCause::DoorsNotLocked:
+      return "doors not locked";
+    case AbortCause::PositionLost:
+      return "no valid car position";
+    case AbortCause::InputsLost:
+      return "machine inputs missing or stale";
+    default:
+      return "not ready";
+  }
+}
+
+}  // namespace
+
+// ---- PositionFeed ----
+
+void PositionFeed::set(std::int64_t position_mm, MonoTime at) noexcept {
+  position_mm_.store(position_mm, std::memory_order_relaxed);
+  at_ns_.store(at.count(), std::memory_order_release);
+}
+
+void PositionFeed::invalidate() noexcept {
+  at_ns_.store(-1, std::memory_order_release);
+}
+
+std::optional<std::int64_t> PositionFeed::position_mm(MonoTime now) const noexcept {
+  const std::int64_t at = at_ns_.load(std::memory_order_acquire);
+  if (at < 0 || now - MonoTime(at) > max_age_) return std::nullopt;
+  return position_mm_.load(std::memory_order_relaxed);
+}
+
+// ---- names ----
+
+std::string_view fault_code_name(FaultCode code) noexcept {
+  switch (code) {
+    case FaultCode::LinkFault:
+      return "link_fault";
+    case FaultCode::DriveFault:
+      return "drive_fault";
+    case FaultCode::SafetyChain:
+      return "safety_chain_open";
+    case FaultCode::InputsLost:
+      return "inputs_lost";
+    case FaultCode::PositionLost:
+      return "position_lost";
+    case FaultCode::AdvanceWarning:
+      return "advance_warning";
+    case FaultCode::kCount:
+      break;
+  }
+  return "internal";
+}
+
+std::string_view fault_text(FaultCode code) noexcept {
+  switch (code) {
+    case FaultCode::LinkFault:
+      return "DCP link fault: replies missing or corrupt (DCP 7.3) or serial port lost; "
+             "drive enable is off";
+    case FaultCode::DriveFault:
+      return "drive reports a general fault (S3); drive enable is off until it clears";
+    case FaultCode::SafetyChain:
+      return "safety chain open; drive enable is off";
+    case FaultCode::InputsLost:
+      return "no input update from the I/O provider within inputs.timeout_ms";
+    case FaultCode::PositionLost:
+      return "absolute car position invalid or stale; no DCP4 travel possible";
+    case FaultCode::AdvanceWarning:
+      return "drive advance warning (S2): no new travel until it clears (DCP 9.1.5)";
+    case FaultCode::kCount:
+      break;
+  }
+  return "internal";
+}
+
+// ---- construction ----
+
+DcpController::DcpController(const ControllerConfig& config, const PositionSource& position)
+    : config_(config),
+      floors_mm_(config.floors_mm),
+      position_(position),
+      link_(config.link),
+      travel_(config.travel),
+      lift_(config.lift) {
+  if (auto bad = travel::validate(config.travel)) {
+    throw std::invalid_argument("travel setting out of range: " + std::string(*bad));
+  }
+  if (!lift_.set_floors(floors_mm_)) {
+    throw std::invalid_argument("floor levels must be strictly increasing, 2 to 64 floors");
+  }
+  publish(MonoTime{});
+}
+
+// ---- the cycle ----
+
+std::span<const std::uint8_t> DcpController::frame_to_send(MonoTime now) noexcept {
+  ++cycle_;
+  Command command;
+  while (commands_.try_pop(command)) handle(command, now);
+
+  last_input_ = build_input(now);
+  last_output_ = travel_.step(last_input_);
+  if (last_output_.channel_request) submit_channel(*last_output_.channel_request);
+  link_.set_process(last_output_.command, last_output_.data_word);
+  frame_ = link_.next_frame(now);
+  return frame_;
+}
+
+bool DcpController::on_reply(std::span<const std::uint8_t> reply, MonoTime now) noexcept {
+  if (reply.size() != dcp::kFrameSize) {
+    link_.on_no_reply(now);
+    return false;
+  }
+  const std::span<const std::uint8_t, dcp::kFrameSize> bytes(reply.data(), dcp::kFrameSize);
+  link_.on_reply(bytes, now);
+  return dcp::decode_slave(bytes).has_value();
+}
+
+void DcpController::after_cycle(MonoTime now) noexcept {
+  drain_link(now);
+  drain_travel(now);
+  lift_.update(last_input_.position_mm, travel_.direction(), travel_.decel_distance_mm());
+  update_faults(last_input_, now);
+  serve_calls();
+  publish(now);
+}
+
+travel::CycleInput DcpController::build_input(MonoTime now) noexcept {
+  travel::CycleInput in;
+  in.now = now;
+  const dcp::LinkState state = link_.state();
+  in.link_up = state == dcp::LinkState::Up || state == dcp::LinkState::Init;
+  in.handshake_done = link_.travel_allowed();
+  in.protocol = link_.protocol().value_or(dcp::Protocol::ComChan);
+  const dcp::DriveSnapshot& drive = link_.drive();
+  if (drive.status) in.status = dcp::Status::from_byte(*drive.status);
+  if (drive.deceleration && !drive.deceleration->saturated) {
+    in.decel_distance_mm = drive.deceleration->deceleration_distance_mm;
+  }
+  in.extended = drive.extended;
+  in.position_mm = position_.position_mm(now);
+  in.inputs = effective_inputs(now);
+  in.channel_reply = pending_reply_;
+  pending_reply_.reset();
+  return in;
+}
+
+lift::Inputs DcpController::effective_inputs(MonoTime now) const noexcept {
+  lift::Inputs in = provider_inputs_;
+  in.valid = inputs_seen_ && now - inputs_at_ <= config_.inputs_timeout;
+  if (api_inspection_) {
+    in.inspection = true;
+    const bool held = now <= api_hold_until_;
+    in.button_up = in.button_up || (held && api_direction_ == lift::Direction::Up);
+    in.button_down = in.button_down || (held && api_direction_ == lift::Direction::Down);
+  }
+  return in;
+}
+
+// ---- commands ----
+
+void DcpController::reply(std::uint32_t tag, ReplyCode code, std::string_view detail,
+                          bool extended) noexcept {
+  if (tag == 0) return;
+  CommandReply r;
+  r.tag = tag;
+  r.code = code;
+  r.detail = detail;
+  r.extended = extended;
+  (void)replies_.try_push(r);  // the queue is as deep as the command queue
+}
+
+void DcpController::handle(const Command& command, MonoTime now) noexcept {
+  const std::uint32_t tag = command.tag;
+  std::visit(
+      [&](const auto& body) {
+        using T = std::decay_t<decltype(body)>;
+        if constexpr (std::is_same_v<T, TravelCommand>) {
+          handle_travel(tag, body);
+        } else if constexpr (std::is_same_v<T, StopCommand>) {
+          lift_.calls().clear();
+          travel_.stop();
+          reply(tag, ReplyCode::Ok);
+        } else if constexpr (std::is_same_v<T, FastStopCommand>) {
+          if (travel_.active_kind() == TravelKind::None) {
+            reply(tag, ReplyCode::BadRequest, "no travel running");
+            return;
+          }
+          lift_.calls().clear();
+          travel_.fast_stop();
+          reply(tag, ReplyCode::Ok);
+        } else if constexpr (std::is_same_v<T, RelevelCommand>) {
+          handle_relevel(tag);
+        } else if constexpr (std::is_same_v<T, InspectionCommand>) {
+          api_inspection_ = body.on;
+          api_direction_ = body.on ? body.direction : lift::Direction::None;
+          api_hold_until_ = now + config_.inspection_hold;
+          reply(tag, ReplyCode::Ok);
+        } else if constexpr (std::is_same_v<T, FastStartCommand>) {
+          if (!fast_start_armed_) {
+            reply(tag, ReplyCode::BadRequest, "no fast start armed");
+          } else if (body.action == FastStartCommand::Action::Abort) {
+            travel_.stop();  // DCP 12.2.2: controlled termination, wait for S6
+            reply(tag, ReplyCode::Ok);
+          } else if (!last_input_.inputs.doors_locked) {
+            reply(tag, ReplyCode::NotReady, "doors not locked: the car leaves when they are");
+          } else {
+            reply(tag, ReplyCode::Ok);  // DCP 12.1.3: the go message follows doors locked
+          }
+        } else if constexpr (std::is_same_v<T, CallCommand>) {
+          if (!body.add) {
+            reply(tag, lift_.cancel_call(body.floor) ? ReplyCode::Ok : ReplyCode::BadRequest,
+                  "floor is not queued");
+            return;
+          }
+          switch (lift_.add_call(body.floor)) {
+            case lift::CallError::None:
+              reply(tag, ReplyCode::Ok);
+              break;
+            case lift::CallError::NoSuchFloor:
+              reply(tag, ReplyCode::BadRequest, "no such floor");
+              break;
+            case lift::CallError::AlreadyQueued:
+              reply(tag, ReplyCode::Ok, "already queued");
+              break;
+            case lift::CallError::Full:
+              reply(tag, ReplyCode::Busy, "calls queue full");
+              break;
+          }
+        } else if constexpr (std::is_same_v<T, InputsCommand>) {
+          provider_inputs_ = body.inputs;
+          inputs_at_ = now;
+          inputs_seen_ = true;
+          reply(tag, ReplyCode::Ok);
+        } else if constexpr (std::is_same_v<T, LinkCommand>) {
+          const dcp::SubmitResult r = link_.submit(body.request, tag);
+          switch (r) {
+            case dcp::SubmitResult::Accepted:
+              break;  // the completion answers
+            case dcp::SubmitResult::QueueFull:
+              reply(tag, ReplyCode::Busy, dcp::to_string(r));
+              break;
+            case dcp::SubmitResult::LinkNotUp:
+              reply(tag, ReplyCode::NotReady, dcp::to_string(r));
+              break;
+            case dcp::SubmitResult::Invalid:
+            case dcp::SubmitResult::TooLate:
+              reply(tag, ReplyCode::BadRequest, dcp::to_string(r));
+              break;
+          }
+        } else if constexpr (std::is_same_v<T, ClockCommand>) {
+          link_.set_civil_time(body.time);
+        }
+      },
+      command.body);
+}
+
+std::optional<std::string_view> DcpController::not_ready_reason(bool fast_start) const noexcept {
+  travel::GateProfile profile;
+  profile.doors_locked_required = !fast_start;
+  profile.position_required = last_input_.protocol == dcp::Protocol::Dcp4;
+  const AbortCause cause = travel::CommandGate::forbidding(last_input_, profile, true);
+  if (cause == AbortCause::None) return std::nullopt;
+  return abort_text(cause);
+}
+
+dcp::Speed DcpController::choose_dcp3_speed(std::int64_t distance_mm) const noexcept {
+  // DCP 10.1/10.2: the fastest installed speed whose fixed deceleration distance SVx fits the
+  // travel; none fits -> crawl V0 (DCP 10.3).
+  for (dcp::Speed s : dcp::dcp3_travel_speeds(config_.travel.dcp3_speed_count)) {
+    const std::uint32_t sv = config_.travel.dcp3_decel_distance_mm[travel::speed_index(s)];
+    if (sv > 0 && static_cast<std::int64_t>(sv) < distance_mm) return s;
+  }
+  return dcp::Speed::V0;
+}
+
+void DcpController::handle_travel(std::uint32_t tag, const TravelCommand& cmd) noexcept {
+  if (cmd.floor >= floors_mm_.size()) {
+    reply(tag, ReplyCode::BadRequest, "no such floor");
+    return;
+  }
+  if (!link_.travel_allowed()) {
+    reply(tag, ReplyCode::NotReady, abort_text(AbortCause::LinkDown));
+    return;
+  }
+  const std::int64_t target_mm = floors_mm_[cmd.floor];
+  const dcp::Protocol protocol = *link_.protocol();
+  const TravelKind running = travel_.active_kind();
+  if (running == TravelKind::Dcp4Distance && !cmd.fast_start) {
+    const travel::ExtendResult r = travel_.extend_target(target_mm);
+    if (r == travel::ExtendResult::Accepted) {
+      target_floor_ = cmd.floor;
+      reply(tag, ReplyCode::Ok, "target extended", true);
+    } else {
+      reply(tag, r == travel::ExtendResult::AdvanceWarning ? ReplyCode::NotReady : ReplyCode::Busy,
+            travel::to_string(r));
+    }
+    return;
+  }
+  if (running != TravelKind::None) {
+    reply(tag, ReplyCode::Busy, "a travel is running that cannot be re-targeted");
+    return;
+  }
+  if (auto why = not_ready_reason(cmd.fast_start)) {
+    reply(tag, last_input_.status.general_fault ? ReplyCode::Fault : ReplyCode::NotReady, *why);
+    return;
+  }
+  travel::TravelRequest request;
+  request.target_mm = target_mm;
+  request.fast_start = cmd.fast_start;
+  request.load_percent = cmd.load_percent;
+  if (protocol == dcp::Protocol::Dcp4) {
+    request.kind = TravelKind::Dcp4Distance;
+    request.speed = cmd.speed.value_or(dcp::Speed::V4);
+  } else {
+    const std::int64_t distance =
+        last_input_.position_mm ? std::abs(target_mm - *last_input_.position_mm) : 0;
+    request.speed = cmd.speed.value_or(choose_dcp3_speed(distance));
+    request.kind = request.speed == dcp::Speed::V0 ? TravelKind::Dcp3Crawl : TravelKind::Dcp3Speed;
+  }
+  const travel::StartResult r = travel_.start(request);
+  if (r != travel::StartResult::Accepted) {
+    reply(tag,
+          r == travel::StartResult::Busy             ? ReplyCode::Busy
+          : r == travel::StartResult::NoPosition     ? ReplyCode::NotReady
+          : r == travel::StartResult::InspectionMode ? ReplyCode::NotReady
+                                                     : ReplyCode::BadRequest,
+          travel::to_string(r));
+    return;
+  }
+  target_floor_ = cmd.floor;
+  travel_tag_ = tag;
+  reply(tag, ReplyCode::Ok);
+}
+
+void DcpController::handle_relevel(std::uint32_t tag) noexcept {
+  if (!link_.travel_allowed()) {
+    reply(tag, ReplyCode::NotReady, abort_text(AbortCause::LinkDown));
+    return;
+  }
+  if (!last_input_.position_mm) {
+    reply(tag, ReplyCode::NotReady, abort_text(AbortCause::PositionLost));
+    return;
+  }
+  const auto nearest = lift_.floors().nearest(*last_input_.position_mm);
+  if (!nearest) {
+    reply(tag, ReplyCode::BadRequest, "no floors configured");
+    return;
+  }
+  travel::TravelRequest request;
+  request.target_mm = floors_mm_[*nearest];
+  request.kind =
+      *link_.protocol() == dcp::Protocol::Dcp4 ? TravelKind::Dcp4Relevel : TravelKind::Relevel;
+  request.speed = dcp::Speed::VN;
+  const travel::StartResult r = travel_.start(request);
+  if (r != travel::StartResult::Accepted) {
+    reply(tag,
+          r == travel::StartResult::Busy           ? ReplyCode::Busy
+          : r == travel::StartResult::AlreadyThere ? ReplyCode::BadRequest
+                                                   : ReplyCode::NotReady,
+          travel::to_string(r));
+    return;
+  }
+  target_floor_ = *nearest;
+  reply(tag, ReplyCode::Ok);
+}
+
+void DcpController::submit_channel(const travel::ChannelRequest& request) noexcept {
+  if (internal_.active) return;  // one travel request at a time; the travel times out otherwise
+  dcp::Request r;
+  switch (request.kind) {
+    case travel::ChannelRequest::Kind::StartParameters:
+      r = dcp::StartParamsRequest{
+          request.vmax == dcp::Speed::V3 ? dcp::MaxSpeed::V3 : dcp::MaxSpeed::V4,
+          request.desired_distance_cm};
+      break;
+    case travel::ChannelRequest::Kind::Load:
+      r = dcp::LoadRequest{request.load_percent};
+      break;
+    case travel::ChannelRequest::Kind::Position: {
+      dcp::PositionRequest p;
+      p.position_mm = request.position_mm
+                          ? dcp::SignedMm(static_cast<std::int32_t>(*request.position_mm))
+                          : dcp::SignedMm{};
+      r = p;
+      break;
+    }
+  }
+  if (link_.submit(r, kTravelTag) == dcp::SubmitResult::Accepted) {
+    internal_.active = true;
+    internal_.kind = request.kind;
+  }
+}
+
+// ---- after the cycle ----
+
+void DcpController::push_event(const ControllerEvent& event) noexcept {
+  if (!events_.try_push(event)) {
+    dropped_events_.store(dropped_events_.load(std::memory_order_relaxed) + 1,
+                          std::memory_order_relaxed);
+  }
+}
+
+void DcpController::drain_link(MonoTime now) noexcept {
+  while (auto c = link_.pop_completion()) {
+    if (c->tag == kTravelTag) {
+      internal_.active = false;
+      if (c->result != dcp::RequestResult::Ok || !c->reply) continue;
+      travel::ChannelReply r;
+      r.kind = internal_.kind;
+      if (const auto* i7 = std::get_if<dcp::StartParamsReply>(&*c->reply)) {
+        r.short_travel = i7->kind == dcp::TravelKind::Short;
+        r.min_distance_cm = i7->total_cm;
+        r.decel_distance_cm = i7->decel_cm;
+      } else if (const auto* i9 = std::get_if<dcp::PositionReply>(&*c->reply)) {
+        // DCP 5.12.9.2: the extended reply carries the distance the drive measured.
+        if (i9->extended && i9->travel_mm) {
+          measured_mm_ = *i9->travel_mm;
+          if (pending_i9_travel_mm_) slip_mm_ = *measured_mm_ - *pending_i9_travel_mm_;
+        }
+      }
+      pending_reply_ = r;
+      continue;
+    }
+    CommandReply r;
+    r.tag = c->tag;
+    switch (c->result) {
+      case dcp::RequestResult::Ok:
+      case dcp::RequestResult::AssumedMains:
+        r.code = ReplyCode::Ok;
+        r.detail = dcp::to_string(c->result);
+        break;
+      case dcp::RequestResult::Timeout:
+        r.code = ReplyCode::Timeout;
+        r.detail = "the drive did not answer";
+        break;
+      case dcp::RequestResult::LinkLost:
+        r.code = ReplyCode::Fault;
+        r.detail = "the link went down before the drive answered";
+        break;
+    }
+    r.drive_reply = c->reply;
+    (void)replies_.try_push(r);
+  }
+  while (auto e = link_.pop_event()) {
+    ControllerEvent ev;
+    ev.kind = ControllerEvent::Kind::Link;
+    ev.at = e->at;
+    ev.link = *e;
+    push_event(ev);
+  }
+  while (auto d = link_.pop_drive_error()) {
+    ControllerEvent ev;
+    ev.kind = ControllerEvent::Kind::DriveError;
+    ev.at = d->at;
+    ev.drive_error = d->text;
+    push_event(ev);
+  }
+  (void)now;
+}
+
+void DcpController::drain_travel(MonoTime now) noexcept {
+  while (auto e = travel_.pop_event()) {
+    ControllerEvent ev;
+    ev.kind = ControllerEvent::Kind::Travel;
+    ev.at = e->at;
+    ev.travel = *e;
+    push_event(ev);
+    switch (e->type) {
+      case travel::Event::Type::FastStartArmed:
+        fast_start_armed_ = true;
+        break;
+      case travel::Event::Type::Started:
+        fast_start_armed_ = false;
+        travel_start_mm_ = e->position_mm;
+        break;
+      case travel::Event::Type::Finished: {
+        fast_start_armed_ = false;
+        pending_i9_travel_mm_.reset();
+        if (travel_start_mm_ && e->position_mm) {
+          pending_i9_travel_mm_ = *e->position_mm - *travel_start_mm_;
+        }
+        const auto front = lift_.calls().front();
+        const auto reached = e->position_mm ? lift_.floors().floor_at(
+                                                  *e->position_mm, config_.lift.level_tolerance_mm)
+                                            : std::nullopt;
+        if (front && reached && *front == *reached) {
+          lift_.calls().pop_front();
+          ControllerEvent served;
+          served.kind = ControllerEvent::Kind::CallServed;
+          served.at = now;
+          served.floor = *front;
+          push_event(served);
+        }
+        target_floor_.reset();
+        break;
+      }
+      case travel::Event::Type::Aborted:
+        fast_start_armed_ = false;
+        target_floor_.reset();
+        // A travel ended by a fault or a stop drops the queue: the dispatcher re-assigns.
+        lift_.calls().clear();
+        break;
+      default:
+        break;
+    }
+  }
+}
+
+void DcpController::serve_calls() noexcept {
+  const auto front = lift_.calls().front();
+  if (!front || travel_.active_kind() != TravelKind::None || last_input_.status.travel_active) {
+    return;
+  }
+  if (lift_.current_floor() == front) {
+    lift_.calls().pop_front();
+    ControllerEvent served;
+    served.kind = ControllerEvent::Kind::CallServed;
+    served.at = last_input_.now;
+    served.floor = *front;
+    push_event(served);
+    return;
+  }
+  if (!link_.travel_allowed() || not_ready_reason(false)) return;  // wait until ready
+  TravelCommand cmd;
+  cmd.floor = *front;
+  handle_travel(0, cmd);
+}
+
+void DcpController::set_fault(FaultCode code, bool active, MonoTime now) noexcept {
+  bool& current = faults_[index(code)];
+  if (current == active) return;
+  current = active;
+  if (active) fault_since_[index(code)] = now;
+  ControllerEvent ev;
+  ev.kind = active ? ControllerEvent::Kind::FaultRaised : ControllerEvent::Kind::FaultCleared;
+  ev.at = now;
+  ev.fault = code;
+  push_event(ev);
+}
+
+void DcpController::update_faults(const travel::CycleInput& in, MonoTime now) noexcept {
+  const bool link_up = link_.state() == dcp::LinkState::Up;
+  // Grace after start: inputs and position get one timeout to arrive before they count as lost.
+  const bool started = now > config_.inputs_timeout * 2;
+  set_fault(FaultCode::LinkFault, link_.state() == dcp::LinkState::Fault, now);
+  set_fault(FaultCode::DriveFault, link_up && in.status.general_fault, now);
+  set_fault(FaultCode::AdvanceWarning, link_up && in.status.advance_warning, now);
+  set_fault(FaultCode::InputsLost, started && !in.inputs.valid, now);
+  set_fault(FaultCode::SafetyChain, in.inputs.valid && !in.inputs.safety_chain_closed, now);
+  set_fault(FaultCode::PositionLost,
+            started && link_.protocol() == dcp::Protocol::Dcp4 && !in.position_mm, now);
+}
+
+void DcpController::publish(MonoTime now) noexcept {
+  ControllerSnapshot s;
+  s.cycle = cycle_;
+  s.at = now;
+  s.link = link_.state();
+  s.protocol = link_.protocol();
+  s.drive_info = link_.drive_info();
+  const dcp::DriveSnapshot& drive = link_.drive();
+  s.status_byte = drive.status;
+  s.extended = drive.extended;
+  s.decel_distance_mm = travel_.decel_distance_mm();
+  s.power_mode = link_.power_mode();
+  s.position_mm = last_input_.position_mm;
+  s.floor = lift_.current_floor();
+  s.next_possible_stop = lift_.next_possible_stop();
+  s.travel_kind = travel_.active_kind();
+  s.direction = travel_.direction();
+  s.target_floor = target_floor_;
+  s.fast_start_armed = fast_start_armed_;
+  s.brake_open = last_output_.brake_open;
+  s.contactors_on = last_output_.contactors_on;
+  s.command = last_output_.command;
+  s.data_word = last_output_.data_word;
+  s.inputs = last_input_.inputs;
+  const lift::CallQueue& calls = lift_.calls();
+  s.call_count = calls.size() < kMaxSnapshotCalls ? calls.size() : kMaxSnapshotCalls;
+  for (std::size_t i = 0; i < s.call_count; ++i)
+    s.calls[i] = static_cast<std::uint8_t>(calls.at(i));
+  for (std::size_t r = 0; r < dcp::kDisplayRows; ++r) {
+    const auto row = link_.display().row(r);
+    std::copy(row.begin(), row.end(), s.display[r].begin());
+  }
+  s.display_version = link_.display().version();
+  s.link_counters = link_.counters();
+  s.faults = faults_;
+  s.fault_since = fault_since_;
+  s.last_travel_measured_mm = measured_mm_;
+  s.last_travel_slip_mm = slip_mm_;
+  snapshot_.publish(s);
+}
+
+}  // namespace liftd::control
