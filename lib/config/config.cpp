@@ -487,7 +487,7 @@ const std::vector<Key>& schema() {
                          &TravelConfig::relevel_with_doors));
     t.push_back(bool_key("travel.relevel_electric_stop",
                          "relevel without remaining distance with electric stop: keep B0 until "
-                         "S6 and S1 are 0 (DCP 11)",
+                         "S6 and S1 are 0 (DCP 9.2.3.2)",
                          &Config::travel, &TravelConfig::relevel_electric_stop));
     t.push_back(bool_key("travel.use_start_parameters",
                          "send I7 start parameters before a DCP4 travel (DCP 5.12.7)",
@@ -499,6 +499,10 @@ const std::vector<Key>& schema() {
         "travel.inspection_hold_ms", 100, 5000,
         "hold-to-run: an inspection travel stops unless its command is repeated within this time",
         &Config::travel, &TravelConfig::inspection_hold_ms));
+    t.push_back(int_key("travel.dcp3_stop_lead_mm", 0, 100,
+                        "DCP3 by position: withdraw B2 this far before the level, so the stop "
+                        "from crawl ends on it (the crawl stop distance of the installation)",
+                        &Config::travel, &TravelConfig::dcp3_stop_lead_mm));
     t.push_back(int_key("travel.dcp3_speed_count", 1, 7,
                         "travelling speeds of a DCP3 installation (DCP 3.5.3.7)", &Config::travel,
                         &TravelConfig::dcp3_speed_count));

@@ -101,6 +101,7 @@ struct TravelConfig {
   bool use_start_parameters = true;                      ///< travel.use_start_parameters (I7)
   int fast_start_timeout_ms = 3000;                      ///< travel.fast_start_timeout_ms
   int inspection_hold_ms = 500;                          ///< travel.inspection_hold_ms
+  int dcp3_stop_lead_mm = 0;                             ///< travel.dcp3_stop_lead_mm
   int dcp3_speed_count = 2;                              ///< travel.dcp3_speed_count
   /// travel.dcp3_decel_distance_mm: speed name ("V4", "V3", ...) -> deceleration distance.
   std::map<std::string, int> dcp3_decel_distance_mm = {{"V3", 1200}, {"V4", 2500}};

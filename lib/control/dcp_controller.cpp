@@ -122,7 +122,7 @@ DcpController::DcpController(const ControllerConfig& config, const PositionSourc
 // ---- the cycle ----
 
 std::span<const std::uint8_t> DcpController::frame_to_send(MonoTime now) noexcept {
-  ++cycle_;
+  if (cycle_++ == 0) start_at_ = now;
   Command command;
   while (commands_.try_pop(command)) handle(command, now);
 
@@ -569,8 +569,8 @@ void DcpController::set_fault(FaultCode code, bool active, MonoTime now) noexcep
 
 void DcpController::update_faults(const travel::CycleInput& in, MonoTime now) noexcept {
   const bool link_up = link_.state() == dcp::LinkState::Up;
-  // Grace after start: inputs and position get one timeout to arrive before they count as lost.
-  const bool started = now > config_.inputs_timeout * 2;
+  // Grace after start: inputs and position get two timeouts to arrive before they count as lost.
+  const bool started = now - start_at_ > config_.inputs_timeout * 2;
   set_fault(FaultCode::LinkFault, link_.state() == dcp::LinkState::Fault, now);
   set_fault(FaultCode::DriveFault, link_up && in.status.general_fault, now);
   set_fault(FaultCode::AdvanceWarning, link_up && in.status.advance_warning, now);

@@ -309,6 +309,7 @@ class DcpController final : public rt::CycleEngine {
   std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults_{};
   std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since_{};
   std::uint64_t cycle_ = 0;
+  MonoTime start_at_{};
 };
 
 }  // namespace liftd::control

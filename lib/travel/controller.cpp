@@ -189,6 +189,19 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
     fault_seen_ = fault;
     ctx.emit(fault ? Event::Type::DriveFault : Event::Type::DriveFaultCleared, active_kind(),
              fault ? AbortCause::DriveFault : AbortCause::None, 0);
+    // DCP 9.1.6: S3 resets B0 and ends the travel at once, whatever its machine is waiting for.
+    // Without this a machine that sees S6/S1 drop in the same reply ends "normally" off the
+    // level, and the event would blame the position instead of the drive.
+    if (fault && (pending_ || dcp4_.active() || dcp3_.active() || relevel_.active())) {
+      const TravelKind kind = active_kind();
+      pending_.reset();
+      dcp4_.abort_immediate();
+      dcp3_.abort_immediate();
+      relevel_.abort_immediate();
+      if (kind != TravelKind::None) {
+        ctx.emit(Event::Type::Aborted, kind, AbortCause::DriveFault, 0);
+      }
+    }
   }
 
   // Inspection / recall switched on during a normal travel: end it at once (DCP 9.1.1).

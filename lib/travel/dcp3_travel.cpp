@@ -67,7 +67,8 @@ bool Dcp3Travel::at_level(const StepContext& ctx) const noexcept {
   }
   if (!ctx.in.position_mm) return false;
   return remaining_mm(target_mm_, *ctx.in.position_mm, direction_) <=
-         static_cast<std::int64_t>(ctx.config.level_tolerance_mm);
+         static_cast<std::int64_t>(ctx.config.level_tolerance_mm) +
+             static_cast<std::int64_t>(ctx.config.dcp3_stop_lead_mm);
 }
 
 void Dcp3Travel::finish(StepContext& ctx) noexcept {
@@ -99,6 +100,12 @@ Demand Dcp3Travel::step(StepContext& ctx) noexcept {
       return {};
 
     case State::FastStartHold:
+      if (cycles_in_state_ == 1 && in.inputs.door_reversal) {
+        // Reversal before the VF message went out: nothing to stop, no B0 at all.
+        end_cause_ = AbortCause::DoorReversal;
+        finish(ctx);
+        return {};
+      }
       if (cycles_in_state_ == 1) {
         ctx.emit(Event::Type::FastStartArmed, kind_, AbortCause::None, target_mm_);
       }

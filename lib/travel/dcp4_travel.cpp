@@ -213,6 +213,12 @@ Demand Dcp4Travel::step(StepContext& ctx) noexcept {
     }
 
     case State::FastStartHold: {
+      if (cycles_in_state_ == 1 && in.inputs.door_reversal) {
+        // Reversal before the VF message went out: nothing to stop, no B0 at all.
+        end_cause_ = AbortCause::DoorReversal;
+        finish(ctx);
+        return {};
+      }
       if (cycles_in_state_ == 1) {
         ctx.emit(Event::Type::FastStartArmed, kind_, AbortCause::None, target_mm_);
       }

@@ -65,6 +65,9 @@ std::optional<std::string_view> validate(const TravelConfig& config) noexcept {
   if (config.relevel_threshold_mm <= config.level_tolerance_mm) return "relevel_threshold_mm";
   if (config.arrival_tolerance_mm < config.level_tolerance_mm) return "arrival_tolerance_mm";
   if (config.relevel_zone_mm <= config.relevel_threshold_mm) return "relevel_zone_mm";
+  // The lead stands for the drive's stopping distance from crawl (a few mm at V0 = 0.05 m/s);
+  // beyond 100 mm B2 would drop before the car is anywhere near the level.
+  if (config.dcp3_stop_lead_mm > 100) return "dcp3_stop_lead_mm";
   // DCP 3.5.3.7: installations have 1 to 7 travelling speeds.
   if (config.dcp3_speed_count < 1 || config.dcp3_speed_count > 7) return "dcp3_speed_count";
   return std::nullopt;

@@ -207,6 +207,10 @@ struct TravelConfig {
   /// DCP 8.1: fixed deceleration distance SVx per DCP3 speed, indexed by the speed's bit
   /// number G0..G10 (used with Dcp3Reference::Position).
   std::array<std::uint32_t, 11> dcp3_decel_distance_mm{};
+  /// DCP 10.3 step 3: once B2 is withdrawn the drive stops from crawl on its own ramp. With
+  /// Dcp3Reference::Position, withdraw B2 this much before the level so the car stops on it
+  /// (the role a stop flag placed ahead of the level plays in the shaft). 0: at the level.
+  std::uint32_t dcp3_stop_lead_mm = 0;
 };
 
 /// The name of the first out-of-range TravelConfig field, or nullopt when the config is usable.

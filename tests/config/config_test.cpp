@@ -63,6 +63,7 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/travel/use_start_parameters", true},
       {"/travel/fast_start_timeout_ms", 3000},
       {"/travel/inspection_hold_ms", 500},
+      {"/travel/dcp3_stop_lead_mm", 0},
       {"/travel/dcp3_speed_count", 2},
       {"/travel/dcp3_decel_distance_mm", {{"V4", 2500}, {"V3", 1200}}},
       {"/sim/dcp", 4},
