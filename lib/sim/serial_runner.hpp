@@ -1,0 +1,195 @@
+// The simulated drive (DriveSim) on a serial device or pty, on its own thread: frames are found
+// by the inter-frame gap, answered after the engine's reply delay, and the car keeps moving
+// between frames. Other threads read the encoder position lock-free, read a status summary,
+// switch faults and drain the drive's events. This is the simulator, not the master's cycle:
+// a mutex held for short copies is acceptable, except for the position (atomics only).
+//
+// Device loss: with `reconnect` (the default) a lost device is retried every
+// `reconnect_interval` (a path is reopened, an adopted descriptor is polled again, e.g. a pty
+// master whose slave was closed and will be reopened) and the state shows Reconnecting.
+// Without it the loop ends and the state shows DeviceLost.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+#include "common/mono_time.hpp"
+#include "io/serial_port.hpp"
+#include "sim/drive_sim.hpp"
+
+namespace liftd::sim {
+
+/// Where and how the runner serves the drive.
+struct RunnerOptions {
+  /// Serial device or pty slave path, opened at 38400 8N1 (DCP 7.1) by start(). Ignored when
+  /// `fd` is set.
+  std::string device;
+  /// An already-open, configured descriptor (e.g. a pty master); the runner takes ownership
+  /// and closes it. -1 = open `device` instead.
+  int fd = -1;
+  /// Silence inside a frame after which the partial frame is dropped (resynchronisation).
+  /// DCP 7.2: frames are sent back to back (6 bytes take 1.56 ms at 38400 baud), so 1 ms of
+  /// silence means the frame was torn.
+  std::chrono::microseconds gap{1000};
+  /// Longest wait for input before the car model is advanced anyway.
+  std::chrono::milliseconds idle_poll{5};
+  /// Queue only fault events (Fault, FaultCleared) for drain_events().
+  bool quiet = false;
+  /// End the loop after this many master frames (0 = run until stop()).
+  std::uint64_t max_frames = 0;
+  /// Keep retrying a lost device (true) or end the loop with DeviceLost (false).
+  bool reconnect = true;
+  /// Pause between reconnection attempts.
+  std::chrono::milliseconds reconnect_interval{100};
+  /// Events kept for drain_events() before the oldest are dropped.
+  std::size_t event_capacity = 1024;
+};
+
+/// What the runner's loop is doing.
+enum class RunnerState : std::uint8_t {
+  Idle,          ///< not started
+  Running,       ///< serving frames
+  Reconnecting,  ///< the device was lost; retrying
+  DeviceLost,    ///< the device was lost and `reconnect` is off: loop ended
+  FrameLimit,    ///< max_frames reached: loop ended
+  Stopped,       ///< stop() ended the loop
+  Failed,        ///< start() could not open the device or start the thread
+};
+/// "idle", "running", ...
+std::string_view to_string(RunnerState state) noexcept;
+
+/// Counters of the serial side (the engine's own counters are in SimCounters).
+struct RunnerCounters {
+  std::uint64_t resyncs = 0;         ///< partial frames dropped after the gap
+  std::uint64_t write_failures = 0;  ///< replies the port did not take completely
+  std::uint64_t device_losses = 0;   ///< hang-ups / lost devices seen
+  std::uint64_t reconnects = 0;      ///< successful reopenings after a loss
+  std::uint64_t dropped_events = 0;  ///< events dropped because the queue was full
+};
+
+/// A consistent copy of the drive's state for status lines and the API.
+struct RunnerStatus {
+  RunnerState state = RunnerState::Idle;  ///< loop state
+  Phase phase = Phase::Idle;              ///< drive phase
+  TravelKind travel = TravelKind::None;   ///< travel sequence running
+  std::uint8_t status_byte = 0;           ///< DCP 4.1 status byte as the next reply carries it
+  bool initialised = false;               ///< a valid I0 exchange happened
+  double position_mm = 0.0;               ///< car position
+  double velocity_mps = 0.0;              ///< car speed, + up
+  SimCounters sim{};                      ///< engine counters
+  RunnerCounters runner{};                ///< serial-side counters
+};
+
+/// One line of text for an event, time relative to `epoch`:
+/// "[     1.234] phase magnetising".
+std::string format_event(const SimEvent& event, MonoTime epoch);
+/// One status line: "status 0x01 phase idle pos 0.0 mm v +0.000 m/s frames ...".
+std::string format_status(const RunnerStatus& status);
+/// Parses a reply fault name: badsum, s7, late, noreply, garbage. False when unknown.
+bool parse_reply_fault(std::string_view name, ReplyFault& out) noexcept;
+
+/// The simulated drive served on a serial device by its own thread.
+class SerialDriveRunner {
+ public:
+  /// A runner for `config` on the device or descriptor in `options`; nothing opens yet.
+  SerialDriveRunner(const DriveConfig& config, RunnerOptions options);
+  /// Stops the thread (see stop()).
+  ~SerialDriveRunner();
+  SerialDriveRunner(const SerialDriveRunner&) = delete;
+  SerialDriveRunner& operator=(const SerialDriveRunner&) = delete;
+
+  /// Opens the device (or adopts the descriptor) and starts the thread. False, with
+  /// last_error(), when the device cannot be opened or the runner was started before.
+  bool start();
+  /// Ends the loop and joins the thread (returns within a few ms: the loop waits at most
+  /// `idle_poll` or one reply delay). Idempotent.
+  void stop() noexcept;
+  /// True while the loop thread runs (false after stop(), DeviceLost or FrameLimit).
+  bool running() const noexcept { return running_.load(std::memory_order_acquire); }
+  /// Why start() failed, or the last open/reconnect error.
+  std::string last_error() const;
+  /// Loop state.
+  RunnerState state() const noexcept { return state_.load(std::memory_order_acquire); }
+  /// What RS485 / low-latency settings took effect when the device was (re)opened.
+  io::PortFeatures port_features() const;
+  /// Monotonic time the drive was powered on (the epoch for event lines).
+  MonoTime epoch() const noexcept { return epoch_; }
+
+  // --- the simulated encoder (lock-free, wait-free: safe in a real-time cycle) ---
+  /// Car position in mm, updated by the loop on every frame and every idle wake-up.
+  double position_mm() const noexcept { return position_mm_.load(std::memory_order_relaxed); }
+  /// Car speed in m/s (+ up), updated with the position.
+  double velocity_mps() const noexcept { return velocity_mps_.load(std::memory_order_relaxed); }
+  /// Monotonic time of the last position update (a stale value means the loop has stalled).
+  MonoTime position_at() const noexcept {
+    return MonoTime{position_at_ns_.load(std::memory_order_relaxed)};
+  }
+
+  // --- status (short lock) ---
+  /// A consistent copy of the drive's state and counters.
+  RunnerStatus status() const;
+  /// Appends the events since the last call to `out` and returns how many.
+  std::size_t drain_events(std::vector<SimEvent>& out);
+  /// Appends the events since the last call as text lines (format_event) and returns how many.
+  std::size_t drain_event_lines(std::vector<std::string>& out);
+
+  // --- fault injection and set-up (short lock; take effect on the next frame) ---
+  /// DCP 4.1 S3: general fault on/off.
+  void set_general_fault(bool on);
+  /// DCP 4.1 S2: advance warning on/off.
+  void set_advance_warning(bool on);
+  /// DCP 4.1 S0 forced off.
+  void set_not_ready(bool on);
+  /// Applies `fault` to the next `frames` replies.
+  void inject(ReplyFault fault, std::uint32_t frames);
+  /// Applies `fault` to each reply with `probability` (0..1).
+  void set_fault_rate(ReplyFault fault, double probability);
+  /// Clears every reply fault and rate.
+  void clear_reply_faults();
+  /// Extended status flags (emergency power, temperature) to report.
+  void set_extended_flags(const dcp::ExtendedStatus& flags);
+  /// Moves the car (only while the drive is idle; ignored otherwise).
+  void set_position_mm(double position_mm);
+
+ private:
+  void run() noexcept;
+  bool reopen() noexcept;
+  void publish(MonoTime now) noexcept;
+  void collect_events() noexcept;
+  void finish(RunnerState state) noexcept;
+  void wake() noexcept;
+  bool wait_for_stop(MonoTime until) noexcept;
+
+  DriveConfig config_;
+  RunnerOptions options_;
+  MonoTime epoch_{};
+  io::SerialPort port_;
+  int wake_fd_ = -1;  // eventfd: stop() wakes the loop's poll at once
+  std::thread thread_;
+  std::atomic<bool> stop_requested_{false};
+  std::atomic<bool> running_{false};
+  std::atomic<RunnerState> state_{RunnerState::Idle};
+
+  std::atomic<double> position_mm_{0.0};
+  std::atomic<double> velocity_mps_{0.0};
+  std::atomic<std::int64_t> position_at_ns_{0};
+  static_assert(std::atomic<double>::is_always_lock_free, "the encoder must be lock-free");
+  static_assert(std::atomic<std::int64_t>::is_always_lock_free, "the encoder must be lock-free");
+
+  mutable std::mutex mutex_;  // guards everything below
+  DriveSim sim_;
+  RunnerCounters counters_{};
+  std::deque<SimEvent> events_;
+  std::string last_error_;
+  io::PortFeatures features_{};
+};
+
+}  // namespace liftd::sim

@@ -1,0 +1,417 @@
+// sim::SerialDriveRunner on a real pty pair against a small master loop and dcp::MasterLink:
+// the link comes up, the encoder is readable while the car moves (also between frames), faults
+// switched through the runner reach the wire, stop() is prompt, device loss is handled.
+// Real time on shared cores: asserts on counts and protocol behaviour with generous margins.
+#include "sim/serial_runner.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "dcp/frame.hpp"
+#include "dcp/master_link.hpp"
+#include "io/pty.hpp"
+#include "sim_harness.hpp"
+
+namespace liftd::sim {
+namespace {
+
+using namespace std::chrono_literals;
+namespace cmd = testing::cmd;
+namespace sb = dcp::status_bit;
+
+constexpr std::uint16_t kVI = 0x0010;  // DCP 3.5.3.7: G4 = inspection speed
+
+void sleep_until_mono(MonoTime t) {
+  std::this_thread::sleep_until(std::chrono::steady_clock::time_point(
+      std::chrono::duration_cast<std::chrono::steady_clock::duration>(t)));
+}
+
+// Polls `pred` every 5 ms for up to `limit`; true once it holds.
+template <class Pred>
+bool eventually(Pred pred, MonoTime limit = 2s) {
+  const MonoTime until = mono_now() + limit;
+  while (mono_now() < until) {
+    if (pred()) return true;
+    std::this_thread::sleep_for(5ms);
+  }
+  return pred();
+}
+
+// The master end: one frame, then up to `wait` for the 6-byte reply.
+struct Master {
+  io::SerialPort port;
+
+  std::optional<dcp::SlaveFrame> exchange(std::uint8_t command, std::uint16_t data = 0,
+                                          std::chrono::milliseconds wait = 14ms) {
+    dcp::MasterFrame f;
+    f.command = command;
+    f.set_data_word(data);
+    const auto bytes = dcp::encode(f);
+    if (port.write_frame(bytes).status != io::IoStatus::Ok) return std::nullopt;
+    std::array<std::uint8_t, dcp::kFrameSize> reply{};
+    const auto r = port.read_until(reply, mono_now() + wait);
+    if (r.status != io::IoStatus::Ok) {
+      (void)port.flush_input();
+      return std::nullopt;
+    }
+    const auto s = dcp::decode_slave(reply);
+    if (!s) return std::nullopt;
+    return *s;
+  }
+  // Runs `n` cycles of 15 ms with `command`; returns how many replies decoded.
+  int cycles(int n, std::uint8_t command, std::uint16_t data = 0) {
+    int good = 0;
+    MonoTime next = mono_now();
+    for (int i = 0; i < n; ++i) {
+      next += 15ms;  // DCP 7.2: 15 ms cycle
+      if (exchange(command, data)) ++good;
+      sleep_until_mono(next);
+    }
+    return good;
+  }
+};
+
+// A pty pair whose slave the runner opens by path; the test keeps the master end.
+struct PathRig {
+  io::PtyPair pair;
+  Master master;
+  SerialDriveRunner runner;
+
+  static io::PtyPair make_pair() {
+    auto p = io::PtyPair::create();
+    if (!p) throw std::runtime_error(p.error().message());
+    return std::move(p).value();
+  }
+  explicit PathRig(DriveConfig config = {}, RunnerOptions options = {})
+      : pair(make_pair()),
+        master{pair.take_master()},
+        runner(config, with_device(std::move(options), pair.slave_path())) {}
+  static RunnerOptions with_device(RunnerOptions o, const std::string& path) {
+    o.device = path;
+    return o;
+  }
+};
+
+DriveConfig no_init() {
+  DriveConfig c;
+  c.require_init = false;
+  return c;
+}
+
+TEST(SerialDriveRunner, StartFailsOnAMissingDevice) {
+  RunnerOptions o;
+  o.device = "/dev/liftd-no-such-tty";
+  SerialDriveRunner runner({}, o);
+  EXPECT_FALSE(runner.start());
+  EXPECT_EQ(runner.state(), RunnerState::Failed);
+  EXPECT_NE(runner.last_error().find("/dev/liftd-no-such-tty"), std::string::npos);
+  EXPECT_FALSE(runner.running());
+}
+
+TEST(SerialDriveRunner, MasterLinkComesUpOverPty) {
+  PathRig rig;
+  ASSERT_TRUE(rig.runner.start()) << rig.runner.last_error();
+  EXPECT_FALSE(rig.runner.start()) << "a second start is refused";
+  dcp::MasterLink link(dcp::MasterLinkConfig{});
+  MonoTime next = mono_now();
+  for (int i = 0; i < 400 && link.state() != dcp::LinkState::Up; ++i) {  // up to 6 s
+    next += 15ms;                                                        // DCP 7.2: 15 ms cycle
+    const auto frame = link.next_frame(mono_now());
+    ASSERT_EQ(rig.master.port.write_frame(frame).status, io::IoStatus::Ok);
+    std::array<std::uint8_t, dcp::kFrameSize> reply{};
+    // DCP 7.2: a complete reply by 13.625 ms after the frame began.
+    const auto r = rig.master.port.read_until(reply, mono_now() + 13ms);
+    if (r.status == io::IoStatus::Ok)
+      link.on_reply(reply, mono_now());
+    else
+      link.on_no_reply(mono_now());
+    sleep_until_mono(next);
+  }
+  ASSERT_EQ(link.state(), dcp::LinkState::Up);
+  ASSERT_TRUE(link.drive_info().has_value());
+  EXPECT_EQ(link.drive_info()->maker, (dcp::Code2{'K', 'W'}));
+  const RunnerStatus s = rig.runner.status();
+  EXPECT_TRUE(s.initialised);
+  EXPECT_EQ(s.state, RunnerState::Running);
+  EXPECT_GT(s.sim.frames, 10u);
+  EXPECT_GT(s.sim.i_messages, 0u);
+  std::vector<std::string> lines;
+  EXPECT_GT(rig.runner.drain_event_lines(lines), 0u);
+  EXPECT_TRUE(std::any_of(lines.begin(), lines.end(), [](const std::string& l) {
+    return l.find("I0") != std::string::npos;
+  })) << "the I0 exchange is logged";
+}
+
+TEST(SerialDriveRunner, EncoderIsReadableWhileTheCarMovesAndBetweenFrames) {
+  DriveConfig config = no_init();
+  config.start_position_mm = 1000;
+  PathRig rig(config);
+  EXPECT_DOUBLE_EQ(rig.runner.position_mm(), 1000.0) << "published before start";
+  ASSERT_TRUE(rig.runner.start()) << rig.runner.last_error();
+
+  // A reader on another thread, like the daemon's cycle: positions must never go down while
+  // the car travels up.
+  std::atomic<bool> done{false};
+  std::atomic<int> reads{0};
+  std::atomic<int> backwards{0};
+  std::thread reader([&] {
+    double last = rig.runner.position_mm();
+    while (!done.load()) {
+      const double p = rig.runner.position_mm();
+      if (p < last - 1e-9) backwards.fetch_add(1);
+      last = p;
+      reads.fetch_add(1);
+      std::this_thread::sleep_for(1ms);
+    }
+  });
+
+  // DCP 9.2.1: inspection travel, VI with B1 B2 (up).
+  EXPECT_GE(rig.master.cycles(1, cmd::kSpeed, kVI), 0);
+  const int good = rig.master.cycles(100, cmd::kTravel);  // 1.5 s
+  EXPECT_GE(good, 80);
+  const double moving_at = rig.runner.position_mm();
+  EXPECT_GT(moving_at, 1000.0 + 100.0) << "VI is 0.5 m/s: well over 100 mm in 1.5 s";
+  EXPECT_GT(rig.runner.velocity_mps(), 0.2);
+
+  // No frames for 60 ms (the drive's link timeout is 10 frames, 150 ms): the car model must
+  // keep advancing on the runner's idle wake-ups.
+  const MonoTime stamp0 = rig.runner.position_at();
+  std::this_thread::sleep_for(60ms);
+  EXPECT_GT(rig.runner.position_mm(), moving_at + 5.0) << "0.5 m/s for 60 ms is 30 mm";
+  EXPECT_GT(rig.runner.position_at(), stamp0);
+
+  // DCP 9.2.1: B1 off with B2 on: crawl; then B2 off: stop; then idle.
+  for (int i = 0; i < 300 && rig.runner.velocity_mps() > 0.06; ++i)
+    rig.master.cycles(1, cmd::kDecel);
+  rig.master.cycles(5, cmd::kDecel);
+  EXPECT_NEAR(rig.runner.velocity_mps(), 0.05, 0.01) << "crawl V0";
+  rig.master.cycles(40, cmd::kStop);
+  rig.master.cycles(5, cmd::kIdle);
+  EXPECT_EQ(rig.runner.velocity_mps(), 0.0);
+  done.store(true);
+  reader.join();
+  EXPECT_GT(reads.load(), 100);
+  EXPECT_EQ(backwards.load(), 0);
+  const RunnerStatus s = rig.runner.status();
+  EXPECT_EQ(s.sim.travels, 1u);
+  EXPECT_DOUBLE_EQ(s.position_mm, rig.runner.position_mm());
+}
+
+TEST(SerialDriveRunner, StopsWithin100Milliseconds) {
+  for (int round = 0; round < 5; ++round) {
+    PathRig rig;
+    ASSERT_TRUE(rig.runner.start()) << rig.runner.last_error();
+    rig.master.cycles(3, cmd::kIdle);
+    const MonoTime t0 = mono_now();
+    rig.runner.stop();
+    const MonoTime took = mono_now() - t0;
+    EXPECT_LT(took, 100ms) << "round " << round;
+    EXPECT_FALSE(rig.runner.running());
+    EXPECT_EQ(rig.runner.state(), RunnerState::Stopped);
+    rig.runner.stop();  // idempotent
+  }
+}
+
+TEST(SerialDriveRunner, DestructorStopsARunningRunner) {
+  const MonoTime t0 = mono_now();
+  {
+    PathRig rig;
+    ASSERT_TRUE(rig.runner.start());
+    rig.master.cycles(2, cmd::kIdle);
+  }
+  EXPECT_LT(mono_now() - t0, 2s);
+}
+
+TEST(SerialDriveRunner, InjectedFaultsReachTheWire) {
+  PathRig rig(no_init());
+  ASSERT_TRUE(rig.runner.start()) << rig.runner.last_error();
+  EXPECT_GE(rig.master.cycles(10, cmd::kIdle), 8);
+
+  // Five replies with a corrupted checksum: the master cannot decode them.
+  rig.runner.inject(ReplyFault::BadChecksum, 5);
+  EXPECT_LE(rig.master.cycles(5, cmd::kIdle), 1);
+  EXPECT_GE(rig.master.cycles(10, cmd::kIdle), 8);
+
+  // No reply at all for three frames.
+  rig.runner.inject(ReplyFault::NoReply, 3);
+  EXPECT_LE(rig.master.cycles(3, cmd::kIdle), 1);
+
+  // DCP 4.1: S3 general fault and S2 advance warning show in the status byte; S0 can be forced
+  // off.
+  rig.runner.set_general_fault(true);
+  rig.runner.set_advance_warning(true);
+  rig.runner.set_not_ready(true);
+  std::optional<dcp::SlaveFrame> r;
+  ASSERT_TRUE(eventually([&] { return (r = rig.master.exchange(cmd::kIdle)).has_value(); }));
+  EXPECT_NE(r->status & sb::kGeneralFault, 0);
+  EXPECT_NE(r->status & sb::kAdvanceWarning, 0);
+  EXPECT_EQ(r->status & sb::kReady, 0);
+  EXPECT_NE(rig.runner.status().status_byte & sb::kGeneralFault, 0);
+
+  rig.runner.set_general_fault(false);
+  rig.runner.set_advance_warning(false);
+  rig.runner.set_not_ready(false);
+  // A rate of 1 corrupts every reply until clear_reply_faults().
+  rig.runner.set_fault_rate(ReplyFault::BadChecksum, 1.0);
+  EXPECT_EQ(rig.master.cycles(5, cmd::kIdle), 0);
+  rig.runner.clear_reply_faults();
+  ASSERT_TRUE(eventually([&] { return (r = rig.master.exchange(cmd::kIdle)).has_value(); }));
+  EXPECT_EQ(r->status & (sb::kGeneralFault | sb::kAdvanceWarning), 0);
+  EXPECT_NE(r->status & sb::kReady, 0);
+
+  std::vector<std::string> lines;
+  rig.runner.drain_event_lines(lines);
+  auto has_line = [&](const std::string& text) {
+    return std::any_of(lines.begin(), lines.end(),
+                       [&](const std::string& l) { return l.find(text) != std::string::npos; });
+  };
+  EXPECT_TRUE(has_line("fault injected")) << "switching the fault on is logged";
+  EXPECT_TRUE(has_line("fault-cleared injected")) << "and off";
+}
+
+TEST(SerialDriveRunner, ResynchronisesAfterATornFrame) {
+  PathRig rig;
+  ASSERT_TRUE(rig.runner.start());
+  int good = 0;
+  for (int i = 0; i < 20; ++i) {
+    // Three stray bytes, silence well over the 1 ms gap, then a whole frame.
+    const std::array<std::uint8_t, 3> torn = {0x09, 0x00, 0x80};
+    ASSERT_EQ(rig.master.port.write_frame(torn).status, io::IoStatus::Ok);
+    std::this_thread::sleep_for(6ms);
+    if (rig.master.exchange(cmd::kIdle)) ++good;
+    std::this_thread::sleep_for(10ms);
+  }
+  EXPECT_GE(good, 16);
+  EXPECT_GE(rig.runner.status().runner.resyncs, 16u);
+}
+
+TEST(SerialDriveRunner, QuietKeepsOnlyFaultEvents) {
+  RunnerOptions o;
+  o.quiet = true;
+  PathRig rig(no_init(), o);
+  ASSERT_TRUE(rig.runner.start());
+  rig.master.cycles(1, cmd::kSpeed, kVI);
+  rig.master.cycles(40, cmd::kTravel);  // phase changes happen, but are not queued
+  rig.runner.set_general_fault(true);
+  rig.master.cycles(3, cmd::kIdle);
+  std::vector<SimEvent> events;
+  rig.runner.drain_events(events);
+  ASSERT_FALSE(events.empty());
+  for (const auto& e : events) EXPECT_EQ(e.kind, SimEvent::Kind::Fault);
+}
+
+TEST(SerialDriveRunner, EndsWithDeviceLostWhenNotReconnecting) {
+  RunnerOptions o;
+  o.reconnect = false;
+  PathRig rig({}, o);
+  ASSERT_TRUE(rig.runner.start());
+  EXPECT_GE(rig.master.cycles(5, cmd::kIdle), 4);
+  rig.master.port.close();  // the slave now reads a hang-up
+  rig.pair.close();
+  EXPECT_TRUE(eventually([&] { return !rig.runner.running(); }));
+  EXPECT_EQ(rig.runner.state(), RunnerState::DeviceLost);
+  EXPECT_GE(rig.runner.status().runner.device_losses, 1u);
+  rig.runner.stop();
+  EXPECT_EQ(rig.runner.state(), RunnerState::DeviceLost) << "stop() keeps the reason";
+}
+
+TEST(SerialDriveRunner, PathRunnerKeepsRetryingAfterALoss) {
+  PathRig rig;
+  ASSERT_TRUE(rig.runner.start());
+  EXPECT_GE(rig.master.cycles(5, cmd::kIdle), 4);
+  rig.master.port.close();
+  rig.pair.close();
+  EXPECT_TRUE(eventually([&] { return rig.runner.state() == RunnerState::Reconnecting; }));
+  EXPECT_TRUE(rig.runner.running());
+  // The model still advances while the device is away.
+  const MonoTime stamp = rig.runner.position_at();
+  EXPECT_TRUE(eventually([&] { return rig.runner.position_at() > stamp; }));
+  const MonoTime t0 = mono_now();
+  rig.runner.stop();
+  EXPECT_LT(mono_now() - t0, 100ms) << "stop() interrupts the retry pause";
+}
+
+TEST(SerialDriveRunner, AdoptedPtyMasterSurvivesTheSlaveClosingAndReopening) {
+  // The runner holds the pty master (as in liftd --simulate); the master side opens the slave
+  // path, closes it (hang-up) and opens it again.
+  auto created = io::PtyPair::create({}, /*hold_slave=*/false);
+  ASSERT_TRUE(created.ok()) << created.error().message();
+  io::PtyPair pair = std::move(created).value();
+  const std::string slave = pair.slave_path();
+  RunnerOptions o;
+  o.fd = pair.take_master().release();
+  o.reconnect_interval = 20ms;
+  SerialDriveRunner runner({}, o);
+  ASSERT_TRUE(runner.start()) << runner.last_error();
+
+  auto open_slave = [&] {
+    auto port = io::SerialPort::open(slave, io::SerialSettings{});
+    if (!port) throw std::runtime_error(port.error().message());
+    return std::move(port).value();
+  };
+  Master m{open_slave()};
+  EXPECT_TRUE(eventually([&] { return runner.state() == RunnerState::Running; }));
+  EXPECT_GE(m.cycles(20, cmd::kIdle), 16);
+
+  m.port.close();
+  EXPECT_TRUE(eventually([&] { return runner.state() == RunnerState::Reconnecting; }));
+  m.port = open_slave();
+  EXPECT_TRUE(eventually([&] { return runner.state() == RunnerState::Running; }));
+  (void)m.port.flush_input();
+  EXPECT_GE(m.cycles(20, cmd::kIdle), 16);
+  const RunnerStatus s = runner.status();
+  EXPECT_GE(s.runner.device_losses, 1u);
+  EXPECT_GE(s.runner.reconnects, 1u);
+}
+
+TEST(SerialDriveRunner, FrameLimitEndsTheLoop) {
+  RunnerOptions o;
+  o.max_frames = 5;
+  PathRig rig({}, o);
+  ASSERT_TRUE(rig.runner.start());
+  rig.master.cycles(10, cmd::kIdle);
+  EXPECT_TRUE(eventually([&] { return !rig.runner.running(); }));
+  EXPECT_EQ(rig.runner.state(), RunnerState::FrameLimit);
+  EXPECT_EQ(rig.runner.status().sim.frames, 5u);
+}
+
+TEST(SimText, ParsesReplyFaultNames) {
+  // Legend: tool/stdin name -> injected fault.
+  struct Case {
+    const char* name;
+    ReplyFault fault;
+  };
+  const Case cases[] = {
+      {"badsum", ReplyFault::BadChecksum}, {"s7", ReplyFault::MessageError},
+      {"late", ReplyFault::Late},          {"noreply", ReplyFault::NoReply},
+      {"garbage", ReplyFault::Garbage},
+  };
+  for (const auto& c : cases) {
+    ReplyFault f{};
+    EXPECT_TRUE(parse_reply_fault(c.name, f)) << c.name;
+    EXPECT_EQ(f, c.fault) << c.name;
+  }
+  ReplyFault f{};
+  EXPECT_FALSE(parse_reply_fault("BADSUM", f));
+  EXPECT_FALSE(parse_reply_fault("", f));
+}
+
+TEST(SimText, FormatsEventsRelativeToTheEpoch) {
+  SimEvent e;
+  e.at = 1500ms;
+  e.kind = SimEvent::Kind::PhaseChanged;
+  e.value = static_cast<std::int64_t>(Phase::Magnetising);
+  EXPECT_EQ(format_event(e, 250ms), "[     1.250] phase magnetising");
+  e.kind = SimEvent::Kind::ChannelMessage;
+  e.value = '7';
+  EXPECT_EQ(format_event(e, 1500ms), "[     0.000] channel-message I7");
+}
+
+}  // namespace
+}  // namespace liftd::sim
