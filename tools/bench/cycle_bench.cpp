@@ -1,11 +1,14 @@
-// cycle-bench: runs the real cycle (CycleRunner over a pty, against the fake responder or any
-// responder on --device) and, in the same run, a bare reference loop that only sleeps with
-// clock_nanosleep(TIMER_ABSTIME) at the same period and priority. Prints wake-up lateness of
-// both, their ratio, send-to-reply latency, cycle work time and CPU time per cycle.
+// cycle-bench: runs the real stack (CycleRunner + DcpController over a pty, the drive simulator
+// on the far end, travels going up and down) and, in the same run, a bare reference loop that
+// only sleeps with clock_nanosleep(TIMER_ABSTIME) at the same period and priority. Prints
+// wake-up lateness of both, their ratio, send-to-reply latency, cycle work time and CPU time
+// per cycle. `--engine echo` runs the protocol-free echo engine against the fake responder
+// instead (the cycle alone, without the DCP engine).
 #include <sys/resource.h>
 
 #include <atomic>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -15,12 +18,17 @@
 #include <string_view>
 #include <thread>
 
+#include <unistd.h>
+
+#include "control/dcp_controller.hpp"
+#include "dcp/trace.hpp"
 #include "echo_engine.hpp"
 #include "fake_responder.hpp"
 #include "io/pty.hpp"
 #include "rt/cycle_runner.hpp"
 #include "rt/histogram.hpp"
 #include "rt/rt_thread.hpp"
+#include "sim/serial_runner.hpp"
 
 namespace {
 
@@ -30,11 +38,13 @@ namespace rt = liftd::rt;
 namespace testing = liftd::rt::testing;
 
 struct Options {
+  std::string engine = "dcp";  // dcp: DcpController + drive simulator; echo: fake responder
+  bool travel = true;          // dcp: keep the car travelling between the end floors
   std::uint64_t cycles = 20000;
   int priority = 80;
   bool lock_memory = true;
-  long reply_delay_us = 2000;  // fake responder: well inside DCP 7.2's 11.5625 ms start limit
-  std::string device;          // empty: built-in pty + fake responder
+  long reply_delay_us = -1;    // -1: the responder's default (simulator 1000, fake 2000)
+  std::string device;          // empty: built-in pty + simulator or fake responder
   std::string check = "echo";  // echo | checksum | none
   std::string recorder_file;   // flight recorder dump at the end
   int cpu = -1;
@@ -42,16 +52,21 @@ struct Options {
 
 void usage() {
   std::puts(
-      "usage: cycle-bench [--cycles N] [--priority P] [--no-mlock] [--cpu N]\n"
-      "                   [--reply-delay-us US] [--device PATH --check echo|checksum|none]\n"
-      "                   [--recorder FILE]\n"
+      "usage: cycle-bench [--engine dcp|echo] [--no-travel] [--cycles N] [--priority P]\n"
+      "                   [--no-mlock] [--cpu N] [--reply-delay-us US]\n"
+      "                   [--device PATH [--check echo|checksum|none]] [--recorder FILE]\n"
+      "  --engine dcp        the real stack (default): DcpController against the drive\n"
+      "                      simulator (lib/sim) over a pty, travelling floor 0 <-> top\n"
+      "  --engine echo       the cycle alone: echo engine against the fake responder\n"
+      "  --no-travel         dcp: keep the car parked (link traffic only)\n"
       "  --cycles N          cycles to run (default 20000 = 5 minutes at 15 ms)\n"
       "  --priority P        SCHED_FIFO priority of both loops, 0 = normal (default 80)\n"
-      "  --device PATH       talk to a responder on PATH (e.g. a drive simulator's pty) instead\n"
-      "                      of the built-in fake responder\n"
-      "  --check MODE        how replies are judged: echo (fake responder), checksum (DCP XOR\n"
-      "                      rule, for a simulator), none\n"
-      "  --recorder FILE     write the flight recorder (last 30 s) to FILE at the end");
+      "  --reply-delay-us US responder's reply delay (simulator 1000, fake 2000 by default)\n"
+      "  --device PATH       talk to a responder on PATH (e.g. dcp-drive-sim on a pty) instead\n"
+      "                      of the built-in one; dcp: no travels (no encoder to read)\n"
+      "  --check MODE        echo engine: how replies are judged: echo (fake responder),\n"
+      "                      checksum (DCP XOR rule, for a simulator), none\n"
+      "  --recorder FILE     write the flight recorder (last 30 s, DCP decoded) to FILE");
 }
 
 template <class T>
@@ -67,7 +82,13 @@ std::optional<Options> parse(int argc, char** argv) {
     const bool has_value = i + 1 < argc;
     const std::string_view value = has_value ? argv[i + 1] : "";
     bool ok = true;
-    if (arg == "--cycles" && has_value) {
+    if (arg == "--engine" && has_value) {
+      o.engine = value;
+      ok = o.engine == "dcp" || o.engine == "echo";
+      ++i;
+    } else if (arg == "--no-travel") {
+      o.travel = false;
+    } else if (arg == "--cycles" && has_value) {
       ok = parse_number(value, o.cycles) && o.cycles > 0;
       ++i;
     } else if (arg == "--priority" && has_value) {
@@ -77,7 +98,8 @@ std::optional<Options> parse(int argc, char** argv) {
       ok = parse_number(value, o.cpu);
       ++i;
     } else if (arg == "--reply-delay-us" && has_value) {
-      ok = parse_number(value, o.reply_delay_us) && o.reply_delay_us >= 0;
+      ok = parse_number(value, o.reply_delay_us) && o.reply_delay_us >= 0 &&
+           o.reply_delay_us < 11000;  // DCP 7.2: the reply must start by 11.5625 ms
       ++i;
     } else if (arg == "--device" && has_value) {
       o.device = value;
@@ -115,13 +137,12 @@ std::int64_t process_cpu_ns() noexcept {
   return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
 }
 
-// The frames of the fake responder's echo protocol (valid DCP checksums), with a selectable
-// reply check so a DCP drive simulator can stand in for the fake responder.
-class BenchEngine : public rt::CycleEngine {
+// The fake responder's echo protocol (valid DCP checksums), with a selectable reply check so
+// a DCP drive simulator on --device can stand in for the fake responder.
+class CheckedEcho : public rt::CycleEngine {
  public:
-  explicit BenchEngine(std::string_view check) : check_(check) {}
+  explicit CheckedEcho(std::string_view check) : check_(check) {}
   std::span<const std::uint8_t> frame_to_send(MonoTime now) noexcept override {
-    if (first_cpu_ns_ < 0) first_cpu_ns_ = thread_cpu_ns();
     return echo_.frame_to_send(now);
   }
   std::size_t reply_size() const noexcept override { return testing::kEchoFrameSize; }
@@ -133,18 +154,118 @@ class BenchEngine : public rt::CycleEngine {
   }
   void on_no_reply(MonoTime now) noexcept override { echo_.on_no_reply(now); }
   void on_port_lost(MonoTime now) noexcept override { echo_.on_port_lost(now); }
-  void after_cycle(MonoTime /*now*/) noexcept override {
-    cpu_ns_.store(thread_cpu_ns() - (first_cpu_ns_ < 0 ? thread_cpu_ns() : first_cpu_ns_),
-                  std::memory_order_relaxed);
+
+ private:
+  std::string_view check_;
+  testing::EchoEngine echo_;
+};
+
+// Forwards to the engine under test and measures the cycle thread's CPU time.
+class TimedEngine final : public rt::CycleEngine {
+ public:
+  explicit TimedEngine(rt::CycleEngine& inner) : inner_(inner) {}
+  std::span<const std::uint8_t> frame_to_send(MonoTime now) noexcept override {
+    if (first_cpu_ns_ < 0) first_cpu_ns_ = thread_cpu_ns();
+    return inner_.frame_to_send(now);
+  }
+  std::size_t reply_size() const noexcept override { return inner_.reply_size(); }
+  bool on_reply(std::span<const std::uint8_t> reply, MonoTime now) noexcept override {
+    return inner_.on_reply(reply, now);
+  }
+  void on_no_reply(MonoTime now) noexcept override { inner_.on_no_reply(now); }
+  void on_port_lost(MonoTime now) noexcept override { inner_.on_port_lost(now); }
+  void on_port_ready(MonoTime now) noexcept override { inner_.on_port_ready(now); }
+  void after_cycle(MonoTime now) noexcept override {
+    inner_.after_cycle(now);
+    if (first_cpu_ns_ >= 0) {
+      cpu_ns_.store(thread_cpu_ns() - first_cpu_ns_, std::memory_order_relaxed);
+    }
   }
   /// CPU time the cycle thread used since its first frame.
   std::int64_t cpu_ns() const noexcept { return cpu_ns_.load(std::memory_order_relaxed); }
 
  private:
-  std::string_view check_;
-  testing::EchoEngine echo_;
+  rt::CycleEngine& inner_;
   std::int64_t first_cpu_ns_ = -1;
   std::atomic<std::int64_t> cpu_ns_{0};
+};
+
+// The simulated encoder, read lock-free by the cycle (DCP4 travels need the position).
+class SimEncoder final : public liftd::control::PositionSource {
+ public:
+  explicit SimEncoder(const liftd::sim::SerialDriveRunner* runner) : runner_(runner) {}
+  std::optional<std::int64_t> position_mm(MonoTime) const noexcept override {
+    if (runner_ == nullptr) return std::nullopt;
+    return std::llround(runner_->position_mm());
+  }
+
+ private:
+  const liftd::sim::SerialDriveRunner* runner_;
+};
+
+// The installation of the benchmark: six floors 3 m apart, DCP4, extended I9 reply.
+liftd::control::ControllerConfig bench_controller_config() {
+  liftd::control::ControllerConfig c;
+  c.floors_mm = {0, 3000, 6000, 9000, 12000, 15000};
+  c.link.extended_position = true;
+  return c;
+}
+
+// The io thread's side of the DCP stack during the run: inputs, travels, events.
+struct DcpDriver {
+  liftd::control::DcpController& controller;
+  bool travel = true;
+  MonoTime last_inputs{};
+  std::uint32_t tag = 0;
+  std::size_t next_floor = 5;
+  bool travel_pending = false;
+  std::uint64_t travels_started = 0;
+  std::uint64_t travels_finished = 0;
+  std::uint64_t travels_aborted = 0;
+  std::uint64_t refused = 0;
+  std::uint64_t link_faults = 0;
+
+  void pump() {
+    namespace control = liftd::control;
+    const MonoTime now = mono_now();
+    if (now - last_inputs >= std::chrono::milliseconds(100)) {  // config inputs.timeout_ms 500
+      liftd::lift::Inputs in;
+      in.valid = in.safety_chain_closed = in.doors_closed = in.doors_locked = true;
+      controller.post(control::Command{0, control::InputsCommand{in}});
+      last_inputs = now;
+    }
+    control::ControllerEvent e;
+    while (controller.poll_event(e)) {
+      if (e.kind == control::ControllerEvent::Kind::Travel) {
+        if (e.travel.type == liftd::travel::Event::Type::Finished) ++travels_finished;
+        if (e.travel.type == liftd::travel::Event::Type::Aborted) ++travels_aborted;
+      } else if (e.kind == control::ControllerEvent::Kind::FaultRaised &&
+                 e.fault == control::FaultCode::LinkFault) {
+        ++link_faults;
+      }
+    }
+    control::CommandReply r;
+    while (controller.poll_reply(r)) {
+      if (r.tag != tag) continue;
+      travel_pending = false;
+      if (r.code == control::ReplyCode::Ok) {
+        ++travels_started;
+        next_floor = next_floor == 0 ? 5 : 0;
+      } else {
+        ++refused;
+      }
+    }
+    if (!travel || travel_pending) return;
+    const control::ControllerSnapshot s = controller.snapshot();
+    const bool idle = s.link == liftd::dcp::LinkState::Up &&
+                      s.travel_kind == liftd::travel::TravelKind::None && s.status_byte &&
+                      (*s.status_byte & liftd::dcp::status_bit::kTravelActive) == 0 &&
+                      (*s.status_byte & liftd::dcp::status_bit::kReady) != 0;
+    if (!idle) return;
+    controller.post(control::Command{
+        ++tag, control::TravelCommand{next_floor, liftd::dcp::Speed::V4, std::nullopt, false}});
+    travel_pending = true;
+  }
 };
 
 struct Reference {
@@ -184,34 +305,73 @@ int main(int argc, char** argv) {
   const std::optional<Options> parsed = parse(argc, argv);
   if (!parsed) return 2;
   const Options& o = *parsed;
+  const bool dcp = o.engine == "dcp";
 
   std::unique_ptr<liftd::io::PtyPair> pty;
   std::unique_ptr<testing::FakeResponder> responder;
+  std::unique_ptr<liftd::sim::SerialDriveRunner> drive;
   rt::CycleConfig config;
   config.thread.priority = o.priority;
   config.thread.lock_memory = o.lock_memory;
   config.thread.cpu = o.cpu;
+  std::string responder_text;
   if (o.device.empty()) {
-    auto created = liftd::io::PtyPair::create();
+    liftd::io::SerialSettings raw;
+    raw.rs485 = liftd::io::Rs485Mode::Off;  // a pty has no RS485 mode
+    auto created = liftd::io::PtyPair::create(raw);
     if (!created.ok()) {
       std::fprintf(stderr, "cycle-bench: %s\n", created.error().message().c_str());
       return 1;
     }
     pty = std::make_unique<liftd::io::PtyPair>(std::move(created).value());
-    // The responder runs just below the cycle, like a drive that always answers in time.
-    responder = std::make_unique<testing::FakeResponder>(
-        pty->master_fd(), std::chrono::microseconds(o.reply_delay_us),
-        o.priority > 1 ? o.priority - 1 : 0);
-    if (responder->start() != 0) {
-      std::fprintf(stderr, "cycle-bench: cannot start the fake responder\n");
-      return 1;
+    if (dcp) {
+      liftd::sim::DriveConfig drive_config;  // DCP4, the simulator's default installation
+      if (o.reply_delay_us >= 0)
+        drive_config.reply_delay = std::chrono::microseconds(o.reply_delay_us);
+      liftd::sim::RunnerOptions runner_options;
+      runner_options.fd = ::dup(pty->master_fd());
+      runner_options.quiet = true;
+      runner_options.reconnect = false;
+      drive = std::make_unique<liftd::sim::SerialDriveRunner>(drive_config, runner_options);
+      if (!drive->start()) {
+        std::fprintf(stderr, "cycle-bench: cannot start the drive simulator: %s\n",
+                     drive->last_error().c_str());
+        return 1;
+      }
+      responder_text = "drive simulator (lib/sim, normal priority) over a pty, reply after " +
+                       std::to_string(drive_config.reply_delay.count()) + " us";
+    } else {
+      const long delay_us = o.reply_delay_us >= 0 ? o.reply_delay_us : 2000;
+      // The responder runs just below the cycle, like a drive that always answers in time.
+      responder = std::make_unique<testing::FakeResponder>(pty->master_fd(),
+                                                           std::chrono::microseconds(delay_us),
+                                                           o.priority > 1 ? o.priority - 1 : 0);
+      if (responder->start() != 0) {
+        std::fprintf(stderr, "cycle-bench: cannot start the fake responder\n");
+        return 1;
+      }
+      responder_text = "built-in fake over a pty, reply after " + std::to_string(delay_us) + " us";
     }
     config.device_path = pty->slave_path();
   } else {
     config.device_path = o.device;
+    responder_text = "external on " + o.device + (dcp ? "" : ", check " + o.check);
   }
 
-  BenchEngine engine(o.check);
+  SimEncoder encoder(drive.get());
+  std::unique_ptr<liftd::control::DcpController> controller;
+  std::unique_ptr<CheckedEcho> echo;
+  std::optional<DcpDriver> driver;
+  if (dcp) {
+    controller =
+        std::make_unique<liftd::control::DcpController>(bench_controller_config(), encoder);
+    driver.emplace(DcpDriver{*controller});
+    driver->travel = o.travel && drive != nullptr;
+  } else {
+    echo = std::make_unique<CheckedEcho>(o.check);
+  }
+  TimedEngine engine(dcp ? static_cast<rt::CycleEngine&>(*controller)
+                         : static_cast<rt::CycleEngine&>(*echo));
   rt::CycleRunner runner(config, engine);
   Reference ref;
   rt::RtThread ref_thread;
@@ -230,21 +390,26 @@ int main(int argc, char** argv) {
   }
 
   std::printf(
-      "cycle-bench: %llu cycles of %.1f ms on %s, liftd cycle and reference loop in "
+      "cycle-bench: %llu cycles of %.1f ms on %s, %s, liftd cycle and reference loop in "
       "parallel\n",
       static_cast<unsigned long long>(o.cycles),
-      std::chrono::duration<double, std::milli>(config.period).count(), config.device_path.c_str());
+      std::chrono::duration<double, std::milli>(config.period).count(), config.device_path.c_str(),
+      dcp ? (driver->travel ? "DcpController, travelling" : "DcpController, parked")
+          : "echo engine");
   std::fflush(stdout);
   rt::CycleEvent event;
   while (runner.stats().counters.cycles + runner.stats().counters.skipped_cycles < o.cycles ||
          ref.done.load() < o.cycles) {
     while (runner.poll_event(event)) std::printf("event: %s\n", rt::describe(event).c_str());
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    if (driver) driver->pump();
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   runner.stop();
   ref_thread.join();
   const std::int64_t process_cpu = process_cpu_ns() - process_cpu_start;
+  if (driver) driver->pump();
   if (responder) responder->stop();
+  if (drive) drive->stop();
   while (runner.poll_event(event)) std::printf("event: %s\n", rt::describe(event).c_str());
 
   const rt::CycleStats s = runner.stats();
@@ -254,11 +419,7 @@ int main(int argc, char** argv) {
               runner.thread_status().realtime ? "SCHED_FIFO" : "normal (SCHED_FIFO refused)",
               o.priority, runner.thread_status().memory_locked ? "yes" : "no");
   if (!st.realtime && o.priority > 0) std::printf("reference loop: %s\n", st.describe().c_str());
-  std::printf("responder: %s\n", o.device.empty()
-                                     ? ("built-in fake over a pty, reply after " +
-                                        std::to_string(o.reply_delay_us) + " us")
-                                           .c_str()
-                                     : ("external on " + o.device + ", check " + o.check).c_str());
+  std::printf("responder: %s\n", responder_text.c_str());
   std::printf("\n%-26s %9s %9s %9s %9s %9s\n", "microseconds", "p50", "p99", "p99.9", "max",
               "mean");
   std::printf("wake-up lateness\n");
@@ -296,8 +457,30 @@ int main(int argc, char** argv) {
       static_cast<unsigned long long>(c.skipped_cycles),
       static_cast<unsigned long long>(c.port_losses),
       static_cast<unsigned long long>(c.stray_bytes));
+  if (driver) {
+    const liftd::control::ControllerSnapshot snap = controller->snapshot();
+    const liftd::dcp::LinkCounters& lc = snap.link_counters;
+    std::printf(
+        "dcp: link %s; bad checksum %llu, missing %llu, S7 %llu, B7 sent %llu, longest error run "
+        "%u, link faults %llu; travels started %llu, finished %llu, aborted %llu, refused %llu\n",
+        std::string(liftd::dcp::to_string(snap.link)).c_str(),
+        static_cast<unsigned long long>(lc.bad_checksum),
+        static_cast<unsigned long long>(lc.missing_replies),
+        static_cast<unsigned long long>(lc.s7_seen), static_cast<unsigned long long>(lc.b7_sent),
+        lc.longest_error_run, static_cast<unsigned long long>(lc.link_faults),
+        static_cast<unsigned long long>(driver->travels_started),
+        static_cast<unsigned long long>(driver->travels_finished),
+        static_cast<unsigned long long>(driver->travels_aborted),
+        static_cast<unsigned long long>(driver->refused));
+  }
+  if (drive) {
+    const liftd::sim::RunnerStatus ds = drive->status();
+    std::printf("drive simulator: %s\n", liftd::sim::format_status(ds).c_str());
+  }
   if (!o.recorder_file.empty()) {
-    if (const int err = rt::write_text_file(o.recorder_file, runner.recorder().copy()); err != 0) {
+    const liftd::rt::FrameDecoder decoder = dcp ? liftd::dcp::trace_decoder() : rt::FrameDecoder{};
+    if (const int err = rt::write_text_file(o.recorder_file, runner.recorder().copy(), decoder);
+        err != 0) {
       std::fprintf(stderr, "cycle-bench: cannot write %s: %s\n", o.recorder_file.c_str(),
                    std::strerror(err));
       return 1;

@@ -1,0 +1,198 @@
+// No heap allocation on the cycle thread of the REAL engine (DcpController: master link, travel
+// sequencer, lift model, snapshots and queues) over a real pty, during a travel. The process's
+// malloc family and operator new are replaced for this test binary; calls are counted only on
+// a thread that switched counting on, and the cycle thread does that after a warm-up.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <new>
+
+#include "dcp/trace.hpp"
+#include "live_rig.hpp"
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define LIFTD_IT_ALLOC_HOOKS 0  // the sanitizers replace malloc themselves
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define LIFTD_IT_ALLOC_HOOKS 0
+#else
+#define LIFTD_IT_ALLOC_HOOKS 1
+#endif
+#else
+#define LIFTD_IT_ALLOC_HOOKS 1
+#endif
+
+namespace {
+
+thread_local bool t_count_here = false;
+std::atomic<std::uint64_t> g_heap_calls{0};
+
+[[maybe_unused]] inline void count_heap_call() noexcept {
+  if (t_count_here) g_heap_calls.fetch_add(1, std::memory_order_relaxed);
+}
+
+}  // namespace
+
+#if LIFTD_IT_ALLOC_HOOKS
+// glibc's own entry points, for the replacements to forward to.
+extern "C" {
+void* __libc_malloc(std::size_t size);
+void* __libc_calloc(std::size_t count, std::size_t size);
+void* __libc_realloc(void* ptr, std::size_t size);
+void* __libc_memalign(std::size_t alignment, std::size_t size);
+
+void* malloc(std::size_t size) {
+  count_heap_call();
+  return __libc_malloc(size);
+}
+void* calloc(std::size_t count, std::size_t size) {
+  count_heap_call();
+  return __libc_calloc(count, size);
+}
+void* realloc(void* ptr, std::size_t size) {
+  count_heap_call();
+  return __libc_realloc(ptr, size);
+}
+void* aligned_alloc(std::size_t alignment, std::size_t size) {
+  count_heap_call();
+  return __libc_memalign(alignment, size);
+}
+int posix_memalign(void** out, std::size_t alignment, std::size_t size) {
+  count_heap_call();
+  *out = __libc_memalign(alignment, size);
+  return *out != nullptr ? 0 : ENOMEM;
+}
+}  // extern "C"
+
+// operator new may not go through the malloc symbol (inlined or a static libstdc++): count it
+// on its own. The matching deletes call free(), which fits __libc_malloc.
+void* operator new(std::size_t size) {
+  count_heap_call();
+  if (void* p = __libc_malloc(size != 0 ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) {
+  return ::operator new(size);
+}
+#endif
+
+namespace liftd::integration {
+namespace {
+
+// Forwards every call to the real controller; on the first frame after arm() it switches
+// counting on for the cycle thread, and off again after disarm().
+class CountingEngine final : public rt::CycleEngine {
+ public:
+  explicit CountingEngine(control::DcpController& inner) : inner_(inner) {}
+  void arm() noexcept { wanted_.store(true); }
+  void disarm() noexcept { wanted_.store(false); }
+  /// Cycles fully run with counting on.
+  std::uint64_t counted_cycles() const noexcept { return counted_.load(); }
+
+  std::span<const std::uint8_t> frame_to_send(MonoTime now) noexcept override {
+    t_count_here = wanted_.load(std::memory_order_relaxed);
+    return inner_.frame_to_send(now);
+  }
+  std::size_t reply_size() const noexcept override { return inner_.reply_size(); }
+  bool on_reply(std::span<const std::uint8_t> reply, MonoTime now) noexcept override {
+    return inner_.on_reply(reply, now);
+  }
+  void on_no_reply(MonoTime now) noexcept override { inner_.on_no_reply(now); }
+  void on_port_lost(MonoTime now) noexcept override { inner_.on_port_lost(now); }
+  void on_port_ready(MonoTime now) noexcept override { inner_.on_port_ready(now); }
+  void after_cycle(MonoTime now) noexcept override {
+    inner_.after_cycle(now);
+    if (t_count_here) counted_.fetch_add(1, std::memory_order_relaxed);
+  }
+
+ private:
+  control::DcpController& inner_;
+  std::atomic<bool> wanted_{false};
+  std::atomic<std::uint64_t> counted_{0};
+};
+
+TEST(LiveAlloc, RealEngineCycleAllocatesNothingDuringATravel) {
+  if (!LIFTD_IT_ALLOC_HOOKS) GTEST_SKIP() << "allocation hooks are off under sanitizers";
+  // The hooks count: one allocation on a counting thread is seen.
+  void* (*volatile allocate)(std::size_t) = &std::malloc;  // volatile: kept by the optimiser
+  t_count_here = true;
+  void* a = ::operator new(32);
+  void* b = allocate(32);
+  t_count_here = false;
+  ::operator delete(a);
+  std::free(b);
+  ASSERT_GE(g_heap_calls.load(), 2U);
+  g_heap_calls = 0;
+
+  io::PtyPair pty = make_pty();
+  auto drive = serve(pty.master_fd(), control::testing::sim_config(dcp::Protocol::Dcp4));
+  std::unique_ptr<CountingEngine> counting;
+  LiveMaster m(pty.slave_path(), control::testing::default_config(dcp::Protocol::Dcp4),
+               [&](control::DcpController& c) -> rt::CycleEngine& {
+                 counting = std::make_unique<CountingEngine>(c);
+                 return *counting;
+               });
+  m.position.attach(drive.get());
+  ASSERT_EQ(m.start(), 0);
+  // Warm-up: handshake, first travel (first use of every path), a link command.
+  ASSERT_TRUE(m.wait_until([&] { return m.ready(); }, 5000ms));
+  m.run_for(300ms);
+  ASSERT_EQ(m.command(control::TravelCommand{1, dcp::Speed::V4, std::nullopt, false}).code,
+            control::ReplyCode::Ok);
+  ASSERT_TRUE(m.wait_until(
+      [&] { return m.travel_events(travel::Event::Type::Finished) >= 1 && m.idle(); }, 30000ms));
+  m.run_for(300ms);
+
+  // Counted: a few hundred cycles with a travel 1 -> 2, commands and inputs arriving.
+  counting->arm();
+  ASSERT_TRUE(m.wait_until([&] { return counting->counted_cycles() >= 20; }, 2000ms));
+  const auto second = m.command(control::TravelCommand{2, dcp::Speed::V4, std::nullopt, false});
+  ASSERT_EQ(second.code, control::ReplyCode::Ok) << second.detail;
+  ASSERT_TRUE(m.wait_until(
+      [&] { return m.travel_events(travel::Event::Type::Finished) >= 2 && m.idle(); }, 30000ms));
+  const auto link_cmd = m.command(control::LinkCommand{dcp::LoadRequest{55}});
+  EXPECT_EQ(link_cmd.code, control::ReplyCode::Ok) << link_cmd.detail;
+  m.run_for(300ms);
+  counting->disarm();
+  m.run_for(100ms);
+  const std::uint64_t cycles = counting->counted_cycles();
+  const std::uint64_t calls = g_heap_calls.load();
+  m.runner.stop();
+  m.position.attach(nullptr);
+
+  EXPECT_NEAR(drive->position_mm(), 6000.0, 2.0);
+  EXPECT_GE(cycles, 300U);
+  EXPECT_EQ(calls, 0U) << "heap calls on the cycle thread in " << cycles << " cycles";
+  std::printf("[ info     ] %llu cycles counted, %llu heap calls on the cycle thread\n",
+              static_cast<unsigned long long>(cycles), static_cast<unsigned long long>(calls));
+}
+
+TEST(LiveAlloc, TraceFormattingAllocatesNothing) {
+  if (!LIFTD_IT_ALLOC_HOOKS) GTEST_SKIP() << "allocation hooks are off under sanitizers";
+  // Legend: a master travel frame, a drive frame with extended status, a corrupt one, a short
+  // one: the decoder core writes into the caller's buffer only.
+  const std::array<std::array<std::uint8_t, 6>, 3> frames = {{
+      {0x17, 0x0B, 0xB7, 0x02, 0x1C, 0x17 ^ 0x0B ^ 0xB7 ^ 0x02 ^ 0x1C},
+      {0x11, 0x80, 0x07, 0x00, 0x00, 0x11 ^ 0x80 ^ 0x07},
+      {0x43, 0x05, 0x96, '0', '4', 0x00},
+  }};
+  dcp::TraceBuffer buffer;
+  std::size_t written = 0;
+  g_heap_calls = 0;
+  t_count_here = true;
+  for (const auto& f : frames) {
+    written += dcp::format_frame(f, dcp::FrameSide::Master, {}, buffer).size();
+    written += dcp::format_frame(f, dcp::FrameSide::Drive, {}, buffer).size();
+  }
+  written +=
+      dcp::format_frame(std::span(frames[0]).first(3), dcp::FrameSide::Drive, {}, buffer).size();
+  t_count_here = false;
+  EXPECT_GT(written, 100U);
+  EXPECT_EQ(g_heap_calls.load(), 0U);
+}
+
+}  // namespace
+}  // namespace liftd::integration

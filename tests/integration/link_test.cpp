@@ -1,0 +1,410 @@
+// The real DCP link over pseudo-terminals: CycleRunner + DcpController against the drive
+// simulator, clean and with a fault-injecting relay in between (DCP chapters 6 and 7).
+// Real time is unavoidable here: the assertions are on counts and protocol behaviour, with
+// margins for a shared, noisy machine.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+#include "dcp/trace.hpp"
+#include "live_rig.hpp"
+#include "rt/fault_proxy.hpp"
+
+namespace liftd::integration {
+namespace {
+
+using control::CommandReply;
+using control::FaultCode;
+using control::ReplyCode;
+using control::TravelCommand;
+using rt::testing::Fault;
+using rt::testing::FaultProxy;
+namespace record_flag = rt::record_flag;
+
+constexpr auto kCycle = 15ms;  // DCP 7.2
+
+sim::DriveConfig drive_config() {
+  return control::testing::sim_config(dcp::Protocol::Dcp4);
+}
+
+bool checksum_ok(const rt::FrameRecord& r) {
+  return r.length == dcp::kFrameSize &&
+         dcp::checksum(std::span<const std::uint8_t, 5>(r.bytes.data(), 5)) == r.bytes[5];
+}
+
+// On failure, the last `n` recorded frames, decoded, help to see what the link did.
+std::string tail_of_trace(const rt::CycleRunner& runner, std::size_t n = 40) {
+  const auto records = runner.recorder().copy();
+  const std::size_t from = records.size() > n ? records.size() - n : 0;
+  std::ostringstream out;
+  rt::write_text(out, std::span(records).subspan(from), dcp::trace_decoder());
+  return out.str();
+}
+
+TEST(LiveLink, HandshakeThousandsOfCleanCyclesAndADcp4TravelLandsWithin2mm) {
+  io::PtyPair pty = make_pty();
+  auto drive = serve(pty.master_fd(), drive_config());
+  LiveMaster m(pty.slave_path());
+  m.position.attach(drive.get());
+  ASSERT_EQ(m.start(), 0);
+
+  // The handshake (STX ETX, I0, I1, I3) completes within a few hundred cycles.
+  ASSERT_TRUE(m.wait_until([&] { return m.ready(); }, 5000ms)) << tail_of_trace(m.runner);
+  const auto up = m.controller.snapshot();
+  EXPECT_EQ(up.protocol, dcp::Protocol::Dcp4);
+  ASSERT_TRUE(up.drive_info.has_value());
+  EXPECT_TRUE(drive->status().initialised);
+
+  // DCP4 travel over the pty, floor 0 -> 3 (9000 mm) at V4.
+  m.run_for(300ms);
+  const CommandReply r = m.command(TravelCommand{3, dcp::Speed::V4, std::nullopt, false});
+  ASSERT_EQ(r.code, ReplyCode::Ok) << r.detail;
+  ASSERT_TRUE(m.wait_until(
+      [&] { return m.travel_events(travel::Event::Type::Finished) >= 1 && m.idle(); }, 40000ms))
+      << tail_of_trace(m.runner);
+  EXPECT_NEAR(drive->position_mm(), 9000.0, 2.0);
+  EXPECT_EQ(m.controller.snapshot().floor, 3U);
+  EXPECT_EQ(m.travel_events(travel::Event::Type::Aborted), 0U);
+
+  // Keep going to a few thousand cycles.
+  constexpr std::uint64_t kCycles = 2000;
+  ASSERT_TRUE(m.wait_until([&] { return m.runner.stats().counters.cycles >= kCycles; },
+                           std::chrono::milliseconds(kCycles * 15 * 3)));
+  m.runner.stop();
+  m.pump();
+  drive->stop();
+
+  const rt::CycleCounters c = m.runner.stats().counters;
+  const dcp::LinkCounters lc = m.controller.snapshot().link_counters;
+  // Nothing is ever corrupted on a pty and no cycle is skipped.
+  EXPECT_EQ(c.bad_replies, 0U);
+  EXPECT_EQ(lc.bad_checksum, 0U);
+  EXPECT_EQ(lc.s7_seen, 0U);
+  EXPECT_EQ(lc.b7_sent, 0U);
+  EXPECT_EQ(lc.decode_errors, 0U);
+  EXPECT_EQ(lc.data_word_errors, 0U);
+  EXPECT_EQ(lc.channel_errors, 0U);
+  EXPECT_EQ(lc.link_faults, 0U);
+  EXPECT_EQ(c.port_losses, 0U);
+  EXPECT_EQ(drive->status().sim.bad_frames, 0U);
+  // Zero missing replies is the expectation; a stalled shared machine can delay a reply past
+  // 13.625 ms now and then: at most 1 %, and never 10 in a row (the link never faulted).
+  EXPECT_LE(c.missing_replies, c.cycles / 100) << "missing " << c.missing_replies;
+  EXPECT_GE(c.frames_sent + c.skipped_cycles + 2, c.cycles);
+  EXPECT_EQ(m.link_events_to(dcp::LinkState::Fault), 0U);
+
+  // Frame spacing: DCP 7.2 one frame every 15 ms. Absolute-time wake-ups keep the mean exact
+  // even when single wake-ups are late.
+  std::vector<MonoTime> sends;
+  for (const auto& rec : m.runner.recorder().copy()) {
+    if (rec.direction == rt::Direction::Tx) sends.push_back(rec.time);
+  }
+  ASSERT_GE(sends.size(), 1000U);
+  const double mean_ms =
+      std::chrono::duration<double, std::milli>(sends.back() - sends.front()).count() /
+      static_cast<double>(sends.size() - 1);
+  EXPECT_NEAR(mean_ms, 15.0, 0.2);
+  std::size_t near_period = 0;
+  for (std::size_t i = 1; i < sends.size(); ++i) {
+    const auto gap = sends[i] - sends[i - 1];
+    near_period += gap > 12ms && gap < 18ms ? 1U : 0U;
+  }
+  EXPECT_GE(near_period, (sends.size() - 1) * 95 / 100);
+  std::printf(
+      "[ info     ] %llu cycles, %llu missing, mean spacing %.3f ms, %zu of %zu gaps 12..18 ms\n",
+      static_cast<unsigned long long>(c.cycles), static_cast<unsigned long long>(c.missing_replies),
+      mean_ms, near_period, sends.size() - 1);
+}
+
+// The master's pty (A) relays through the fault proxy to the simulator's pty (B).
+struct ProxiedLink {
+  explicit ProxiedLink(std::function<Fault(std::uint64_t)> plan)
+      : side_a(make_pty()), side_b(make_pty()) {
+    io::SerialSettings raw;
+    raw.rs485 = io::Rs485Mode::Off;
+    auto opened = io::SerialPort::open(side_b.slave_path(), raw);
+    if (!opened.ok()) throw std::runtime_error(opened.error().message());
+    b_slave = std::move(opened).value();
+    drive = serve(side_b.master_fd(), drive_config());
+    proxy = std::make_unique<FaultProxy>(side_a.master_fd(), b_slave.fd(), std::move(plan));
+    if (proxy->start() != 0) throw std::runtime_error("proxy did not start");
+  }
+  ~ProxiedLink() {
+    proxy->stop();
+    drive->stop();
+  }
+  io::PtyPair side_a;  // the master's port: the cycle on the slave, the proxy on the master
+  io::PtyPair side_b;  // the drive's port: the simulator on the master, the proxy on the slave
+  io::SerialPort b_slave;
+  std::unique_ptr<sim::SerialDriveRunner> drive;
+  std::unique_ptr<FaultProxy> proxy;
+};
+
+TEST(LiveLink, DamagedRepliesAreCountedAsChapter6Says) {
+  // Legend: from request `start` on, every 10th reply (offset 5) gets the next fault of this
+  // list. What the master must do with each (DCP 6.1, 7.2):
+  //   FlipBit    -> reply ignored for its checksum, B7 in the next frame
+  //   DropByte   -> missing (5 of 6 bytes in time)
+  //   Truncate   -> missing (3 of 6 bytes)
+  //   ExtraBytes -> good reply; the 2 stray bytes are flushed before the next frame
+  //   Stall      -> 2 missing, then the held reply arrives late and is read as that cycle's
+  //   Silence    -> missing, nothing partial
+  // None of these is 10 in a row: the link must never fault.
+  const std::array<Fault, 6> kPlan = {Fault::FlipBit,    Fault::DropByte, Fault::Truncate,
+                                      Fault::ExtraBytes, Fault::Stall,    Fault::Silence};
+  std::atomic<std::uint64_t> start{std::numeric_limits<std::uint64_t>::max()};
+  ProxiedLink link([&](std::uint64_t i) {
+    const std::uint64_t s = start.load();
+    if (i < s) return Fault::None;
+    const std::uint64_t j = i - s;
+    return j % 10 == 5 ? kPlan[(j / 10) % kPlan.size()] : Fault::None;
+  });
+  LiveMaster m(link.side_a.slave_path());
+  m.position.attach(link.drive.get());
+  ASSERT_EQ(m.start(), 0);
+  ASSERT_TRUE(m.wait_until([&] { return m.ready(); }, 5000ms)) << tail_of_trace(m.runner);
+  m.run_for(300ms);
+
+  const MonoTime faults_from = mono_now();
+  const auto before = m.controller.snapshot().link_counters;
+  start = link.proxy->requests() + 1;
+  ASSERT_TRUE(m.wait_until([&] { return link.proxy->requests() >= start.load() + 600; }, 30000ms));
+  link.proxy->heal();
+  m.run_for(500ms);
+  const auto after = m.controller.snapshot().link_counters;
+  const rt::CycleCounters c = m.runner.stats().counters;
+  const auto n = [&](Fault f) { return link.proxy->applied(f); };
+  for (Fault f : kPlan) EXPECT_GE(n(f), 9U) << "fault " << static_cast<int>(f);
+
+  // Isolated faults never trip the supervision.
+  EXPECT_EQ(after.link_faults, 0U);
+  EXPECT_EQ(m.link_events_to(dcp::LinkState::Fault), 0U);
+  EXPECT_TRUE(m.link_up());
+  EXPECT_LT(after.longest_error_run, 10U);
+  // Bad checksums are the flipped bits. Margin of one each way: the machine may push a
+  // flipped reply past its deadline, or tear a stalled reply's flush across two cycles.
+  const auto bad = after.bad_checksum - before.bad_checksum;
+  EXPECT_GE(bad + 1, n(Fault::FlipBit));
+  EXPECT_LE(bad, n(Fault::FlipBit) + 1);
+  EXPECT_GE(after.b7_sent - before.b7_sent, bad);
+  // Missing: dropped, truncated, silenced once each, stalled twice.
+  const auto missing = after.missing_replies - before.missing_replies;
+  const auto expected_missing =
+      n(Fault::DropByte) + n(Fault::Truncate) + n(Fault::Silence) + 2 * n(Fault::Stall);
+  EXPECT_GE(missing + 2, expected_missing);
+  EXPECT_LE(missing, expected_missing + 6);
+  EXPECT_GE(c.partial_replies + 2, n(Fault::DropByte) + n(Fault::Truncate));
+  EXPECT_GE(c.stray_bytes + 4, 2 * n(Fault::ExtraBytes));
+
+  // From the flight recorder: every reply with a bad checksum is followed by a frame with B7
+  // (DCP 6.1 a), and frames after a good reply do not carry it.
+  const auto records = m.runner.recorder().copy();
+  std::size_t bad_seen = 0;
+  std::size_t b7_after_bad = 0;
+  std::size_t b7_without_cause = 0;
+  for (std::size_t i = 0; i + 1 < records.size(); ++i) {
+    const auto& rx = records[i];
+    const auto& tx = records[i + 1];
+    if (rx.time < faults_from || rx.direction != rt::Direction::Rx ||
+        tx.direction != rt::Direction::Tx || rx.length != dcp::kFrameSize) {
+      continue;
+    }
+    const bool b7 = (tx.bytes[0] & dcp::command_bit::kReplyChecksumError) != 0;
+    if (!checksum_ok(rx)) {
+      ++bad_seen;
+      b7_after_bad += b7 ? 1U : 0U;
+    } else if ((rx.flags & record_flag::kReply) != 0 && (rx.flags & record_flag::kBad) == 0) {
+      b7_without_cause += b7 ? 1U : 0U;
+    }
+  }
+  EXPECT_EQ(bad_seen, bad);
+  EXPECT_EQ(b7_after_bad, bad_seen);
+  EXPECT_EQ(b7_without_cause, 0U);
+
+  // S7: the drive got our frame corrupted and ignored it; we repeat our last channel bytes
+  // (DCP 6.1 b). The simulator flags every 4th reply while I-messages (I8) run.
+  const MonoTime s7_from = mono_now();
+  link.drive->set_fault_rate(sim::ReplyFault::MessageError, 0.25);
+  for (int k = 0; k < 5; ++k) {
+    const CommandReply lr =
+        m.command(control::LinkCommand{dcp::LoadRequest{static_cast<std::uint16_t>(40 + k)}});
+    EXPECT_EQ(lr.code, ReplyCode::Ok) << lr.detail;
+  }
+  link.drive->clear_reply_faults();
+  m.run_for(200ms);
+  const auto s7 = m.controller.snapshot().link_counters;
+  EXPECT_GE(s7.s7_seen - after.s7_seen, 3U);
+  const auto trace = m.runner.recorder().copy();
+  std::size_t s7_replies = 0;
+  std::size_t repeated = 0;
+  std::size_t repeated_busy = 0;  // repeats of channel bytes that were not idle
+  for (std::size_t i = 1; i + 1 < trace.size(); ++i) {
+    const auto& sent = trace[i - 1];
+    const auto& rx = trace[i];
+    const auto& next = trace[i + 1];
+    if (rx.time < s7_from || sent.direction != rt::Direction::Tx ||
+        rx.direction != rt::Direction::Rx || next.direction != rt::Direction::Tx ||
+        !checksum_ok(rx) || (rx.bytes[0] & dcp::status_bit::kMessageChecksumError) == 0) {
+      continue;
+    }
+    ++s7_replies;
+    const bool same = sent.bytes[3] == next.bytes[3] && sent.bytes[4] == next.bytes[4];
+    repeated += same ? 1U : 0U;
+    repeated_busy += same && (sent.bytes[3] != 0 || sent.bytes[4] != 0) ? 1U : 0U;
+  }
+  EXPECT_GE(s7_replies, 3U);
+  EXPECT_EQ(repeated, s7_replies) << tail_of_trace(m.runner, 200);
+  EXPECT_GE(repeated_busy, 1U);
+  std::printf(
+      "[ info     ] faults per kind >= %llu; bad checksums %llu (B7 after %zu); missing %llu "
+      "(expected %llu); S7 replies %zu, channel repeated %zu (%zu busy)\n",
+      static_cast<unsigned long long>(n(Fault::Silence)), static_cast<unsigned long long>(bad),
+      b7_after_bad, static_cast<unsigned long long>(missing),
+      static_cast<unsigned long long>(expected_missing), s7_replies, repeated, repeated_busy);
+}
+
+TEST(LiveLink, TenLostRepliesFaultTheLinkStopTheTravelThenItRecoversAndReinitialises) {
+  std::atomic<bool> silent{false};
+  ProxiedLink link([&](std::uint64_t) { return silent.load() ? Fault::Silence : Fault::None; });
+  LiveMaster m(link.side_a.slave_path());
+  m.position.attach(link.drive.get());
+  ASSERT_EQ(m.start(), 0);
+  ASSERT_TRUE(m.wait_until([&] { return m.ready(); }, 5000ms)) << tail_of_trace(m.runner);
+  m.run_for(300ms);
+
+  // A long travel; once the car runs, the drive's replies stop reaching us.
+  const CommandReply r = m.command(TravelCommand{5, dcp::Speed::V4, std::nullopt, false});
+  ASSERT_EQ(r.code, ReplyCode::Ok) << r.detail;
+  ASSERT_TRUE(m.wait_until([&] { return link.drive->velocity_mps() > 0.5; }, 10000ms))
+      << tail_of_trace(m.runner);
+  const auto before = m.controller.snapshot().link_counters;
+  silent = true;
+  ASSERT_TRUE(
+      m.wait_until([&] { return m.controller.snapshot().link == dcp::LinkState::Fault; }, 2000ms))
+      << tail_of_trace(m.runner);
+  const auto faulted = m.controller.snapshot();
+  EXPECT_TRUE(faulted.faults[static_cast<std::size_t>(FaultCode::LinkFault)]);
+  // DCP 7.3: ten in a row, not fewer.
+  EXPECT_GE(faulted.link_counters.missing_replies - before.missing_replies, 10U);
+  EXPECT_EQ(faulted.link_counters.link_faults, before.link_faults + 1);
+  MonoTime fault_at{};
+  for (const auto& e : m.events) {
+    if (e.kind == control::ControllerEvent::Kind::Link &&
+        e.link.kind == dcp::LinkEventKind::StateChanged && e.link.state == dcp::LinkState::Fault) {
+      fault_at = e.link.at;
+    }
+  }
+  ASSERT_NE(fault_at, MonoTime{});
+  // The travel ends and B0 goes off while the link is down.
+  ASSERT_TRUE(
+      m.wait_until([&] { return m.travel_events(travel::Event::Type::Aborted) >= 1; }, 2000ms));
+  m.run_for(300ms);
+  const auto silent_trace = m.runner.recorder().copy();
+  std::size_t frames_in_fault = 0;
+  std::size_t b0_in_fault = 0;
+  for (const auto& rec : silent_trace) {
+    if (rec.direction != rt::Direction::Tx || rec.time <= fault_at + kCycle) continue;
+    ++frames_in_fault;
+    b0_in_fault += (rec.bytes[0] & dcp::command_bit::kDriveEnable) != 0 ? 1U : 0U;
+  }
+  EXPECT_GE(frames_in_fault, 15U);
+  EXPECT_EQ(b0_in_fault, 0U) << tail_of_trace(m.runner, 60);
+  // Without B0 the drive stops the car (DCP 3.1).
+  EXPECT_TRUE(m.wait_until([&] { return std::abs(link.drive->velocity_mps()) < 1e-6; }, 5000ms));
+
+  // Replies come back: 10 good while stationary end the fault, then the handshake runs again.
+  silent = false;
+  ASSERT_TRUE(m.wait_until([&] { return m.ready(); }, 10000ms)) << tail_of_trace(m.runner, 80);
+  EXPECT_FALSE(m.controller.snapshot().faults[static_cast<std::size_t>(FaultCode::LinkFault)]);
+  EXPECT_GE(m.link_events_to(dcp::LinkState::Init), 2U);  // at start and after the recovery
+  EXPECT_GE(count_i0(master_channel(m.runner.recorder().copy(), fault_at)), 1U);
+  std::vector<sim::SimEvent> sim_events;
+  link.drive->drain_events(sim_events);
+  std::size_t i0_at_drive_after = 0;
+  for (const auto& e : sim_events) {
+    i0_at_drive_after +=
+        e.kind == sim::SimEvent::Kind::ChannelMessage && e.value == '0' && e.at > fault_at ? 1U
+                                                                                           : 0U;
+  }
+  EXPECT_GE(i0_at_drive_after, 1U);
+
+  // And the lift works again: to the top floor, on the level.
+  m.run_for(300ms);
+  const std::size_t finished = m.travel_events(travel::Event::Type::Finished);
+  const CommandReply again = m.command(TravelCommand{5, dcp::Speed::V4, std::nullopt, false});
+  ASSERT_EQ(again.code, ReplyCode::Ok) << again.detail;
+  ASSERT_TRUE(m.wait_until(
+      [&] { return m.travel_events(travel::Event::Type::Finished) > finished && m.idle(); },
+      40000ms))
+      << tail_of_trace(m.runner, 80);
+  EXPECT_NEAR(link.drive->position_mm(), 15000.0, 2.0);
+}
+
+TEST(LiveLink, DeviceLossAndReappearanceRecoverWithoutRestart) {
+  DeviceAlias alias;
+  auto first = std::make_unique<io::PtyPair>(make_pty());
+  alias.point_to(first->slave_path());
+  auto drive = serve(first->master_fd(), drive_config());
+  std::unique_ptr<sim::SerialDriveRunner> drive2;  // outlives the master reading its encoder
+  LiveMaster m(alias.path());
+  m.position.attach(drive.get());
+  ASSERT_EQ(m.start(), 0);
+  ASSERT_TRUE(m.wait_until([&] { return m.ready(); }, 5000ms)) << tail_of_trace(m.runner);
+
+  // Unplug: the far end hangs up and the node disappears.
+  m.position.attach(nullptr);
+  drive->stop();
+  drive.reset();
+  first->close();
+  alias.remove();
+  const MonoTime lost_at = mono_now();
+  ASSERT_TRUE(m.wait_until([&] { return m.runner.stats().counters.port_losses == 1; }, 2000ms));
+  ASSERT_TRUE(
+      m.wait_until([&] { return m.controller.snapshot().link == dcp::LinkState::Fault; }, 1000ms));
+  EXPECT_TRUE(m.controller.snapshot().faults[static_cast<std::size_t>(FaultCode::LinkFault)]);
+  EXPECT_FALSE(m.runner.port_ready());
+  const std::uint64_t sent_at_loss = m.runner.stats().counters.frames_sent;
+  m.run_for(300ms);
+  EXPECT_EQ(m.runner.stats().counters.frames_sent, sent_at_loss);  // nothing sent meanwhile
+
+  // Replug: a new device (a fresh drive) under the same name; the same master carries on.
+  io::PtyPair second = make_pty();
+  drive2 = serve(second.master_fd(), drive_config());
+  m.position.attach(drive2.get());
+  alias.point_to(second.slave_path());
+  ASSERT_TRUE(m.wait_until([&] { return m.ready(); }, 10000ms)) << tail_of_trace(m.runner, 80);
+  EXPECT_TRUE(drive2->status().initialised);
+  EXPECT_GE(count_i0(master_channel(m.runner.recorder().copy(), lost_at)), 1U);
+  const rt::CycleCounters c = m.runner.stats().counters;
+  EXPECT_EQ(c.port_losses, 1U);
+  EXPECT_EQ(c.port_opens, 2U);
+  std::size_t opened = 0;
+  std::size_t lost = 0;
+  for (const auto& e : m.cycle_events) {
+    opened += e.kind == rt::CycleEventKind::PortOpened ? 1U : 0U;
+    lost += e.kind == rt::CycleEventKind::PortLost ? 1U : 0U;
+  }
+  EXPECT_EQ(opened, 2U);
+  EXPECT_EQ(lost, 1U);
+
+  // A travel on the new device lands.
+  m.run_for(300ms);
+  const CommandReply r = m.command(TravelCommand{1, dcp::Speed::V4, std::nullopt, false});
+  ASSERT_EQ(r.code, ReplyCode::Ok) << r.detail;
+  ASSERT_TRUE(m.wait_until(
+      [&] { return m.travel_events(travel::Event::Type::Finished) >= 1 && m.idle(); }, 30000ms))
+      << tail_of_trace(m.runner, 80);
+  EXPECT_NEAR(drive2->position_mm(), 3000.0, 2.0);
+  m.position.attach(nullptr);
+  m.runner.stop();
+}
+
+}  // namespace
+}  // namespace liftd::integration
