@@ -55,7 +55,8 @@ function(liftd_executable name)
 endfunction()
 
 # liftd_test(<name> SOURCES ... [DEPS ...] [LABELS ...]): a GoogleTest binary whose cases are
-# registered with CTest one by one.
+# registered with CTest one by one. gtest_discover_tests keeps only the FIRST label (it splits
+# the property list again when it writes the test file): give each binary one main label.
 function(liftd_test name)
   if(NOT LIFTD_TESTS)
     return()

@@ -31,11 +31,12 @@ AccessPolicy AccessPolicy::resolve(const std::string& read_group, const std::str
   if (!read_group.empty()) policy.read_gid = resolve_group(read_group);
   if (!control_group.empty()) policy.control_gid = resolve_group(control_group);
   if (!inputs_group.empty()) policy.inputs_gid = resolve_group(inputs_group);
+  policy.owner_uid = geteuid();
   return policy;
 }
 
 AccessSet AccessPolicy::access_for(uid_t uid, const std::vector<gid_t>& gids) const {
-  if (uid == 0) return AccessSet{true, true, true};
+  if (uid == 0 || (owner_uid && uid == *owner_uid)) return AccessSet{true, true, true};
   const auto member = [&gids](const std::optional<gid_t>& gid) {
     return gid && std::find(gids.begin(), gids.end(), *gid) != gids.end();
   };

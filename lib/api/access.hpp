@@ -16,12 +16,15 @@ struct AccessPolicy {
   std::optional<gid_t> read_gid;     ///< may run read commands
   std::optional<gid_t> control_gid;  ///< may run control (and read) commands
   std::optional<gid_t> inputs_gid;   ///< may send inputs (and run read commands)
+  /// The daemon's own user: a peer running as it could stop the daemon anyway, so it gets every
+  /// right (this is also what lets `liftd --simulate` be driven by the user who started it).
+  std::optional<uid_t> owner_uid;
 
   /// Resolves group names; throws std::runtime_error naming the group if one does not exist.
   static AccessPolicy resolve(const std::string& read_group, const std::string& control_group,
                               const std::string& inputs_group);
   /// Access of a peer with user `uid` and groups `gids` (primary and supplementary). Root (uid 0)
-  /// may do everything.
+  /// and `owner_uid` may do everything.
   AccessSet access_for(uid_t uid, const std::vector<gid_t>& gids) const;
 };
 

@@ -131,11 +131,18 @@ nlohmann::json to_json(const StatusSnapshot& s) {
        {{"mode", s.drive_mode ? nlohmann::json(mode_name(*s.drive_mode)) : nlohmann::json(nullptr)},
         {"status", to_json(s.drive_status)},
         {"extended", s.extended ? to_json(*s.extended) : nlohmann::json(nullptr)}}},
-      {"car", {{"position_mm", or_null(s.position_mm)}, {"floor", or_null(s.floor)}}},
+      {"car",
+       {{"position_mm", or_null(s.position_mm)},
+        {"floor", or_null(s.floor)},
+        {"next_possible_stop", or_null(s.next_possible_stop)},
+        {"brake_open", s.brake_open},
+        {"contactors_on", s.contactors_on}}},
       {"travel",
        {{"state", s.travel_state},
         {"direction", or_null(s.travel_direction)},
-        {"target_floor", or_null(s.target_floor)}}},
+        {"target_floor", or_null(s.target_floor)},
+        {"calls", s.calls},
+        {"last_slip_mm", or_null(s.last_travel_slip_mm)}}},
       {"faults", std::move(faults)},
       {"rt",
        {{"realtime", s.rt.realtime},
@@ -152,11 +159,18 @@ nlohmann::json to_json(const StatsSnapshot& s) {
             {"checksum_errors", s.checksum_errors},
             {"missing_replies", s.missing_replies},
             {"repeats", s.repeats},
-            {"link_losses", s.link_losses}}},
+            {"link_losses", s.link_losses},
+            {"b7_sent", s.b7_sent},
+            {"channel_resets", s.channel_resets},
+            {"decode_errors", s.decode_errors},
+            {"request_timeouts", s.request_timeouts},
+            {"longest_error_run", s.longest_error_run}}},
           {"cycle",
            {{"cycles", s.cycles},
             {"overruns", s.overruns},
             {"max_lateness_us", s.max_lateness_us},
+            {"lateness_p99_us", s.lateness_p99_us},
+            {"reply_p99_us", s.reply_p99_us},
             {"max_work_us", s.max_work_us}}}};
 }
 
@@ -184,6 +198,34 @@ nlohmann::json to_json(const Inputs& inputs) {
   for (const auto& flag : kInputFlags) out[std::string(flag.name)] = inputs.*(flag.member);
   out["position_mm"] = or_null(inputs.position_mm);
   return out;
+}
+
+namespace {
+void no_travel(Responder& done) {
+  done(Result::fail(ErrorCode::NotReady, "this daemon has no travel control for its drive"));
+}
+}  // namespace
+
+void Backend::travel(const TravelArgs&, Responder done) {
+  no_travel(done);
+}
+void Backend::stop(Responder done) {
+  no_travel(done);
+}
+void Backend::fast_stop(Responder done) {
+  no_travel(done);
+}
+void Backend::relevel(Responder done) {
+  no_travel(done);
+}
+void Backend::inspection(bool, const std::string&, Responder done) {
+  no_travel(done);
+}
+void Backend::fast_start(const std::string&, const TravelArgs&, Responder done) {
+  no_travel(done);
+}
+void Backend::calls(const std::string&, std::optional<int>, Responder done) {
+  no_travel(done);
 }
 
 }  // namespace liftd::api

@@ -31,7 +31,7 @@ std::string_view to_string(LinkState state) noexcept;
 
 /// One active fault.
 struct FaultInfo {
-  std::string code;                             ///< snake_case, stable, e.g. "link_timeout"
+  std::string code;                             ///< snake_case, stable, e.g. "link_fault"
   std::string text;                             ///< human-readable explanation
   std::chrono::system_clock::time_point since;  ///< when it became active (wall clock)
 };
@@ -52,25 +52,37 @@ struct StatusSnapshot {
   std::optional<dcp::ExtendedStatus> extended;  ///< drive.extended; nullopt if never seen
   std::optional<std::int64_t> position_mm;      ///< car.position_mm; nullopt if unknown
   std::optional<int> floor;                     ///< car.floor (0 = lowest); nullopt between
-  std::string travel_state = "idle";            ///< travel.state, snake_case
-  std::optional<std::string> travel_direction;  ///< travel.direction: "up", "down" or null
-  std::optional<int> target_floor;              ///< travel.target_floor or null
-  std::vector<FaultInfo> faults;                ///< active faults, oldest first
-  RtInfo rt{};                                  ///< rt
+  std::optional<int> next_possible_stop;  ///< car.next_possible_stop: nearest floor it can stop at
+  bool brake_open = false;                ///< car.brake_open: brake output (follows S6)
+  bool contactors_on = false;             ///< car.contactors_on: motor contactor output
+  std::string travel_state = "idle";      ///< travel.state, snake_case
+  std::optional<std::string> travel_direction;      ///< travel.direction: "up", "down" or null
+  std::optional<int> target_floor;                  ///< travel.target_floor or null
+  std::vector<int> calls;                           ///< travel.calls: queued destinations, in order
+  std::optional<std::int64_t> last_travel_slip_mm;  ///< travel.last_slip_mm (I9 extended reply)
+  std::vector<FaultInfo> faults;                    ///< active faults, oldest first
+  RtInfo rt{};                                      ///< rt
 };
 
 /// Counters and timing for `stats`.
 struct StatsSnapshot {
-  std::uint64_t frames_sent = 0;      ///< master frames sent
-  std::uint64_t replies_good = 0;     ///< replies with a good checksum
-  std::uint64_t checksum_errors = 0;  ///< replies with a bad checksum
-  std::uint64_t missing_replies = 0;  ///< cycles without a complete reply
-  std::uint64_t repeats = 0;          ///< replies with S7 set (drive saw our frame corrupt)
-  std::uint64_t link_losses = 0;      ///< times the link supervision tripped
-  std::uint64_t cycles = 0;           ///< cycles run
-  std::uint64_t overruns = 0;         ///< cycles started late by more than a period
-  std::uint64_t max_lateness_us = 0;  ///< worst wake-up lateness
-  std::uint64_t max_work_us = 0;      ///< worst time spent inside one cycle
+  std::uint64_t frames_sent = 0;        ///< master frames sent
+  std::uint64_t replies_good = 0;       ///< replies with a good checksum
+  std::uint64_t checksum_errors = 0;    ///< replies with a bad checksum
+  std::uint64_t missing_replies = 0;    ///< cycles without a complete reply
+  std::uint64_t repeats = 0;            ///< replies with S7 set (drive saw our frame corrupt)
+  std::uint64_t link_losses = 0;        ///< times the link supervision tripped
+  std::uint64_t cycles = 0;             ///< cycles run
+  std::uint64_t overruns = 0;           ///< cycles started late by more than a period
+  std::uint64_t max_lateness_us = 0;    ///< worst wake-up lateness
+  std::uint64_t max_work_us = 0;        ///< worst time spent inside one cycle
+  double lateness_p99_us = 0;           ///< wake-up lateness, 99th percentile
+  double reply_p99_us = 0;              ///< send start to complete reply, 99th percentile
+  std::uint64_t b7_sent = 0;            ///< frames sent with B7 (reply checksum error, DCP 6.1)
+  std::uint64_t channel_resets = 0;     ///< communication channel resets (DCP 5.4, 5.10)
+  std::uint64_t decode_errors = 0;      ///< channel payloads that did not decode
+  std::uint64_t request_timeouts = 0;   ///< I-messages the drive did not answer
+  std::uint64_t longest_error_run = 0;  ///< longest run of consecutive bad or missing replies
 };
 
 /// One cycle of the DCP frame trace.
@@ -136,6 +148,13 @@ struct InputFlag {
 /// Every boolean input, in wire-name order of the docs.
 extern const std::array<InputFlag, 21> kInputFlags;
 
+/// Arguments of `travel` and `fast_start` "arm".
+struct TravelArgs {
+  int floor = 0;                     ///< floor index, 0 = lowest
+  std::optional<std::string> speed;  ///< "V4", "V3", ... (nullopt: the fastest allowed)
+  std::optional<int> load_percent;   ///< car load for I8
+};
+
 /// DCP I9 carries a sign and 6 digits of millimetres (DCP 5.12.9): the position range we accept.
 inline constexpr std::int64_t kMaxPositionMm = 999'999;
 
@@ -164,6 +183,22 @@ class Backend {
   virtual void load(int percent, Responder done) = 0;
   /// Applies an input update from the I/O board; the result is to_json() of all inputs after it.
   virtual void update_inputs(const InputUpdate& update, Responder done) = 0;
+
+  // ---- travel (DCP chapters 9 to 13); a backend without travel support refuses them ----
+  /// Travel to `floor` (or extend a running DCP4 travel). `speed` "V4", "V3", ... or empty.
+  virtual void travel(const TravelArgs& args, Responder done);
+  /// Controlled stop of the running travel; clears the calls queue.
+  virtual void stop(Responder done);
+  /// DCP 13 fast stop.
+  virtual void fast_stop(Responder done);
+  /// Relevel to the nearest floor.
+  virtual void relevel(Responder done);
+  /// Software inspection on/off with a held direction ("up", "down", "none").
+  virtual void inspection(bool on, const std::string& direction, Responder done);
+  /// DCP 12 fast start: "arm" (with args.floor), "go" or "abort".
+  virtual void fast_start(const std::string& action, const TravelArgs& args, Responder done);
+  /// Calls queue: "list", "add" or "cancel" (with floor).
+  virtual void calls(const std::string& action, std::optional<int> floor, Responder done);
 };
 
 /// JSON of a status snapshot, as in the `status` result and `state` event.

@@ -169,6 +169,95 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                     }
                     b->update_inputs(update, std::move(done));
                   }});
+
+  add_travel_commands(dispatcher, *b);
+}
+
+namespace {
+
+TravelArgs travel_args(const nlohmann::json& request) {
+  TravelArgs args;
+  args.floor = arg_or<int>(request, "floor", 0);
+  if (request.contains("speed")) args.speed = request.at("speed").get<std::string>();
+  if (request.contains("load_percent")) args.load_percent = request.at("load_percent").get<int>();
+  return args;
+}
+
+}  // namespace
+
+void add_travel_commands(Dispatcher& dispatcher, Backend& backend) {
+  Backend* b = &backend;
+  const std::vector<std::string> speeds = {"V4", "V3", "V2", "V1", "V7", "V6", "V5"};
+  const ArgSpec speed = choice_arg(
+      "speed", false, speeds, "speed limit (DCP4: V4 or V3; DCP3: a speed of the installation)");
+  // Floors are limited to 64 by the configuration; the backend checks the installed count.
+  const ArgSpec floor = int_arg("floor", true, 0, kMaxFloorIndex, "floor index, 0 = lowest");
+  ArgSpec optional_floor = floor;
+  optional_floor.required = false;
+
+  dispatcher.add({"travel",
+                  Access::Control,
+                  {floor, speed, int_arg("load_percent", false, 0, 200, "car load in % (I8)")},
+                  "travel to a floor, or extend a running DCP4 travel",
+                  [b](const Call& call, Responder done) {
+                    b->travel(travel_args(call.request), std::move(done));
+                  }});
+  dispatcher.add({"stop",
+                  Access::Control,
+                  {},
+                  "controlled stop; clears the calls queue",
+                  [b](const Call&, Responder done) { b->stop(std::move(done)); }});
+  dispatcher.add({"fast_stop",
+                  Access::Control,
+                  {},
+                  "fast stop of the running travel (DCP 13)",
+                  [b](const Call&, Responder done) { b->fast_stop(std::move(done)); }});
+  dispatcher.add({"relevel",
+                  Access::Control,
+                  {},
+                  "relevel to the nearest floor",
+                  [b](const Call&, Responder done) { b->relevel(std::move(done)); }});
+  dispatcher.add({"inspection",
+                  Access::Control,
+                  {choice_arg("mode", true, {"on", "off"}, "software inspection on or off"),
+                   choice_arg("direction", false, {"up", "down", "none"},
+                              "held like a button: repeat within travel.inspection_hold_ms")},
+                  "software inspection with a hold-to-run direction",
+                  [b](const Call& call, Responder done) {
+                    b->inspection(call.request.at("mode") == "on",
+                                  arg_or<std::string>(call.request, "direction", "none"),
+                                  std::move(done));
+                  }});
+  dispatcher.add({"fast_start",
+                  Access::Control,
+                  {choice_arg("action", true, {"arm", "go", "abort"},
+                              "arm while the doors close, go when locked, abort (controlled)"),
+                   optional_floor, speed},
+                  "fast start (DCP 12)",
+                  [b](const Call& call, Responder done) {
+                    const std::string action = call.request.at("action");
+                    if (action == "arm" && !call.request.contains("floor")) {
+                      done(Result::fail(ErrorCode::BadRequest, "arm needs a floor", "floor"));
+                      return;
+                    }
+                    b->fast_start(action, travel_args(call.request), std::move(done));
+                  }});
+  dispatcher.add({"calls",
+                  Access::Control,
+                  {choice_arg("action", false, {"list", "add", "cancel"},
+                              "list (default), add or cancel a destination"),
+                   optional_floor},
+                  "the queue of destinations, served in order",
+                  [b](const Call& call, Responder done) {
+                    const std::string action = arg_or<std::string>(call.request, "action", "list");
+                    std::optional<int> f;
+                    if (call.request.contains("floor")) f = call.request.at("floor").get<int>();
+                    if (action != "list" && !f) {
+                      done(Result::fail(ErrorCode::BadRequest, action + " needs a floor", "floor"));
+                      return;
+                    }
+                    b->calls(action, f, std::move(done));
+                  }});
 }
 
 }  // namespace liftd::api

@@ -14,6 +14,13 @@ namespace liftd::api {
 /// Most trace entries one `trace` request returns.
 inline constexpr std::int64_t kMaxTraceEntries = 1000;
 
+/// Highest floor index a request may name (the configuration allows at most 64 floors).
+inline constexpr std::int64_t kMaxFloorIndex = 63;
+
+/// Adds the travel commands (travel, stop, fast_stop, relevel, inspection, fast_start, calls).
+/// add_builtin_commands() calls it.
+void add_travel_commands(Dispatcher& dispatcher, Backend& backend);
+
 /// Adds every built-in command to `dispatcher`, served by `backend`. `api_stats` supplies the
 /// server's own counters for `stats` ("api" object); it may be empty.
 void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,

@@ -160,6 +160,7 @@ std::string absolute_path_rule(const std::string& text) {
 }
 
 std::string group_name_rule(const std::string& text) {
+  if (text.empty()) return {};  // no group: root and the daemon's own user only
   // shadow-utils' default rule: a lower-case letter or _, then letters, digits, _ or -.
   const auto ok_first = [](char c) { return (c >= 'a' && c <= 'z') || c == '_'; };
   const auto ok_rest = [&](char c) { return ok_first(c) || (c >= '0' && c <= '9') || c == '-'; };
@@ -434,19 +435,23 @@ const std::vector<Key>& schema() {
     t.push_back(string_key("api.socket", 1, kMaxSocketPathLength,
                            "absolute path, at most 107 bytes", absolute_path_rule,
                            "Unix socket of the JSON API", &Config::api, &ApiConfig::socket));
-    t.push_back(string_key("api.socket_group", 1, kMaxGroupNameLength, "group name",
-                           group_name_rule, "group owning the API socket", &Config::api,
-                           &ApiConfig::socket_group));
-    t.push_back(string_key("api.read_group", 1, kMaxGroupNameLength, "group name", group_name_rule,
-                           "members may read state and watch events", &Config::api,
-                           &ApiConfig::read_group));
-    t.push_back(string_key("api.control_group", 1, kMaxGroupNameLength, "group name",
-                           group_name_rule, "members may send calls, travels and resets",
-                           &Config::api, &ApiConfig::control_group));
-    t.push_back(string_key("api.inputs_group", 1, kMaxGroupNameLength, "group name",
+    t.push_back(string_key("api.socket_group", 0, kMaxGroupNameLength, "group name",
                            group_name_rule,
-                           "members may send machine inputs (the I/O board's daemon)", &Config::api,
-                           &ApiConfig::inputs_group));
+                           "group owning the API socket (empty: the daemon's own group)",
+                           &Config::api, &ApiConfig::socket_group));
+    t.push_back(string_key(
+        "api.read_group", 0, kMaxGroupNameLength, "group name", group_name_rule,
+        "members may read state and watch events (empty: nobody but root and the daemon's user)",
+        &Config::api, &ApiConfig::read_group));
+    t.push_back(
+        string_key("api.control_group", 0, kMaxGroupNameLength, "group name", group_name_rule,
+                   "members may send calls, travels and resets (empty: root and the daemon's user)",
+                   &Config::api, &ApiConfig::control_group));
+    t.push_back(string_key("api.inputs_group", 0, kMaxGroupNameLength, "group name",
+                           group_name_rule,
+                           "members may send machine inputs, the I/O board's daemon (empty: root "
+                           "and the daemon's user)",
+                           &Config::api, &ApiConfig::inputs_group));
     t.push_back(int_key("api.max_clients", 1, 256, "API connections served at once", &Config::api,
                         &ApiConfig::max_clients));
     t.push_back(int_key("api.idle_timeout_s", 0, 86400,

@@ -123,10 +123,24 @@ DcpController::DcpController(const ControllerConfig& config, const PositionSourc
 
 std::span<const std::uint8_t> DcpController::frame_to_send(MonoTime now) noexcept {
   if (cycle_++ == 0) start_at_ = now;
+  // Inputs (machine inputs, the API's inspection buttons) and the clock first, so this cycle's
+  // input is current; then every other command is
+  // judged against that input (a travel asked for right after the handshake is not refused with
+  // the previous cycle's state).
+  std::size_t deferred = 0;
   Command command;
-  while (commands_.try_pop(command)) handle(command, now);
-
+  while (deferred < deferred_.size() && commands_.try_pop(command)) {
+    if (std::holds_alternative<InputsCommand>(command.body) ||
+        std::holds_alternative<InspectionCommand>(command.body) ||  // a held button: an input
+        std::holds_alternative<ClockCommand>(command.body)) {
+      handle(command, now);
+    } else {
+      deferred_[deferred++] = command;
+    }
+  }
   last_input_ = build_input(now);
+  for (std::size_t i = 0; i < deferred; ++i) handle(deferred_[i], now);
+
   last_output_ = travel_.step(last_input_);
   if (last_output_.channel_request) submit_channel(*last_output_.channel_request);
   link_.set_process(last_output_.command, last_output_.data_word);
@@ -237,8 +251,11 @@ void DcpController::handle(const Command& command, MonoTime now) noexcept {
           }
         } else if constexpr (std::is_same_v<T, CallCommand>) {
           if (!body.add) {
-            reply(tag, lift_.cancel_call(body.floor) ? ReplyCode::Ok : ReplyCode::BadRequest,
-                  "floor is not queued");
+            if (lift_.cancel_call(body.floor)) {
+              reply(tag, ReplyCode::Ok);
+            } else {
+              reply(tag, ReplyCode::BadRequest, "floor is not queued");
+            }
             return;
           }
           switch (lift_.add_call(body.floor)) {

@@ -282,6 +282,7 @@ class DcpController final : public rt::CycleEngine {
   lift::LiftModel lift_;
 
   rt::SpscQueue<Command, kCommandQueueSize> commands_;
+  std::array<Command, kCommandQueueSize> deferred_{};  ///< this cycle's commands after inputs
   rt::SpscQueue<CommandReply, kReplyQueueSize> replies_;
   rt::SpscQueue<ControllerEvent, kEventQueueSize> events_;
   rt::Snapshot<ControllerSnapshot> snapshot_;

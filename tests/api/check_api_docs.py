@@ -3,7 +3,9 @@
 
 Examples are fenced blocks whose info string is "json request", "json reply [command]" or
 "json event". A reply tagged with a command is also checked against that command's result
-schema. Exits non-zero with the failing example's line number on the first mismatch.
+schema. Every request and every event the schema describes must have at least one example,
+and every command at least one tagged reply. Prints every mismatch with the example's line
+number and exits non-zero if there was one.
 """
 import json
 import re
@@ -26,6 +28,8 @@ def main(docs_path, schema_path):
     checked = 0
     failures = 0
     kinds = set()
+    replies = set()
+    events = set()
     i = 0
     while i < len(lines):
         m = fence.match(lines[i])
@@ -66,11 +70,24 @@ def main(docs_path, schema_path):
             failures += 1
         if kind == "request":
             kinds.add(example.get("cmd"))
+        if kind == "reply" and command:
+            replies.add(command)
+        if kind == "event":
+            events.add(example.get("event"))
         checked += 1
     # Every request kind in the schema must have at least one example.
     for name in schema["$defs"]:
         if name.startswith("request_") and name[len("request_"):] not in kinds:
             print(f"{docs_path}: no request example for '{name[len('request_'):]}'")
+            failures += 1
+        if name.startswith("request_") and name[len("request_"):] not in replies:
+            print(f"{docs_path}: no 'json reply {name[len('request_'):]}' example")
+            failures += 1
+    # Every event the schema describes must have at least one example.
+    for branch in schema["$defs"]["event"].get("allOf", []):
+        name = branch["if"]["properties"]["event"]["const"]
+        if name not in events:
+            print(f"{docs_path}: no example of the '{name}' event")
             failures += 1
     print(f"checked {checked} examples, {failures} failures")
     return 1 if failures or checked == 0 else 0

@@ -229,7 +229,11 @@ TEST_F(DispatcherTest, StatusNamesEveryField) {
                                               {"brake_open", true},
                                               {"message_error", false}}));
   EXPECT_EQ(r.at("drive").at("extended").at("below_unlocking_speed"), false);
-  EXPECT_EQ(r.at("car"), (json{{"position_mm", 3000}, {"floor", 1}}));
+  EXPECT_EQ(r.at("car"), (json{{"position_mm", 3000},
+                               {"floor", 1},
+                               {"next_possible_stop", nullptr},
+                               {"brake_open", false},
+                               {"contactors_on", false}}));
   EXPECT_EQ(r.at("travel").at("state"), "idle");
   EXPECT_EQ(r.at("faults").at(0).at("since"), "1970-01-01T00:00:00.000Z");
   EXPECT_EQ(r.at("rt").at("policy"), "SCHED_FIFO");
@@ -320,18 +324,15 @@ TEST_F(DispatcherTest, AddingACommandIsOneEntry) {
   floor.required = true;
   floor.min = 0;
   floor.max = 63;
-  dispatcher_.add({"travel",
-                   Access::Control,
-                   {floor},
-                   "travel to a floor",
-                   [](const Call& call, Responder done) {
-                     done(Result::ok({{"floor", call.request.at("floor")}}));
-                   }});
-  EXPECT_EQ(handle(R"({"cmd":"travel","floor":4})").at("result").at("floor"), 4);
-  EXPECT_EQ(code_of(handle(R"({"cmd":"travel","floor":64})")), "bad_request");
-  EXPECT_EQ(code_of(handle(R"({"cmd":"travel","floor":4})", AccessSet{true, false, false})),
+  dispatcher_.add(
+      {"goto", Access::Control, {floor}, "travel to a floor", [](const Call& call, Responder done) {
+         done(Result::ok({{"floor", call.request.at("floor")}}));
+       }});
+  EXPECT_EQ(handle(R"({"cmd":"goto","floor":4})").at("result").at("floor"), 4);
+  EXPECT_EQ(code_of(handle(R"({"cmd":"goto","floor":64})")), "bad_request");
+  EXPECT_EQ(code_of(handle(R"({"cmd":"goto","floor":4})", AccessSet{true, false, false})),
             "forbidden");
-  EXPECT_THROW(dispatcher_.add({"travel", Access::Read, {}, "", [](const Call&, Responder) {}}),
+  EXPECT_THROW(dispatcher_.add({"goto", Access::Read, {}, "", [](const Call&, Responder) {}}),
                std::invalid_argument);
 }
 

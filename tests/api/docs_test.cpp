@@ -1,9 +1,14 @@
-// docs/api.md must describe every command and every error code the server can send.
+// docs/api.md and docs/api.schema.json must describe every command, error code, event, fault
+// code and travel abort cause the daemon can send.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <fstream>
+#include <regex>
+#include <set>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "api/commands.hpp"
 #include "api/fake_backend.hpp"
@@ -80,6 +85,186 @@ TEST(ApiSchema, RequestsMatchTheCommandTable) {
       }
     }
   }
+}
+
+// ---- the event stream, fault codes and abort causes ----
+//
+// The lists below are what a client sees on the wire. Each test checks the list three ways:
+// against the daemon's source (so a new name in the code fails here until it is documented),
+// against docs/api.md (a table row per name) and against the schema's enums.
+
+/// Root of the source tree: API_DOCS_PATH is "<root>/docs/api.md".
+std::string source_root() {
+  const std::string docs = API_DOCS_PATH;
+  const std::string tail = "docs/api.md";
+  return docs.substr(0, docs.size() - tail.size());
+}
+
+std::string read_source(const std::string& relative) {
+  std::ifstream in(source_root() + relative);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+nlohmann::json read_schema() {
+  std::ifstream in(API_SCHEMA_PATH);
+  return nlohmann::json::parse(in);
+}
+
+/// Every match of the first group of `pattern` in `text`, sorted and without duplicates.
+std::set<std::string> matches(const std::string& text, const std::string& pattern) {
+  std::set<std::string> out;
+  const std::regex re(pattern);
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), re); it != std::sregex_iterator();
+       ++it) {
+    out.insert((*it)[1].str());
+  }
+  return out;
+}
+
+/// The string literals a name function returns: the `return "...";` lines of the function whose
+/// definition starts with `signature`, up to its closing brace at column 0, minus `fallbacks`.
+std::set<std::string> returned_names(const std::string& relative, const std::string& signature,
+                                     const std::set<std::string>& fallbacks) {
+  const std::string text = read_source(relative);
+  const auto begin = text.find(signature);
+  if (begin == std::string::npos) return {};
+  const auto end = text.find("\n}\n", begin);
+  std::set<std::string> out = matches(text.substr(begin, end - begin), R"re(return "([^"]+)";)re");
+  for (const auto& f : fallbacks) out.erase(f);
+  return out;
+}
+
+std::set<std::string> as_set(const std::vector<std::string>& names) {
+  return {names.begin(), names.end()};
+}
+
+/// The names of a schema enum, without a null member.
+std::set<std::string> schema_enum(const nlohmann::json& values) {
+  std::set<std::string> out;
+  for (const auto& v : values) {
+    if (v.is_string()) out.insert(v.get<std::string>());
+  }
+  return out;
+}
+
+void expect_table_rows(const std::vector<std::string>& names, const char* what) {
+  const std::string docs = read_docs();
+  for (const auto& name : names) {
+    EXPECT_NE(docs.find("| `" + name + "` |"), std::string::npos)
+        << what << " \"" << name << "\" has no row in docs/api.md";
+  }
+}
+
+// Every event the daemon publishes: the server's greeting, the watch start, lift_app.cpp.
+const std::vector<std::string> kEvents = {"hello",  "state",       "display", "link",
+                                          "travel", "drive_error", "fault",   "call_served"};
+
+TEST(ApiDocs, EventListMatchesWhatTheDaemonPublishes) {
+  std::set<std::string> published;
+  const std::string app = read_source("daemon/lift_app.cpp");
+  for (const auto& pattern : {R"re(\bname = "([a-z_]+)";)re", R"re(publish\("([a-z_]+)")re"}) {
+    published.merge(matches(app, pattern));
+  }
+  published.merge(matches(read_source("lib/api/server.cpp"), R"re(event_line\("([a-z_]+)")re"));
+  published.merge(matches(read_source("lib/api/commands.cpp"), R"re(event_line\("([a-z_]+)")re"));
+  EXPECT_EQ(published, as_set(kEvents)) << "update kEvents, docs/api.md section 4 and the schema";
+}
+
+TEST(ApiDocs, EveryEventIsDocumentedWithASchema) {
+  expect_table_rows(kEvents, "event");
+  const auto schema = read_schema();
+  std::set<std::string> described;
+  for (const auto& branch : schema.at("$defs").at("event").at("allOf")) {
+    described.insert(branch.at("if").at("properties").at("event").at("const").get<std::string>());
+  }
+  EXPECT_EQ(described, as_set(kEvents)) << "every event needs an if/then branch in $defs/event";
+}
+
+const std::vector<std::string> kFaultCodes = {"link_fault",  "drive_fault",   "safety_chain_open",
+                                              "inputs_lost", "position_lost", "advance_warning"};
+
+TEST(ApiDocs, FaultCodesMatchTheController) {
+  EXPECT_EQ(returned_names("lib/control/dcp_controller.cpp", "std::string_view fault_code_name(",
+                           {"internal"}),
+            as_set(kFaultCodes));
+  expect_table_rows(kFaultCodes, "fault code");
+  const auto schema = read_schema();
+  const auto& defs = schema.at("$defs");
+  EXPECT_EQ(schema_enum(defs.at("fault").at("properties").at("code").at("enum")),
+            as_set(kFaultCodes));
+  EXPECT_EQ(schema_enum(defs.at("event_fault").at("properties").at("code").at("enum")),
+            as_set(kFaultCodes));
+}
+
+const std::vector<std::string> kAbortCauses = {
+    "link_down",           "no_handshake",       "drive_not_ready",    "advance_warning",
+    "drive_fault",         "safety_chain_open",  "doors_not_locked",   "position_lost",
+    "inputs_lost",         "door_reversal",      "fast_start_timeout", "stop_requested",
+    "drive_did_not_start", "drive_did_not_stop", "mode_changed",       "stopped_off_level",
+    "level_not_reached"};
+
+TEST(ApiDocs, AbortCausesMatchTheTravelLibrary) {
+  EXPECT_EQ(returned_names("lib/travel/types.cpp", "to_string(AbortCause cause)", {"none"}),
+            as_set(kAbortCauses));
+  expect_table_rows(kAbortCauses, "abort cause");
+  const auto schema = read_schema();
+  const auto& travel = schema.at("$defs").at("event_travel").at("properties");
+  EXPECT_EQ(schema_enum(travel.at("cause").at("enum")), as_set(kAbortCauses));
+  EXPECT_TRUE(travel.at("cause").at("enum").back().is_null()) << "cause is null unless aborted";
+}
+
+const std::vector<std::string> kTravelEvents = {
+    "started",     "finished",           "aborted", "target_extended", "fast_start_armed",
+    "drive_fault", "drive_fault_cleared"};
+
+TEST(ApiDocs, TravelEventTypesMatchTheTravelLibrary) {
+  EXPECT_EQ(returned_names("lib/travel/types.cpp", "to_string(Event::Type type)", {}),
+            as_set(kTravelEvents));
+  expect_table_rows(kTravelEvents, "travel event");
+  const auto schema = read_schema();
+  const auto& travel = schema.at("$defs").at("event_travel").at("properties");
+  EXPECT_EQ(schema_enum(travel.at("event").at("enum")), as_set(kTravelEvents));
+}
+
+// Travel kinds as status.travel.state and the travel event's kind ("none" only in events).
+const std::vector<std::string> kTravelKinds = {"distance",   "relevel_distance", "speed",  "crawl",
+                                               "inspection", "recall",           "relevel"};
+
+TEST(ApiDocs, TravelKindsMatchTheTravelLibrary) {
+  EXPECT_EQ(returned_names("lib/travel/types.cpp", "to_string(TravelKind kind)", {"none"}),
+            as_set(kTravelKinds));
+  expect_table_rows(kTravelKinds, "travel kind");
+  const auto schema = read_schema();
+  const auto& defs = schema.at("$defs");
+  std::set<std::string> states = as_set(kTravelKinds);
+  states.insert({"idle", "fast_start"});
+  EXPECT_EQ(schema_enum(defs.at("result_status")
+                            .at("properties")
+                            .at("travel")
+                            .at("properties")
+                            .at("state")
+                            .at("enum")),
+            states);
+  std::set<std::string> kinds = as_set(kTravelKinds);
+  kinds.insert("none");
+  EXPECT_EQ(schema_enum(defs.at("event_travel").at("properties").at("kind").at("enum")), kinds);
+}
+
+const std::vector<std::string> kLinkEventKinds = {
+    "state changed",   "channel reset",   "channel error", "decode error",
+    "request timeout", "unmatched reply", "date/time sent"};
+
+TEST(ApiDocs, LinkEventsMatchTheMasterLink) {
+  EXPECT_EQ(returned_names("lib/dcp/master_link.cpp", "to_string(LinkEventKind kind)", {"unknown"}),
+            as_set(kLinkEventKinds));
+  expect_table_rows(kLinkEventKinds, "link event kind");
+  const auto schema = read_schema();
+  const auto& link = schema.at("$defs").at("event_link").at("properties");
+  EXPECT_EQ(schema_enum(link.at("kind").at("enum")), as_set(kLinkEventKinds));
+  EXPECT_EQ(schema_enum(link.at("state").at("enum")),
+            returned_names("lib/dcp/master_link.cpp", "to_string(LinkState state)", {"unknown"}));
 }
 
 }  // namespace

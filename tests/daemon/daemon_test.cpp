@@ -79,6 +79,7 @@ TEST(DaemonNotify, SimulateSendsReadyStatusThenStoppingOnSigterm) {
   TestSocket notify;
   auto env = base_env();
   env.push_back("NOTIFY_SOCKET=" + notify.path());
+  env.push_back("XDG_RUNTIME_DIR=" + notify.dir());  // its own API socket: tests run in parallel
   Process liftd({kLiftd, "--simulate"}, env, notify.dir());
 
   std::vector<std::string> seen;
@@ -87,7 +88,8 @@ TEST(DaemonNotify, SimulateSendsReadyStatusThenStoppingOnSigterm) {
   // Startup reports progress first, then READY=1 carries the running status.
   ASSERT_GE(seen.size(), 2U);
   EXPECT_EQ(seen.front(), "STATUS=starting");
-  EXPECT_EQ(seen.back(), "READY=1\nSTATUS=simulated lift (DCP4, 6 floors), no drive link yet");
+  EXPECT_THAT(seen.back(),
+              ::testing::StartsWith("READY=1\nSTATUS=simulated lift running; API on "));
 
   const auto stop_sent = std::chrono::steady_clock::now();
   liftd.signal(SIGTERM);
@@ -102,7 +104,7 @@ TEST(DaemonNotify, SimulateSendsReadyStatusThenStoppingOnSigterm) {
   RecordProperty(
       "stop_ms",
       static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(took).count()));
-  EXPECT_THAT(liftd.err(), HasSubstr("simulated lift (DCP4, 6 floors), no drive link yet"));
+  EXPECT_THAT(liftd.err(), HasSubstr("simulated drive answering on /dev/pts/"));
   EXPECT_THAT(liftd.err(), HasSubstr("[event=stopping reason=SIGTERM]"));
 }
 
@@ -110,6 +112,7 @@ TEST(DaemonSignals, SigintStopsCleanly) {
   TestSocket notify;
   auto env = base_env();
   env.push_back("NOTIFY_SOCKET=" + notify.path());
+  env.push_back("XDG_RUNTIME_DIR=" + notify.dir());  // its own API socket: tests run in parallel
   Process liftd({kLiftd, "--simulate"}, env, notify.dir());
   std::vector<std::string> seen;
   ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit)) << liftd.err();
@@ -122,6 +125,7 @@ TEST(DaemonSignals, SighupIsRefusedAndTheDaemonKeepsRunning) {
   TestSocket notify;
   auto env = base_env();
   env.push_back("NOTIFY_SOCKET=" + notify.path());
+  env.push_back("XDG_RUNTIME_DIR=" + notify.dir());  // its own API socket: tests run in parallel
   Process liftd({kLiftd, "--simulate"}, env, notify.dir());
   std::vector<std::string> seen;
   ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit)) << liftd.err();
@@ -137,6 +141,7 @@ TEST(DaemonWatchdog, PingsAtHalfTheTimeout) {
   TestSocket notify;
   auto env = base_env();
   env.push_back("NOTIFY_SOCKET=" + notify.path());
+  env.push_back("XDG_RUNTIME_DIR=" + notify.dir());  // its own API socket: tests run in parallel
   env.push_back("WATCHDOG_USEC=200000");  // 200 ms: a ping every 100 ms
   Process liftd({kLiftd, "--simulate"}, env, notify.dir());
   std::vector<std::string> seen;
@@ -155,6 +160,7 @@ TEST(DaemonWatchdog, NoPingsWhenWatchdogPidIsAnotherProcess) {
   TestSocket notify;
   auto env = base_env();
   env.push_back("NOTIFY_SOCKET=" + notify.path());
+  env.push_back("XDG_RUNTIME_DIR=" + notify.dir());  // its own API socket: tests run in parallel
   env.push_back("WATCHDOG_USEC=100000");
   env.push_back("WATCHDOG_PID=1");  // meant for another process: not ours to answer
   Process liftd({kLiftd, "--simulate"}, env, notify.dir());
@@ -193,6 +199,7 @@ TEST(DaemonConfig, EveryKindOfConfigErrorExitsWithTwo) {
     if (c.file_text != nullptr) write_file(notify.dir(), "liftd.json", c.file_text);
     auto env = base_env();
     env.push_back("NOTIFY_SOCKET=" + notify.path());
+    env.push_back("XDG_RUNTIME_DIR=" + notify.dir());  // its own API socket: tests run in parallel
     Process liftd({kLiftd, "--config", path}, env, notify.dir());
     EXPECT_EQ(liftd.wait(kStartupLimit), 2) << c.legend << "\n" << liftd.err();
     EXPECT_THAT(liftd.err(), HasSubstr(c.expected)) << c.legend;
@@ -277,9 +284,14 @@ TEST(DaemonCommandLine, PrintConfigShowsSimulateForcingTheSimPosition) {
 
 TEST(DaemonCommandLine, LogLevelOptionOverridesTheConfig) {
   TestSocket notify;
-  const std::string path = write_file(notify.dir(), "liftd.json", R"({"log": {"level": "error"}})");
+  const std::string path =
+      write_file(notify.dir(), "liftd.json",
+                 R"({"log": {"level": "error"}, "api": {"socket": ")" + notify.dir() +
+                     R"(/api.sock", "socket_group": "", "read_group": "", "control_group": "",
+                         "inputs_group": ""}})");
   auto env = base_env();
   env.push_back("NOTIFY_SOCKET=" + notify.path());
+  env.push_back("XDG_RUNTIME_DIR=" + notify.dir());  // its own API socket: tests run in parallel
   Process liftd({kLiftd, "--simulate", "--config", path, "--log-level", "debug"}, env,
                 notify.dir());
   std::vector<std::string> seen;
@@ -291,9 +303,14 @@ TEST(DaemonCommandLine, LogLevelOptionOverridesTheConfig) {
 
 TEST(DaemonCommandLine, ConfigLogLevelAppliesWithoutTheOption) {
   TestSocket notify;
-  const std::string path = write_file(notify.dir(), "liftd.json", R"({"log": {"level": "warn"}})");
+  const std::string path =
+      write_file(notify.dir(), "liftd.json",
+                 R"({"log": {"level": "warn"}, "api": {"socket": ")" + notify.dir() +
+                     R"(/api.sock", "socket_group": "", "read_group": "", "control_group": "",
+                         "inputs_group": ""}})");
   auto env = base_env();
   env.push_back("NOTIFY_SOCKET=" + notify.path());
+  env.push_back("XDG_RUNTIME_DIR=" + notify.dir());  // its own API socket: tests run in parallel
   Process liftd({kLiftd, "--simulate", "--config", path}, env, notify.dir());
   std::vector<std::string> seen;
   ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit)) << liftd.err();

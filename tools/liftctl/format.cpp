@@ -32,6 +32,21 @@ std::string true_flags(const json& flags) {
   return out.empty() ? "-" : out;
 }
 
+/// "2 5 7" for an array of floors, "none" when empty.
+std::string floor_list(const json& floors) {
+  if (!floors.is_array() || floors.empty()) return "none";
+  std::string out;
+  for (const auto& f : floors) out += (out.empty() ? "" : " ") + text(f);
+  return out;
+}
+
+/// "+4 mm" / "-3 mm": a signed distance.
+std::string signed_mm(const json& mm) {
+  if (!mm.is_number_integer()) return text(mm) + " mm";
+  const auto value = mm.get<long long>();
+  return (value > 0 ? "+" : "") + std::to_string(value) + " mm";
+}
+
 void flatten(const json& value, const std::string& prefix, std::ostringstream& out) {
   if (value.is_object() && !value.empty()) {
     for (const auto& [key, inner] : value.items()) {
@@ -57,13 +72,28 @@ std::string format_status(const json& s) {
     out << "extended: " << true_flags(at(drive, "extended")) << '\n';
   }
   out << "car:      floor " << text(at(car, "floor")) << ", position "
-      << (at(car, "position_mm").is_null() ? "unknown" : text(at(car, "position_mm")) + " mm")
-      << '\n';
+      << (at(car, "position_mm").is_null() ? "unknown" : text(at(car, "position_mm")) + " mm");
+  if (!at(car, "next_possible_stop").is_null()) {
+    out << ", next possible stop: floor " << text(at(car, "next_possible_stop"));
+  }
+  out << '\n';
+  // Older daemons do not report the outputs: print the line only when they are there.
+  if (car.is_object() && car.contains("brake_open") && car.contains("contactors_on")) {
+    out << "outputs:  brake " << (at(car, "brake_open") == true ? "open" : "closed")
+        << ", motor contactors " << (at(car, "contactors_on") == true ? "on" : "off") << '\n';
+  }
   out << "travel:   " << text(at(travel, "state"));
   if (!at(travel, "direction").is_null()) out << " " << text(at(travel, "direction"));
   if (!at(travel, "target_floor").is_null())
     out << " to floor " << text(at(travel, "target_floor"));
   out << '\n';
+  if (travel.is_object() && travel.contains("calls")) {
+    out << "calls:    " << floor_list(at(travel, "calls")) << '\n';
+  }
+  if (!at(travel, "last_slip_mm").is_null()) {
+    out << "slip:     " << signed_mm(at(travel, "last_slip_mm"))
+        << " on the last travel (drive's measured distance minus the position source's)\n";
+  }
   const json& faults = at(s, "faults");
   if (!faults.is_array() || faults.empty()) {
     out << "faults:   none\n";
@@ -87,14 +117,32 @@ std::string format_state_line(const json& s) {
   out << "link=" << text(at(at(s, "link"), "state")) << " mode=" << text(at(at(s, "drive"), "mode"))
       << " status=" << true_flags(at(at(s, "drive"), "status"))
       << " floor=" << text(at(car, "floor")) << " position_mm=" << text(at(car, "position_mm"))
-      << " travel=" << text(at(at(s, "travel"), "state"))
-      << " faults=" << (faults.is_array() ? faults.size() : 0);
+      << " travel=" << text(at(at(s, "travel"), "state"));
+  const json& calls = at(at(s, "travel"), "calls");
+  if (calls.is_array() && !calls.empty()) {
+    std::string list;
+    for (const auto& f : calls) list += (list.empty() ? "" : ",") + text(f);
+    out << " calls=" << list;
+  }
+  out << " faults=" << (faults.is_array() ? faults.size() : 0);
   return out.str();
 }
 
 std::string format_event_line(const std::string& name, const json& data) {
   if (name == "state") return "state " + format_state_line(data);
   std::ostringstream out;
+  if (name == "travel" && data.is_object() && data.contains("event")) {
+    // "travel aborted (distance): safety_chain_open, target 9000 mm, at 5472 mm"
+    out << "travel " << text(at(data, "event")) << " (" << text(at(data, "kind")) << ")";
+    if (!at(data, "cause").is_null()) out << ": " << text(at(data, "cause"));
+    const json& target = at(data, "target_mm");
+    if (target.is_number_integer() && target.get<long long>() != 0) {
+      out << ", target " << text(target) << " mm";
+    }
+    if (!at(data, "position_mm").is_null())
+      out << ", at " << text(at(data, "position_mm")) << " mm";
+    return out.str();
+  }
   out << name;
   if (data.is_object()) {
     for (const auto& [key, value] : data.items()) {
@@ -156,6 +204,53 @@ std::string format_display(const json& display) {
         << '\n';
   }
   return out.str();
+}
+
+std::string format_travel_result(const json& request, const json& result) {
+  const std::string command = text(at(request, "cmd"));
+  const std::string action = text(at(request, "action"));
+  const std::string floor = text(at(request, "floor"));
+  const json& detail = at(result, "detail");
+  const std::string note = detail.is_string() ? " (" + detail.get<std::string>() + ")" : "";
+  std::string line;
+  if (command == "travel") {
+    line = at(result, "extended") == true
+               ? "target of the running travel moved to floor " + floor
+               : "travel to floor " + floor + " accepted; follow it with 'liftctl watch'" + note;
+  } else if (command == "stop") {
+    line = "stopping; calls queue cleared" + note;
+  } else if (command == "fast_stop") {
+    line = "fast stop sent; calls queue cleared" + note;
+  } else if (command == "relevel") {
+    line = "relevelling to the nearest floor" + note;
+  } else if (command == "inspection") {
+    const std::string direction = text(at(request, "direction"));
+    if (text(at(request, "mode")) != "on") {
+      line = "software inspection off";
+    } else if (direction == "up" || direction == "down") {
+      line = "software inspection on, " + direction +
+             " held for travel.inspection_hold_ms: repeat to keep moving";
+    } else {
+      line = "software inspection on, no direction held";
+    }
+  } else if (command == "fast_start") {
+    line = action == "arm" ? "fast start armed for floor " + floor +
+                                 ": the car leaves when the doors are locked"
+           : action == "go" ? "doors locked: the car leaves"
+                            : "fast start aborted (controlled stop)";
+  } else if (command == "calls") {
+    if (at(result, "calls").is_array()) {
+      line = "calls: " + floor_list(at(result, "calls"));
+    } else if (action == "add") {
+      line = detail == "already queued" ? "floor " + floor + " was already queued"
+                                        : "floor " + floor + " queued";
+    } else {
+      line = "floor " + floor + " cancelled";
+    }
+  } else {
+    return format_generic(result);
+  }
+  return line + "\n";
 }
 
 std::string format_generic(const json& result) {

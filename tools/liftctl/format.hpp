@@ -19,6 +19,9 @@ std::string format_stats(const nlohmann::json& stats);
 std::string format_trace(const nlohmann::json& trace);
 /// The display as a framed box.
 std::string format_display(const nlohmann::json& display);
+/// The result of a travel command (`travel`, `stop`, `fast_stop`, `relevel`, `inspection`,
+/// `fast_start`, `calls`) to `request`: what the daemon did, in a line.
+std::string format_travel_result(const nlohmann::json& request, const nlohmann::json& result);
 /// Any other result: "key: value" lines (nested keys joined with '.').
 std::string format_generic(const nlohmann::json& result);
 

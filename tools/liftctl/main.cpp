@@ -46,6 +46,13 @@ void usage(std::FILE* out) {
       "  reset                  ask the drive for a fault reset\n"
       "  power mains|emergency [SAVING]   set the power supply mode (SAVING 0..2)\n"
       "  load PERCENT           car load for the next travel\n"
+      "  travel FLOOR [SPEED]   travel to a floor (extends a running DCP4 travel)\n"
+      "  stop                   controlled stop; clears the calls queue\n"
+      "  fast-stop              DCP fast stop of the running travel\n"
+      "  relevel                relevel to the nearest floor\n"
+      "  calls [add|cancel N]   list, add or cancel destinations (served in order)\n"
+      "  inspection on|off [up|down|none]   software inspection; repeat to hold a direction\n"
+      "  fast-start arm FLOOR|go|abort      DCP fast start while the doors close\n"
       "  config                 the daemon's effective configuration\n"
       "  version                daemon and API version\n"
       "  raw 'JSON'             send any request, e.g. raw '{\"cmd\":\"status\"}'\n"
@@ -327,6 +334,40 @@ int main(int argc, char** argv) {
     const auto percent = args.size() == 2 ? parse_int(args[1]) : std::nullopt;
     if (!percent) return bad_usage("usage: load PERCENT");
     request = {{"cmd", "load"}, {"percent", *percent}};
+  } else if (command == "travel") {
+    const auto floor = args.size() >= 2 ? parse_int(args[1]) : std::nullopt;
+    if (!floor || args.size() > 3) return bad_usage("usage: travel FLOOR [V4|V3|...]");
+    request = {{"cmd", "travel"}, {"floor", *floor}};
+    if (args.size() == 3) request["speed"] = args[2];
+  } else if (command == "stop" || command == "fast-stop" || command == "relevel") {
+    if (args.size() != 1) return bad_usage("this command takes no arguments");
+    request = {{"cmd", command == "fast-stop" ? "fast_stop" : command}};
+  } else if (command == "calls") {
+    request = {{"cmd", "calls"}};
+    if (args.size() == 3) {
+      const auto floor = parse_int(args[2]);
+      if (!floor || (args[1] != "add" && args[1] != "cancel")) {
+        return bad_usage("usage: calls [add|cancel FLOOR]");
+      }
+      request["action"] = args[1];
+      request["floor"] = *floor;
+    } else if (args.size() != 1) {
+      return bad_usage("usage: calls [add|cancel FLOOR]");
+    }
+  } else if (command == "inspection") {
+    if (args.size() < 2 || args.size() > 3) return bad_usage("usage: inspection on|off [up|down]");
+    request = {{"cmd", "inspection"}, {"mode", args[1]}};
+    if (args.size() == 3) request["direction"] = args[2];
+  } else if (command == "fast-start") {
+    if (args.size() < 2) return bad_usage("usage: fast-start arm FLOOR|go|abort");
+    request = {{"cmd", "fast_start"}, {"action", args[1]}};
+    if (args[1] == "arm") {
+      const auto floor = args.size() == 3 ? parse_int(args[2]) : std::nullopt;
+      if (!floor) return bad_usage("usage: fast-start arm FLOOR");
+      request["floor"] = *floor;
+    } else if (args.size() != 2) {
+      return bad_usage("usage: fast-start arm FLOOR|go|abort");
+    }
   } else if (command == "raw") {
     if (args.size() != 2) return bad_usage("usage: raw '{\"cmd\":...}'");
     request = json::parse(args[1], nullptr, false);
@@ -383,6 +424,10 @@ int main(int argc, char** argv) {
     out = liftctl::format_display(result);
   } else if (command == "config") {
     out = result.value("config", json::object()).dump(2) + "\n";
+  } else if (command == "travel" || command == "stop" || command == "fast-stop" ||
+             command == "relevel" || command == "inspection" || command == "fast-start" ||
+             command == "calls") {
+    out = liftctl::format_travel_result(request, result);
   } else {
     out = liftctl::format_generic(result);
   }

@@ -1,0 +1,409 @@
+#include "daemon/lift_app.hpp"
+
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <stdexcept>
+
+#include <cstring>
+#include "api/commands.hpp"
+#include "common/mono_time.hpp"
+#include "common/version.hpp"
+#include "daemon/simulated_lift.hpp"
+#include "dcp/charset.hpp"
+#include "dcp/messages.hpp"
+#include "log/log.hpp"
+
+namespace liftd::daemon {
+namespace {
+
+using namespace std::chrono_literals;
+
+// How often the io thread drains the cycle's queues: a few cycles, so API replies and events
+// follow within tens of milliseconds without waking the io thread every cycle.
+constexpr auto kPollPeriod = 20ms;
+// The `state` watch event is sent on a change, at most this often.
+constexpr auto kStatePublishMin = 100ms;
+// The simulated I/O board reports its inputs this often (well inside inputs.timeout_ms).
+constexpr auto kSimInputsPeriod = 100ms;
+
+dcp::Code2 code2(const std::string& s) {
+  return {s.at(0), s.at(1)};
+}
+
+// "state changed" -> "state_changed": journal field values are snake_case words.
+std::string snake(std::string_view text) {
+  std::string out(text);
+  for (char& c : out) {
+    if (c == ' ' || c == '/' || c == '-') c = '_';
+  }
+  return out;
+}
+
+std::string hex_word(std::uint16_t w) {
+  char buf[8];
+  std::snprintf(buf, sizeof buf, "%04X", w);
+  return buf;
+}
+
+control::ControllerConfig controller_config(const config::Config& c) {
+  control::ControllerConfig out;
+  out.link.data_info_type = *dcp::data_info_type_from_char(c.dcp.data_info_type);
+  out.link.extended_position = c.dcp.extended_position;
+  out.link.fault_after_bad_frames = c.dcp.link_fault_frames;
+  out.link.recover_after_good_frames = c.dcp.link_recover_frames;
+  out.link.maker = code2(c.dcp.manufacturer);
+  out.link.language = code2(c.dcp.language);
+  out.link.request_timeout = std::chrono::milliseconds(c.dcp.request_timeout_ms);
+  {
+    // I0 carries our version as four digits (DCP 5.12.2.1): 0.1.0 -> 00.10.
+    int major = 0, minor = 0, patch = 0;
+    std::sscanf(std::string(kVersion).c_str(), "%d.%d.%d", &major, &minor, &patch);
+    out.link.version = static_cast<dcp::VersionCenti>(major * 100 + minor * 10 + patch);
+  }
+  out.travel.data_info_type = out.link.data_info_type;
+  out.travel.use_i7 = c.travel.use_start_parameters;
+  out.travel.fast_start_timeout_ms = static_cast<std::uint32_t>(c.travel.fast_start_timeout_ms);
+  out.travel.level_tolerance_mm = static_cast<std::uint32_t>(c.travel.level_tolerance_mm);
+  out.travel.relevel_threshold_mm = static_cast<std::uint32_t>(c.travel.relevel_threshold_mm);
+  out.travel.auto_relevel = c.travel.relevel_with_doors != config::RelevelDoors::never;
+  out.travel.relevel_electric_stop = c.travel.relevel_electric_stop;
+  out.travel.dcp3_speed_count = c.travel.dcp3_speed_count;
+  out.travel.dcp3_stop_lead_mm = static_cast<std::uint32_t>(c.travel.dcp3_stop_lead_mm);
+  // DCP3 travels need the deceleration points: with an absolute position we compute them from
+  // the configured SVx, otherwise the shaft signals give them.
+  out.travel.dcp3_reference =
+      c.position.source == config::PositionSource::api && c.travel.dcp3_decel_distance_mm.empty()
+          ? travel::Dcp3Reference::ShaftSignals
+          : travel::Dcp3Reference::Position;
+  for (const auto& [name, mm] : c.travel.dcp3_decel_distance_mm) {
+    if (auto speed = dcp::speed_from_string(name)) {
+      out.travel.dcp3_decel_distance_mm[travel::speed_index(*speed)] =
+          static_cast<std::uint32_t>(mm);
+    }
+  }
+  out.lift.level_tolerance_mm = static_cast<std::uint32_t>(c.travel.level_tolerance_mm);
+  for (const auto& f : c.floors) out.floors_mm.push_back(f.level_mm);
+  out.inputs_timeout = std::chrono::milliseconds(c.inputs.timeout_ms);
+  out.inspection_hold = std::chrono::milliseconds(c.travel.inspection_hold_ms);
+  return out;
+}
+
+rt::CycleConfig cycle_config(const config::Config& c, const std::string& device) {
+  rt::CycleConfig out;
+  out.device_path = device;
+  out.serial.baud = 38400;  // DCP 7.1: 38400 baud, 8 data bits, no parity, 1 stop bit
+  out.serial.data_bits = 8;
+  out.serial.parity = io::Parity::None;
+  out.serial.stop_bits = 1;
+  out.serial.rs485 = c.drive.rs485 == config::Rs485Mode::required ? io::Rs485Mode::Required
+                     : c.drive.rs485 == config::Rs485Mode::off    ? io::Rs485Mode::Off
+                                                                  : io::Rs485Mode::Auto;
+  out.thread.priority = c.rt.priority;
+  out.thread.cpu = c.rt.cpu;
+  out.thread.lock_memory = c.rt.lock_memory;
+  out.recorder_span = std::chrono::seconds(c.rt.flight_recorder_s);
+  return out;
+}
+
+std::string default_runtime_dir(const config::Config& c) {
+  if (const char* dir = std::getenv("RUNTIME_DIRECTORY")) return dir;  // systemd RuntimeDirectory
+  return std::filesystem::path(c.api.socket).parent_path().string();
+}
+
+log::Level level_for(control::ControllerEvent::Kind kind) {
+  switch (kind) {
+    case control::ControllerEvent::Kind::FaultRaised:
+    case control::ControllerEvent::Kind::DriveError:
+      return log::Level::warn;
+    default:
+      return log::Level::info;
+  }
+}
+
+}  // namespace
+
+LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
+    : daemon_(daemon),
+      config_(config),
+      simulate_(simulate),
+      socket_path_(config.api.socket),
+      runtime_dir_(default_runtime_dir(config)),
+      poll_timer_(daemon.io()) {
+  if (config.drive.kind != config::DriveKind::dcp) {
+    throw std::invalid_argument("drive.kind \"" +
+                                std::string(config::to_string(config.drive.kind)) +
+                                "\" is not available in this build; use \"dcp\"");
+  }
+  std::string device = config.drive.device;
+  if (simulate_) {
+    sim_ = std::make_unique<SimulatedLift>(config);
+    device = sim_->device_path();
+    position_ = &sim_->position();
+  } else {
+    position_feed_ = std::make_unique<control::PositionFeed>(
+        std::chrono::milliseconds(config.inputs.timeout_ms));
+    position_ = position_feed_.get();
+    if (config.position.source == config::PositionSource::can) {
+      throw std::invalid_argument(
+          "position.source \"can\" is not available in this build; use \"api\"");
+    }
+  }
+  controller_ = std::make_unique<control::DcpController>(controller_config(config), *position_);
+  runner_ = std::make_unique<rt::CycleRunner>(cycle_config(config, device), *controller_);
+  backend_ = std::make_unique<LiftBackend>(
+      config, *controller_, *runner_,
+      config.position.source == config::PositionSource::api ? position_feed_.get() : nullptr);
+
+  api::ServerConfig server;
+  server.socket_path = socket_path_;
+  server.socket_group = config.api.socket_group;
+  server.read_group = config.api.read_group;
+  server.control_group = config.api.control_group;
+  server.inputs_group = config.api.inputs_group;
+  server.max_clients = static_cast<std::size_t>(config.api.max_clients);
+  server.idle_timeout = std::chrono::seconds(config.api.idle_timeout_s);
+  server_ = std::make_unique<api::Server>(
+      daemon.io(), *backend_, server, [](api::LogLevel level, std::string_view text) {
+        const log::Level l = level == api::LogLevel::Error  ? log::Level::error
+                             : level == api::LogLevel::Warn ? log::Level::warn
+                             : level == api::LogLevel::Info ? log::Level::info
+                                                            : log::Level::debug;
+        log::write(l, "api", std::string(text));
+      });
+
+  if (sim_) {
+    daemon.add_component({"sim", [this] { return sim_->start(); }, [this] { sim_->stop(); }});
+  }
+  daemon.add_component({"dcp", [this] { return start_cycle(); }, [this] { stop_cycle(); }});
+  daemon.add_component({"api", [this] { return start_api(); }, [this] { stop_api(); }});
+  daemon.set_progress_probe([this] {
+    const std::uint64_t p = runner_->progress();
+    const bool advanced = p != last_progress_;
+    last_progress_ = p;
+    return advanced;
+  });
+  daemon.set_running_status(simulate_ ? "simulated lift running; API on " + socket_path_
+                                      : "drive link starting on " + device);
+}
+
+LiftApp::~LiftApp() {
+  stop_api();
+  stop_cycle();
+  if (sim_) sim_->stop();
+}
+
+bool LiftApp::start_cycle() {
+  const int error = runner_->start();
+  if (error != 0) {
+    log::event(log::Level::error, "dcp", "cycle_start_failed", {{"errno", std::to_string(error)}},
+               std::string("cannot start the cycle thread: ") + std::strerror(error));
+    return false;
+  }
+  for (const std::string& line : {runner_->thread_status().describe()}) {
+    if (!line.empty()) log::event(log::Level::warn, "rt", "rt_degraded", {}, line);
+  }
+  log::event(log::Level::info, "dcp", "cycle_started",
+             {{"device", runner_->config().device_path},
+              {"realtime", runner_->thread_status().realtime ? "yes" : "no"}},
+             "DCP cycle running every 15 ms on " + runner_->config().device_path);
+  running_ = true;
+  backend_->send_clock(std::chrono::system_clock::now());
+  schedule_poll();
+  return true;
+}
+
+void LiftApp::stop_cycle() {
+  if (!running_) return;
+  running_ = false;
+  poll_timer_.cancel();
+  runner_->stop();
+}
+
+bool LiftApp::start_api() {
+  try {
+    server_->start();
+  } catch (const std::exception& e) {
+    log::event(log::Level::error, "api", "api_start_failed", {{"socket", socket_path_}}, e.what());
+    return false;
+  }
+  log::event(log::Level::info, "api", "api_listening", {{"socket", socket_path_}},
+             "API listening on " + socket_path_);
+  return true;
+}
+
+void LiftApp::stop_api() {
+  if (server_) server_->stop();
+}
+
+void LiftApp::schedule_poll() {
+  poll_timer_.expires_after(kPollPeriod);
+  poll_timer_.async_wait([this](const asio::error_code& ec) {
+    if (ec || !running_) return;
+    poll();
+    schedule_poll();
+  });
+}
+
+void LiftApp::poll() {
+  const MonoTime now = mono_now();
+  if (sim_ && now - last_sim_inputs_ >= kSimInputsPeriod) {
+    last_sim_inputs_ = now;
+    backend_->send_inputs(sim_->inputs(now));
+    sim_->log_events();
+  }
+  if (now - last_clock_ >= 1s) {  // DCP 5.12.5: I3 after I0 and at day change
+    last_clock_ = now;
+    backend_->send_clock(std::chrono::system_clock::now());
+  }
+  backend_->poll(now);
+  control::ControllerEvent event;
+  while (controller_->poll_event(event)) handle_event(event);
+  log_cycle_events();
+  publish_state_if_changed(now);
+}
+
+void LiftApp::log_cycle_events() {
+  rt::CycleEvent e;
+  while (runner_->poll_event(e)) {
+    const bool bad = e.kind == rt::CycleEventKind::PortLost ||
+                     e.kind == rt::CycleEventKind::PortOpenFailed ||
+                     e.kind == rt::CycleEventKind::Overruns;
+    log::event(bad ? log::Level::warn : log::Level::info, "rt",
+               e.kind == rt::CycleEventKind::PortLost         ? "port_lost"
+               : e.kind == rt::CycleEventKind::PortOpenFailed ? "port_open_failed"
+               : e.kind == rt::CycleEventKind::PortOpened     ? "port_opened"
+               : e.kind == rt::CycleEventKind::Overruns       ? "overruns"
+                                                              : "thread_status",
+               {}, rt::describe(e));
+  }
+}
+
+void LiftApp::handle_event(const control::ControllerEvent& event) {
+  using Kind = control::ControllerEvent::Kind;
+  nlohmann::json data;
+  std::string name;
+  std::string text;
+  std::string log_event;
+  std::string component = "travel";
+  switch (event.kind) {
+    case Kind::Link: {
+      component = "dcp";
+      name = "link";
+      log_event = "link_" + snake(dcp::to_string(event.link.kind));
+      text = std::string(dcp::to_string(event.link.kind)) + ": " + std::string(event.link.detail);
+      if (event.link.kind == dcp::LinkEventKind::StateChanged) {
+        text = "link " + std::string(dcp::to_string(event.link.from)) + " -> " +
+               std::string(dcp::to_string(event.link.state)) + ": " +
+               std::string(event.link.detail);
+        daemon_.report_status("drive link " + std::string(dcp::to_string(event.link.state)));
+      }
+      data = {{"kind", std::string(dcp::to_string(event.link.kind))},
+              {"state", std::string(dcp::to_string(event.link.state))},
+              {"detail", std::string(event.link.detail)}};
+      break;
+    }
+    case Kind::Travel: {
+      const travel::Event& t = event.travel;
+      name = "travel";
+      log_event = "travel_" + std::string(travel::to_string(t.type));
+      text = "travel " + std::string(travel::to_string(t.type)) + " (" +
+             std::string(travel::to_string(t.kind)) + ")";
+      if (t.type == travel::Event::Type::Aborted) {
+        text += ": " + std::string(travel::to_string(t.cause));
+      }
+      if (t.position_mm) text += " at " + std::to_string(*t.position_mm) + " mm";
+      data = {{"event", std::string(travel::to_string(t.type))},
+              {"kind", std::string(travel::to_string(t.kind))},
+              {"cause", t.cause == travel::AbortCause::None
+                            ? nlohmann::json(nullptr)
+                            : nlohmann::json(std::string(travel::to_string(t.cause)))},
+              {"target_mm", t.target_mm},
+              {"position_mm",
+               t.position_mm ? nlohmann::json(*t.position_mm) : nlohmann::json(nullptr)}};
+      break;
+    }
+    case Kind::DriveError: {
+      component = "dcp";
+      name = "drive_error";
+      log_event = "drive_error";
+      text = "drive error: " + dcp::to_utf8(event.drive_error.chars());
+      data = {{"text", dcp::to_utf8(event.drive_error.chars())},
+              {"at", api::format_utc(backend_->wall_time(event.at))}};
+      break;
+    }
+    case Kind::FaultRaised:
+    case Kind::FaultCleared: {
+      const bool active = event.kind == Kind::FaultRaised;
+      component = "safety";
+      name = "fault";
+      log_event = active ? "fault_raised" : "fault_cleared";
+      text = std::string(active ? "fault: " : "fault cleared: ") +
+             std::string(control::fault_text(event.fault));
+      data = {{"code", std::string(control::fault_code_name(event.fault))},
+              {"text", std::string(control::fault_text(event.fault))},
+              {"active", active}};
+      if (active && event.fault == control::FaultCode::LinkFault) {
+        dump_flight_recorder("link fault");
+      }
+      break;
+    }
+    case Kind::CallServed:
+      name = "call_served";
+      log_event = "call_served";
+      text = "call served: floor " + std::to_string(event.floor);
+      data = {{"floor", event.floor}};
+      break;
+  }
+  log::event(level_for(event.kind), component, log_event, {}, text);
+  server_->publish(name, data);
+}
+
+void LiftApp::publish_state_if_changed(MonoTime now) {
+  const control::ControllerSnapshot s = controller_->snapshot();
+  if (s.display_version != last_display_version_) {
+    last_display_version_ = s.display_version;
+    server_->publish("display", api::to_json(backend_->display()));
+  }
+  // A cheap fingerprint of what a watcher cares about; position in 10 mm steps.
+  std::string key = std::to_string(static_cast<int>(s.link)) + "/" +
+                    std::to_string(s.status_byte.value_or(0)) + "/" +
+                    std::to_string(s.floor ? static_cast<long>(*s.floor) : -1L) + "/" +
+                    std::to_string(static_cast<int>(s.travel_kind)) + "/" +
+                    std::to_string(s.position_mm ? *s.position_mm / 10 : -1) + "/" +
+                    hex_word(s.data_word) + "/" + std::to_string(s.call_count);
+  for (bool f : s.faults) key += f ? "1" : "0";
+  if (key == last_state_key_ || now - last_state_publish_ < kStatePublishMin) return;
+  last_state_key_ = key;
+  last_state_publish_ = now;
+  server_->publish("state", api::to_json(backend_->status()));
+}
+
+void LiftApp::dump_flight_recorder(std::string_view why) {
+  const std::vector<rt::FrameRecord> records = runner_->recorder().copy();
+  char stamp[32];
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
+  const std::string path = runtime_dir_ + "/liftd-trace-" + stamp + ".txt";
+  const int error = rt::write_text_file(path, records, {});
+  if (error != 0) {
+    log::event(log::Level::warn, "dcp", "trace_not_written", {{"path", path}},
+               "could not write the flight recorder to " + path + ": " + std::strerror(error));
+    return;
+  }
+  std::size_t missing = 0;
+  for (const auto& r : records) {
+    if ((r.flags & (rt::record_flag::kMissing | rt::record_flag::kBad)) != 0) ++missing;
+  }
+  log::event(log::Level::warn, "dcp", "trace_written",
+             {{"path", path},
+              {"frames", std::to_string(records.size())},
+              {"bad_or_missing", std::to_string(missing)}},
+             "flight recorder (" + std::to_string(records.size()) + " frames, " +
+                 std::to_string(missing) + " bad or missing) written to " + path + " after " +
+                 std::string(why));
+}
+
+}  // namespace liftd::daemon

@@ -1,0 +1,73 @@
+// The daemon as one piece: builds the DCP controller, its real-time cycle, the simulated lift
+// (with --simulate) and the API server from the configuration, and registers them as daemon
+// components. The io thread polls the cycle's queues every few milliseconds and turns what it
+// finds into journal lines, API replies and watch events.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "api/server.hpp"
+#include "config/config.hpp"
+#include "control/dcp_controller.hpp"
+#include "daemon/daemon.hpp"
+#include "daemon/lift_backend.hpp"
+#include "io/pty.hpp"
+#include "rt/cycle_runner.hpp"
+
+namespace liftd::daemon {
+
+class SimulatedLift;
+
+/// Everything between the configuration and the running components.
+class LiftApp {
+ public:
+  /// Builds the parts (throws std::invalid_argument / std::runtime_error with a clear message
+  /// on a configuration the parts refuse) and registers them with `daemon`.
+  LiftApp(Daemon& daemon, const config::Config& config, bool simulate);
+  ~LiftApp();
+  LiftApp(const LiftApp&) = delete;
+  LiftApp& operator=(const LiftApp&) = delete;
+
+  /// The API socket path in use.
+  const std::string& socket_path() const { return socket_path_; }
+
+ private:
+  bool start_cycle();
+  void stop_cycle();
+  bool start_api();
+  void stop_api();
+  void schedule_poll();
+  void poll();
+  void publish_state_if_changed(MonoTime now);
+  void log_cycle_events();
+  void handle_event(const control::ControllerEvent& event);
+  void dump_flight_recorder(std::string_view why);
+
+  Daemon& daemon_;
+  const config::Config& config_;
+  bool simulate_;
+  std::string socket_path_;
+  std::string runtime_dir_;
+
+  std::unique_ptr<SimulatedLift> sim_;
+  std::unique_ptr<control::PositionFeed> position_feed_;
+  const control::PositionSource* position_ = nullptr;
+  std::unique_ptr<control::DcpController> controller_;
+  std::unique_ptr<rt::CycleRunner> runner_;
+  std::unique_ptr<LiftBackend> backend_;
+  std::unique_ptr<api::Server> server_;
+
+  asio::steady_timer poll_timer_;
+  bool running_ = false;
+  std::uint64_t last_progress_ = 0;
+  MonoTime last_state_publish_{};
+  MonoTime last_clock_{};
+  MonoTime last_sim_inputs_{};
+  std::string last_state_key_;
+  std::uint32_t last_display_version_ = 0;
+  dcp::LinkState last_link_ = dcp::LinkState::Down;
+};
+
+}  // namespace liftd::daemon

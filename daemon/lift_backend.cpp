@@ -1,0 +1,382 @@
+#include "daemon/lift_backend.hpp"
+
+#include <algorithm>
+#include <ctime>
+
+#include "common/mono_time.hpp"
+#include "dcp/charset.hpp"
+
+namespace liftd::daemon {
+namespace {
+
+using api::Result;
+using control::ReplyCode;
+
+// How long a client waits for the cycle to answer a command. The cycle answers travel
+// commands within a cycle and I-messages within dcp.request_timeout_ms; this only catches a
+// cycle that stopped.
+constexpr std::chrono::seconds kReplyGrace{3};
+
+api::LinkState to_api(dcp::LinkState state) {
+  switch (state) {
+    case dcp::LinkState::Down:
+      return api::LinkState::Down;
+    case dcp::LinkState::Init:
+    case dcp::LinkState::Resetting:
+      return api::LinkState::Init;
+    case dcp::LinkState::Up:
+      return api::LinkState::Up;
+    case dcp::LinkState::Fault:
+      return api::LinkState::Fault;
+  }
+  return api::LinkState::Down;
+}
+
+std::optional<std::string> direction_name(lift::Direction d) {
+  if (d == lift::Direction::Up) return "up";
+  if (d == lift::Direction::Down) return "down";
+  return std::nullopt;
+}
+
+lift::Inputs to_lift(const api::Inputs& in) {
+  lift::Inputs out;
+  out.valid = true;
+  out.safety_chain_closed = in.safety_chain;
+  out.doors_closed = in.doors_closed;
+  out.doors_locked = in.doors_locked;
+  out.inspection = in.inspection;
+  out.recall = in.recall;
+  out.button_up = in.button_up;
+  out.button_down = in.button_down;
+  out.end_zone_top = in.end_zone_top;
+  out.end_zone_bottom = in.end_zone_bottom;
+  out.door_zone_bridge = in.zone_door;
+  // DCP3 shaft signals: the deceleration point of any speed in the direction of travel, and the
+  // level zone (the sequencer only looks at them during a DCP3 travel).
+  out.dcp3_decel_point = in.decel_v4_up || in.decel_v4_down || in.decel_v3_up || in.decel_v3_down ||
+                         in.decel_v2_up || in.decel_v2_down || in.decel_v1_up || in.decel_v1_down;
+  out.dcp3_at_level = in.zone_level;
+  return out;
+}
+
+std::string utf8_row(const std::array<std::uint8_t, dcp::kDisplayColumns>& row) {
+  return dcp::to_utf8(std::span<const std::uint8_t>(row.data(), row.size()));
+}
+
+}  // namespace
+
+api::ErrorCode to_api_error(ReplyCode code) noexcept {
+  switch (code) {
+    case ReplyCode::Ok:
+      break;
+    case ReplyCode::NotReady:
+      return api::ErrorCode::NotReady;
+    case ReplyCode::Busy:
+      return api::ErrorCode::Busy;
+    case ReplyCode::BadRequest:
+      return api::ErrorCode::BadRequest;
+    case ReplyCode::Fault:
+      return api::ErrorCode::Fault;
+    case ReplyCode::Timeout:
+      return api::ErrorCode::Timeout;
+  }
+  return api::ErrorCode::Internal;
+}
+
+LiftBackend::LiftBackend(const config::Config& config, control::DcpController& controller,
+                         rt::CycleRunner& runner, control::PositionFeed* position_feed)
+    : config_(config),
+      controller_(controller),
+      runner_(runner),
+      position_feed_(position_feed),
+      mono_at_start_(mono_now()),
+      wall_at_start_(std::chrono::system_clock::now()) {}
+
+std::chrono::system_clock::time_point LiftBackend::wall_time(MonoTime at) const {
+  return wall_at_start_ +
+         std::chrono::duration_cast<std::chrono::system_clock::duration>(at - mono_at_start_);
+}
+
+// ---- reads ----
+
+api::StatusSnapshot LiftBackend::status() {
+  const control::ControllerSnapshot s = controller_.snapshot();
+  api::StatusSnapshot out;
+  out.link = to_api(s.link);
+  out.drive_mode = s.protocol;
+  if (s.status_byte) out.drive_status = dcp::Status::from_byte(*s.status_byte);
+  out.extended = s.extended;
+  out.position_mm = s.position_mm;
+  if (s.floor) out.floor = static_cast<int>(*s.floor);
+  if (s.next_possible_stop) out.next_possible_stop = static_cast<int>(*s.next_possible_stop);
+  out.travel_state = s.travel_kind == travel::TravelKind::None
+                         ? (s.fast_start_armed ? "fast_start" : "idle")
+                         : std::string(travel::to_string(s.travel_kind));
+  if (s.fast_start_armed) out.travel_state = "fast_start";
+  out.travel_direction = direction_name(s.direction);
+  if (s.target_floor) out.target_floor = static_cast<int>(*s.target_floor);
+  for (std::size_t i = 0; i < s.call_count; ++i) out.calls.push_back(s.calls[i]);
+  out.brake_open = s.brake_open;
+  out.contactors_on = s.contactors_on;
+  out.last_travel_slip_mm = s.last_travel_slip_mm;
+  for (std::size_t i = 0; i < s.faults.size(); ++i) {
+    if (!s.faults[i]) continue;
+    const auto code = static_cast<control::FaultCode>(i);
+    out.faults.push_back({std::string(control::fault_code_name(code)),
+                          std::string(control::fault_text(code)), wall_time(s.fault_since[i])});
+  }
+  const rt::RtThreadStatus& rt = runner_.thread_status();
+  out.rt.realtime = rt.realtime;
+  out.rt.policy = rt.realtime ? "SCHED_FIFO" : "SCHED_OTHER";
+  out.rt.priority = rt.realtime ? config_.rt.priority : 0;
+  out.rt.memory_locked = rt.memory_locked;
+  return out;
+}
+
+api::StatsSnapshot LiftBackend::stats() {
+  const rt::CycleStats cycle = runner_.stats();
+  const dcp::LinkCounters link = controller_.snapshot().link_counters;
+  api::StatsSnapshot out;
+  out.frames_sent = cycle.counters.frames_sent;
+  out.replies_good = link.good_replies;
+  out.checksum_errors = link.bad_checksum;
+  out.missing_replies = link.missing_replies;
+  out.repeats = link.s7_seen;
+  out.link_losses = link.link_faults;
+  out.cycles = cycle.counters.cycles;
+  out.overruns = cycle.counters.overruns;
+  out.max_lateness_us = static_cast<std::uint64_t>(cycle.wake_lateness.max_us());
+  out.max_work_us = static_cast<std::uint64_t>(cycle.work_time.max_us());
+  out.lateness_p99_us = cycle.wake_lateness.percentile_us(0.99);
+  out.reply_p99_us = cycle.reply_latency.percentile_us(0.99);
+  out.b7_sent = link.b7_sent;
+  out.channel_resets = link.channel_resets;
+  out.decode_errors = link.decode_errors;
+  out.request_timeouts = link.request_timeouts;
+  out.longest_error_run = link.longest_error_run;
+  return out;
+}
+
+std::vector<api::TraceEntry> LiftBackend::trace(std::size_t max_entries) {
+  const std::vector<rt::FrameRecord> records = runner_.recorder().copy();
+  std::vector<api::TraceEntry> out;
+  for (const rt::FrameRecord& r : records) {
+    if (r.direction == rt::Direction::Tx && r.length == dcp::kFrameSize) {
+      api::TraceEntry e;
+      e.at = r.time;
+      std::copy_n(r.bytes.begin(), dcp::kFrameSize, e.tx.begin());
+      out.push_back(e);
+    } else if (r.direction == rt::Direction::Rx && !out.empty() && r.length == dcp::kFrameSize &&
+               (r.flags & (rt::record_flag::kReply | rt::record_flag::kBad)) != 0) {
+      dcp::FrameBytes rx{};
+      std::copy_n(r.bytes.begin(), dcp::kFrameSize, rx.begin());
+      out.back().rx = rx;
+    }
+  }
+  if (out.size() > max_entries) {
+    out.erase(out.begin(), out.end() - static_cast<std::ptrdiff_t>(max_entries));
+  }
+  return out;
+}
+
+api::DisplaySnapshot LiftBackend::display() {
+  const control::ControllerSnapshot s = controller_.snapshot();
+  api::DisplaySnapshot out;
+  for (const auto& row : s.display) out.lines.push_back(utf8_row(row));
+  return out;
+}
+
+nlohmann::json LiftBackend::config() {
+  return config::to_json(config_);
+}
+
+// ---- commands through the cycle ----
+
+void LiftBackend::send(control::CommandBody body, api::Responder done, Completion complete) {
+  std::uint32_t tag = ++next_tag_;
+  if (tag == 0 || tag == 0xFFFF'FFFFU) tag = next_tag_ = 1;  // 0: no reply; max: the travel's own
+  if (!controller_.post(control::Command{tag, std::move(body)})) {
+    done(Result::fail(api::ErrorCode::Busy, "the cycle's command queue is full; try again"));
+    return;
+  }
+  pending_[tag] = Pending{std::move(done), std::move(complete), mono_now() + kReplyGrace};
+}
+
+void LiftBackend::send_ok(control::CommandBody body, api::Responder done) {
+  send(std::move(body), std::move(done), [](const control::CommandReply& r) {
+    nlohmann::json result = nlohmann::json::object();
+    if (!r.detail.empty()) result["detail"] = std::string(r.detail);
+    if (r.extended) result["extended"] = true;
+    return Result::ok(std::move(result));
+  });
+}
+
+void LiftBackend::poll(MonoTime now) {
+  control::CommandReply r;
+  while (controller_.poll_reply(r)) {
+    auto it = pending_.find(r.tag);
+    if (it == pending_.end()) continue;  // its client gave up long ago
+    Pending p = std::move(it->second);
+    pending_.erase(it);
+    if (r.code == ReplyCode::Ok) {
+      p.done(p.complete(r));
+    } else {
+      p.done(Result::fail(to_api_error(r.code), std::string(r.detail)));
+    }
+  }
+  for (auto it = pending_.begin(); it != pending_.end();) {
+    if (now > it->second.deadline) {
+      it->second.done(Result::fail(api::ErrorCode::Internal,
+                                   "the real-time cycle did not answer; see the journal"));
+      it = pending_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+void LiftBackend::key(int button, api::Responder done) {
+  // DCP 5.6.3: button n is bit 0x04 << (n - 1).
+  const auto bits = static_cast<std::uint8_t>(0x04U << (button - 1));
+  send_ok(control::LinkCommand{dcp::KeypadPress{bits}}, std::move(done));
+}
+
+void LiftBackend::drive_reset(api::Responder done) {
+  if (controller_.snapshot().travel_kind != travel::TravelKind::None) {
+    done(Result::fail(api::ErrorCode::Busy, "a travel is running: no drive reset during travel"));
+    return;
+  }
+  send(control::LinkCommand{dcp::SwitchRequest{dcp::SwitchFunction::Reset}}, std::move(done),
+       [](const control::CommandReply& r) {
+         // DCP 5.12.4.2: 'R' = reset follows within 1000 ms; '0' = the drive cannot reset.
+         const auto* reply =
+             r.drive_reply ? std::get_if<dcp::SwitchReply>(&*r.drive_reply) : nullptr;
+         if (reply && reply->function != dcp::SwitchFunction::Reset) {
+           return Result::fail(api::ErrorCode::Fault, "the drive answered that it cannot reset");
+         }
+         return Result::ok(
+             {{"reset", true},
+              {"detail", "reset within 1000 ms; link re-initialises about 5 s later"}});
+       });
+}
+
+void LiftBackend::power(api::PowerSetting setting, api::Responder done) {
+  dcp::PowerRequest request;
+  request.supply = setting.emergency ? dcp::PowerSupply::Emergency : dcp::PowerSupply::Mains;
+  request.saving = static_cast<dcp::EnergySaving>('0' + setting.saving);
+  send(control::LinkCommand{request}, std::move(done), [](const control::CommandReply& r) {
+    api::PowerSetting actual;
+    if (const auto* reply =
+            r.drive_reply ? std::get_if<dcp::PowerReply>(&*r.drive_reply) : nullptr) {
+      actual.emergency = reply->supply == dcp::PowerSupply::Emergency;
+      actual.saving = static_cast<int>(reply->saving) - '0';
+    }
+    return Result::ok(api::to_json(actual));
+  });
+}
+
+void LiftBackend::load(int percent, api::Responder done) {
+  send_ok(control::LinkCommand{dcp::LoadRequest{static_cast<std::uint16_t>(percent)}},
+          std::move(done));
+}
+
+void LiftBackend::update_inputs(const api::InputUpdate& update, api::Responder done) {
+  if (update.position_mm && config_.position.source != config::PositionSource::api) {
+    done(Result::fail(api::ErrorCode::BadRequest,
+                      "position_mm is only accepted when position.source is \"api\"",
+                      "position_mm"));
+    return;
+  }
+  update.apply_to(inputs_);
+  if (update.position_mm && position_feed_ != nullptr) {
+    position_feed_->set(*update.position_mm, mono_now());
+  }
+  send_inputs(to_lift(inputs_));
+  done(Result::ok(api::to_json(inputs_)));
+}
+
+void LiftBackend::send_inputs(const lift::Inputs& inputs) {
+  (void)controller_.post(control::Command{0, control::InputsCommand{inputs}});
+}
+
+void LiftBackend::send_clock(std::chrono::system_clock::time_point now) {
+  const std::time_t t = std::chrono::system_clock::to_time_t(now);
+  std::tm local{};
+  localtime_r(&t, &local);
+  dcp::CivilTime time;
+  time.year = static_cast<std::uint16_t>(local.tm_year + 1900);
+  time.month = static_cast<std::uint8_t>(local.tm_mon + 1);
+  time.day = static_cast<std::uint8_t>(local.tm_mday);
+  time.hour = static_cast<std::uint8_t>(local.tm_hour);
+  time.minute = static_cast<std::uint8_t>(local.tm_min);
+  time.second = static_cast<std::uint8_t>(local.tm_sec);
+  (void)controller_.post(control::Command{0, control::ClockCommand{time}});
+}
+
+// ---- travel commands ----
+
+namespace {
+
+control::TravelCommand travel_command(const api::TravelArgs& args) {
+  control::TravelCommand cmd;
+  cmd.floor = static_cast<std::size_t>(args.floor);
+  if (args.speed) cmd.speed = dcp::speed_from_string(*args.speed);
+  if (args.load_percent) cmd.load_percent = static_cast<std::uint8_t>(*args.load_percent);
+  return cmd;
+}
+
+}  // namespace
+
+void LiftBackend::travel(const api::TravelArgs& args, api::Responder done) {
+  send_ok(travel_command(args), std::move(done));
+}
+
+void LiftBackend::stop(api::Responder done) {
+  send_ok(control::StopCommand{}, std::move(done));
+}
+
+void LiftBackend::fast_stop(api::Responder done) {
+  send_ok(control::FastStopCommand{}, std::move(done));
+}
+
+void LiftBackend::relevel(api::Responder done) {
+  send_ok(control::RelevelCommand{}, std::move(done));
+}
+
+void LiftBackend::inspection(bool on, const std::string& direction, api::Responder done) {
+  control::InspectionCommand cmd;
+  cmd.on = on;
+  cmd.direction = direction == "up"     ? lift::Direction::Up
+                  : direction == "down" ? lift::Direction::Down
+                                        : lift::Direction::None;
+  send_ok(cmd, std::move(done));
+}
+
+void LiftBackend::fast_start(const std::string& action, const api::TravelArgs& args,
+                             api::Responder done) {
+  if (action == "arm") {
+    control::TravelCommand cmd = travel_command(args);
+    cmd.fast_start = true;
+    send_ok(cmd, std::move(done));
+    return;
+  }
+  send_ok(control::FastStartCommand{action == "go" ? control::FastStartCommand::Action::Go
+                                                   : control::FastStartCommand::Action::Abort},
+          std::move(done));
+}
+
+void LiftBackend::calls(const std::string& action, std::optional<int> floor, api::Responder done) {
+  if (action == "list") {
+    const auto s = controller_.snapshot();
+    nlohmann::json list = nlohmann::json::array();
+    for (std::size_t i = 0; i < s.call_count; ++i) list.push_back(s.calls[i]);
+    done(Result::ok({{"calls", list}}));
+    return;
+  }
+  control::CallCommand cmd;
+  cmd.add = action == "add";
+  cmd.floor = static_cast<std::size_t>(floor.value_or(0));
+  send_ok(cmd, std::move(done));
+}
+
+}  // namespace liftd::daemon

@@ -1,0 +1,85 @@
+// The API's view of the lift: turns DcpController snapshots into API results and API requests
+// into controller commands, matching each reply to its waiting client by tag. Runs on the io
+// thread only; the controller is reached through its lock-free queues.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+
+#include "api/backend.hpp"
+#include "api/dispatcher.hpp"
+#include "config/config.hpp"
+#include "control/dcp_controller.hpp"
+#include "rt/cycle_runner.hpp"
+
+namespace liftd::daemon {
+
+/// api::Backend over a DcpController and its CycleRunner.
+class LiftBackend final : public api::Backend {
+ public:
+  /// `position_feed` is written by `inputs` when position.source is "api" (else nullptr).
+  LiftBackend(const config::Config& config, control::DcpController& controller,
+              rt::CycleRunner& runner, control::PositionFeed* position_feed);
+
+  // ---- api::Backend ----
+  api::StatusSnapshot status() override;
+  api::StatsSnapshot stats() override;
+  std::vector<api::TraceEntry> trace(std::size_t max_entries) override;
+  api::DisplaySnapshot display() override;
+  nlohmann::json config() override;
+  void key(int button, api::Responder done) override;
+  void drive_reset(api::Responder done) override;
+  void power(api::PowerSetting setting, api::Responder done) override;
+  void load(int percent, api::Responder done) override;
+  void update_inputs(const api::InputUpdate& update, api::Responder done) override;
+
+  void travel(const api::TravelArgs& args, api::Responder done) override;
+  void stop(api::Responder done) override;
+  void fast_stop(api::Responder done) override;
+  void relevel(api::Responder done) override;
+  void inspection(bool on, const std::string& direction, api::Responder done) override;
+  void fast_start(const std::string& action, const api::TravelArgs& args,
+                  api::Responder done) override;
+  void calls(const std::string& action, std::optional<int> floor, api::Responder done) override;
+
+  /// Io thread, every few ms: hands controller replies to their waiting clients and times out
+  /// requests the cycle never answered (it stopped).
+  void poll(MonoTime now);
+  /// Sends a full input set to the cycle (the simulated I/O board uses this).
+  void send_inputs(const lift::Inputs& inputs);
+  /// Sends the wall clock to the cycle for I3.
+  void send_clock(std::chrono::system_clock::time_point now);
+
+  /// Wall-clock time of a monotonic instant (for fault "since" fields).
+  std::chrono::system_clock::time_point wall_time(MonoTime at) const;
+
+ private:
+  using Completion = std::function<api::Result(const control::CommandReply&)>;
+  struct Pending {
+    api::Responder done;
+    Completion complete;
+    MonoTime deadline{};
+  };
+
+  /// Posts a command; the responder gets `complete(reply)` or an error.
+  void send(control::CommandBody body, api::Responder done, Completion complete);
+  void send_ok(control::CommandBody body, api::Responder done);
+
+  const config::Config& config_;
+  control::DcpController& controller_;
+  rt::CycleRunner& runner_;
+  control::PositionFeed* position_feed_;
+  api::Inputs inputs_{};  ///< merged API input state (partial updates keep the rest)
+  std::map<std::uint32_t, Pending> pending_;
+  std::uint32_t next_tag_ = 0;
+  MonoTime mono_at_start_{};
+  std::chrono::system_clock::time_point wall_at_start_{};
+};
+
+/// The API error code for a controller reply code.
+api::ErrorCode to_api_error(control::ReplyCode code) noexcept;
+
+}  // namespace liftd::daemon

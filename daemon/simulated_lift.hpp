@@ -1,0 +1,51 @@
+// The simulated lift for `liftd --simulate`: the simulated drive serving one end of a
+// pseudo-terminal (the cycle opens the other end exactly as it would a real RS485 port), the
+// simulated encoder as the position source, and the simulated I/O board.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "config/config.hpp"
+#include "control/dcp_controller.hpp"
+#include "io/pty.hpp"
+#include "lift/inputs.hpp"
+#include "sim/serial_runner.hpp"
+#include "sim/sim_io.hpp"
+
+namespace liftd::daemon {
+
+/// Drive simulator on a pty, encoder and I/O board for --simulate.
+class SimulatedLift {
+ public:
+  /// Creates the pty pair; throws std::runtime_error naming the failing call.
+  explicit SimulatedLift(const config::Config& config);
+  ~SimulatedLift();
+  SimulatedLift(const SimulatedLift&) = delete;
+  SimulatedLift& operator=(const SimulatedLift&) = delete;
+
+  /// The serial device the cycle opens (the pty's slave side).
+  const std::string& device_path() const { return device_path_; }
+  /// Starts the drive simulator thread.
+  bool start();
+  /// Stops it (idempotent).
+  void stop();
+  /// The simulated absolute encoder, read by the cycle thread (lock-free).
+  const control::PositionSource& position() const;
+  /// The simulated I/O board's inputs now (io thread).
+  lift::Inputs inputs(MonoTime now);
+  /// Logs what the simulated drive did since the last call (io thread).
+  void log_events();
+
+ private:
+  class Encoder;
+
+  std::unique_ptr<io::PtyPair> pty_;  ///< held open so the cycle's side never sees a hang-up
+  std::string device_path_;
+  std::unique_ptr<sim::SerialDriveRunner> drive_;
+  std::unique_ptr<Encoder> position_;
+  sim::SimulatedIo io_;
+  bool started_ = false;
+};
+
+}  // namespace liftd::daemon

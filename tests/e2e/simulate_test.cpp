@@ -1,0 +1,238 @@
+// End to end: `liftd --simulate` as a process (real pty, real cycle thread, real API socket),
+// driven through the JSON API and the liftctl binary the way a dispatcher and a technician would.
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+
+#include "daemon/process.hpp"
+
+namespace {
+
+using namespace std::chrono_literals;
+using liftd::testing::Process;
+using nlohmann::json;
+
+/// A line client of the API socket with a receive deadline.
+class Client {
+ public:
+  explicit Client(const std::string& path) {
+    fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    path.copy(addr.sun_path, sizeof(addr.sun_path) - 1);
+    if (::connect(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+      ::close(fd_);
+      fd_ = -1;
+    }
+  }
+  ~Client() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  bool connected() const { return fd_ >= 0; }
+
+  void send(const json& request) {
+    const std::string line = request.dump() + "\n";
+    ASSERT_EQ(::write(fd_, line.data(), line.size()), static_cast<ssize_t>(line.size()));
+  }
+  /// The next line as JSON, or null after `timeout`.
+  json next(std::chrono::milliseconds timeout = 5s) {
+    const auto end = std::chrono::steady_clock::now() + timeout;
+    while (true) {
+      if (auto pos = buffer_.find('\n'); pos != std::string::npos) {
+        const std::string line = buffer_.substr(0, pos);
+        buffer_.erase(0, pos + 1);
+        return json::parse(line);
+      }
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+          end - std::chrono::steady_clock::now());
+      if (left.count() <= 0) return nullptr;
+      timeval tv{0, static_cast<suseconds_t>(std::min<long>(left.count(), 200) * 1000)};
+      ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+      char chunk[4096];
+      const ssize_t n = ::read(fd_, chunk, sizeof chunk);
+      if (n > 0) buffer_.append(chunk, static_cast<std::size_t>(n));
+      if (n == 0) return nullptr;
+    }
+  }
+  /// Sends a request with an id and returns its reply (events in between are skipped).
+  json call(json request, std::chrono::milliseconds timeout = 5s) {
+    request["id"] = ++id_;
+    send(request);
+    const auto end = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < end) {
+      json line = next(timeout);
+      if (line.is_null()) break;
+      if (line.contains("id") && line["id"] == id_) return line;
+    }
+    return nullptr;
+  }
+  /// Waits for an event `name` whose data satisfies `match`.
+  template <typename Match>
+  json wait_event(const std::string& name, Match match, std::chrono::milliseconds timeout) {
+    const auto end = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < end) {
+      json line = next(1s);
+      if (line.is_object() && line.value("event", "") == name && match(line["data"])) return line;
+    }
+    return nullptr;
+  }
+
+ private:
+  int fd_ = -1;
+  int id_ = 0;
+  std::string buffer_;
+};
+
+class SimulateTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = std::filesystem::temp_directory_path() / ("liftd-e2e-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir_);
+    socket_ = (dir_ / "liftd-sim.sock").string();
+    daemon_ = std::make_unique<Process>(
+        std::vector<std::string>{LIFTD_BINARY, "--simulate"},
+        std::vector<std::string>{"XDG_RUNTIME_DIR=" + dir_.string(), "PATH=/usr/bin:/bin"},
+        dir_.string(), "liftd");
+    // The link is up once I0, I1 and I3 went through (well under a second on a quiet machine).
+    for (int i = 0; i < 300; ++i) {
+      Client c(socket_);
+      if (c.connected()) {
+        c.next();  // hello
+        json r = c.call({{"cmd", "status"}});
+        if (r.is_object() && r["result"]["link"]["state"] == "up") return;
+      }
+      std::this_thread::sleep_for(100ms);
+    }
+  }
+  static void TearDownTestSuite() {
+    daemon_.reset();
+    std::filesystem::remove_all(dir_);
+  }
+  /// Runs liftctl with arguments; returns stdout (exit code in `code`).
+  static std::string liftctl(const std::vector<std::string>& args, int* code = nullptr) {
+    std::vector<std::string> argv = {LIFTCTL_BINARY, "--socket", socket_};
+    argv.insert(argv.end(), args.begin(), args.end());
+    Process p(argv, {"PATH=/usr/bin:/bin"}, dir_.string(), "liftctl");
+    const auto rc = p.wait(10s);
+    if (code != nullptr) *code = rc.value_or(-1);
+    return p.out() + p.err();
+  }
+
+  static inline std::filesystem::path dir_;
+  static inline std::string socket_;
+  static inline std::unique_ptr<Process> daemon_;
+};
+
+TEST_F(SimulateTest, LinkComesUpAndLiftctlShowsIt) {
+  Client c(socket_);
+  ASSERT_TRUE(c.connected()) << daemon_->err();
+  const json hello = c.next();
+  ASSERT_EQ(hello.value("event", ""), "hello");
+  const json status = c.call({{"cmd", "status"}});
+  ASSERT_TRUE(status["ok"].get<bool>()) << status.dump();
+  EXPECT_EQ(status["result"]["link"]["state"], "up") << daemon_->err();
+  EXPECT_EQ(status["result"]["drive"]["mode"], "DCP4");
+  EXPECT_EQ(status["result"]["car"]["floor"], 0);
+  EXPECT_TRUE(status["result"]["faults"].empty()) << status.dump();
+  int code = -1;
+  const std::string text = liftctl({"status"}, &code);
+  EXPECT_EQ(code, 0) << text;
+  EXPECT_NE(text.find("up"), std::string::npos) << text;
+  EXPECT_NE(text.find("DCP4"), std::string::npos) << text;
+}
+
+TEST_F(SimulateTest, WatchSeesTheDrivesDisplayAfterAKeypress) {
+  Client watcher(socket_);
+  watcher.next();
+  ASSERT_TRUE(watcher.call({{"cmd", "watch"}, {"enable", true}})["ok"].get<bool>());
+  Client control(socket_);
+  control.next();
+  const json key = control.call({{"cmd", "key"}, {"key", 1}});
+  ASSERT_TRUE(key["ok"].get<bool>()) << key.dump();
+  const json display = watcher.wait_event(
+      "display",
+      [](const json& d) {
+        for (const auto& line : d["lines"]) {
+          if (line.get<std::string>().find_first_not_of(' ') != std::string::npos) return true;
+        }
+        return false;
+      },
+      10s);
+  ASSERT_FALSE(display.is_null()) << "no display text after a keypress";
+  const std::string text = liftctl({"display"});
+  EXPECT_NE(text.find_first_not_of(" |+-\n"), std::string::npos) << text;
+}
+
+TEST_F(SimulateTest, TravelThroughTheApiLandsOnTheFloorAndEndsWithDriveEnableOff) {
+  Client watcher(socket_);
+  watcher.next();
+  ASSERT_TRUE(watcher.call({{"cmd", "watch"}, {"enable", true}})["ok"].get<bool>());
+  Client control(socket_);
+  control.next();
+  const json r = control.call({{"cmd", "travel"}, {"floor", 2}});
+  ASSERT_TRUE(r["ok"].get<bool>()) << r.dump();
+  const json finished = watcher.wait_event(
+      "travel", [](const json& d) { return d["event"] == "finished"; }, 60s);
+  ASSERT_FALSE(finished.is_null()) << daemon_->err();
+  EXPECT_NEAR(finished["data"]["position_mm"].get<double>(), 6000.0, 2.0);
+  std::this_thread::sleep_for(300ms);
+  const json status = control.call({{"cmd", "status"}});
+  EXPECT_EQ(status["result"]["car"]["floor"], 2);
+  EXPECT_EQ(status["result"]["travel"]["state"], "idle");
+  // The newest frames on the wire: drive enable (B0) off while stationary (DCP 9.1.1).
+  const json trace = control.call({{"cmd", "trace"}, {"count", 3}});
+  ASSERT_TRUE(trace["ok"].get<bool>()) << trace.dump();
+  for (const auto& e : trace["result"]["frames"]) {
+    const std::string tx = e["tx"];
+    const int command = std::stoi(tx.substr(0, 2), nullptr, 16);
+    EXPECT_EQ(command & 0x01, 0) << tx;
+  }
+}
+
+TEST_F(SimulateTest, CallsAreServedInOrder) {
+  Client watcher(socket_);
+  watcher.next();
+  ASSERT_TRUE(watcher.call({{"cmd", "watch"}, {"enable", true}})["ok"].get<bool>());
+  Client control(socket_);
+  control.next();
+  ASSERT_TRUE(control.call({{"cmd", "calls"}, {"action", "add"}, {"floor", 4}})["ok"].get<bool>());
+  ASSERT_TRUE(control.call({{"cmd", "calls"}, {"action", "add"}, {"floor", 1}})["ok"].get<bool>());
+  const json first = watcher.wait_event(
+      "call_served", [](const json&) { return true; }, 60s);
+  ASSERT_FALSE(first.is_null());
+  EXPECT_EQ(first["data"]["floor"], 4);
+  const json second = watcher.wait_event(
+      "call_served", [](const json&) { return true; }, 60s);
+  ASSERT_FALSE(second.is_null());
+  EXPECT_EQ(second["data"]["floor"], 1);
+}
+
+TEST_F(SimulateTest, RefusesATravelToAFloorThatDoesNotExist) {
+  Client control(socket_);
+  control.next();
+  const json r = control.call({{"cmd", "travel"}, {"floor", 99}});
+  EXPECT_FALSE(r["ok"].get<bool>());
+  EXPECT_EQ(r["error"]["code"], "bad_request");
+  EXPECT_NE(r["error"]["message"].get<std::string>().find("floor"), std::string::npos);
+}
+
+// Last: SIGTERM stops the whole stack cleanly with exit code 0.
+TEST_F(SimulateTest, ZzSigtermStopsCleanly) {
+  daemon_->signal(SIGTERM);
+  const auto code = daemon_->wait(5s);
+  ASSERT_TRUE(code.has_value());
+  EXPECT_EQ(*code, 0) << daemon_->err();
+}
+
+}  // namespace
