@@ -153,7 +153,8 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
   runner_ = std::make_unique<rt::CycleRunner>(cycle_config(config, device), *controller_);
   backend_ = std::make_unique<LiftBackend>(
       config, *controller_, *runner_,
-      config.position.source == config::PositionSource::api ? position_feed_.get() : nullptr);
+      config.position.source == config::PositionSource::api ? position_feed_.get() : nullptr,
+      runtime_dir_);
 
   api::ServerConfig server;
   server.socket_path = socket_path_;
@@ -380,30 +381,7 @@ void LiftApp::publish_state_if_changed(MonoTime now) {
 }
 
 void LiftApp::dump_flight_recorder(std::string_view why) {
-  const std::vector<rt::FrameRecord> records = runner_->recorder().copy();
-  char stamp[32];
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
-  const std::string path = runtime_dir_ + "/liftd-trace-" + stamp + ".txt";
-  const int error = rt::write_text_file(path, records, {});
-  if (error != 0) {
-    log::event(log::Level::warn, "dcp", "trace_not_written", {{"path", path}},
-               "could not write the flight recorder to " + path + ": " + std::strerror(error));
-    return;
-  }
-  std::size_t missing = 0;
-  for (const auto& r : records) {
-    if ((r.flags & (rt::record_flag::kMissing | rt::record_flag::kBad)) != 0) ++missing;
-  }
-  log::event(log::Level::warn, "dcp", "trace_written",
-             {{"path", path},
-              {"frames", std::to_string(records.size())},
-              {"bad_or_missing", std::to_string(missing)}},
-             "flight recorder (" + std::to_string(records.size()) + " frames, " +
-                 std::to_string(missing) + " bad or missing) written to " + path + " after " +
-                 std::string(why));
+  (void)backend_->write_flight_recorder(why);
 }
 
 }  // namespace liftd::daemon

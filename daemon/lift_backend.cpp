@@ -5,6 +5,10 @@
 
 #include "common/mono_time.hpp"
 #include "dcp/charset.hpp"
+#include "dcp/trace.hpp"
+#include "log/log.hpp"
+
+#include <cstring>
 
 namespace liftd::daemon {
 namespace {
@@ -84,11 +88,13 @@ api::ErrorCode to_api_error(ReplyCode code) noexcept {
 }
 
 LiftBackend::LiftBackend(const config::Config& config, control::DcpController& controller,
-                         rt::CycleRunner& runner, control::PositionFeed* position_feed)
+                         rt::CycleRunner& runner, control::PositionFeed* position_feed,
+                         std::string runtime_dir)
     : config_(config),
       controller_(controller),
       runner_(runner),
       position_feed_(position_feed),
+      runtime_dir_(std::move(runtime_dir)),
       mono_at_start_(mono_now()),
       wall_at_start_(std::chrono::system_clock::now()) {}
 
@@ -177,6 +183,42 @@ std::vector<api::TraceEntry> LiftBackend::trace(std::size_t max_entries) {
     out.erase(out.begin(), out.end() - static_cast<std::ptrdiff_t>(max_entries));
   }
   return out;
+}
+
+api::Result LiftBackend::save_trace() {
+  return write_flight_recorder("request");
+}
+
+api::Result LiftBackend::write_flight_recorder(std::string_view why) {
+  const std::vector<rt::FrameRecord> records = runner_.recorder().copy();
+  char stamp[32];
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
+  const std::string path = runtime_dir_ + "/liftd-trace-" + stamp + ".txt";
+  dcp::TraceOptions options;
+  options.protocol = controller_.snapshot().protocol.value_or(dcp::Protocol::Dcp4);
+  options.data_info = *dcp::data_info_type_from_char(config_.dcp.data_info_type);
+  const int error = rt::write_text_file(path, records, dcp::trace_decoder(options));
+  if (error != 0) {
+    const std::string text =
+        "could not write the flight recorder to " + path + ": " + std::strerror(error);
+    log::event(log::Level::warn, "dcp", "trace_not_written", {{"path", path}}, text);
+    return Result::fail(api::ErrorCode::Internal, text);
+  }
+  std::size_t bad = 0;
+  for (const auto& r : records) {
+    if ((r.flags & (rt::record_flag::kMissing | rt::record_flag::kBad)) != 0) ++bad;
+  }
+  log::event(log::Level::warn, "dcp", "trace_written",
+             {{"path", path},
+              {"records", std::to_string(records.size())},
+              {"bad_or_missing", std::to_string(bad)}},
+             "flight recorder (" + std::to_string(records.size()) + " records, " +
+                 std::to_string(bad) + " bad or missing replies) written to " + path + " after " +
+                 std::string(why));
+  return Result::ok({{"file", path}, {"records", records.size()}});
 }
 
 api::DisplaySnapshot LiftBackend::display() {

@@ -8,6 +8,8 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <string>
+#include <string_view>
 
 #include "api/backend.hpp"
 #include "api/dispatcher.hpp"
@@ -22,12 +24,14 @@ class LiftBackend final : public api::Backend {
  public:
   /// `position_feed` is written by `inputs` when position.source is "api" (else nullptr).
   LiftBackend(const config::Config& config, control::DcpController& controller,
-              rt::CycleRunner& runner, control::PositionFeed* position_feed);
+              rt::CycleRunner& runner, control::PositionFeed* position_feed,
+              std::string runtime_dir);
 
   // ---- api::Backend ----
   api::StatusSnapshot status() override;
   api::StatsSnapshot stats() override;
   std::vector<api::TraceEntry> trace(std::size_t max_entries) override;
+  api::Result save_trace() override;
   api::DisplaySnapshot display() override;
   nlohmann::json config() override;
   void key(int button, api::Responder done) override;
@@ -53,6 +57,10 @@ class LiftBackend final : public api::Backend {
   /// Sends the wall clock to the cycle for I3.
   void send_clock(std::chrono::system_clock::time_point now);
 
+  /// Writes the flight recorder, decoded, to `<runtime dir>/liftd-trace-<UTC time>.txt` and logs
+  /// it with `why`. Returns the path and record count, or the error text.
+  api::Result write_flight_recorder(std::string_view why);
+
   /// Wall-clock time of a monotonic instant (for fault "since" fields).
   std::chrono::system_clock::time_point wall_time(MonoTime at) const;
 
@@ -72,6 +80,7 @@ class LiftBackend final : public api::Backend {
   control::DcpController& controller_;
   rt::CycleRunner& runner_;
   control::PositionFeed* position_feed_;
+  std::string runtime_dir_;
   api::Inputs inputs_{};  ///< merged API input state (partial updates keep the rest)
   std::map<std::uint32_t, Pending> pending_;
   std::uint32_t next_tag_ = 0;

@@ -206,6 +206,10 @@ void no_travel(Responder& done) {
 }
 }  // namespace
 
+Result Backend::save_trace() {
+  return Result::fail(ErrorCode::NotReady, "this daemon keeps no flight recorder");
+}
+
 void Backend::travel(const TravelArgs&, Responder done) {
   no_travel(done);
 }

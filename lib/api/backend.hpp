@@ -169,6 +169,9 @@ class Backend {
   virtual StatsSnapshot stats() = 0;
   /// The newest `max_entries` trace entries, oldest first.
   virtual std::vector<TraceEntry> trace(std::size_t max_entries) = 0;
+  /// Writes the whole flight recorder, decoded, to a file; the result names it ({"file": path,
+  /// "records": n}). A backend without a recorder refuses.
+  virtual Result save_trace();
   /// Current contents of the drive's remote display.
   virtual DisplaySnapshot display() = 0;
   /// The effective configuration (as loaded and defaulted) for `config`.

@@ -86,7 +86,8 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
   dispatcher.add(
       {"trace",
        Access::Read,
-       {int_arg("count", false, 1, kMaxTraceEntries, "newest frames to return (default 100)")},
+       {int_arg("count", false, 1, kMaxTraceEntries, "newest frames to return (default 100)"),
+        flag_arg("save", "also write the whole flight recorder, decoded, to a file")},
        "the newest DCP frames sent and received",
        [b](const Call& call, Responder done) {
          const auto count = arg_or<std::int64_t>(call.request, "count", 100);
@@ -94,7 +95,16 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
          for (const auto& entry : b->trace(static_cast<std::size_t>(count))) {
            frames.push_back(to_json(entry));
          }
-         done(Result::ok({{"frames", std::move(frames)}}));
+         nlohmann::json result = {{"frames", std::move(frames)}};
+         if (arg_or<bool>(call.request, "save", false)) {
+           Result saved = b->save_trace();
+           if (!saved.is_ok()) {
+             done(std::move(saved));
+             return;
+           }
+           result.update(saved.value());
+         }
+         done(Result::ok(std::move(result)));
        }});
 
   dispatcher.add(

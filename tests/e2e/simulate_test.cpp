@@ -10,6 +10,8 @@
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -216,6 +218,20 @@ TEST_F(SimulateTest, CallsAreServedInOrder) {
       "call_served", [](const json&) { return true; }, 60s);
   ASSERT_FALSE(second.is_null());
   EXPECT_EQ(second["data"]["floor"], 1);
+}
+
+TEST_F(SimulateTest, TraceSaveWritesTheDecodedFlightRecorder) {
+  Client control(socket_);
+  control.next();
+  const json r = control.call({{"cmd", "trace"}, {"count", 1}, {"save", true}});
+  ASSERT_TRUE(r["ok"].get<bool>()) << r.dump();
+  const std::string path = r["result"]["file"];
+  EXPECT_EQ(std::filesystem::path(path).parent_path(), dir_);
+  EXPECT_GT(r["result"]["records"].get<int>(), 10);
+  std::ifstream in(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Every reply of a running link is decoded: the drive's ready bit by name.
+  EXPECT_NE(text.find("S0:ready"), std::string::npos) << text.substr(0, 2000);
 }
 
 TEST_F(SimulateTest, RefusesATravelToAFloorThatDoesNotExist) {
