@@ -123,6 +123,22 @@ log::Level level_for(control::ControllerEvent::Kind kind) {
 
 }  // namespace
 
+config::Config simulation_defaults() {
+  config::Config cfg;
+  cfg.position.source = config::PositionSource::sim;
+  const char* runtime = std::getenv("XDG_RUNTIME_DIR");
+  cfg.api.socket =
+      std::string(runtime != nullptr && *runtime != '\0' ? runtime : ".") + "/liftd-sim.sock";
+  cfg.api.socket_group.clear();
+  cfg.api.read_group.clear();
+  cfg.api.control_group.clear();
+  cfg.api.inputs_group.clear();
+  cfg.rt.lock_memory = false;  // an ordinary user may not lock memory; say nothing about it
+  // The simulator's crawl (V0) stop takes about 8 mm: DCP3 travels withdraw B2 that early.
+  cfg.travel.dcp3_stop_lead_mm = 8;
+  return cfg;
+}
+
 LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
     : daemon_(daemon),
       config_(config),

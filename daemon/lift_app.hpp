@@ -20,6 +20,11 @@ namespace liftd::daemon {
 
 class SimulatedLift;
 
+/// The configuration of `liftd --simulate` without a config file: the defaults, the API socket in
+/// $XDG_RUNTIME_DIR (else the current directory) as liftd-sim.sock, no access groups (root and
+/// the user who started it may do everything), no memory locking.
+config::Config simulation_defaults();
+
 /// Everything between the configuration and the running components.
 class LiftApp {
  public:
@@ -32,6 +37,8 @@ class LiftApp {
 
   /// The API socket path in use.
   const std::string& socket_path() const { return socket_path_; }
+  /// The real-time cycle (statistics for benchmarks and diagnostics).
+  const rt::CycleRunner& cycle() const { return *runner_; }
 
  private:
   bool start_cycle();

@@ -49,27 +49,9 @@ int check_config(const std::string& path) {
   return exit_code::kOk;
 }
 
-// --simulate without a config file: the defaults, a socket the current user can create, and no
-// access groups (root and the user who started it may do everything).
-config::Config simulation_defaults() {
-  config::Config cfg;
-  cfg.position.source = config::PositionSource::sim;
-  const char* runtime = std::getenv("XDG_RUNTIME_DIR");
-  cfg.api.socket =
-      std::string(runtime != nullptr && *runtime != '\0' ? runtime : ".") + "/liftd-sim.sock";
-  cfg.api.socket_group.clear();
-  cfg.api.read_group.clear();
-  cfg.api.control_group.clear();
-  cfg.api.inputs_group.clear();
-  cfg.rt.lock_memory = false;  // an ordinary user may not lock memory; say nothing about it
-  // The simulator's crawl (V0) stop takes about 8 mm: DCP3 travels withdraw B2 that early.
-  cfg.travel.dcp3_stop_lead_mm = 8;
-  return cfg;
-}
-
 // Loads the configuration the command line names; the defaults when simulating without one.
 std::optional<config::Config> load_config(const CommandLine& cl, bool to_log) {
-  if (cl.simulate && !cl.config_path) return simulation_defaults();
+  if (cl.simulate && !cl.config_path) return liftd::daemon::simulation_defaults();
   const std::string path = cl.config_path.value_or(std::string(liftd::daemon::kDefaultConfigPath));
   auto result = config::load_file(path);
   if (!result.ok()) {

@@ -1,0 +1,255 @@
+// api-load-bench: what API load does to the real-time cycle. Runs the real daemon wiring in
+// process (Daemon + LiftApp with the simulated lift on a pty, the cycle thread at its configured
+// priority, the API server), keeps the car travelling between the lowest and the top floor, and
+// measures the cycle's wake-up lateness in a quiet window and then in windows where 1, 8 and 32
+// clients hammer `status` as fast as they can. The same run, the same machine: the ratios are
+// the figures to read. Also prints requests per second and request latency per load.
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "common/mono_time.hpp"
+#include "daemon/daemon.hpp"
+#include "daemon/lift_app.hpp"
+#include "log/log.hpp"
+#include "rt/histogram.hpp"
+#include "service/notify.hpp"
+
+namespace {
+
+using namespace std::chrono_literals;
+using liftd::rt::HistogramData;
+using nlohmann::json;
+
+/// A blocking line client of the API socket.
+class Client {
+ public:
+  explicit Client(const std::string& path) {
+    fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    path.copy(addr.sun_path, sizeof(addr.sun_path) - 1);
+    if (::connect(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+      ::close(fd_);
+      fd_ = -1;
+      return;
+    }
+    (void)line();  // hello
+  }
+  ~Client() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  bool ok() const { return fd_ >= 0; }
+  /// Sends one request line and returns the reply line ("" on error).
+  std::string call(const std::string& request) {
+    const std::string out = request + "\n";
+    if (::write(fd_, out.data(), out.size()) != static_cast<ssize_t>(out.size())) return {};
+    return line();
+  }
+
+ private:
+  std::string line() {
+    while (true) {
+      if (auto pos = buffer_.find('\n'); pos != std::string::npos) {
+        std::string l = buffer_.substr(0, pos);
+        buffer_.erase(0, pos + 1);
+        return l;
+      }
+      char chunk[8192];
+      const ssize_t n = ::read(fd_, chunk, sizeof chunk);
+      if (n <= 0) return {};
+      buffer_.append(chunk, static_cast<std::size_t>(n));
+    }
+  }
+  int fd_ = -1;
+  std::string buffer_;
+};
+
+/// The samples recorded between two copies of one histogram.
+HistogramData window(const HistogramData& before, const HistogramData& after) {
+  HistogramData d = after;
+  d.count = after.count - before.count;
+  d.sum_ns = after.sum_ns - before.sum_ns;
+  d.max_ns = 0;
+  for (std::size_t i = 0; i < d.bins.size() && i < before.bins.size(); ++i) {
+    d.bins[i] = after.bins[i] - before.bins[i];
+    if (d.bins[i] != 0) d.max_ns = static_cast<std::int64_t>(i + 1) * d.bin_width_ns;
+  }
+  return d;
+}
+
+struct LoadResult {
+  double requests_per_s = 0;
+  double latency_p50_us = 0;
+  double latency_p99_us = 0;
+};
+
+/// `clients` threads sending `status` back to back for `duration`.
+LoadResult hammer(const std::string& socket, int clients, std::chrono::seconds duration) {
+  std::atomic<bool> stop{false};
+  std::vector<std::vector<double>> latencies(static_cast<std::size_t>(clients));
+  std::vector<std::thread> threads;
+  for (int c = 0; c < clients; ++c) {
+    threads.emplace_back([&, c] {
+      Client client(socket);
+      if (!client.ok()) return;
+      auto& mine = latencies[static_cast<std::size_t>(c)];
+      while (!stop.load(std::memory_order_relaxed)) {
+        const auto t0 = std::chrono::steady_clock::now();
+        if (client.call(R"({"cmd":"status"})").empty()) return;
+        mine.push_back(
+            std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0)
+                .count());
+      }
+    });
+  }
+  std::this_thread::sleep_for(duration);
+  stop = true;
+  for (auto& t : threads) t.join();
+  std::vector<double> all;
+  for (const auto& l : latencies) all.insert(all.end(), l.begin(), l.end());
+  std::sort(all.begin(), all.end());
+  LoadResult r;
+  if (all.empty()) return r;
+  r.requests_per_s = static_cast<double>(all.size()) / static_cast<double>(duration.count());
+  r.latency_p50_us = all[all.size() / 2];
+  r.latency_p99_us = all[std::min(all.size() - 1, all.size() * 99 / 100)];
+  return r;
+}
+
+/// Keeps the car travelling between the lowest and the top floor while the benchmark runs.
+void dispatcher(const std::string& socket, std::atomic<bool>& stop, std::atomic<int>& travels) {
+  Client client(socket);
+  int floor = 5;
+  while (!stop.load()) {
+    const json status = json::parse(client.call(R"({"cmd":"status"})"), nullptr, false);
+    if (!status.is_discarded() && status["ok"] == true &&
+        status["result"]["travel"]["state"] == "idle" &&
+        status["result"]["link"]["state"] == "up" &&
+        !status["result"]["drive"]["status"]["travel_active"].get<bool>()) {
+      const json r = json::parse(
+          client.call(R"({"cmd":"travel","floor":)" + std::to_string(floor) + "}"), nullptr, false);
+      if (!r.is_discarded() && r["ok"] == true) {
+        ++travels;
+        floor = floor == 0 ? 5 : 0;
+      }
+    }
+    std::this_thread::sleep_for(200ms);
+  }
+}
+
+void print_row(const char* name, const HistogramData& d, const HistogramData& quiet,
+               const LoadResult* load) {
+  std::printf("  %-12s %8.0f %9.1f %9.1f %9.1f %9.1f  %6.2f %6.2f", name, d.percentile_us(0.5),
+              d.percentile_us(0.99), d.percentile_us(0.999), d.max_us(),
+              static_cast<double>(d.count), d.percentile_us(0.99) / quiet.percentile_us(0.99),
+              d.max_us() / quiet.max_us());
+  if (load != nullptr) {
+    std::printf("  %9.0f %9.1f %9.1f", load->requests_per_s, load->latency_p50_us,
+                load->latency_p99_us);
+  }
+  std::printf("\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::chrono::seconds phase{20};
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--seconds") == 0 && i + 1 < argc) {
+      phase = std::chrono::seconds(std::max(1, std::atoi(argv[++i])));
+    } else {
+      std::fprintf(stderr,
+                   "usage: api-load-bench [--seconds N]\n"
+                   "  N seconds per window (default 20): quiet, then 1, 8 and 32 clients\n");
+      return 2;
+    }
+  }
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("liftd-api-load-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  ::setenv("XDG_RUNTIME_DIR", dir.c_str(), 1);
+  liftd::log::init({liftd::log::Level::warn, liftd::log::Backend::text, {}, "api-load-bench"});
+
+  liftd::config::Config cfg = liftd::daemon::simulation_defaults();
+  cfg.rt.lock_memory = true;  // as the service runs
+  liftd::daemon::Daemon daemon(cfg, liftd::service::Notifier::from_environment(), std::nullopt);
+  liftd::daemon::LiftApp app(daemon, cfg, true);
+  std::thread daemon_thread([&] { daemon.run(); });
+
+  // Wait for the link.
+  bool up = false;
+  for (int i = 0; i < 100 && !up; ++i) {
+    std::this_thread::sleep_for(100ms);
+    Client c(cfg.api.socket);
+    if (!c.ok()) continue;
+    const json s = json::parse(c.call(R"({"cmd":"status"})"), nullptr, false);
+    up = !s.is_discarded() && s["result"]["link"]["state"] == "up";
+  }
+  if (!up) {
+    std::fprintf(stderr, "api-load-bench: the simulated link did not come up\n");
+    daemon.request_stop("benchmark failed");
+    daemon_thread.join();
+    return 1;
+  }
+  std::atomic<bool> stop_dispatch{false};
+  std::atomic<int> travels{0};
+  std::thread dispatch([&] { dispatcher(cfg.api.socket, stop_dispatch, travels); });
+
+  const auto rt_status = app.cycle().thread_status();
+  std::printf(
+      "api-load-bench: cycle thread %s, memory %s; %lld s per window; the car travels "
+      "0 <-> 5 throughout\n",
+      rt_status.realtime ? "SCHED_FIFO" : "SCHED_OTHER (not real-time: run as root)",
+      rt_status.memory_locked ? "locked" : "not locked", static_cast<long long>(phase.count()));
+
+  HistogramData before = app.cycle().stats().wake_lateness;
+  std::this_thread::sleep_for(phase);
+  HistogramData after = app.cycle().stats().wake_lateness;
+  const HistogramData quiet = window(before, after);
+
+  struct Row {
+    int clients;
+    HistogramData lateness;
+    LoadResult load;
+  };
+  std::vector<Row> rows;
+  for (int clients : {1, 8, 32}) {
+    before = app.cycle().stats().wake_lateness;
+    const LoadResult load = hammer(cfg.api.socket, clients, phase);
+    after = app.cycle().stats().wake_lateness;
+    rows.push_back({clients, window(before, after), load});
+  }
+  stop_dispatch = true;
+  dispatch.join();
+  const auto counters = app.cycle().stats().counters;
+
+  std::printf("\ncycle wake-up lateness per window (us), and the API load in it\n");
+  std::printf("  %-12s %8s %9s %9s %9s %9s  %6s %6s  %9s %9s %9s\n", "window", "p50", "p99",
+              "p99.9", "max", "cycles", "p99/q", "max/q", "req/s", "req p50", "req p99");
+  print_row("quiet", quiet, quiet, nullptr);
+  for (const Row& r : rows) {
+    char name[32];
+    std::snprintf(name, sizeof name, "%d client%s", r.clients, r.clients == 1 ? "" : "s");
+    print_row(name, r.lateness, quiet, &r.load);
+  }
+  std::printf("\ntravels started %d; cycles %llu, overruns %llu, missing replies %llu\n",
+              travels.load(), static_cast<unsigned long long>(counters.cycles),
+              static_cast<unsigned long long>(counters.overruns),
+              static_cast<unsigned long long>(counters.missing_replies));
+  daemon.request_stop("benchmark done");
+  daemon_thread.join();
+  fs::remove_all(dir);
+  return 0;
+}
