@@ -39,6 +39,17 @@ std::vector<std::string> base_env() {
   return env;
 }
 
+std::string write_file(const std::string& dir, const std::string& name, const std::string& text);
+
+// A config for --simulate --config: the given log level, the API socket in `dir`, no access
+// groups (the test's user owns the daemon), so parallel tests never share a socket.
+std::string write_sim_config(const std::string& dir, const std::string& log_level) {
+  return write_file(dir, "liftd.json",
+                    R"({"log": {"level": ")" + log_level + R"("}, "api": {"socket": ")" + dir +
+                        R"(/api.sock", "socket_group": "", "read_group": "", "control_group": "",
+                            "inputs_group": ""}})");
+}
+
 std::string write_file(const std::string& dir, const std::string& name, const std::string& text) {
   const std::string path = dir + "/" + name;
   std::ofstream(path) << text;
@@ -142,7 +153,7 @@ TEST(DaemonWatchdog, PingsAtHalfTheTimeout) {
   auto env = base_env();
   env.push_back("NOTIFY_SOCKET=" + notify.path());
   env.push_back("XDG_RUNTIME_DIR=" + notify.dir());  // its own API socket: tests run in parallel
-  env.push_back("WATCHDOG_USEC=200000");  // 200 ms: a ping every 100 ms
+  env.push_back("WATCHDOG_USEC=200000");             // 200 ms: a ping every 100 ms
   Process liftd({kLiftd, "--simulate"}, env, notify.dir());
   std::vector<std::string> seen;
   ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit)) << liftd.err();
@@ -284,11 +295,7 @@ TEST(DaemonCommandLine, PrintConfigShowsSimulateForcingTheSimPosition) {
 
 TEST(DaemonCommandLine, LogLevelOptionOverridesTheConfig) {
   TestSocket notify;
-  const std::string path =
-      write_file(notify.dir(), "liftd.json",
-                 R"({"log": {"level": "error"}, "api": {"socket": ")" + notify.dir() +
-                     R"(/api.sock", "socket_group": "", "read_group": "", "control_group": "",
-                         "inputs_group": ""}})");
+  const std::string path = write_sim_config(notify.dir(), "error");
   auto env = base_env();
   env.push_back("NOTIFY_SOCKET=" + notify.path());
   env.push_back("XDG_RUNTIME_DIR=" + notify.dir());  // its own API socket: tests run in parallel
@@ -303,11 +310,7 @@ TEST(DaemonCommandLine, LogLevelOptionOverridesTheConfig) {
 
 TEST(DaemonCommandLine, ConfigLogLevelAppliesWithoutTheOption) {
   TestSocket notify;
-  const std::string path =
-      write_file(notify.dir(), "liftd.json",
-                 R"({"log": {"level": "warn"}, "api": {"socket": ")" + notify.dir() +
-                     R"(/api.sock", "socket_group": "", "read_group": "", "control_group": "",
-                         "inputs_group": ""}})");
+  const std::string path = write_sim_config(notify.dir(), "warn");
   auto env = base_env();
   env.push_back("NOTIFY_SOCKET=" + notify.path());
   env.push_back("XDG_RUNTIME_DIR=" + notify.dir());  // its own API socket: tests run in parallel

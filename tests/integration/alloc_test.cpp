@@ -13,71 +13,7 @@
 #include "dcp/trace.hpp"
 #include "live_rig.hpp"
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define LIFTD_IT_ALLOC_HOOKS 0  // the sanitizers replace malloc themselves
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-#define LIFTD_IT_ALLOC_HOOKS 0
-#else
-#define LIFTD_IT_ALLOC_HOOKS 1
-#endif
-#else
-#define LIFTD_IT_ALLOC_HOOKS 1
-#endif
-
-namespace {
-
-thread_local bool t_count_here = false;
-std::atomic<std::uint64_t> g_heap_calls{0};
-
-[[maybe_unused]] inline void count_heap_call() noexcept {
-  if (t_count_here) g_heap_calls.fetch_add(1, std::memory_order_relaxed);
-}
-
-}  // namespace
-
-#if LIFTD_IT_ALLOC_HOOKS
-// glibc's own entry points, for the replacements to forward to.
-extern "C" {
-void* __libc_malloc(std::size_t size);
-void* __libc_calloc(std::size_t count, std::size_t size);
-void* __libc_realloc(void* ptr, std::size_t size);
-void* __libc_memalign(std::size_t alignment, std::size_t size);
-
-void* malloc(std::size_t size) {
-  count_heap_call();
-  return __libc_malloc(size);
-}
-void* calloc(std::size_t count, std::size_t size) {
-  count_heap_call();
-  return __libc_calloc(count, size);
-}
-void* realloc(void* ptr, std::size_t size) {
-  count_heap_call();
-  return __libc_realloc(ptr, size);
-}
-void* aligned_alloc(std::size_t alignment, std::size_t size) {
-  count_heap_call();
-  return __libc_memalign(alignment, size);
-}
-int posix_memalign(void** out, std::size_t alignment, std::size_t size) {
-  count_heap_call();
-  *out = __libc_memalign(alignment, size);
-  return *out != nullptr ? 0 : ENOMEM;
-}
-}  // extern "C"
-
-// operator new may not go through the malloc symbol (inlined or a static libstdc++): count it
-// on its own. The matching deletes call free(), which fits __libc_malloc.
-void* operator new(std::size_t size) {
-  count_heap_call();
-  if (void* p = __libc_malloc(size != 0 ? size : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) {
-  return ::operator new(size);
-}
-#endif
+#include "support/heap_hooks.hpp"
 
 namespace liftd::integration {
 namespace {
@@ -93,7 +29,7 @@ class CountingEngine final : public rt::CycleEngine {
   std::uint64_t counted_cycles() const noexcept { return counted_.load(); }
 
   std::span<const std::uint8_t> frame_to_send(MonoTime now) noexcept override {
-    t_count_here = wanted_.load(std::memory_order_relaxed);
+    heap_hooks::counting = wanted_.load(std::memory_order_relaxed);
     return inner_.frame_to_send(now);
   }
   std::size_t reply_size() const noexcept override { return inner_.reply_size(); }
@@ -105,7 +41,7 @@ class CountingEngine final : public rt::CycleEngine {
   void on_port_ready(MonoTime now) noexcept override { inner_.on_port_ready(now); }
   void after_cycle(MonoTime now) noexcept override {
     inner_.after_cycle(now);
-    if (t_count_here) counted_.fetch_add(1, std::memory_order_relaxed);
+    if (heap_hooks::counting) counted_.fetch_add(1, std::memory_order_relaxed);
   }
 
  private:
@@ -115,17 +51,17 @@ class CountingEngine final : public rt::CycleEngine {
 };
 
 TEST(LiveAlloc, RealEngineCycleAllocatesNothingDuringATravel) {
-  if (!LIFTD_IT_ALLOC_HOOKS) GTEST_SKIP() << "allocation hooks are off under sanitizers";
+  if (!LIFTD_HEAP_HOOKS) GTEST_SKIP() << "allocation hooks are off under sanitizers";
   // The hooks count: one allocation on a counting thread is seen.
   void* (*volatile allocate)(std::size_t) = &std::malloc;  // volatile: kept by the optimiser
-  t_count_here = true;
+  heap_hooks::counting = true;
   void* a = ::operator new(32);
   void* b = allocate(32);
-  t_count_here = false;
+  heap_hooks::counting = false;
   ::operator delete(a);
   std::free(b);
-  ASSERT_GE(g_heap_calls.load(), 2U);
-  g_heap_calls = 0;
+  ASSERT_GE(heap_hooks::calls(), 2U);
+  heap_hooks::reset();
 
   io::PtyPair pty = make_pty();
   auto drive = serve(pty.master_fd(), control::testing::sim_config(dcp::Protocol::Dcp4));
@@ -159,7 +95,7 @@ TEST(LiveAlloc, RealEngineCycleAllocatesNothingDuringATravel) {
   counting->disarm();
   m.run_for(100ms);
   const std::uint64_t cycles = counting->counted_cycles();
-  const std::uint64_t calls = g_heap_calls.load();
+  const std::uint64_t calls = heap_hooks::calls();
   m.runner.stop();
   m.position.attach(nullptr);
 
@@ -171,7 +107,7 @@ TEST(LiveAlloc, RealEngineCycleAllocatesNothingDuringATravel) {
 }
 
 TEST(LiveAlloc, TraceFormattingAllocatesNothing) {
-  if (!LIFTD_IT_ALLOC_HOOKS) GTEST_SKIP() << "allocation hooks are off under sanitizers";
+  if (!LIFTD_HEAP_HOOKS) GTEST_SKIP() << "allocation hooks are off under sanitizers";
   // Legend: a master travel frame, a drive frame with extended status, a corrupt one, a short
   // one: the decoder core writes into the caller's buffer only.
   const std::array<std::array<std::uint8_t, 6>, 3> frames = {{
@@ -181,17 +117,17 @@ TEST(LiveAlloc, TraceFormattingAllocatesNothing) {
   }};
   dcp::TraceBuffer buffer;
   std::size_t written = 0;
-  g_heap_calls = 0;
-  t_count_here = true;
+  heap_hooks::reset();
+  heap_hooks::counting = true;
   for (const auto& f : frames) {
     written += dcp::format_frame(f, dcp::FrameSide::Master, {}, buffer).size();
     written += dcp::format_frame(f, dcp::FrameSide::Drive, {}, buffer).size();
   }
   written +=
       dcp::format_frame(std::span(frames[0]).first(3), dcp::FrameSide::Drive, {}, buffer).size();
-  t_count_here = false;
+  heap_hooks::counting = false;
   EXPECT_GT(written, 100U);
-  EXPECT_EQ(g_heap_calls.load(), 0U);
+  EXPECT_EQ(heap_hooks::calls(), 0U);
 }
 
 }  // namespace

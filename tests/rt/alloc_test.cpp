@@ -12,70 +12,7 @@
 #include "io/pty.hpp"
 #include "rt/cycle_runner.hpp"
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define LIFTD_ALLOC_HOOKS 0  // the sanitizers own malloc; the hooks would fight them
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-#define LIFTD_ALLOC_HOOKS 0
-#else
-#define LIFTD_ALLOC_HOOKS 1
-#endif
-#else
-#define LIFTD_ALLOC_HOOKS 1
-#endif
-
-namespace {
-
-thread_local bool t_counting = false;  // set on the cycle thread only
-std::atomic<std::uint64_t> g_mallocs{0};
-std::atomic<std::uint64_t> g_news{0};
-
-[[maybe_unused]] void note_malloc() noexcept {
-  if (t_counting) g_mallocs.fetch_add(1, std::memory_order_relaxed);
-}
-
-}  // namespace
-
-#if LIFTD_ALLOC_HOOKS
-extern "C" {
-void* __libc_malloc(std::size_t size);
-void* __libc_calloc(std::size_t count, std::size_t size);
-void* __libc_realloc(void* ptr, std::size_t size);
-void* __libc_memalign(std::size_t alignment, std::size_t size);
-
-void* malloc(std::size_t size) {
-  note_malloc();
-  return __libc_malloc(size);
-}
-void* calloc(std::size_t count, std::size_t size) {
-  note_malloc();
-  return __libc_calloc(count, size);
-}
-void* realloc(void* ptr, std::size_t size) {
-  note_malloc();
-  return __libc_realloc(ptr, size);
-}
-void* aligned_alloc(std::size_t alignment, std::size_t size) {
-  note_malloc();
-  return __libc_memalign(alignment, size);
-}
-int posix_memalign(void** out, std::size_t alignment, std::size_t size) {
-  note_malloc();
-  *out = __libc_memalign(alignment, size);
-  return *out != nullptr ? 0 : ENOMEM;
-}
-}  // extern "C"
-
-void* operator new(std::size_t size) {
-  if (t_counting) g_news.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = __libc_malloc(size != 0 ? size : 1)) return p;
-  throw std::bad_alloc();
-}
-// The default deletes call free(), which matches __libc_malloc.
-void* operator new[](std::size_t size) {
-  return ::operator new(size);
-}
-#endif
+#include "support/heap_hooks.hpp"
 
 namespace liftd::rt {
 namespace {
@@ -89,10 +26,10 @@ class CountingEngine : public testing::EchoEngine {
   explicit CountingEngine(std::uint64_t warm_up) : warm_up_(warm_up) {}
   std::span<const std::uint8_t> frame_to_send(MonoTime now) noexcept override {
     if (++frames_ == warm_up_) {
-      t_counting = true;
+      heap_hooks::counting = true;
       counting_.store(true);
     }
-    if (t_counting) counted_frames_.fetch_add(1, std::memory_order_relaxed);
+    if (heap_hooks::counting) counted_frames_.fetch_add(1, std::memory_order_relaxed);
     return EchoEngine::frame_to_send(now);
   }
   std::atomic<bool> counting_{false};
@@ -104,19 +41,19 @@ class CountingEngine : public testing::EchoEngine {
 };
 
 TEST(RtCycleAlloc, NoAllocationOnTheCycleThreadAfterWarmUpNorAfterDeviceLoss) {
-  if (!LIFTD_ALLOC_HOOKS) GTEST_SKIP() << "allocation hooks are off under sanitizers";
+  if (!LIFTD_HEAP_HOOKS) GTEST_SKIP() << "allocation hooks are off under sanitizers";
   // The hooks really count: an allocation on a counting thread is seen.
   void* (*volatile malloc_fn)(std::size_t) = &std::malloc;  // volatile: not optimised away
-  t_counting = true;
+  heap_hooks::counting = true;
   void* by_new = ::operator new(16);
   void* by_malloc = malloc_fn(16);
-  t_counting = false;
+  heap_hooks::counting = false;
   ::operator delete(by_new);
   std::free(by_malloc);
-  ASSERT_EQ(g_news.load(), 1U);
-  ASSERT_GE(g_mallocs.load(), 1U);
-  g_news = 0;
-  g_mallocs = 0;
+  ASSERT_EQ(heap_hooks::news.load(), 1U);
+  ASSERT_GE(heap_hooks::mallocs.load(), 1U);
+  heap_hooks::news = 0;
+  heap_hooks::mallocs = 0;
 
   auto pty = io::PtyPair::create();
   ASSERT_TRUE(pty.ok());
@@ -140,16 +77,16 @@ TEST(RtCycleAlloc, NoAllocationOnTheCycleThreadAfterWarmUpNorAfterDeviceLoss) {
     }
     return engine.counted_frames_.load() >= 300;
   }());
-  EXPECT_EQ(g_mallocs.load(), 0U) << "malloc calls on the cycle thread";
-  EXPECT_EQ(g_news.load(), 0U) << "operator new calls on the cycle thread";
+  EXPECT_EQ(heap_hooks::mallocs.load(), 0U) << "malloc calls on the cycle thread";
+  EXPECT_EQ(heap_hooks::news.load(), 0U) << "operator new calls on the cycle thread";
 
   // Device loss: the loss path and the cycles without a port must not allocate either.
   responder.stop();
   pty.value().close();
   std::this_thread::sleep_for(milliseconds(300));
   EXPECT_EQ(runner.stats().counters.port_losses, 1U);
-  const std::uint64_t mallocs = g_mallocs.load();
-  const std::uint64_t news = g_news.load();
+  const std::uint64_t mallocs = heap_hooks::mallocs.load();
+  const std::uint64_t news = heap_hooks::news.load();
   runner.stop();
   EXPECT_EQ(mallocs, 0U);
   EXPECT_EQ(news, 0U);

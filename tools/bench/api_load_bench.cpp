@@ -4,8 +4,6 @@
 // measures the cycle's wake-up lateness in a quiet window and then in windows where 1, 8 and 32
 // clients hammer `status` as fast as they can. The same run, the same machine: the ratios are
 // the figures to read. Also prints requests per second and request latency per load.
-#include <sys/socket.h>
-#include <sys/un.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -25,6 +23,7 @@
 #include "log/log.hpp"
 #include "rt/histogram.hpp"
 #include "service/notify.hpp"
+#include "support/api_client.hpp"
 
 namespace {
 
@@ -32,48 +31,12 @@ using namespace std::chrono_literals;
 using liftd::rt::HistogramData;
 using nlohmann::json;
 
-/// A blocking line client of the API socket.
-class Client {
- public:
-  explicit Client(const std::string& path) {
-    fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    path.copy(addr.sun_path, sizeof(addr.sun_path) - 1);
-    if (::connect(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
-      ::close(fd_);
-      fd_ = -1;
-      return;
-    }
-    (void)line();  // hello
+/// A connected client that has read the greeting.
+struct Client : liftd::testing::ApiClient {
+  explicit Client(const std::string& path) : ApiClient(path) {
+    if (connected()) (void)next();  // hello
   }
-  ~Client() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  bool ok() const { return fd_ >= 0; }
-  /// Sends one request line and returns the reply line ("" on error).
-  std::string call(const std::string& request) {
-    const std::string out = request + "\n";
-    if (::write(fd_, out.data(), out.size()) != static_cast<ssize_t>(out.size())) return {};
-    return line();
-  }
-
- private:
-  std::string line() {
-    while (true) {
-      if (auto pos = buffer_.find('\n'); pos != std::string::npos) {
-        std::string l = buffer_.substr(0, pos);
-        buffer_.erase(0, pos + 1);
-        return l;
-      }
-      char chunk[8192];
-      const ssize_t n = ::read(fd_, chunk, sizeof chunk);
-      if (n <= 0) return {};
-      buffer_.append(chunk, static_cast<std::size_t>(n));
-    }
-  }
-  int fd_ = -1;
-  std::string buffer_;
+  bool ok() const { return connected(); }
 };
 
 /// The samples recorded between two copies of one histogram.
@@ -107,7 +70,7 @@ LoadResult hammer(const std::string& socket, int clients, std::chrono::seconds d
       auto& mine = latencies[static_cast<std::size_t>(c)];
       while (!stop.load(std::memory_order_relaxed)) {
         const auto t0 = std::chrono::steady_clock::now();
-        if (client.call(R"({"cmd":"status"})").empty()) return;
+        if (client.call({{"cmd", "status"}}).is_null()) return;
         mine.push_back(
             std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0)
                 .count());
@@ -133,14 +96,13 @@ void dispatcher(const std::string& socket, std::atomic<bool>& stop, std::atomic<
   Client client(socket);
   int floor = 5;
   while (!stop.load()) {
-    const json status = json::parse(client.call(R"({"cmd":"status"})"), nullptr, false);
-    if (!status.is_discarded() && status["ok"] == true &&
+    const json status = client.call({{"cmd", "status"}});
+    if (status.is_object() && status["ok"] == true &&
         status["result"]["travel"]["state"] == "idle" &&
         status["result"]["link"]["state"] == "up" &&
         !status["result"]["drive"]["status"]["travel_active"].get<bool>()) {
-      const json r = json::parse(
-          client.call(R"({"cmd":"travel","floor":)" + std::to_string(floor) + "}"), nullptr, false);
-      if (!r.is_discarded() && r["ok"] == true) {
+      const json r = client.call({{"cmd", "travel"}, {"floor", floor}});
+      if (r.is_object() && r["ok"] == true) {
         ++travels;
         floor = floor == 0 ? 5 : 0;
       }
@@ -194,8 +156,8 @@ int main(int argc, char** argv) {
     std::this_thread::sleep_for(100ms);
     Client c(cfg.api.socket);
     if (!c.ok()) continue;
-    const json s = json::parse(c.call(R"({"cmd":"status"})"), nullptr, false);
-    up = !s.is_discarded() && s["result"]["link"]["state"] == "up";
+    const json s = c.call({{"cmd", "status"}});
+    up = s.is_object() && s["result"]["link"]["state"] == "up";
   }
   if (!up) {
     std::fprintf(stderr, "api-load-bench: the simulated link did not come up\n");
