@@ -49,7 +49,7 @@ constexpr std::array<std::string_view, 8> kStatusBits = {
 void bit_names(LineWriter& w, std::uint8_t byte,
                const std::array<std::string_view, 8>& names) noexcept {
   for (std::size_t i = 0; i < names.size(); ++i) {
-    if (((byte >> i) & 1U) != 0) {
+    if (((static_cast<unsigned>(byte) >> i) & 1U) != 0) {
       w.character(' ');
       w.text(names[i]);
     }
