@@ -579,12 +579,16 @@ void DriveSim::process(const dcp::MasterFrame& frame, MonoTime now) noexcept {
         if (!b1 && !b2) {
           plan_stop(config_.decel, now);
         } else if (!b1 && !to_crawl_) {
-          // DCP 10.1.1: B1 off -> decelerate to crawl within the fixed distance SVx.
+          // DCP 10.1.1: B1 off -> decelerate to crawl within the fixed distance SVx. DCP 10.1.2 /
+          // 10.2.2: the same SVx when B1 drops before Vx was reached (time-optimised short
+          // travel): the car may still speed up towards Vx or cruise first, and brakes harder
+          // (at most on the fast-stop ramp) when its normal ramp cannot make it.
           to_crawl_ = true;
           const double t0 = std::max(seconds(now), motion_start_s_);
           const MotionState st = plan_.at(t0);
-          plan_.plan_arrival(t0, st, st.s_m + dcp3_decel_m(run_speed_), st.v_mps,
-                             config_.speeds.v0_mps, config_.accel, config_.decel);
+          plan_.plan_fixed_arrival(t0, st, st.s_m + dcp3_decel_m(run_speed_),
+                                   config_.speeds.of(run_speed_), config_.speeds.v0_mps,
+                                   config_.accel, config_.decel, config_.fast_stop);
         }
       }
       break;

@@ -106,21 +106,48 @@ double MotionPlan::ramp_distance_from_m(const MotionState& state, double to_mps,
   return scratch.end_state_.s_m - state.s_m;
 }
 
+namespace {
+
+/// Distance of going to `peak_mps` from `state`, then on to `end_mps`.
+double arrival_cost_m(const MotionState& state, double peak_mps, double end_mps,
+                      const RampLimits& accel, const RampLimits& decel) noexcept {
+  const RampLimits& second = peak_mps >= end_mps ? decel : accel;
+  return MotionPlan::ramp_distance_from_m(state, peak_mps, accel, decel) +
+         ramp_distance_m(peak_mps, end_mps, second);
+}
+
+/// The slowest peak reachable from `state` without first reversing a present acceleration,
+/// kept within [end_mps, max(vmax_mps, end_mps)].
+double lowest_peak_mps(const MotionState& state, double vmax_mps, double end_mps,
+                       const RampLimits& accel, const RampLimits& decel) noexcept {
+  double settle_mps = state.v_mps;
+  if (state.a_mps2 > 0.0) settle_mps += state.a_mps2 * state.a_mps2 / (2.0 * accel.jerk_mps3);
+  if (state.a_mps2 < 0.0) settle_mps -= state.a_mps2 * state.a_mps2 / (2.0 * decel.jerk_mps3);
+  return std::max(end_mps, std::min(settle_mps, std::max(vmax_mps, end_mps)));
+}
+
+/// `from` moved a share `k` (0..1) of the way to `to`.
+double blend(double from, double to, double k) noexcept {
+  return from + k * (to - from);
+}
+
+}  // namespace
+
+double MotionPlan::min_arrival_m(const MotionState& state, double vmax_mps, double end_mps,
+                                 const RampLimits& accel, const RampLimits& decel) noexcept {
+  return arrival_cost_m(state, lowest_peak_mps(state, vmax_mps, end_mps, accel, decel), end_mps,
+                        accel, decel);
+}
+
 bool MotionPlan::plan_arrival(double t_s, MotionState state, double target_s_m, double vmax_mps,
                               double end_mps, const RampLimits& accel,
                               const RampLimits& decel) noexcept {
   const double remaining_m = target_s_m - state.s_m;
   auto cost = [&](double peak_mps) {
-    const RampLimits& second = peak_mps >= end_mps ? decel : accel;
-    return ramp_distance_from_m(state, peak_mps, accel, decel) +
-           ramp_distance_m(peak_mps, end_mps, second);
+    return arrival_cost_m(state, peak_mps, end_mps, accel, decel);
   };
-  // The slowest peak reachable without first reversing a present acceleration.
-  double settle_mps = state.v_mps;
-  if (state.a_mps2 > 0.0) settle_mps += state.a_mps2 * state.a_mps2 / (2.0 * accel.jerk_mps3);
-  if (state.a_mps2 < 0.0) settle_mps -= state.a_mps2 * state.a_mps2 / (2.0 * decel.jerk_mps3);
+  const double lo_mps = lowest_peak_mps(state, vmax_mps, end_mps, accel, decel);
   vmax_mps = std::max(vmax_mps, end_mps);
-  const double lo_mps = std::max(end_mps, std::min(settle_mps, vmax_mps));
   start(t_s, state);
   if (cost(lo_mps) > remaining_m + kEpsilon) {
     push_ramp(end_mps, accel, decel);
@@ -143,6 +170,49 @@ bool MotionPlan::plan_arrival(double t_s, MotionState state, double target_s_m, 
   push_ramp(end_mps, accel, decel);
   push_hold();
   return true;
+}
+
+MotionPlan::FixedArrival MotionPlan::plan_fixed_arrival(double t_s, MotionState state,
+                                                        double target_s_m, double vmax_mps,
+                                                        double end_mps, const RampLimits& accel,
+                                                        const RampLimits& decel,
+                                                        const RampLimits& hardest) noexcept {
+  // Share k of the way from the normal limits to the hardest: the deceleration ramp, and the
+  // jerk that rounds off a present acceleration (the car turns from speeding up to braking).
+  auto accel_at = [&](double k) {
+    return RampLimits{accel.accel_mps2,
+                      std::max(accel.jerk_mps3, blend(accel.jerk_mps3, hardest.jerk_mps3, k))};
+  };
+  auto decel_at = [&](double k) {
+    return RampLimits{std::max(decel.accel_mps2, blend(decel.accel_mps2, hardest.accel_mps2, k)),
+                      std::max(decel.jerk_mps3, blend(decel.jerk_mps3, hardest.jerk_mps3, k))};
+  };
+  const double remaining_m = target_s_m - state.s_m;
+  auto fits = [&](double k) {
+    return min_arrival_m(state, vmax_mps, end_mps, accel_at(k), decel_at(k)) <=
+           remaining_m + kEpsilon;
+  };
+  FixedArrival result;
+  if (!fits(0.0)) {
+    if (!fits(1.0)) {
+      result.fits = false;
+      result.harder = 1.0;
+      plan_speed(t_s, state, end_mps, accel_at(1.0), decel_at(1.0));
+      result.overshoot_m = std::max(0.0, final_position_m() - target_s_m);
+      return result;
+    }
+    // Both limits grow with k and the distance shrinks with them: bisect the least k that fits.
+    double lo = 0.0;
+    double hi = 1.0;
+    for (int i = 0; i < kBisectionSteps; ++i) {
+      const double mid = (lo + hi) / 2.0;
+      (fits(mid) ? hi : lo) = mid;
+    }
+    result.harder = hi;
+  }
+  plan_arrival(t_s, state, target_s_m, vmax_mps, end_mps, accel_at(result.harder),
+               decel_at(result.harder));
+  return result;
 }
 
 void MotionPlan::plan_speed(double t_s, MotionState state, double speed_mps,

@@ -59,6 +59,24 @@ class MotionPlan {
   /// without overshoot; the plan then ramps to `end_mps` at once.
   bool plan_arrival(double t_s, MotionState state, double target_s_m, double vmax_mps,
                     double end_mps, const RampLimits& accel, const RampLimits& decel) noexcept;
+  /// How a fixed-distance arrival (plan_fixed_arrival) was met.
+  struct FixedArrival {
+    /// False: even the `hardest` ramp cannot reach `end_mps` by the target; the plan then
+    /// ramps to `end_mps` at once on `hardest` and passes the target by `overshoot_m`.
+    bool fits = true;
+    /// Share of the way from the normal ramps (0) to `hardest` (1) that was needed.
+    double harder = 0.0;
+    /// Distance by which the end speed is reached past the target (0 when it fits).
+    double overshoot_m = 0.0;
+  };
+  /// Like plan_arrival (free to keep accelerating up to `vmax_mps` or to cruise first), but the
+  /// target is a fixed distance that must be met, as the DCP3 deceleration distance SVx is
+  /// (DCP 10.1.2): when the normal ramps cannot stop the speed change by the target (e.g. the car
+  /// is still accelerating), the deceleration limits and the jerk that rounds off a present
+  /// acceleration are raised, as little as needed, towards `hardest`.
+  FixedArrival plan_fixed_arrival(double t_s, MotionState state, double target_s_m, double vmax_mps,
+                                  double end_mps, const RampLimits& accel, const RampLimits& decel,
+                                  const RampLimits& hardest) noexcept;
   /// Plans from `state` at `t_s`: change speed to `speed_mps` and keep it.
   void plan_speed(double t_s, MotionState state, double speed_mps, const RampLimits& accel,
                   const RampLimits& decel) noexcept;
@@ -82,6 +100,10 @@ class MotionPlan {
   void push_ramp(double to_mps, const RampLimits& accel, const RampLimits& decel) noexcept;
   /// Appends the open-ended hold at the end state's speed.
   void push_hold() noexcept;
+  /// Shortest distance from `state` to `end_mps` without exceeding `vmax_mps` or reversing a
+  /// present acceleration first (what plan_arrival needs at least).
+  static double min_arrival_m(const MotionState& state, double vmax_mps, double end_mps,
+                              const RampLimits& accel, const RampLimits& decel) noexcept;
 
   std::array<Segment, kMaxSegments> segments_{};
   std::size_t count_ = 0;

@@ -131,18 +131,18 @@ INSTANTIATE_TEST_SUITE_P(
                       SpeedCase{"400 mm down: crawl V0", 1, 0, dcp::Speed::V0}),
     [](const auto& p) { return "Case" + std::to_string(p.index); });
 
-// Simulator bug (lib/sim, not ours to change): DCP 10.1.2 / 10.2.2 say that when B1 drops
-// before Vx is reached, the drive still covers the same fixed SVx down to crawl. The simulator
-// plans from its state with the normal ramps and, when a car still accelerating cannot make it,
-// falls back to a plain ramp and overshoots: 5000 mm at V4 lands 200 mm past the level, 4600 mm
-// at V4 360 mm, 2000 mm at V3 160 mm (DriveSim::process, kind Speed, "B1 off" branch ->
-// MotionPlan::plan_arrival returning false).
-TEST(Dcp3ShortTravel, DISABLED_SimulatorCoversSvxWhenB1DropsWhileAccelerating) {
+// DCP 10.1.2 / 10.2.2: when B1 drops before Vx is reached, the drive still covers the same
+// fixed SVx down to crawl, so the by-position stop lands on the level just as after a long
+// travel (these hops once overshot by 160 to 360 mm in the simulator).
+TEST(Dcp3ShortTravel, SimulatorCoversSvxWhenB1DropsWhileAccelerating) {
   ControllerConfig config = testing::default_config(dcp::Protocol::Dcp3);
   config.floors_mm = {0, 2000, 5000};
   Rig rig(config, testing::sim_config(dcp::Protocol::Dcp3));
   ASSERT_TRUE(rig.warm_up());
   ASSERT_TRUE(travel_to(rig, 2));  // 5000 mm at V4: B1 drops at 2654 mm, still accelerating
+  EXPECT_NEAR(rig.sim.position_mm(), 5000.0, kDcp3LandingMm);
+  rig.place_at(400);
+  ASSERT_TRUE(travel_to(rig, 2));  // 4600 mm at V4: B1 drops at 1946 mm, full acceleration
   EXPECT_NEAR(rig.sim.position_mm(), 5000.0, kDcp3LandingMm);
   rig.place_at(0);
   ASSERT_TRUE(travel_to(rig, 1));  // 2000 mm at V3
