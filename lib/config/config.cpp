@@ -835,6 +835,14 @@ LoadResult parse(std::string_view text, std::string_view origin) {
         {std::string(origin) + ":" + std::to_string(line) + ":" + std::to_string(column),
          "malformed JSON: " + what});
     return result;
+  } catch (const json::exception& error) {
+    // out_of_range 406: a number too large for any JSON number type (e.g. 1E989299). The
+    // library gives no position for it.
+    LoadResult result;
+    result.problems.push_back(
+        {std::string(origin), error.id == 406 ? "malformed JSON: a number is too large to represent"
+                                              : std::string("malformed JSON: ") + error.what()});
+    return result;
   }
   LoadResult result = from_json(document);
   result.problems.insert(result.problems.begin(), duplicates.begin(), duplicates.end());

@@ -295,6 +295,16 @@ TEST(ConfigProblems, MalformedJsonReportsLineAndColumn) {
   }
 }
 
+TEST(ConfigProblems, NumberTooLargeIsAProblemNotACrash) {
+  // Found by config_fuzz: the JSON library throws out_of_range, not parse_error, for these.
+  for (const std::string text : {"1E989299", "{\"rt\": {\"priority\": 1e400}}"}) {
+    const LoadResult r = parse(text, "f.json");
+    ASSERT_EQ(r.problems.size(), 1U) << text;
+    EXPECT_EQ(r.problems[0].where, "f.json") << text;
+    EXPECT_EQ(r.problems[0].message, "malformed JSON: a number is too large to represent");
+  }
+}
+
 TEST(ConfigFile, UnreadableFileNamesThePathAndTheErrnoText) {
   const LoadResult missing = load_file("/nonexistent/liftd.json");
   ASSERT_EQ(missing.problems.size(), 1U);
