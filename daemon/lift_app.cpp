@@ -170,7 +170,7 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
   backend_ = std::make_unique<LiftBackend>(
       config, *controller_, *runner_,
       config.position.source == config::PositionSource::api ? position_feed_.get() : nullptr,
-      runtime_dir_);
+      runtime_dir_, sim_.get());
 
   api::ServerConfig server;
   server.socket_path = socket_path_;

@@ -4,6 +4,7 @@
 #include <ctime>
 
 #include "common/mono_time.hpp"
+#include "daemon/simulated_lift.hpp"
 #include "dcp/charset.hpp"
 #include "dcp/trace.hpp"
 #include "log/log.hpp"
@@ -89,12 +90,13 @@ api::ErrorCode to_api_error(ReplyCode code) noexcept {
 
 LiftBackend::LiftBackend(const config::Config& config, control::DcpController& controller,
                          rt::CycleRunner& runner, control::PositionFeed* position_feed,
-                         std::string runtime_dir)
+                         std::string runtime_dir, SimulatedLift* sim)
     : config_(config),
       controller_(controller),
       runner_(runner),
       position_feed_(position_feed),
       runtime_dir_(std::move(runtime_dir)),
+      sim_(sim),
       mono_at_start_(mono_now()),
       wall_at_start_(std::chrono::system_clock::now()) {}
 
@@ -419,6 +421,14 @@ void LiftBackend::calls(const std::string& action, std::optional<int> floor, api
   cmd.add = action == "add";
   cmd.floor = static_cast<std::size_t>(floor.value_or(0));
   send_ok(cmd, std::move(done));
+}
+
+void LiftBackend::sim(const api::SimRequest& request, api::Responder done) {
+  if (sim_ == nullptr) {
+    api::Backend::sim(request, std::move(done));
+    return;
+  }
+  done(sim_->apply(request, mono_now()));
 }
 
 }  // namespace liftd::daemon

@@ -19,13 +19,16 @@
 
 namespace liftd::daemon {
 
+class SimulatedLift;
+
 /// api::Backend over a DcpController and its CycleRunner.
 class LiftBackend final : public api::Backend {
  public:
-  /// `position_feed` is written by `inputs` when position.source is "api" (else nullptr).
+  /// `position_feed` is written by `inputs` when position.source is "api" (else nullptr);
+  /// `sim` is the simulated lift with --simulate (else nullptr: the `sim` command is refused).
   LiftBackend(const config::Config& config, control::DcpController& controller,
               rt::CycleRunner& runner, control::PositionFeed* position_feed,
-              std::string runtime_dir);
+              std::string runtime_dir, SimulatedLift* sim);
 
   // ---- api::Backend ----
   api::StatusSnapshot status() override;
@@ -48,6 +51,8 @@ class LiftBackend final : public api::Backend {
   void fast_start(const std::string& action, const api::TravelArgs& args,
                   api::Responder done) override;
   void calls(const std::string& action, std::optional<int> floor, api::Responder done) override;
+  /// Served by the process's SimulatedLift (liftd --simulate); refused without one.
+  void sim(const api::SimRequest& request, api::Responder done) override;
 
   /// Io thread, every few ms: hands controller replies to their waiting clients and times out
   /// requests the cycle never answered (it stopped).
@@ -81,6 +86,7 @@ class LiftBackend final : public api::Backend {
   rt::CycleRunner& runner_;
   control::PositionFeed* position_feed_;
   std::string runtime_dir_;
+  SimulatedLift* sim_;    ///< the simulated lift (liftd --simulate), else nullptr
   api::Inputs inputs_{};  ///< merged API input state (partial updates keep the rest)
   std::map<std::uint32_t, Pending> pending_;
   std::uint32_t next_tag_ = 0;

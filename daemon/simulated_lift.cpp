@@ -1,5 +1,6 @@
 #include "daemon/simulated_lift.hpp"
 
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
@@ -11,12 +12,20 @@ namespace liftd::daemon {
 
 /// The drive simulator's car position as the cycle's absolute encoder. A position older than
 /// `kMaxAge` means the simulator stalled: the encoder reports invalid, as a real one would.
+///
+/// The simulator publishes the position when it handles a frame, so when the cycle reads it for
+/// the next frame it is most of a cycle old: 15 ms at 1.6 m/s is 24 mm, which a DCP3 travel by
+/// position turns into a late deceleration point and an overshoot. A real encoder is read
+/// when asked, so this one carries the position forward at the published speed to `now`.
 class SimulatedLift::Encoder final : public control::PositionSource {
  public:
   explicit Encoder(const sim::SerialDriveRunner& drive) : drive_(drive) {}
   std::optional<std::int64_t> position_mm(MonoTime now) const noexcept override {
-    if (now - drive_.position_at() > kMaxAge) return std::nullopt;
-    return std::llround(drive_.position_mm());
+    const MonoTime age = now - drive_.position_at();
+    if (age > kMaxAge) return std::nullopt;
+    const double age_s = age > MonoTime::zero() ? std::chrono::duration<double>(age).count() : 0.0;
+    // m/s * s * 1000 = mm
+    return std::llround(drive_.position_mm() + drive_.velocity_mps() * age_s * 1000.0);
   }
 
  private:
@@ -25,6 +34,22 @@ class SimulatedLift::Encoder final : public control::PositionSource {
 };
 
 namespace {
+
+sim::ReplyFault to_sim(api::SimReplyFault fault) {
+  switch (fault) {
+    case api::SimReplyFault::NoReply:
+      return sim::ReplyFault::NoReply;
+    case api::SimReplyFault::BadChecksum:
+      return sim::ReplyFault::BadChecksum;
+    case api::SimReplyFault::S7:
+      return sim::ReplyFault::MessageError;
+    case api::SimReplyFault::Late:
+      return sim::ReplyFault::Late;
+    case api::SimReplyFault::Garbage:
+      return sim::ReplyFault::Garbage;
+  }
+  return sim::ReplyFault::NoReply;
+}
 
 sim::SimIoConfig io_config(const config::Config& c) {
   sim::SimIoConfig out;
@@ -93,6 +118,73 @@ void SimulatedLift::log_events() {
   std::vector<std::string> lines;
   drive_->drain_event_lines(lines);
   for (const auto& line : lines) log::write(log::Level::debug, "sim", line);
+}
+
+api::Result SimulatedLift::apply(const api::SimRequest& request, MonoTime now) {
+  using api::SimAction;
+  switch (request.action) {
+    case SimAction::GeneralFault:
+      general_fault_ = request.on;
+      drive_->set_general_fault(request.on);
+      break;
+    case SimAction::AdvanceWarning:
+      advance_warning_ = request.on;
+      drive_->set_advance_warning(request.on);
+      break;
+    case SimAction::NotReady:
+      not_ready_ = request.on;
+      drive_->set_not_ready(request.on);
+      break;
+    case SimAction::ReplyFault:
+      drive_->inject(to_sim(request.fault), request.frames);
+      break;
+    case SimAction::ClearReplyFaults:
+      drive_->clear_reply_faults();
+      break;
+    case SimAction::Drift: {
+      const sim::RunnerStatus s = drive_->status();
+      // The simulator moves a car only while its drive is idle; a moving car would not drift.
+      if (s.phase != sim::Phase::Idle || std::abs(s.velocity_mps) > 0.0) {
+        return api::Result::fail(api::ErrorCode::Busy,
+                                 "the car is moving: drift only while the drive is idle");
+      }
+      drive_->set_position_mm(s.position_mm + request.drift_mm);
+      break;
+    }
+    case SimAction::SafetyChainOpen:
+      chain_open_ = request.on;
+      io_.set_safety_chain_open(request.on);
+      break;
+    case SimAction::DoorReversal:
+      io_.inject_door_reversal(now);
+      break;
+    case SimAction::OpenDoors:
+      io_.open_doors(now);
+      break;
+    case SimAction::CloseDoors:
+      io_.close_doors(now);
+      break;
+    case SimAction::ObstructDoors:
+      obstructed_ = request.on;
+      io_.set_door_obstructed(request.on, now);
+      break;
+  }
+  io_.advance(now);
+  log::event(
+      log::Level::info, "sim", "sim_injected",
+      {{"action", std::string(api::kSimActions[static_cast<std::size_t>(request.action)])}},
+      "simulated lift: " + std::string(api::kSimActions[static_cast<std::size_t>(request.action)]));
+  return api::Result::ok(state_json());
+}
+
+nlohmann::json SimulatedLift::state_json() const {
+  return {{"general_fault", general_fault_},
+          {"advance_warning", advance_warning_},
+          {"not_ready", not_ready_},
+          {"safety_chain_open", chain_open_},
+          {"doors", sim::to_string(io_.door_state())},
+          {"door_obstructed", obstructed_},
+          {"position_mm", std::llround(drive_->position_mm())}};
 }
 
 }  // namespace liftd::daemon

@@ -6,6 +6,8 @@
 #include <memory>
 #include <string>
 
+#include "api/backend.hpp"
+#include "api/result.hpp"
 #include "config/config.hpp"
 #include "control/dcp_controller.hpp"
 #include "io/pty.hpp"
@@ -36,6 +38,11 @@ class SimulatedLift {
   lift::Inputs inputs(MonoTime now);
   /// Logs what the simulated drive did since the last call (io thread).
   void log_events();
+  /// Carries out a `sim` request at `now` (io thread); the result is state_json() after it, or
+  /// `busy` for a drift while the car moves.
+  api::Result apply(const api::SimRequest& request, MonoTime now);
+  /// The injected state: drive switches, safety chain, doors, car position.
+  nlohmann::json state_json() const;
 
  private:
   class Encoder;
@@ -46,6 +53,11 @@ class SimulatedLift {
   std::unique_ptr<Encoder> position_;
   sim::SimulatedIo io_;
   bool started_ = false;
+  bool general_fault_ = false;    ///< injected S3
+  bool advance_warning_ = false;  ///< injected S2
+  bool not_ready_ = false;        ///< injected S0 = 0
+  bool chain_open_ = false;       ///< injected safety chain opening
+  bool obstructed_ = false;       ///< injected door obstruction
 };
 
 }  // namespace liftd::daemon

@@ -232,4 +232,8 @@ void Backend::calls(const std::string&, std::optional<int>, Responder done) {
   no_travel(done);
 }
 
+void Backend::sim(const SimRequest&, Responder done) {
+  done(Result::fail(ErrorCode::NotReady, "only with liftd --simulate"));
+}
+
 }  // namespace liftd::api

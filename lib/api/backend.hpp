@@ -155,6 +155,47 @@ struct TravelArgs {
   std::optional<int> load_percent;   ///< car load for I8
 };
 
+/// What `sim` does to the simulated lift (only a daemon started with --simulate has one).
+enum class SimAction : std::uint8_t {
+  GeneralFault,      ///< drive S3 on/off (DCP 4.1)
+  AdvanceWarning,    ///< drive S2 on/off (DCP 4.1)
+  NotReady,          ///< drive S0 forced to 0 on/off (DCP 4.1)
+  ReplyFault,        ///< the drive's next `frames` replies carry `fault`
+  ClearReplyFaults,  ///< ends every injected reply fault
+  Drift,             ///< moves the stationary car by `drift_mm`
+  SafetyChainOpen,   ///< safety chain open (on) or closed (off)
+  DoorReversal,      ///< a door reversal (light curtain): closing doors reopen
+  OpenDoors,         ///< starts opening the doors (on arrival while the car moves)
+  CloseDoors,        ///< starts closing the doors
+  ObstructDoors,     ///< holds the doors open (on) or releases them (off)
+};
+/// Wire names of SimAction, in enum order.
+inline constexpr std::array<std::string_view, 11> kSimActions = {
+    "general_fault",      "advance_warning", "not_ready",         "reply_fault",
+    "clear_reply_faults", "drift",           "safety_chain_open", "door_reversal",
+    "open_doors",         "close_doors",     "obstruct_doors"};
+
+/// A fault on the simulated drive's replies.
+enum class SimReplyFault : std::uint8_t {
+  NoReply,      ///< no reply at all
+  BadChecksum,  ///< reply with a wrong checksum
+  S7,           ///< reply with S7 (the drive claims our frame was corrupt)
+  Late,         ///< reply outside the DCP 7.2 window
+  Garbage,      ///< a few random bytes instead of a frame
+};
+/// Wire names of SimReplyFault, in enum order.
+inline constexpr std::array<std::string_view, 5> kSimReplyFaults = {"no_reply", "bad_checksum",
+                                                                    "s7", "late", "garbage"};
+
+/// Arguments of `sim`, validated by the command table.
+struct SimRequest {
+  SimAction action = SimAction::GeneralFault;    ///< what to do
+  bool on = true;                                ///< switches: on (default) or off
+  SimReplyFault fault = SimReplyFault::NoReply;  ///< ReplyFault: which fault
+  std::uint32_t frames = 1;                      ///< ReplyFault: how many replies
+  std::int32_t drift_mm = 0;                     ///< Drift: + up, - down
+};
+
 /// DCP I9 carries a sign and 6 digits of millimetres (DCP 5.12.9): the position range we accept.
 inline constexpr std::int64_t kMaxPositionMm = 999'999;
 
@@ -202,6 +243,12 @@ class Backend {
   virtual void fast_start(const std::string& action, const TravelArgs& args, Responder done);
   /// Calls queue: "list", "add" or "cancel" (with floor).
   virtual void calls(const std::string& action, std::optional<int> floor, Responder done);
+
+  // ---- the simulated lift (liftd --simulate only) ----
+  /// Fault injection and door/safety-chain handling on the simulated lift. The result is the
+  /// simulated lift's state after it. The default refuses: `not_ready` "only with liftd
+  /// --simulate".
+  virtual void sim(const SimRequest& request, Responder done);
 };
 
 /// JSON of a status snapshot, as in the `status` result and `state` event.

@@ -1,5 +1,6 @@
 #include "api/commands.hpp"
 
+#include <algorithm>
 #include <string>
 
 #include "common/version.hpp"
@@ -181,6 +182,7 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                   }});
 
   add_travel_commands(dispatcher, *b);
+  add_sim_command(dispatcher, *b);
 }
 
 namespace {
@@ -268,6 +270,60 @@ void add_travel_commands(Dispatcher& dispatcher, Backend& backend) {
                     }
                     b->calls(action, f, std::move(done));
                   }});
+}
+
+namespace {
+
+template <std::size_t N>
+std::vector<std::string> names_of(const std::array<std::string_view, N>& names) {
+  return {names.begin(), names.end()};
+}
+
+template <typename Enum, std::size_t N>
+Enum enum_of(const std::array<std::string_view, N>& names, const std::string& name) {
+  const auto it = std::find(names.begin(), names.end(), name);
+  return static_cast<Enum>(it - names.begin());
+}
+
+}  // namespace
+
+void add_sim_command(Dispatcher& dispatcher, Backend& backend) {
+  Backend* b = &backend;
+  dispatcher.add(
+      {"sim",
+       Access::Control,
+       {choice_arg("action", true, names_of(kSimActions), "what to do to the simulated lift"),
+        flag_arg("on", "switches: on (default) or off"),
+        choice_arg("fault", false, names_of(kSimReplyFaults), "reply_fault: the fault to inject"),
+        int_arg("frames", false, 1, kMaxSimFaultFrames,
+                "reply_fault: how many replies it affects (default 1)"),
+        int_arg("drift_mm", false, -kMaxSimDriftMm, kMaxSimDriftMm,
+                "drift: how far the stationary car moves, + up")},
+       "fault injection on the simulated lift (liftd --simulate only)",
+       [b](const Call& call, Responder done) {
+         const nlohmann::json& r = call.request;
+         SimRequest request;
+         request.action = enum_of<SimAction>(kSimActions, r.at("action").get<std::string>());
+         request.on = arg_or<bool>(r, "on", true);
+         if (request.action == SimAction::ReplyFault) {
+           if (!r.contains("fault")) {
+             done(Result::fail(ErrorCode::BadRequest, "reply_fault needs a fault", "fault"));
+             return;
+           }
+           request.fault =
+               enum_of<SimReplyFault>(kSimReplyFaults, r.at("fault").get<std::string>());
+           request.frames = arg_or<std::uint32_t>(r, "frames", 1);
+         }
+         if (request.action == SimAction::Drift) {
+           request.drift_mm = arg_or<std::int32_t>(r, "drift_mm", 0);
+           if (request.drift_mm == 0) {
+             done(Result::fail(ErrorCode::BadRequest, "drift needs a drift_mm other than 0",
+                               "drift_mm"));
+             return;
+           }
+         }
+         b->sim(request, std::move(done));
+       }});
 }
 
 }  // namespace liftd::api

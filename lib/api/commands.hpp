@@ -1,5 +1,5 @@
 // The built-in commands (status, watch, stats, trace, display, key, drive_reset, power, load,
-// config, version, inputs), each one table entry on a Dispatcher.
+// config, version, inputs, the travel commands, sim), each one table entry on a Dispatcher.
 #pragma once
 
 #include <functional>
@@ -20,6 +20,15 @@ inline constexpr std::int64_t kMaxFloorIndex = 63;
 /// Adds the travel commands (travel, stop, fast_stop, relevel, inspection, fast_start, calls).
 /// add_builtin_commands() calls it.
 void add_travel_commands(Dispatcher& dispatcher, Backend& backend);
+
+/// Most replies one `sim` reply_fault request affects (about 2.5 minutes of 15 ms cycles).
+inline constexpr std::int64_t kMaxSimFaultFrames = 10000;
+/// Largest car drift one `sim` drift request applies, either way.
+inline constexpr std::int64_t kMaxSimDriftMm = 1000;
+
+/// Adds `sim`, the simulated lift's fault injection (a backend without one refuses it).
+/// add_builtin_commands() calls it.
+void add_sim_command(Dispatcher& dispatcher, Backend& backend);
 
 /// Adds every built-in command to `dispatcher`, served by `backend`. `api_stats` supplies the
 /// server's own counters for `stats` ("api" object); it may be empty.

@@ -146,7 +146,16 @@ void TravelController::fast_stop() noexcept {
 ExtendResult TravelController::extend_target(std::int64_t target_mm) noexcept {
   if (!dcp4_.active()) return ExtendResult::NoDistanceTravel;
   const ExtendResult result = dcp4_.extend(target_mm, last_, config_);
-  if (result == ExtendResult::Accepted) home_level_mm_ = target_mm;
+  if (result == ExtendResult::Accepted) {
+    home_level_mm_ = target_mm;
+    Event event;
+    event.type = Event::Type::TargetExtended;
+    event.kind = dcp4_.kind();
+    event.at = last_.now;
+    event.target_mm = target_mm;
+    event.position_mm = last_.position_mm;
+    events_.push(event);
+  }
   return result;
 }
 

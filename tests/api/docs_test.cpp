@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <optional>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -85,6 +86,19 @@ TEST(ApiSchema, RequestsMatchTheCommandTable) {
       }
     }
   }
+}
+
+// `sim` is served only by liftd --simulate; every other backend refuses it the documented way.
+TEST(ApiDocs, SimIsRefusedWithoutASimulatorAsDocumented) {
+  testing::FakeBackend backend;
+  std::optional<Result> result;
+  backend.sim(SimRequest{}, [&](Result r) { result = std::move(r); });
+  ASSERT_TRUE(result.has_value());
+  ASSERT_FALSE(result->is_ok());
+  EXPECT_EQ(result->error().code, ErrorCode::NotReady);
+  EXPECT_EQ(result->error().message, "only with liftd --simulate");
+  EXPECT_NE(read_docs().find("\"only with liftd --simulate\""), std::string::npos)
+      << "docs/api.md, section sim, must name the refusal";
 }
 
 // ---- the event stream, fault codes and abort causes ----

@@ -251,6 +251,10 @@ TEST(Dcp4Extension, ExtendsEarlyRefusesLateWithReason) {
   ASSERT_TRUE(rig.run_until([&] { return rig.finished_travels(1) && rig.idle(); }, 60s));
   EXPECT_NEAR(rig.sim.position_mm(), 12000.0, kDcp4LandingMm);
   EXPECT_EQ(rig.controller.snapshot().floor, 4U);
+  // Exactly one extension event, for the accepted one, naming the new level.
+  const auto extended = rig.travel_events(travel::Event::Type::TargetExtended);
+  ASSERT_EQ(extended.size(), 1U);
+  EXPECT_EQ(extended[0].target_mm, 12000);
 }
 
 TEST(Dcp4Extension, RefusedWhileAdvanceWarning) {

@@ -18,83 +18,14 @@
 #include <thread>
 
 #include "daemon/process.hpp"
+#include "support/api_client.hpp"
 
 namespace {
 
 using namespace std::chrono_literals;
+using liftd::testing::ApiClient;
 using liftd::testing::Process;
 using nlohmann::json;
-
-/// A line client of the API socket with a receive deadline.
-class Client {
- public:
-  explicit Client(const std::string& path) {
-    fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    path.copy(addr.sun_path, sizeof(addr.sun_path) - 1);
-    if (::connect(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
-      ::close(fd_);
-      fd_ = -1;
-    }
-  }
-  ~Client() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  bool connected() const { return fd_ >= 0; }
-
-  void send(const json& request) {
-    const std::string line = request.dump() + "\n";
-    ASSERT_EQ(::write(fd_, line.data(), line.size()), static_cast<ssize_t>(line.size()));
-  }
-  /// The next line as JSON, or null after `timeout`.
-  json next(std::chrono::milliseconds timeout = 5s) {
-    const auto end = std::chrono::steady_clock::now() + timeout;
-    while (true) {
-      if (auto pos = buffer_.find('\n'); pos != std::string::npos) {
-        const std::string line = buffer_.substr(0, pos);
-        buffer_.erase(0, pos + 1);
-        return json::parse(line);
-      }
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
-          end - std::chrono::steady_clock::now());
-      if (left.count() <= 0) return nullptr;
-      timeval tv{0, static_cast<suseconds_t>(std::min<long>(left.count(), 200) * 1000)};
-      ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-      char chunk[4096];
-      const ssize_t n = ::read(fd_, chunk, sizeof chunk);
-      if (n > 0) buffer_.append(chunk, static_cast<std::size_t>(n));
-      if (n == 0) return nullptr;
-    }
-  }
-  /// Sends a request with an id and returns its reply (events in between are skipped).
-  json call(json request, std::chrono::milliseconds timeout = 5s) {
-    request["id"] = ++id_;
-    send(request);
-    const auto end = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < end) {
-      json line = next(timeout);
-      if (line.is_null()) break;
-      if (line.contains("id") && line["id"] == id_) return line;
-    }
-    return nullptr;
-  }
-  /// Waits for an event `name` whose data satisfies `match`.
-  template <typename Match>
-  json wait_event(const std::string& name, Match match, std::chrono::milliseconds timeout) {
-    const auto end = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < end) {
-      json line = next(1s);
-      if (line.is_object() && line.value("event", "") == name && match(line["data"])) return line;
-    }
-    return nullptr;
-  }
-
- private:
-  int fd_ = -1;
-  int id_ = 0;
-  std::string buffer_;
-};
 
 class SimulateTest : public ::testing::Test {
  protected:
@@ -108,7 +39,7 @@ class SimulateTest : public ::testing::Test {
         dir_.string(), "liftd");
     // The link is up once I0, I1 and I3 went through (well under a second on a quiet machine).
     for (int i = 0; i < 300; ++i) {
-      Client c(socket_);
+      ApiClient c(socket_);
       if (c.connected()) {
         c.next();  // hello
         json r = c.call({{"cmd", "status"}});
@@ -137,7 +68,7 @@ class SimulateTest : public ::testing::Test {
 };
 
 TEST_F(SimulateTest, LinkComesUpAndLiftctlShowsIt) {
-  Client c(socket_);
+  ApiClient c(socket_);
   ASSERT_TRUE(c.connected()) << daemon_->err();
   const json hello = c.next();
   ASSERT_EQ(hello.value("event", ""), "hello");
@@ -155,10 +86,10 @@ TEST_F(SimulateTest, LinkComesUpAndLiftctlShowsIt) {
 }
 
 TEST_F(SimulateTest, WatchSeesTheDrivesDisplayAfterAKeypress) {
-  Client watcher(socket_);
+  ApiClient watcher(socket_);
   watcher.next();
   ASSERT_TRUE(watcher.call({{"cmd", "watch"}, {"enable", true}})["ok"].get<bool>());
-  Client control(socket_);
+  ApiClient control(socket_);
   control.next();
   const json key = control.call({{"cmd", "key"}, {"key", 1}});
   ASSERT_TRUE(key["ok"].get<bool>()) << key.dump();
@@ -177,10 +108,10 @@ TEST_F(SimulateTest, WatchSeesTheDrivesDisplayAfterAKeypress) {
 }
 
 TEST_F(SimulateTest, TravelThroughTheApiLandsOnTheFloorAndEndsWithDriveEnableOff) {
-  Client watcher(socket_);
+  ApiClient watcher(socket_);
   watcher.next();
   ASSERT_TRUE(watcher.call({{"cmd", "watch"}, {"enable", true}})["ok"].get<bool>());
-  Client control(socket_);
+  ApiClient control(socket_);
   control.next();
   const json r = control.call({{"cmd", "travel"}, {"floor", 2}});
   ASSERT_TRUE(r["ok"].get<bool>()) << r.dump();
@@ -203,10 +134,10 @@ TEST_F(SimulateTest, TravelThroughTheApiLandsOnTheFloorAndEndsWithDriveEnableOff
 }
 
 TEST_F(SimulateTest, CallsAreServedInOrder) {
-  Client watcher(socket_);
+  ApiClient watcher(socket_);
   watcher.next();
   ASSERT_TRUE(watcher.call({{"cmd", "watch"}, {"enable", true}})["ok"].get<bool>());
-  Client control(socket_);
+  ApiClient control(socket_);
   control.next();
   ASSERT_TRUE(control.call({{"cmd", "calls"}, {"action", "add"}, {"floor", 4}})["ok"].get<bool>());
   ASSERT_TRUE(control.call({{"cmd", "calls"}, {"action", "add"}, {"floor", 1}})["ok"].get<bool>());
@@ -221,7 +152,7 @@ TEST_F(SimulateTest, CallsAreServedInOrder) {
 }
 
 TEST_F(SimulateTest, TraceSaveWritesTheDecodedFlightRecorder) {
-  Client control(socket_);
+  ApiClient control(socket_);
   control.next();
   const json r = control.call({{"cmd", "trace"}, {"count", 1}, {"save", true}});
   ASSERT_TRUE(r["ok"].get<bool>()) << r.dump();
@@ -235,7 +166,7 @@ TEST_F(SimulateTest, TraceSaveWritesTheDecodedFlightRecorder) {
 }
 
 TEST_F(SimulateTest, RefusesATravelToAFloorThatDoesNotExist) {
-  Client control(socket_);
+  ApiClient control(socket_);
   control.next();
   const json r = control.call({{"cmd", "travel"}, {"floor", 99}});
   EXPECT_FALSE(r["ok"].get<bool>());

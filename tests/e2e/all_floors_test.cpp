@@ -1,0 +1,172 @@
+// End to end, every floor to every floor of the default 6-floor building, DCP4 and DCP3, each
+// through a real `liftd --simulate` process: travel requested over the API, the travel events,
+// the landing position, the status afterwards and drive enable (B0) off on the wire once the car
+// stands.
+//
+// The 30 ordered floor pairs are split into five round trips from floor 0 (every daemon starts
+// there), each visiting six pairs; the trips of one test case run at the same time on separate
+// daemons, so the case takes as long as its longest trip (about a minute) rather than the sum.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <set>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "e2e/harness.hpp"
+
+namespace liftd::e2e {
+namespace {
+
+// Five closed trips 0 -> ... -> 0. Together they take each of the 30 ordered pairs of floors
+// exactly once (AllFloorPairs.TripsCoverEveryOrderedPairOnce checks it).
+const std::array<std::vector<int>, 5> kTrips = {{
+    {0, 1, 2, 1, 3, 1, 0},
+    {0, 2, 3, 2, 4, 2, 0},
+    {0, 3, 4, 1, 4, 3, 0},
+    {0, 4, 5, 1, 5, 4, 0},
+    {0, 5, 2, 5, 3, 5, 0},
+}};
+
+// DCP 11.1.2: a DCP4 distance travel ends on the level without crawl; our acceptance is 2 mm
+// (as in tests/control/travel_test.cpp).
+constexpr double kDcp4LandingMm = 2.0;
+// DCP3 by position with the in-process rig's settings (level tolerance 3 mm, B2 withdrawn 5 mm
+// early, see dcp3_travel()): tests/control/travel_test.cpp measured landings within about 1 mm
+// on its fake clock and accepts 2 mm. Here the cycle wakes a few ms late now and then, and the
+// decision to drop B1 at the deceleration point (DCP 10.1.2) is taken at full speed with no
+// crawl distance to absorb it: 1.6 m/s for 2 ms is 3 mm more before the drive reaches V0. Over
+// 90 travels on this machine the car stopped 0 to 3 mm past the level, once 4 mm under load; we
+// accept 5 mm.
+constexpr double kDcp3LandingMm = 5.0;
+
+/// The DCP3 travel settings of the in-process rig of tests/control/travel_test.cpp.
+json dcp3_travel() {
+  return {{"level_tolerance_mm", 3}, {"dcp3_stop_lead_mm", 5}};
+}
+
+/// What one travel of a trip did.
+struct Leg {
+  int from = 0;          ///< floor it started at
+  int to = 0;            ///< requested floor
+  json reply;            ///< the travel request's reply
+  json end;              ///< the `finished` / `aborted` event (null: none in time)
+  json status;           ///< status after the travel
+  bool b0_off = false;   ///< B0 off in the newest frames once stationary
+  double seconds = 0.0;  ///< request to end event
+};
+
+/// What one daemon did on its trip.
+struct TripResult {
+  std::string setup_error;  ///< empty when the daemon came up
+  std::vector<Leg> legs;
+  int aborted = 0;  ///< `aborted` travel events seen
+  int faults = 0;   ///< `fault` events with active = true seen
+  std::string log;  ///< the daemon's stderr, for failure messages
+};
+
+TripResult run_trip(const std::vector<int>& trip, int dcp, const std::string& name) {
+  TripResult out;
+  Lift lift(name, dcp, dcp == 3 ? dcp3_travel() : json::object());
+  out.setup_error = lift.setup_error();
+  if (!out.setup_error.empty()) return out;
+  for (std::size_t i = 1; i < trip.size(); ++i) {
+    Leg leg;
+    leg.from = trip[i - 1];
+    leg.to = trip[i];
+    const auto start = Clock::now();
+    leg.reply = lift.call({{"cmd", "travel"}, {"floor", leg.to}});
+    if (leg.reply.is_object() && leg.reply.value("ok", false)) {
+      leg.end = lift.wait_travel_end(90s);
+    }
+    leg.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    leg.b0_off = lift.b0_off_in_newest();
+    leg.status = lift.status();
+    const bool ok = leg.end.is_object() && leg.end["data"]["event"] == "finished";
+    out.legs.push_back(std::move(leg));
+    if (!ok) break;  // the rest of the trip would start from the wrong floor
+  }
+  out.aborted = lift.count_events("travel", [](const json& d) { return d["event"] == "aborted"; });
+  out.faults = lift.count_events("fault", [](const json& d) { return d["active"] == true; });
+  out.log = lift.log();
+  return out;
+}
+
+void check_trip(const std::vector<int>& trip, const TripResult& r, double tolerance_mm) {
+  ASSERT_TRUE(r.setup_error.empty()) << r.setup_error;
+  ASSERT_EQ(r.legs.size(), trip.size() - 1) << "trip ended early; daemon log:\n" << r.log;
+  for (const Leg& leg : r.legs) {
+    SCOPED_TRACE("floor " + std::to_string(leg.from) + " -> " + std::to_string(leg.to));
+    ASSERT_TRUE(leg.reply.value("ok", false)) << leg.reply.dump();
+    ASSERT_TRUE(leg.end.is_object()) << "no end of travel within 90 s";
+    const json& d = leg.end["data"];
+    EXPECT_EQ(d["event"], "finished") << d.dump();
+    EXPECT_TRUE(d["cause"].is_null()) << d.dump();
+    EXPECT_EQ(d["target_mm"], level_mm(leg.to));
+    ASSERT_TRUE(d["position_mm"].is_number()) << d.dump();
+    EXPECT_NEAR(d["position_mm"].get<double>(), level_mm(leg.to), tolerance_mm);
+    EXPECT_EQ(leg.status["car"]["floor"], leg.to) << leg.status.dump();
+    EXPECT_EQ(leg.status["travel"]["state"], "idle") << leg.status.dump();
+    EXPECT_TRUE(leg.status["faults"].empty()) << leg.status.dump();
+    EXPECT_TRUE(leg.b0_off) << "B0 still on in the newest frames once stationary";
+    std::printf("  %d -> %d: landed %+.0f mm off in %.1f s\n", leg.from, leg.to,
+                d["position_mm"].get<double>() - level_mm(leg.to), leg.seconds);
+  }
+  EXPECT_EQ(r.aborted, 0);
+  EXPECT_EQ(r.faults, 0);
+}
+
+/// Runs the trips `which` of kTrips at the same time, one daemon each, and checks them.
+void run_trips(const std::vector<std::size_t>& which, int dcp, double tolerance_mm) {
+  std::vector<TripResult> results(which.size());
+  std::vector<std::thread> threads;
+  for (std::size_t i = 0; i < which.size(); ++i) {
+    threads.emplace_back([&, i] {
+      results[i] = run_trip(kTrips[which[i]], dcp,
+                            "dcp" + std::to_string(dcp) + "-trip" + std::to_string(which[i]));
+    });
+  }
+  for (auto& t : threads) t.join();
+  for (std::size_t i = 0; i < which.size(); ++i) {
+    SCOPED_TRACE("trip " + std::to_string(which[i]));
+    check_trip(kTrips[which[i]], results[i], tolerance_mm);
+  }
+}
+
+TEST(AllFloorPairs, TripsCoverEveryOrderedPairOnce) {
+  std::multiset<std::pair<int, int>> pairs;
+  for (const auto& trip : kTrips) {
+    EXPECT_EQ(trip.front(), 0);
+    EXPECT_EQ(trip.back(), 0);
+    for (std::size_t i = 1; i < trip.size(); ++i) pairs.insert({trip[i - 1], trip[i]});
+  }
+  for (int from = 0; from < 6; ++from) {
+    for (int to = 0; to < 6; ++to) {
+      if (from == to) continue;
+      EXPECT_EQ(pairs.count({from, to}), 1U) << from << " -> " << to;
+    }
+  }
+  EXPECT_EQ(pairs.size(), 30U);
+}
+
+TEST(Dcp4AllFloors, RoundTrips1To3LandWithin2Mm) {
+  run_trips({0, 1, 2}, 4, kDcp4LandingMm);
+}
+
+TEST(Dcp4AllFloors, RoundTrips4And5LandWithin2Mm) {
+  run_trips({3, 4}, 4, kDcp4LandingMm);
+}
+
+TEST(Dcp3AllFloors, RoundTrips1To3LandWithin5Mm) {
+  run_trips({0, 1, 2}, 3, kDcp3LandingMm);
+}
+
+TEST(Dcp3AllFloors, RoundTrips4And5LandWithin5Mm) {
+  run_trips({3, 4}, 3, kDcp3LandingMm);
+}
+
+}  // namespace
+}  // namespace liftd::e2e

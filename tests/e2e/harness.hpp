@@ -1,0 +1,255 @@
+// Process-level test harness: one `liftd --simulate` per Lift (own directory, config and API
+// socket), a client that keeps every event it reads, and helpers for travels, the trace and
+// waiting on the simulated car. Time is real here (a real pty and cycle): helpers wait on events
+// and protocol state with generous limits, never on fixed sleeps for the outcome.
+#pragma once
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "daemon/process.hpp"
+#include "support/api_client.hpp"
+
+namespace liftd::e2e {
+
+using namespace std::chrono_literals;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+/// A client of the API socket (over the shared testing::ApiClient) that keeps every event it
+/// reads in `events()`, so a test can count them afterwards; replies are matched by id.
+class Client {
+ public:
+  /// Connects to `path`; connected() says whether it worked.
+  explicit Client(const std::string& path) : api_(path) {}
+
+  /// True when the socket is connected.
+  bool connected() const { return api_.connected(); }
+
+  /// Sends a request with a fresh id and returns its reply, or null after `timeout`.
+  json call(json request, std::chrono::milliseconds timeout = 5s) {
+    request["id"] = ++id_;
+    if (!api_.send(request)) return nullptr;
+    const auto end = Clock::now() + timeout;
+    while (Clock::now() < end) {
+      const json reply = next(end);
+      if (reply.is_object() && reply.contains("id") && reply["id"] == id_) return reply;
+    }
+    return nullptr;
+  }
+
+  /// The first event named `name` after the last one a wait returned whose data satisfies
+  /// `match`; null after `timeout`.
+  json wait_event(const std::string& name, const std::function<bool(const json&)>& match,
+                  std::chrono::milliseconds timeout) {
+    const auto end = Clock::now() + timeout;
+    while (true) {
+      for (; cursor_ < events_.size(); ++cursor_) {
+        const json& e = events_[cursor_];
+        if (e["event"] == name && match(e["data"])) return events_[cursor_++];
+      }
+      if (Clock::now() >= end) return nullptr;
+      next(std::min(end, Clock::now() + 200ms));
+    }
+  }
+
+  /// Reads whatever arrives for `duration` (events are kept).
+  void drain(std::chrono::milliseconds duration) {
+    const auto end = Clock::now() + duration;
+    while (Clock::now() < end) next(end);
+  }
+
+  /// Every event read so far.
+  const std::vector<json>& events() const { return events_; }
+
+ private:
+  // The next line (an event is also appended to events_), or null at `end`.
+  json next(Clock::time_point end) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now());
+    if (left.count() <= 0) return nullptr;
+    json line = api_.next(left);
+    if (line.is_object() && line.contains("event")) events_.push_back(line);
+    return line;
+  }
+
+  liftd::testing::ApiClient api_;
+  int id_ = 0;
+  std::vector<json> events_;
+  std::size_t cursor_ = 0;
+};
+
+/// Level of floor `floor` in the default building (6 floors, 3000 mm apart).
+inline double level_mm(int floor) {
+  return 3000.0 * floor;
+}
+
+/// The environment a daemon gets: a minimal PATH plus the sanitizer options of the test run.
+inline std::vector<std::string> daemon_env() {
+  std::vector<std::string> env = {"PATH=/usr/bin:/bin", "TZ=UTC"};
+  for (const char* name : {"ASAN_OPTIONS", "UBSAN_OPTIONS", "LSAN_OPTIONS"}) {
+    if (const char* value = std::getenv(name)) env.push_back(std::string(name) + "=" + value);
+  }
+  return env;
+}
+
+/// One `liftd --simulate --config FILE` with the API socket in its own directory and no access
+/// groups (the test's user owns the daemon), already watching events on its client.
+class Lift {
+ public:
+  /// Starts the daemon with `"sim": {"dcp": dcp}` and `travel` merged into the config; waits
+  /// until the link is up (setup_error() is empty then).
+  Lift(const std::string& name, int dcp, const json& travel = json::object()) {
+    std::string leaf = name;  // a parameterised test's name has a '/'
+    std::replace(leaf.begin(), leaf.end(), '/', '-');
+    dir_ = std::filesystem::temp_directory_path() /
+           ("liftd-e2e-" + std::to_string(::getpid()) + "-" + leaf);
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+    socket_ = (dir_ / "api.sock").string();
+    json config = {{"log", {{"level", "info"}}},
+                   {"api",
+                    {{"socket", socket_},
+                     {"socket_group", ""},
+                     {"read_group", ""},
+                     {"control_group", ""},
+                     {"inputs_group", ""}}},
+                   {"sim", {{"dcp", dcp}}}};
+    if (!travel.empty()) config["travel"] = travel;
+    const std::string config_path = (dir_ / "liftd.json").string();
+    std::ofstream(config_path) << config.dump(2);
+    daemon_ = std::make_unique<liftd::testing::Process>(
+        std::vector<std::string>{LIFTD_BINARY, "--simulate", "--config", config_path}, daemon_env(),
+        dir_.string(), "liftd");
+    // The link is up once I0, I1 and I3 went through (well under a second on a quiet machine;
+    // 30 s allows for a loaded one).
+    for (int i = 0; i < 300; ++i) {
+      auto client = std::make_unique<Client>(socket_);
+      if (client->connected()) {
+        const json status = client->call({{"cmd", "status"}});
+        if (status.is_object() && status["result"]["link"]["state"] == "up" &&
+            status["result"]["car"]["floor"] == 0) {
+          client_ = std::move(client);
+          const json watch = client_->call({{"cmd", "watch"}, {"enable", true}});
+          if (!watch.is_object() || !watch.value("ok", false)) error_ = "watch refused";
+          return;
+        }
+      }
+      std::this_thread::sleep_for(100ms);
+    }
+    error_ = "the link did not come up: " + daemon_->err();
+  }
+  ~Lift() {
+    client_.reset();
+    if (daemon_) {
+      daemon_->signal(SIGTERM);
+      daemon_->wait(5s);
+      daemon_.reset();
+    }
+    std::error_code ignored;
+    std::filesystem::remove_all(dir_, ignored);
+  }
+  Lift(const Lift&) = delete;
+  Lift& operator=(const Lift&) = delete;
+
+  /// Empty when the daemon runs with the link up; otherwise what went wrong.
+  const std::string& setup_error() const { return error_; }
+  /// The watching client (replies and every event).
+  Client& api() { return *client_; }
+  /// The daemon's stderr so far (for failure messages).
+  std::string log() const { return daemon_->err(); }
+
+  /// A request's reply (null on timeout).
+  json call(const json& request) { return client_->call(request); }
+  /// The `status` result.
+  json status() { return client_->call({{"cmd", "status"}})["result"]; }
+  /// The car position from `status` (NaN when unknown).
+  double position_mm() {
+    const json p = status()["car"]["position_mm"];
+    return p.is_number() ? p.get<double>() : std::nan("");
+  }
+
+  /// Waits for the next travel event `finished` or `aborted` (null after `timeout`).
+  json wait_travel_end(std::chrono::milliseconds timeout = 60s) {
+    return client_->wait_event(
+        "travel", [](const json& d) { return d["event"] == "finished" || d["event"] == "aborted"; },
+        timeout);
+  }
+  /// Waits for the travel event `type` (null after `timeout`).
+  json wait_travel(const std::string& type, std::chrono::milliseconds timeout = 10s) {
+    return client_->wait_event(
+        "travel", [&](const json& d) { return d["event"] == type; }, timeout);
+  }
+
+  /// Polls status until the car is moving farther than `mm` from where it started (`from_mm`);
+  /// false after `timeout`.
+  bool wait_moved(double from_mm, double mm, std::chrono::milliseconds timeout = 20s) {
+    const auto end = Clock::now() + timeout;
+    while (Clock::now() < end) {
+      const double p = position_mm();
+      if (std::abs(p - from_mm) >= mm) return true;
+      client_->drain(30ms);
+    }
+    return false;
+  }
+
+  /// The newest `count` master frames from `trace`: {t_us, command byte}.
+  std::vector<std::pair<std::int64_t, int>> newest_commands(int count) {
+    std::vector<std::pair<std::int64_t, int>> out;
+    const json trace = client_->call({{"cmd", "trace"}, {"count", count}});
+    for (const auto& f : trace["result"]["frames"]) {
+      const std::string tx = f["tx"];
+      out.emplace_back(f["t_us"].get<std::int64_t>(), std::stoi(tx.substr(0, 2), nullptr, 16));
+    }
+    return out;
+  }
+
+  /// True when drive enable (B0, DCP 9.1.1) is off in each of the newest `count` frames, checked
+  /// until it holds or 2 s passed (the cycle withdraws it within a few cycles of standstill).
+  bool b0_off_in_newest(int count = 5) {
+    const auto end = Clock::now() + 2s;
+    while (true) {
+      const auto frames = newest_commands(count);
+      const bool off = !frames.empty() && std::all_of(frames.begin(), frames.end(), [](auto& f) {
+        return (f.second & 0x01) == 0;
+      });
+      if (off || Clock::now() >= end) return off;
+      client_->drain(50ms);
+    }
+  }
+
+  /// Events named `name` whose data satisfies `match`, counted over everything read so far.
+  int count_events(const std::string& name, const std::function<bool(const json&)>& match) {
+    return static_cast<int>(
+        std::count_if(client_->events().begin(), client_->events().end(),
+                      [&](const json& e) { return e["event"] == name && match(e["data"]); }));
+  }
+
+ private:
+  std::filesystem::path dir_;
+  std::string socket_;
+  std::unique_ptr<liftd::testing::Process> daemon_;
+  std::unique_ptr<Client> client_;
+  std::string error_;
+};
+
+/// Monotonic now in microseconds, comparable with the trace's t_us (both CLOCK_MONOTONIC).
+inline std::int64_t mono_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(Clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace liftd::e2e
