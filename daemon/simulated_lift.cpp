@@ -35,6 +35,10 @@ class SimulatedLift::Encoder final : public control::PositionSource {
 
 namespace {
 
+// Crawl distance of the simulated DCP3 installation: the drive's SVx is this much shorter than
+// the controller's configured deceleration distance.
+constexpr int kCrawlApproachMm = 100;
+
 sim::ReplyFault to_sim(api::SimReplyFault fault) {
   switch (fault) {
     case api::SimReplyFault::NoReply:
@@ -74,7 +78,12 @@ SimulatedLift::SimulatedLift(const config::Config& config) : io_(io_config(confi
   if (!config.floors.empty()) drive.start_position_mm = config.floors.front().level_mm;
   for (const auto& [name, mm] : config.travel.dcp3_decel_distance_mm) {
     if (auto speed = dcp::speed_from_string(name)) {
-      drive.dcp3_decel_mm[travel::speed_index(*speed)] = static_cast<std::uint32_t>(mm);
+      // DCP 10.1.1: the drive reaches crawl within SVx and the controller positions with B2.
+      // As in a real shaft, the deceleration point lies a crawl distance before the drive's
+      // ramp ends, so the car arrives at crawl and B2 stops it precisely, whatever a cycle's
+      // lateness at full speed.
+      const int ramp_mm = mm > 2 * kCrawlApproachMm ? mm - kCrawlApproachMm : mm;
+      drive.dcp3_decel_mm[travel::speed_index(*speed)] = static_cast<std::uint32_t>(ramp_mm);
     }
   }
   sim::RunnerOptions options;
