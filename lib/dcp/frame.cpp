@@ -3,9 +3,9 @@
 namespace liftd::dcp {
 namespace {
 
-constexpr std::uint16_t kModeBit = 0x8000;  // DCP 4.2.1: bit 15 marks extended status
-constexpr std::uint16_t kMax15 = 0x7FFF;    // DCP 3.5.3.4 / 4.2.1.2: 15-bit saturation
-constexpr std::uint16_t kMax16 = 0xFFFF;    // DCP 3.5.3.4 / 4.2.1.3: 16-bit saturation
+constexpr std::uint16_t kModeBit = 0x8000;        // DCP 4.2.1: bit 15 marks extended status
+constexpr std::uint16_t kMax15 = 0x7FFF;          // DCP 3.5.3.4 / 4.2.1.2: 15-bit saturation
+constexpr std::uint16_t kMax16 = 0xFFFF;          // DCP 3.5.3.4 / 4.2.1.3: 16-bit saturation
 constexpr std::uint16_t kSpeedBitsMask = 0x07FF;  // G0..G10
 
 struct SpeedName {
@@ -38,8 +38,12 @@ constexpr std::uint8_t kNibbleSpeed = 0x9;
 constexpr std::uint8_t kNibbleAfterFastStartDcp3 = 0xF;
 constexpr std::uint8_t kNibbleAfterFastStartDcp4 = 0xD;
 
-constexpr bool bit(std::uint8_t byte, std::uint8_t mask) { return (byte & mask) != 0; }
-constexpr std::uint8_t flag(bool on, std::uint8_t mask) { return on ? mask : std::uint8_t{0}; }
+constexpr bool bit(std::uint8_t byte, std::uint8_t mask) {
+  return (byte & mask) != 0;
+}
+constexpr std::uint8_t flag(bool on, std::uint8_t mask) {
+  return on ? mask : std::uint8_t{0};
+}
 
 template <typename Frame>
 FrameBytes encode_frame(std::uint8_t first, const Frame& f) noexcept {
@@ -76,8 +80,8 @@ bool speed_allowed(Speed speed, Protocol protocol) noexcept {
       return true;
     case Protocol::Dcp4:
       // DCP 3.5.3.7: V7, V6, V5, V2 and V1 are not available under DCP4.
-      return speed != Speed::V1 && speed != Speed::V2 && speed != Speed::V5 &&
-             speed != Speed::V6 && speed != Speed::V7;
+      return speed != Speed::V1 && speed != Speed::V2 && speed != Speed::V5 && speed != Speed::V6 &&
+             speed != Speed::V7;
   }
   return false;
 }
@@ -276,8 +280,12 @@ std::uint8_t checksum(std::span<const std::uint8_t, 5> bytes) noexcept {
   return x;
 }
 
-FrameBytes encode(const MasterFrame& frame) noexcept { return encode_frame(frame.command, frame); }
-FrameBytes encode(const SlaveFrame& frame) noexcept { return encode_frame(frame.status, frame); }
+FrameBytes encode(const MasterFrame& frame) noexcept {
+  return encode_frame(frame.command, frame);
+}
+FrameBytes encode(const SlaveFrame& frame) noexcept {
+  return encode_frame(frame.status, frame);
+}
 
 std::optional<MasterFrame> decode_master(std::span<const std::uint8_t, kFrameSize> bytes) noexcept {
   if (!checksum_ok(bytes)) return std::nullopt;
@@ -291,8 +299,8 @@ std::optional<SlaveFrame> decode_slave(std::span<const std::uint8_t, kFrameSize>
 
 Status Status::from_byte(std::uint8_t s) noexcept {
   using namespace status_bit;
-  return Status{bit(s, kReady),       bit(s, kTravelActive),    bit(s, kAdvanceWarning),
-                bit(s, kGeneralFault), bit(s, kBelowLevelling), bit(s, kAccepted),
+  return Status{bit(s, kReady),        bit(s, kTravelActive),        bit(s, kAdvanceWarning),
+                bit(s, kGeneralFault), bit(s, kBelowLevelling),      bit(s, kAccepted),
                 bit(s, kBrakeOpen),    bit(s, kMessageChecksumError)};
 }
 
@@ -307,8 +315,9 @@ std::uint8_t Status::to_byte() const noexcept {
 
 Command Command::from_byte(std::uint8_t c) noexcept {
   using namespace command_bit;
-  return Command{bit(c, kDriveEnable),    bit(c, kTravel),       bit(c, kStopSwitch),
-                 bit(c, kSpeedData),      bit(c, kDirectionDown), bit(c, kSpeedChange),
+  return Command{bit(c, kDriveEnable),     bit(c, kTravel),
+                 bit(c, kStopSwitch),      bit(c, kSpeedData),
+                 bit(c, kDirectionDown),   bit(c, kSpeedChange),
                  bit(c, kDesiredDistance), bit(c, kReplyChecksumError)};
 }
 

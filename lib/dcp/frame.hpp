@@ -27,23 +27,23 @@ namespace command_bit {
 inline constexpr std::uint8_t kDriveEnable = 0x01;  ///< B0: drive controller enable
 /// B1: travel command (DCP3) / desired-distance travel (DCP4)
 inline constexpr std::uint8_t kTravel = 0x02;
-inline constexpr std::uint8_t kStopSwitch = 0x04;        ///< B2: stop switch (V0 switch-off)
-inline constexpr std::uint8_t kSpeedData = 0x08;         ///< B3: data bytes carry a speed
-inline constexpr std::uint8_t kDirectionDown = 0x10;     ///< B4: 0 = up, 1 = down
-inline constexpr std::uint8_t kSpeedChange = 0x20;       ///< B5: speed change
-inline constexpr std::uint8_t kDesiredDistance = 0x40;   ///< B6: 0 actual, 1 desired distance
+inline constexpr std::uint8_t kStopSwitch = 0x04;          ///< B2: stop switch (V0 switch-off)
+inline constexpr std::uint8_t kSpeedData = 0x08;           ///< B3: data bytes carry a speed
+inline constexpr std::uint8_t kDirectionDown = 0x10;       ///< B4: 0 = up, 1 = down
+inline constexpr std::uint8_t kSpeedChange = 0x20;         ///< B5: speed change
+inline constexpr std::uint8_t kDesiredDistance = 0x40;     ///< B6: 0 actual, 1 desired distance
 inline constexpr std::uint8_t kReplyChecksumError = 0x80;  ///< B7: your last reply was corrupt
 }  // namespace command_bit
 
 /// Status byte bits S0..S7 (DCP 4.1).
 namespace status_bit {
-inline constexpr std::uint8_t kReady = 0x01;            ///< S0: drive controller ready
-inline constexpr std::uint8_t kTravelActive = 0x02;     ///< S1: travel active
-inline constexpr std::uint8_t kAdvanceWarning = 0x04;   ///< S2: advance warning active
-inline constexpr std::uint8_t kGeneralFault = 0x08;     ///< S3: general fault active
-inline constexpr std::uint8_t kBelowLevelling = 0x10;   ///< S4: v < 0.3 m/s
-inline constexpr std::uint8_t kAccepted = 0x20;         ///< S5: distance / speed accepted
-inline constexpr std::uint8_t kBrakeOpen = 0x40;        ///< S6: 1 = mechanical brake open
+inline constexpr std::uint8_t kReady = 0x01;                 ///< S0: drive controller ready
+inline constexpr std::uint8_t kTravelActive = 0x02;          ///< S1: travel active
+inline constexpr std::uint8_t kAdvanceWarning = 0x04;        ///< S2: advance warning active
+inline constexpr std::uint8_t kGeneralFault = 0x08;          ///< S3: general fault active
+inline constexpr std::uint8_t kBelowLevelling = 0x10;        ///< S4: v < 0.3 m/s
+inline constexpr std::uint8_t kAccepted = 0x20;              ///< S5: distance / speed accepted
+inline constexpr std::uint8_t kBrakeOpen = 0x40;             ///< S6: 1 = mechanical brake open
 inline constexpr std::uint8_t kMessageChecksumError = 0x80;  ///< S7: your last message was corrupt
 }  // namespace status_bit
 
@@ -86,12 +86,12 @@ std::optional<Speed> speed_from_word(std::uint16_t word) noexcept;
 
 /// Message types by the command byte's low nibble B3..B0 (DCP 3.5.1 and 3.5.2).
 enum class MessageType : std::uint8_t {
-  Idle,                 ///< 0000: idle mode
-  Stop,                 ///< 0001: stop mode (waiting for the drive to stop)
-  Relevelling,          ///< 0011: relevelling without remaining distance
-  DistanceOrDecel,      ///< 0101: remaining distance (DCP4) or deceleration; see DistanceModeTracker
-  Travel,               ///< 0111: travel mode
-  Speed,                ///< 1001: speed message, data bytes carry a speed
+  Idle,             ///< 0000: idle mode
+  Stop,             ///< 0001: stop mode (waiting for the drive to stop)
+  Relevelling,      ///< 0011: relevelling without remaining distance
+  DistanceOrDecel,  ///< 0101: remaining distance (DCP4) or deceleration; see DistanceModeTracker
+  Travel,           ///< 0111: travel mode
+  Speed,            ///< 1001: speed message, data bytes carry a speed
   SpeedAfterFastStart,  ///< DCP3 1111, DCP4 1101: speed after a fast start (and fast stop)
   Invalid,              ///< any other nibble, or B6 set (every valid type has B6 = 0)
 };
@@ -130,11 +130,11 @@ std::uint16_t remaining_distance_word(std::int64_t distance_mm, DistanceWidth wi
 
 /// Data-information-type set with I1 (DCP 4.2.2, 5.12.3); default '0'.
 enum class DataInfoType : std::uint8_t {
-  Alternating = '0',       ///< 15-bit deceleration distance and extended status alternate
-  Decel15 = '1',           ///< 15-bit deceleration distance only
-  Extended = '2',          ///< extended status only
-  Decel16 = '3',           ///< 16-bit deceleration distance only (16-bit remaining distance)
-  ExtendedDist16 = '4',    ///< extended status only, 16-bit remaining distance from us
+  Alternating = '0',     ///< 15-bit deceleration distance and extended status alternate
+  Decel15 = '1',         ///< 15-bit deceleration distance only
+  Extended = '2',        ///< extended status only
+  Decel16 = '3',         ///< 16-bit deceleration distance only (16-bit remaining distance)
+  ExtendedDist16 = '4',  ///< extended status only, 16-bit remaining distance from us
 };
 
 /// Parses '0'..'4'.
@@ -144,10 +144,10 @@ DistanceWidth remaining_distance_width(DataInfoType type) noexcept;
 
 /// Extended status (DCP 4.2.1.1), one field per defined bit.
 struct ExtendedStatus {
-  bool below_unlocking_speed = false;  ///< bit 0: v < 0.8 m/s (unlocking zone)
-  bool below_border_speed = false;     ///< bit 1: v < adjustable border speed
-  bool below_overspeed = false;        ///< bit 2: v < adjustable overspeed
-  std::uint8_t weight_bits = 0;        ///< bits 4..8: reserved for weight detection (raw)
+  bool below_unlocking_speed = false;      ///< bit 0: v < 0.8 m/s (unlocking zone)
+  bool below_border_speed = false;         ///< bit 1: v < adjustable border speed
+  bool below_overspeed = false;            ///< bit 2: v < adjustable overspeed
+  std::uint8_t weight_bits = 0;            ///< bits 4..8: reserved for weight detection (raw)
   bool emergency_reduced_voltage = false;  ///< bit 9: emergency power, reduced DC-link voltage
   bool emergency_direction_down = false;   ///< bit 10: recommended direction (0 up, 1 down)
   bool motor_temperature_limit = false;    ///< bit 11
@@ -231,14 +231,14 @@ std::optional<SlaveFrame> decode_slave(std::span<const std::uint8_t, kFrameSize>
 
 /// Status byte by name (DCP 4.1).
 struct Status {
-  bool ready = false;             ///< S0
-  bool travel_active = false;     ///< S1
-  bool advance_warning = false;   ///< S2
-  bool general_fault = false;     ///< S3
-  bool below_levelling = false;   ///< S4
-  bool accepted = false;          ///< S5
-  bool brake_open = false;        ///< S6
-  bool message_error = false;     ///< S7
+  bool ready = false;            ///< S0
+  bool travel_active = false;    ///< S1
+  bool advance_warning = false;  ///< S2
+  bool general_fault = false;    ///< S3
+  bool below_levelling = false;  ///< S4
+  bool accepted = false;         ///< S5
+  bool brake_open = false;       ///< S6
+  bool message_error = false;    ///< S7
   static Status from_byte(std::uint8_t status) noexcept;
   std::uint8_t to_byte() const noexcept;
   bool operator==(const Status&) const = default;

@@ -25,7 +25,8 @@ TEST(DcpChecksum, IsXorOfFirstFiveBytes) {
 
 TEST(DcpMasterFrame, EncodesBytesInOrderWithChecksum) {
   MasterFrame f{0x05, 0x12, 0x34, 0x02, 0x1C};
-  EXPECT_EQ(encode(f), (FrameBytes{0x05, 0x12, 0x34, 0x02, 0x1C, 0x05 ^ 0x12 ^ 0x34 ^ 0x02 ^ 0x1C}));
+  EXPECT_EQ(encode(f),
+            (FrameBytes{0x05, 0x12, 0x34, 0x02, 0x1C, 0x05 ^ 0x12 ^ 0x34 ^ 0x02 ^ 0x1C}));
 }
 
 TEST(DcpSlaveFrame, RoundTripsAndRejectsBadChecksum) {
@@ -49,9 +50,9 @@ TEST(DcpCommandByte, EveryBitHasItsName) {
     bool Command::*field;
   };
   const std::vector<Case> cases = {
-      {0x01, &Command::drive_enable},   {0x02, &Command::travel},
-      {0x04, &Command::stop_switch},    {0x08, &Command::speed_data},
-      {0x10, &Command::direction_down}, {0x20, &Command::speed_change},
+      {0x01, &Command::drive_enable},     {0x02, &Command::travel},
+      {0x04, &Command::stop_switch},      {0x08, &Command::speed_data},
+      {0x10, &Command::direction_down},   {0x20, &Command::speed_change},
       {0x40, &Command::desired_distance}, {0x80, &Command::reply_error},
   };
   for (const auto& c : cases) {
@@ -171,8 +172,8 @@ TEST(DcpSpeed, WordsAreSingleBitsG0ToG10) {
     std::string_view name;
   };
   const std::vector<Case> cases = {
-      {Speed::V0, 0, "V0"}, {Speed::VN, 1, "VN"}, {Speed::VF, 2, "VF"}, {Speed::V1, 3, "V1"},
-      {Speed::VI, 4, "VI"}, {Speed::V2, 5, "V2"}, {Speed::V3, 6, "V3"}, {Speed::V4, 7, "V4"},
+      {Speed::V0, 0, "V0"}, {Speed::VN, 1, "VN"}, {Speed::VF, 2, "VF"},  {Speed::V1, 3, "V1"},
+      {Speed::VI, 4, "VI"}, {Speed::V2, 5, "V2"}, {Speed::V3, 6, "V3"},  {Speed::V4, 7, "V4"},
       {Speed::V5, 8, "V5"}, {Speed::V6, 9, "V6"}, {Speed::V7, 10, "V7"},
   };
   for (const auto& c : cases) {
@@ -230,14 +231,10 @@ TEST(DcpRemainingDistance, ClampsPerWidth) {
   };
   const std::vector<Case> cases = {
       {-5, DistanceWidth::Bits15, 0x0000},  // level passed: 0
-      {0, DistanceWidth::Bits15, 0x0000},
-      {1234, DistanceWidth::Bits15, 1234},
-      {0x7FFE, DistanceWidth::Bits15, 0x7FFE},
-      {0x7FFF, DistanceWidth::Bits15, 0x7FFF},
-      {40000, DistanceWidth::Bits15, 0x7FFF},
-      {40000, DistanceWidth::Bits16, 40000},
-      {70000, DistanceWidth::Bits16, 0xFFFF},
-      {-1, DistanceWidth::Bits16, 0x0000},
+      {0, DistanceWidth::Bits15, 0x0000},      {1234, DistanceWidth::Bits15, 1234},
+      {0x7FFE, DistanceWidth::Bits15, 0x7FFE}, {0x7FFF, DistanceWidth::Bits15, 0x7FFF},
+      {40000, DistanceWidth::Bits15, 0x7FFF},  {40000, DistanceWidth::Bits16, 40000},
+      {70000, DistanceWidth::Bits16, 0xFFFF},  {-1, DistanceWidth::Bits16, 0x0000},
   };
   for (const auto& c : cases) EXPECT_EQ(remaining_distance_word(c.mm, c.width), c.word) << c.mm;
 }
