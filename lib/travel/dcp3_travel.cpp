@@ -72,11 +72,7 @@ bool Dcp3Travel::at_level(const StepContext& ctx) const noexcept {
 }
 
 void Dcp3Travel::finish(StepContext& ctx) noexcept {
-  if (end_cause_ == AbortCause::None) {
-    ctx.emit(Event::Type::Finished, kind_, AbortCause::None, target_mm_);
-  } else {
-    ctx.emit(Event::Type::Aborted, kind_, end_cause_, target_mm_);
-  }
+  ctx.emit_end(kind_, end_cause_, target_mm_);
   if (go_sent_) ctx.request_position_after_stop();  // DCP 5.12.9: I9 after every stop
   state_ = State::Idle;
 }

@@ -42,11 +42,7 @@ bool RelevelTravel::at_level(const StepContext& ctx) const noexcept {
 }
 
 void RelevelTravel::finish(StepContext& ctx) noexcept {
-  if (end_cause_ == AbortCause::None) {
-    ctx.emit(Event::Type::Finished, TravelKind::Relevel, AbortCause::None, target_mm_);
-  } else {
-    ctx.emit(Event::Type::Aborted, TravelKind::Relevel, end_cause_, target_mm_);
-  }
+  ctx.emit_end(TravelKind::Relevel, end_cause_, target_mm_);
   ctx.request_position_after_stop();
   state_ = State::Idle;
 }

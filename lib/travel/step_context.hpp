@@ -32,6 +32,11 @@ struct StepContext {
     event.position_mm = in.position_mm;
     static_cast<void>(events.push(event));
   }
+  /// The end of a travel: Finished when `cause` is None, else Aborted with the cause.
+  void emit_end(TravelKind kind, AbortCause cause, std::int64_t target_mm) noexcept {
+    emit(cause == AbortCause::None ? Event::Type::Finished : Event::Type::Aborted, kind, cause,
+         target_mm);
+  }
   /// DCP 5.12.9: after every stop in DCP4, tell the drive where the car is (I9).
   void request_position_after_stop() noexcept {
     if (in.protocol != dcp::Protocol::Dcp4) return;
