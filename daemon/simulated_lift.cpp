@@ -147,6 +147,12 @@ api::Result SimulatedLift::apply(const api::SimRequest& request, MonoTime now) {
     case SimAction::ReplyFault:
       drive_->inject(to_sim(request.fault), request.frames);
       break;
+    case SimAction::ChannelFault:
+      drive_->inject_channel(
+          request.channel == api::SimChannelFault::Partial   ? sim::ChannelFault::Partial
+          : request.channel == api::SimChannelFault::Garbage ? sim::ChannelFault::Garbage
+                                                             : sim::ChannelFault::Silence);
+      break;
     case SimAction::ClearReplyFaults:
       drive_->clear_reply_faults();
       break;
@@ -193,7 +199,9 @@ nlohmann::json SimulatedLift::state_json() const {
           {"safety_chain_open", chain_open_},
           {"doors", sim::to_string(io_.door_state())},
           {"door_obstructed", obstructed_},
-          {"position_mm", std::llround(drive_->position_mm())}};
+          {"position_mm", std::llround(drive_->position_mm())},
+          {"violations", drive_->status().sim.violations},
+          {"implausible", drive_->status().sim.implausible}};
 }
 
 }  // namespace liftd::daemon

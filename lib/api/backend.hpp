@@ -168,12 +168,23 @@ enum class SimAction : std::uint8_t {
   OpenDoors,         ///< starts opening the doors (on arrival while the car moves)
   CloseDoors,        ///< starts closing the doors
   ObstructDoors,     ///< holds the doors open (on) or releases them (off)
+  ChannelFault,      ///< a fault on the drive's communication channel only (DCP 5)
 };
 /// Wire names of SimAction, in enum order.
-inline constexpr std::array<std::string_view, 11> kSimActions = {
+inline constexpr std::array<std::string_view, 12> kSimActions = {
     "general_fault",      "advance_warning", "not_ready",         "reply_fault",
     "clear_reply_faults", "drift",           "safety_chain_open", "door_reversal",
-    "open_doors",         "close_doors",     "obstruct_doors"};
+    "open_doors",         "close_doors",     "obstruct_doors",    "channel_fault"};
+
+/// A fault on the simulated drive's communication channel (DCP 5), the real-time bytes intact.
+enum class SimChannelFault : std::uint8_t {
+  Partial,  ///< STX and the start of a message, never an ETX (the master resets after 1 s)
+  Garbage,  ///< a frame with an undefined mode byte and stray control characters
+  Silence,  ///< 1.5 s of idle channel bytes, the master's channel bytes unheard
+};
+/// Wire names of SimChannelFault, in enum order.
+inline constexpr std::array<std::string_view, 3> kSimChannelFaults = {"partial", "garbage",
+                                                                      "silence"};
 
 /// A fault on the simulated drive's replies.
 enum class SimReplyFault : std::uint8_t {
@@ -189,11 +200,12 @@ inline constexpr std::array<std::string_view, 5> kSimReplyFaults = {"no_reply", 
 
 /// Arguments of `sim`, validated by the command table.
 struct SimRequest {
-  SimAction action = SimAction::GeneralFault;    ///< what to do
-  bool on = true;                                ///< switches: on (default) or off
-  SimReplyFault fault = SimReplyFault::NoReply;  ///< ReplyFault: which fault
-  std::uint32_t frames = 1;                      ///< ReplyFault: how many replies
-  std::int32_t drift_mm = 0;                     ///< Drift: + up, - down
+  SimAction action = SimAction::GeneralFault;          ///< what to do
+  bool on = true;                                      ///< switches: on (default) or off
+  SimReplyFault fault = SimReplyFault::NoReply;        ///< ReplyFault: which fault
+  std::uint32_t frames = 1;                            ///< ReplyFault: how many replies
+  std::int32_t drift_mm = 0;                           ///< Drift: + up, - down
+  SimChannelFault channel = SimChannelFault::Partial;  ///< ChannelFault: which fault
 };
 
 /// DCP I9 carries a sign and 6 digits of millimetres (DCP 5.12.9): the position range we accept.

@@ -295,6 +295,8 @@ void add_sim_command(Dispatcher& dispatcher, Backend& backend) {
        {choice_arg("action", true, names_of(kSimActions), "what to do to the simulated lift"),
         flag_arg("on", "switches: on (default) or off"),
         choice_arg("fault", false, names_of(kSimReplyFaults), "reply_fault: the fault to inject"),
+        choice_arg("channel", false, names_of(kSimChannelFaults),
+                   "channel_fault: the communication-channel fault to inject"),
         int_arg("frames", false, 1, kMaxSimFaultFrames,
                 "reply_fault: how many replies it affects (default 1)"),
         int_arg("drift_mm", false, -kMaxSimDriftMm, kMaxSimDriftMm,
@@ -313,6 +315,14 @@ void add_sim_command(Dispatcher& dispatcher, Backend& backend) {
            request.fault =
                enum_of<SimReplyFault>(kSimReplyFaults, r.at("fault").get<std::string>());
            request.frames = arg_or<std::uint32_t>(r, "frames", 1);
+         }
+         if (request.action == SimAction::ChannelFault) {
+           if (!r.contains("channel")) {
+             done(Result::fail(ErrorCode::BadRequest, "channel_fault needs a channel", "channel"));
+             return;
+           }
+           request.channel =
+               enum_of<SimChannelFault>(kSimChannelFaults, r.at("channel").get<std::string>());
          }
          if (request.action == SimAction::Drift) {
            request.drift_mm = arg_or<std::int32_t>(r, "drift_mm", 0);

@@ -99,6 +99,10 @@ std::string_view to_string(LinkEventKind kind) noexcept {
       return "unmatched reply";
     case LinkEventKind::TimeSent:
       return "date/time sent";
+    case LinkEventKind::HandshakeProblem:
+      return "handshake problem";
+    case LinkEventKind::Tolerated:
+      return "tolerated";
   }
   return "unknown";
 }
@@ -134,8 +138,16 @@ MasterLink::MasterLink(const MasterLinkConfig& config) : config_(config) {
 }
 
 bool MasterLink::travel_allowed() const noexcept {
-  return state_ == LinkState::Up && protocol_ &&
-         (*protocol_ == Protocol::Dcp3 || *protocol_ == Protocol::Dcp4);
+  if (!protocol_ || (*protocol_ != Protocol::Dcp3 && *protocol_ != Protocol::Dcp4)) return false;
+  if (state_ == LinkState::Up) return true;
+  // DCP 5.1: "The communication data channel is subordinate to the real time channel": a
+  // travel already running goes on while the channel re-initialises; no new one starts.
+  return motion_on_ && (state_ == LinkState::Init || state_ == LinkState::Resetting);
+}
+
+bool MasterLink::at_rest() const noexcept {
+  const bool travel_active = drive_.status && (*drive_.status & status_bit::kTravelActive) != 0;
+  return !motion_on_ && !travel_active;
 }
 
 void MasterLink::set_civil_time(const CivilTime& time) noexcept {
@@ -179,6 +191,7 @@ FrameBytes MasterLink::next_frame(MonoTime now) noexcept {
 
   std::uint8_t command = command_;
   if (!travel_allowed()) command = static_cast<std::uint8_t>(command & ~kTravelBits);
+  motion_on_ = (command & kTravelBits) != 0;
   b7_in_last_frame_ = b7_next_;
   if (b7_next_) {
     command |= command_bit::kReplyChecksumError;  // DCP 6.1 a
@@ -197,6 +210,7 @@ void MasterLink::on_reply(std::span<const std::uint8_t, kFrameSize> bytes, MonoT
   awaiting_reply_ = false;
   last_now_ = now;
   const auto frame = decode_slave(bytes);
+  last_exchange_good_ = false;
   if (!frame) {
     // DCP 6.1 a: ignore the reply (its S7 too, DCP 6 note), set B7 in the next frame, keep the
     // message type. The drive then repeats this reply, which we have not consumed.
@@ -216,6 +230,8 @@ void MasterLink::on_reply(std::span<const std::uint8_t, kFrameSize> bytes, MonoT
     // are 00 in such a reply (DCP 6.2 a), so there is nothing to consume.
     ++counters_.s7_seen;
     repeat_next_ = true;
+    // The frame that carried B7 did not reach the drive either: say it again.
+    if (b7_in_last_frame_) b7_next_ = true;
   } else if (b7_in_last_frame_ && last_reply_consumed_) {
     // DCP 6.2 b: this is a repetition of a reply whose channel bytes we already have.
     ++counters_.repeats_skipped;
@@ -225,7 +241,16 @@ void MasterLink::on_reply(std::span<const std::uint8_t, kFrameSize> bytes, MonoT
     consumed = true;
   }
   last_reply_consumed_ = consumed;
-  count_good(frame->status, now);
+  const bool s7 = (frame->status & status_bit::kMessageChecksumError) != 0;
+  // A reply to a B7 frame repeats an older one (DCP 6.2 b; DCP3 repeats its status too).
+  last_exchange_good_ = !s7 && !b7_in_last_frame_;
+  if (s7) {
+    // DCP 7.3: "10 successive messages are received incorrectly or were completely lost": an
+    // S7 reply says the drive received ours incorrectly, so it counts like a lost one.
+    count_error(now);
+  } else {
+    count_good(frame->status, now);
+  }
   if (state_ == LinkState::Up) handle_drive_data(*frame, now);
 }
 
@@ -233,6 +258,7 @@ void MasterLink::on_no_reply(MonoTime now) noexcept {
   if (!awaiting_reply_) return;
   awaiting_reply_ = false;
   last_now_ = now;
+  last_exchange_good_ = false;
   // No B7 here: the drive may never have seen our frame, and would then repeat a reply whose
   // channel bytes we consumed already.
   ++counters_.missing_replies;
@@ -298,6 +324,8 @@ void MasterLink::enter(LinkState next, std::string_view why, MonoTime now) noexc
 }
 
 void MasterLink::enter_init(std::string_view why, MonoTime now) noexcept {
+  ++counters_.handshake_attempts;
+  reinit_pending_ = {};
   fail_requests(RequestResult::LinkLost, now);
   reset_channel(now);
   step_ = Step::ChannelReset;
@@ -307,6 +335,36 @@ void MasterLink::enter_init(std::string_view why, MonoTime now) noexcept {
   const LinkEvent e{now, LinkEventKind::StateChanged, state_, LinkState::Init, why};
   state_ = LinkState::Init;
   events_.push(e);  // also Init -> Init: a restarted handshake is worth a line in the journal
+}
+
+void MasterLink::channel_fault(std::string_view why, MonoTime now) noexcept {
+  if (state_ != LinkState::Init && state_ != LinkState::Up) return;
+  if (at_rest()) {
+    enter_init(why, now);
+    return;
+  }
+  // DCP 5.1: the channel is subordinate to the real-time channel, and DCP 5.4 resets "the
+  // communication devices": reset the channel now, never the travel; the handshake (I0, I1,
+  // I3) runs again once the car is at rest.
+  fail_requests(RequestResult::LinkLost, now);
+  reset_channel(now);
+  ++counters_.deferred_resets;
+  reinit_pending_ = why;
+}
+
+void MasterLink::handshake_done(MonoTime /*now*/) noexcept {
+  handshake_problem_ = {};
+  counters_.handshake_attempts = 0;
+}
+
+void MasterLink::handshake_failed(std::string_view problem, MonoTime now) noexcept {
+  const bool news = problem != handshake_problem_;
+  handshake_problem_ = problem;
+  // Said in the journal the first time, whenever the cause changes, and then every 60th try
+  // (about once a minute with the 1 s reply timeout), never silently and never every second.
+  if (news || counters_.handshake_attempts % 60 == 1) {
+    event(LinkEventKind::HandshakeProblem, problem, now);
+  }
 }
 
 void MasterLink::reset_channel(MonoTime now) noexcept {
@@ -358,6 +416,7 @@ void MasterLink::run_timers(MonoTime now) noexcept {
       now - outstanding_.sent_at >= config_.request_timeout) {
     handle_timeout(now);
   }
+  if (!reinit_pending_.empty() && at_rest()) enter_init(reinit_pending_, now);
   if (state_ == LinkState::Resetting && now - reset_reply_at_ >= config_.reinit_after_reset) {
     enter_init("re-initialising after the drive's trip/fault reset (DCP 5.12.4.2)", now);
   }
@@ -369,11 +428,23 @@ void MasterLink::handle_timeout(MonoTime now) noexcept {
   ++counters_.request_timeouts;
   event(LinkEventKind::RequestTimeout, to_string(o.id), now);
   if (o.internal) {
-    if (o.id == MessageId::Init || o.id == MessageId::DataInfo) {
-      // DCP 5.12.2: without a valid I0/I1 exchange no travel; start the handshake again.
-      if (state_ == LinkState::Init) enter_init("no reply to the handshake: restarting", now);
+    if (o.id == MessageId::Init) {
+      // DCP 5.12.2: without a valid I0 exchange no travel; start the handshake again.
+      if (state_ == LinkState::Init) {
+        if (handshake_problem_.empty() || handshake_problem_ == "no reply to I0") {
+          handshake_failed("no reply to I0", now);
+        }
+        enter_init("no valid reply to I0: restarting the handshake", now);
+      }
+    } else if (o.id == MessageId::DataInfo && state_ == LinkState::Init && step_ == Step::I1) {
+      // DCP 5.12.3.1: "If no message ('I' '1') is transmitted ..., the data-information-type will
+      // be set to '0' on both controllers": an older drive that ignores I1 runs with type '0'.
+      step_ = Step::I3;
+      event(LinkEventKind::Tolerated,
+            "no reply to I1: data-information-type '0' on both sides (DCP 5.12.3.1)", now);
     } else if (o.id == MessageId::DateTime && state_ == LinkState::Init && step_ == Step::I3) {
       step_ = Step::Done;  // I3 is not needed for travel (DCP 5.12.5.1)
+      handshake_done(now);
       enter(LinkState::Up, "handshake complete (I3 unanswered)", now);
     }
     return;
@@ -410,6 +481,7 @@ void MasterLink::schedule_channel(MonoTime now) noexcept {
     case LinkState::Fault:
       return;  // channel idle
     case LinkState::Init:
+      if (!at_rest()) return;  // the handshake waits until the travel has ended
       switch (step_) {
         case Step::ChannelReset:
           // DCP 5.10: STX ETX puts the drive's channel into its initial state first.
@@ -434,6 +506,7 @@ void MasterLink::schedule_channel(MonoTime now) noexcept {
             send_message(DateTimeRequest{*civil_time_}, true, 0);
           } else {
             step_ = Step::Done;  // no wall clock given yet: I3 follows once it is
+            handshake_done(now);
             enter(LinkState::Up, "handshake complete (no date/time to send yet)", now);
           }
           return;
@@ -515,9 +588,8 @@ void MasterLink::handle_parse(ParseStatus status, MonoTime now) noexcept {
       ++counters_.channel_resets;
       display_.clear();
       event(LinkEventKind::ChannelReset, to_string(reason), now);
-      if ((reason == ChannelReset::IdleTimeout || reason == ChannelReset::FrameTimeout) &&
-          (state_ == LinkState::Init || state_ == LinkState::Up)) {
-        enter_init("channel timeout (DCP 5.4): re-initialising", now);
+      if (reason == ChannelReset::IdleTimeout || reason == ChannelReset::FrameTimeout) {
+        channel_fault("channel timeout (DCP 5.4): re-initialising", now);
       }
       return;
     }
@@ -531,6 +603,14 @@ void MasterLink::handle_frame(const ChannelFrame& frame, MonoTime now) noexcept 
       if (!decoded.ok()) {
         ++counters_.decode_errors;
         event(LinkEventKind::DecodeError, to_string(decoded.error), now);
+        if (state_ == LinkState::Init && outstanding_.active && outstanding_.internal &&
+            outstanding_.id == MessageId::Init && frame.payload().size() >= 2 &&
+            frame.payload()[1] == static_cast<std::uint8_t>(MessageId::Init)) {
+          handshake_failed(decoded.error == MessageError::BadDcpType
+                               ? "the drive's I0 reply names no known DCP type (DCP 5.12.2.2)"
+                               : "the drive's I0 reply is unreadable (see the decode error)",
+                           now);
+        }
         return;
       }
       handle_reply(decoded.value, now);
@@ -573,6 +653,13 @@ void MasterLink::handle_reply(const DriveMessage& reply, MonoTime now) noexcept 
         if (r == nullptr) return;
         drive_info_ = *r;
         protocol_ = r->dcp_type;  // DCP 5.12.2.2: the drive's DCP type decides the dialect
+        if (r->anomalies != 0) {
+          // Only the DCP type decides whether we can travel; odd fields are said, not refused.
+          event(LinkEventKind::Tolerated,
+                "I0 reply with fields not as DCP 5.12.2.2 defines them (maker, version, date, "
+                "language or length): accepted for its DCP type",
+                now);
+        }
         if (state_ == LinkState::Init && step_ == Step::I0) step_ = Step::I1;
         return;
       }
@@ -587,6 +674,7 @@ void MasterLink::handle_reply(const DriveMessage& reply, MonoTime now) noexcept 
         event(LinkEventKind::TimeSent, "drive confirmed date/time", now);
         if (state_ == LinkState::Init && step_ == Step::I3) {
           step_ = Step::Done;
+          handshake_done(now);
           enter(LinkState::Up, "handshake complete", now);
         }
         return;

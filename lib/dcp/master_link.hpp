@@ -111,13 +111,15 @@ struct Completion {
 
 /// What happened on the link, for the journal and the API watch stream.
 enum class LinkEventKind : std::uint8_t {
-  StateChanged,    ///< `from` -> `state`; detail says why
-  ChannelReset,    ///< the receive channel went back to its initial state; detail says why
-  ChannelError,    ///< a malformed channel frame from the drive was dropped
-  DecodeError,     ///< a drive payload (I-message, display, error text) did not decode
-  RequestTimeout,  ///< an I-message got no reply; detail names it
-  UnmatchedReply,  ///< a reply that answers nothing outstanding
-  TimeSent,        ///< I3 date/time confirmed by the drive
+  StateChanged,      ///< `from` -> `state`; detail says why
+  ChannelReset,      ///< the receive channel went back to its initial state; detail says why
+  ChannelError,      ///< a malformed channel frame from the drive was dropped
+  DecodeError,       ///< a drive payload (I-message, display, error text) did not decode
+  RequestTimeout,    ///< an I-message got no reply; detail names it
+  UnmatchedReply,    ///< a reply that answers nothing outstanding
+  TimeSent,          ///< I3 date/time confirmed by the drive
+  HandshakeProblem,  ///< the handshake did not complete; detail says what was wrong
+  Tolerated,         ///< the drive's answer was odd but usable; detail says what was odd
 };
 
 std::string_view to_string(LinkEventKind kind) noexcept;
@@ -153,8 +155,10 @@ struct LinkCounters {
   std::uint64_t request_timeouts = 0;
   std::uint64_t unmatched_replies = 0;
   std::uint64_t link_faults = 0;
-  std::uint64_t events_dropped = 0;  ///< events, completions, error texts lost to full queues
-  std::uint32_t error_run = 0;       ///< current run of consecutive bad/missing replies
+  std::uint64_t events_dropped = 0;      ///< events, completions, error texts lost to full queues
+  std::uint64_t handshake_attempts = 0;  ///< handshakes started since the last success
+  std::uint64_t deferred_resets = 0;     ///< channel faults during a travel: re-init at rest
+  std::uint32_t error_run = 0;           ///< current run of consecutive bad/missing replies
   std::uint32_t longest_error_run = 0;
 };
 
@@ -211,8 +215,18 @@ class MasterLink {
   LinkState state() const noexcept { return state_; }
   /// The drive's DCP type from its last I0 reply.
   std::optional<Protocol> protocol() const noexcept { return protocol_; }
-  /// True only while Up with a DCP3 or DCP4 drive; B0..B2 are cleared in every other case.
+  /// True while Up with a DCP3 or DCP4 drive, and while a travel that was running goes on through
+  /// a channel re-initialisation (DCP 5.1: the channel is subordinate to the real-time
+  /// channel). B0..B2 are cleared in every other case.
   bool travel_allowed() const noexcept;
+  /// The real-time channel is healthy (replies arrive: not Down, not Fault, DCP 7.3).
+  bool realtime_up() const noexcept {
+    return state_ != LinkState::Down && state_ != LinkState::Fault;
+  }
+  /// The last frame got a good reply without S7: its status reflects our last frame.
+  bool last_exchange_good() const noexcept { return last_exchange_good_; }
+  /// What kept the last handshake from completing (empty when it completed).
+  std::string_view handshake_problem() const noexcept { return handshake_problem_; }
   /// The drive's last I0 reply (maker, version, date, DCP type, language).
   const std::optional<InitReply>& drive_info() const noexcept { return drive_info_; }
   /// The data-information-type both sides use now ('0' until the drive confirmed I1).
@@ -265,6 +279,10 @@ class MasterLink {
   void count_good(std::uint8_t status, MonoTime now) noexcept;
   void enter(LinkState next, std::string_view why, MonoTime now) noexcept;
   void enter_init(std::string_view why, MonoTime now) noexcept;
+  void channel_fault(std::string_view why, MonoTime now) noexcept;
+  void handshake_failed(std::string_view problem, MonoTime now) noexcept;
+  void handshake_done(MonoTime now) noexcept;
+  bool at_rest() const noexcept;
   void reset_channel(MonoTime now) noexcept;
   void fail_requests(RequestResult result, MonoTime now) noexcept;
   void complete(const Outstanding& o, RequestResult result, std::optional<DriveMessage> reply,
@@ -285,6 +303,10 @@ class MasterLink {
   bool b7_in_last_frame_ = false;
   bool repeat_next_ = false;  ///< S7 seen: repeat our last channel pair
   bool last_reply_consumed_ = false;
+  bool last_exchange_good_ = false;
+  bool motion_on_ = false;           ///< the last frame sent carried B0, B1 or B2
+  std::string_view reinit_pending_;  ///< channel fault during a travel: re-init at rest
+  std::string_view handshake_problem_;
   int good_run_ = 0;  ///< good stationary replies while in Fault
 
   // channel

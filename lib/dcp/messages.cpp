@@ -6,11 +6,13 @@ namespace liftd::dcp {
 namespace {
 
 // Payload lengths including 'I' and the id character (DCP 5.12.2 to 5.12.9).
-constexpr std::size_t kLenInitRequest = 16;      // I 0 HK1 HK2 V V V V D D M M Y Y LK1 LK2
-constexpr std::size_t kLenInitReply = 17;        // ... plus the DCP type before LK1
-constexpr std::size_t kLenDataInfoRequest = 4;   // I 1 protocol type
-constexpr std::size_t kLenDataInfoBase = 2;      // I 1
-constexpr std::size_t kLenDataInfoExt = 3;       // I 1 '1'
+constexpr std::size_t kLenInitRequest = 16;  // I 0 HK1 HK2 V V V V D D M M Y Y LK1 LK2
+constexpr std::size_t kLenInitReply = 17;    // ... plus the DCP type before LK1
+constexpr std::size_t kInitTypeOffset = 14;  // 'I' '0' HK1 HK2 V V V V D D M M Y Y type
+constexpr std::size_t kLenInitReplyMin = kInitTypeOffset + 1;  // the DCP type must be there
+constexpr std::size_t kLenDataInfoRequest = 4;                 // I 1 protocol type
+constexpr std::size_t kLenDataInfoBase = 2;                    // I 1
+constexpr std::size_t kLenDataInfoExt = 3;                     // I 1 '1'
 constexpr std::size_t kLenSwitch = 4;            // I 2 reserve function (both directions)
 constexpr std::size_t kLenDateTimeRequest = 16;  // I 3 DDMMYYYYHHMMSS
 constexpr std::size_t kLenBare = 2;              // I3 / I8 / base I9 replies
@@ -557,12 +559,15 @@ Decoded<DriveMessage> decode_drive_message(std::span<const std::uint8_t> p) noex
   };
   switch (id) {
     case MessageId::Init: {
-      if (!length_is(kLenInitReply)) break;
+      // Tolerant on purpose: older and other drives fill maker, version, date and language in
+      // their own ways; only the DCP type character (DCP 5.12.2.2, after the date) decides.
+      if (p.size() < kLenInitReplyMin) {
+        r.fail(MessageError::WrongLength, 0);
+        break;
+      }
       InitReply m;
-      m.maker = r.code(2, MessageError::BadMaker);
-      m.version = static_cast<VersionCenti>(r.digits(4, 4));
-      m.date = r.date(8);
-      switch (p[14]) {
+      if (p.size() != kLenInitReply) m.anomalies |= init_anomaly::kLength;
+      switch (p[kInitTypeOffset]) {
         case '0':
           m.dcp_type = Protocol::ComChan;
           break;
@@ -573,9 +578,27 @@ Decoded<DriveMessage> decode_drive_message(std::span<const std::uint8_t> p) noex
           m.dcp_type = Protocol::Dcp4;
           break;
         default:
-          r.fail(MessageError::BadDcpType, 14);
+          r.fail(MessageError::BadDcpType, kInitTypeOffset);
       }
-      m.language = r.code(15, MessageError::BadLanguage);
+      if (!r.ok()) break;
+      Reader lenient(p);
+      m.maker = lenient.code(2, MessageError::BadMaker);
+      if (!lenient.ok()) m.anomalies |= init_anomaly::kMaker;
+      Reader version(p);
+      m.version = static_cast<VersionCenti>(version.digits(4, 4));
+      if (!version.ok()) m.anomalies |= init_anomaly::kVersion;
+      Reader date(p);
+      m.date = date.date(8);
+      if (!date.ok()) {
+        m.anomalies |= init_anomaly::kDate;
+        m.date = SoftwareDate{};
+      }
+      Reader language(p);
+      if (p.size() >= kLenInitReply) m.language = language.code(15, MessageError::BadLanguage);
+      if (p.size() < kLenInitReply || !language.ok()) {
+        m.anomalies |= init_anomaly::kLanguage;
+        m.language = Code2{'E', 'N'};
+      }
       return widen<DriveMessage>(r.result(m));
     }
     case MessageId::DataInfo: {

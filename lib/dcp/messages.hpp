@@ -217,8 +217,20 @@ struct InitReply {
   SoftwareDate date{};
   Protocol dcp_type = Protocol::Dcp4;  ///< '0' ComChan, '3' DCP3, '4' DCP4
   Code2 language{'E', 'N'};
+  /// Decoding only: fields that were not as DCP 5.12.2.2 defines them but were tolerated
+  /// (init_anomaly bits). The DCP type alone must be readable.
+  std::uint8_t anomalies = 0;
   bool operator==(const InitReply&) const = default;
 };
+
+/// Bits of InitReply::anomalies.
+namespace init_anomaly {
+inline constexpr std::uint8_t kMaker = 0x01;     ///< maker code not two capital letters
+inline constexpr std::uint8_t kVersion = 0x02;   ///< version not four digits
+inline constexpr std::uint8_t kDate = 0x04;      ///< software date not a DDMMYY date
+inline constexpr std::uint8_t kLanguage = 0x08;  ///< language missing or not two capitals
+inline constexpr std::uint8_t kLength = 0x10;    ///< reply shorter or longer than defined
+}  // namespace init_anomaly
 /// I1 reply (DCP 5.12.3.2): "I1" (base protocol) or "I11" (extended protocol supported).
 struct DataInfoReply {
   bool extended_protocol = false;

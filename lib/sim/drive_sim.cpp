@@ -124,6 +124,18 @@ std::string_view to_string(SimEvent::Kind kind) noexcept {
       return "channel-reset";
     case SimEvent::Kind::DriveReset:
       return "drive-reset";
+    case SimEvent::Kind::Violation:
+      return "violation";
+  }
+  return "?";
+}
+
+std::string_view to_string(Violation violation) noexcept {
+  switch (violation) {
+    case Violation::StopAtSpeed:
+      return "stop-at-speed";
+    case Violation::NoPositionAfterStop:
+      return "no-position-after-stop";
   }
   return "?";
 }
@@ -230,7 +242,8 @@ void DriveSim::update_timers(MonoTime now) noexcept {
         travel_measured_ = true;
         ++counters_.travels;
         emit(SimEvent::Kind::TravelEnded, now, last_travel_mm_);
-        max_torque_ = false;  // DCP 5.12.4: only for the next travel
+        stop_without_i9_ = true;  // DCP 5.12.9: the master now owes an I9
+        max_torque_ = false;      // DCP 5.12.4: only for the next travel
         accepted_ = false;
         set_phase(Phase::Finished, now);
       }
@@ -321,7 +334,7 @@ Reply DriveSim::on_master_frame(std::span<const std::uint8_t, dcp::kFrameSize> b
     }
     out.comm1 = last_reply_[3];
     out.comm2 = last_reply_[4];
-  } else if (frame) {
+  } else if (frame && now >= channel_silent_until_) {
     out.comm1 = out_.pop();
     out.comm2 = out_.pop();
   }
@@ -408,8 +421,10 @@ bool DriveSim::can_start() const noexcept {
 }
 
 void DriveSim::process(const dcp::MasterFrame& frame, MonoTime now) noexcept {
-  process_channel(frame.comm1, now);
-  process_channel(frame.comm2, now);
+  if (now >= channel_silent_until_) {  // an injected channel silence hears nothing
+    process_channel(frame.comm1, now);
+    process_channel(frame.comm2, now);
+  }
 
   const std::uint8_t cmd = frame.command;
   const dcp::MessageType mt = dcp::classify_command(cmd, config_.protocol);
@@ -553,12 +568,17 @@ void DriveSim::process(const dcp::MasterFrame& frame, MonoTime now) noexcept {
       if (mt == dcp::MessageType::DistanceOrDecel) {
         if (b2_) on_remaining_distance(frame.data_word(), now);
       } else if (!b2 && b2_) {
-        // B2 withdrawn before the level: stop at once on the normal ramp.
         b2_ = false;
-        if (phase_ == Phase::Magnetising)
-          controlled_abort(now);
-        else if (phase_ == Phase::Moving)
-          plan_stop(config_.decel, now);
+        if (phase_ == Phase::Magnetising) {
+          controlled_abort(now);  // nothing moves yet: close the brake (DCP 12.2.2)
+        } else if (phase_ == Phase::Moving && decelerating(now)) {
+          plan_stop(config_.decel, now);  // DCP 3.5.3.2: stop mode "During deceleration"
+        } else if (phase_ == Phase::Moving) {
+          // DCP 11.1.1 d: "Stop switch bit B2 remains activated until the lift car comes to the
+          // level and the drive controller switches the mechanical brake bit S6/MB off".
+          report_violation(Violation::StopAtSpeed, now);
+          plan_stop(config_.fast_stop, now);
+        }
       }
       break;
     case TravelKind::Speed:
@@ -576,8 +596,13 @@ void DriveSim::process(const dcp::MasterFrame& frame, MonoTime now) noexcept {
       if (phase_ == Phase::Magnetising && !b1 && !b2) {
         controlled_abort(now);
       } else if (phase_ == Phase::Moving && !stopping_) {
-        if (!b1 && !b2) {
-          plan_stop(config_.decel, now);
+        if (!b1 && !b2 && to_crawl_) {
+          plan_stop(config_.decel, now);  // DCP 10.1.1 step 4: B2 positions the car at crawl
+        } else if (!b1 && !b2) {
+          // DCP 3.5.3.2: stop mode only "During deceleration"; at speed B1 must drop first so
+          // the drive slows to crawl within SVx (DCP 10.1.1 step 3).
+          report_violation(Violation::StopAtSpeed, now);
+          plan_stop(config_.fast_stop, now);
         } else if (!b1 && !to_crawl_) {
           // DCP 10.1.1: B1 off -> decelerate to crawl within the fixed distance SVx. DCP 10.1.2 /
           // 10.2.2: the same SVx when B1 drops before Vx was reached (time-optimised short
@@ -647,7 +672,11 @@ void DriveSim::start_travel(TravelKind kind, dcp::Speed speed, bool down, MonoTi
   to_crawl_ = false;
   go_pending_ = false;
   decel_report_m_ = 0.0;
-  refused_target_s_m_ = -1.0;
+  // The Sv of an I7 exchanged just before this travel bounds its extensions (DCP 11.1.2 note).
+  travel_i7_decel_m_ = i7_decel_m_;
+  i7_decel_m_ = -1.0;
+  if (stop_without_i9_ && initialised_) report_violation(Violation::NoPositionAfterStop, now);
+  stop_without_i9_ = false;
   crawl_limited_ = false;
   rd_saturated_ = false;
   target_s_m_ = static_cast<double>(distance_mm) / 1000.0;
@@ -740,28 +769,60 @@ void DriveSim::on_remaining_distance(std::uint16_t raw, MonoTime now) noexcept {
   rd_saturated_ = saturated;
   const double extend_tol_m = exact ? 1e-4 : lag_tol_m;
   if (diff_m >= 0.0 ? diff_m <= extend_tol_m : -diff_m <= lag_tol_m) return;
+  const double remaining_m = target_s_m_ - st.s_m;
+  const double stop_m = MotionPlan::ramp_distance_from_m(st, 0.0, config_.accel, config_.decel);
   if (diff_m > 0.0) {
-    const double remaining_m = target_s_m_ - st.s_m;
-    const double stop_m = MotionPlan::ramp_distance_from_m(st, 0.0, config_.accel, config_.decel);
-    // DCP 11.1.2: extend only while the remaining distance exceeds the deceleration distance.
-    if (st.a_mps2 >= 0.0 && remaining_m > stop_m) {
+    // DCP 11.1.2 note: "The controller can increase the remaining distance while it is greater
+    // than the deceleration distance the drive controller had transmitted before the beginning
+    // of the travel" (Sv of I7, 11.1.2.1), and never once the car decelerates.
+    const double limit_m = std::max(stop_m, travel_i7_decel_m_);
+    if (st.a_mps2 >= 0.0 && remaining_m > limit_m) {
       target_s_m_ = implied_m;
       plan_to_target(now);
       ++counters_.extensions;
       if (!saturated) emit(SimEvent::Kind::TargetExtended, now, word);
-    } else if (std::fabs(implied_m - refused_target_s_m_) >
-               tol_m + config_.speeds.v4_mps * kPositionLag.count()) {
-      refused_target_s_m_ = implied_m;
-      ++counters_.refused_extensions;
-      emit(SimEvent::Kind::ExtensionRefused, now, word);
+    } else {
+      refuse_target(word, now);
     }
     return;
   }
-  // The target moved closer than the car can honour: DCP 4.1 S5 emergency stop.
+  // A nearer level: DCP 3.5.3.4 "the drive unit must process always the remaining distance
+  // during the total travel" and 11.1.2 "the drive controller calculates a time optimised lift
+  // travel curve online": a level the car can still reach on its normal ramp is taken over.
+  if (rd_m > stop_m + tol_m) {
+    target_s_m_ = implied_m;
+    plan_to_target(now);
+    ++counters_.shortened;
+    emit(SimEvent::Kind::TargetExtended, now, word);
+    return;
+  }
+  refuse_target(word, now);
+}
+
+void DriveSim::refuse_target(std::uint16_t word, MonoTime now) noexcept {
+  // DCP 4.1 S5 note: "If a plausibility error is found in the remaining distance transmitted,
+  // the drive controller should carry out an emergency stop. This bit is then cleared until
+  // the lift has stopped. The drive controller should then output an error message."
   accepted_ = false;
+  ++counters_.refused_extensions;
+  ++counters_.implausible;
+  emit(SimEvent::Kind::ExtensionRefused, now, word);
   emit(SimEvent::Kind::Fault, now, static_cast<std::int64_t>(FaultCause::Implausible), word);
   send_error_message("DISTANCE IMPLAUSIBLE");
   plan_stop(config_.fast_stop, now);
+}
+
+bool DriveSim::decelerating(MonoTime now) const noexcept {
+  // The car is on its final ramp: slowing down (a < 0) towards standstill, or already below
+  // the levelling speed of DCP 4.1 S4 (v < 0.3 m/s).
+  const MotionState st = plan_.at(std::max(seconds(now), motion_start_s_));
+  return (stopping_ && st.a_mps2 < 0.0) || std::fabs(st.v_mps) < kLevellingSpeedMps;
+}
+
+void DriveSim::report_violation(Violation kind, MonoTime now) noexcept {
+  ++violations_[static_cast<std::size_t>(kind)];
+  ++counters_.violations;
+  emit(SimEvent::Kind::Violation, now, static_cast<std::int64_t>(kind));
 }
 
 void DriveSim::controlled_abort(MonoTime now) noexcept {
@@ -779,6 +840,7 @@ void DriveSim::abort_travel(MonoTime now) noexcept {
     const double end_s_mm = plan_.final_position_m() * 1000.0;
     last_travel_mm_ = std::llround(origin_mm_ + (down_ ? -end_s_mm : end_s_mm) - travel_start_mm_);
     travel_measured_ = true;
+    stop_without_i9_ = true;  // DCP 5.12.9: an aborted travel is a stop too
   }
   kind_ = TravelKind::None;
   go_pending_ = false;
@@ -871,6 +933,28 @@ void DriveSim::set_fault_rate(ReplyFault fault, double probability) noexcept {
 void DriveSim::clear_reply_faults() noexcept {
   fault_frames_.fill(0);
   fault_rate_.fill(0.0);
+}
+
+void DriveSim::inject_channel(ChannelFault fault, MonoTime now, MonoTime duration) noexcept {
+  using namespace dcp::channel_char;
+  switch (fault) {
+    case ChannelFault::Partial: {
+      // STX, the expanded-data mode and the start of an I-message, never an ETX: the master's
+      // channel must reset itself 1 s later (DCP 5.4).
+      constexpr std::array<std::uint8_t, 4> kPartial{kStx, kModeExpanded, 'I', '7'};
+      out_.push_raw(kPartial);
+      break;
+    }
+    case ChannelFault::Garbage: {
+      // A frame with an undefined mode byte, then stray control characters outside a frame.
+      constexpr std::array<std::uint8_t, 7> kGarbage{kStx, 0x11, 'X', 'Y', kEtx, 0x05, 0x17};
+      out_.push_raw(kGarbage);
+      break;
+    }
+    case ChannelFault::Silence:
+      channel_silent_until_ = now + duration;
+      break;
+  }
 }
 
 bool DriveSim::take_fault(ReplyFault fault) noexcept {
@@ -967,6 +1051,8 @@ void DriveSim::handle_i_message(std::span<const std::uint8_t> payload, MonoTime 
           reply = dcp::InitReply{config_.maker, config_.version, config_.date, config_.protocol,
                                  language_};
         } else if constexpr (std::is_same_v<T, dcp::DataInfoRequest>) {
+          // An older drive knows no I1 and stays at type '0' (DCP 5.12.3.1).
+          if (config_.older_drive) return;
           data_info_type_ = m.type;
           extended_i9_ = m.extended_protocol;  // DCP 5.12.3.2: extended protocol supported
           reply = dcp::DataInfoReply{m.extended_protocol};
@@ -1002,6 +1088,7 @@ void DriveSim::handle_i_message(std::span<const std::uint8_t> payload, MonoTime 
         } else if constexpr (std::is_same_v<T, dcp::StartParamsRequest>) {
           const StartParameters p =
               start_parameters(m.distance_cm, m.max_speed == dcp::MaxSpeed::V4);
+          i7_decel_m_ = static_cast<double>(p.decel_cm) / 100.0;
           reply = dcp::StartParamsReply{
               p.travel_type == 'l' ? dcp::TravelKind::Long : dcp::TravelKind::Short, p.total_cm,
               p.decel_cm};
@@ -1010,6 +1097,7 @@ void DriveSim::handle_i_message(std::span<const std::uint8_t> payload, MonoTime 
           reply = dcp::LoadReply{};
         } else if constexpr (std::is_same_v<T, dcp::PositionRequest>) {
           if (m.position_mm) controller_position_mm_ = *m.position_mm;
+          stop_without_i9_ = false;
           // DCP 5.12.9.2: extended reply with the distance measured over the last travel.
           dcp::SignedMm travel;
           if (travel_measured_) travel = static_cast<std::int32_t>(last_travel_mm_);
@@ -1022,6 +1110,19 @@ void DriveSim::handle_i_message(std::span<const std::uint8_t> payload, MonoTime 
   if (!encoded.ok()) return;
   ++counters_.i_messages;
   emit(SimEvent::Kind::ChannelMessage, now, payload[1]);
+  if (config_.older_drive && std::holds_alternative<dcp::InitReply>(*reply)) {
+    // An older drive's I0 reply: version "1.00" and date "000000" (no digits / no date), the
+    // DCP type character still in its place (DCP 5.12.2.2).
+    std::array<std::uint8_t, 32> body{};
+    const auto bytes = encoded.value.bytes();
+    const std::size_t n = std::min(bytes.size(), body.size());
+    std::copy_n(bytes.begin(), n, body.begin());
+    constexpr std::array<std::uint8_t, 10> kOdd{'1', '.', '0', '0', '0', '0', '0', '0', '0', '0'};
+    std::copy(kOdd.begin(), kOdd.end(), body.begin() + 4);  // after 'I' '0' HK1 HK2
+    out_.push_message(dcp::channel_char::kModeExpanded,
+                      std::span<const std::uint8_t>(body.data(), n));
+    return;
+  }
   out_.push_message(dcp::channel_char::kModeExpanded, encoded.value.bytes());
 }
 

@@ -61,13 +61,19 @@ struct DriveConfig {
   std::uint32_t link_timeout_frames = 10;       ///< DCP 7.3: 10 bad or missing frames
   std::uint32_t reset_delay_ms = 400;           ///< DCP 5.12.4: trip reset 200..1000 ms after reply
   std::chrono::microseconds reply_delay{1000};  ///< after the master frame's last byte
-  /// Late-reply injection: 10.5 ms after the last byte = starts 12.06 ms after the frame
-  /// began, past the DCP 7.2 limit of 11.5625 ms.
-  std::chrono::microseconds late_reply_delay{10500};
+  /// Late-reply injection: 11 ms after the master frame's last byte (1.5625 ms at 38400 baud)
+  /// the reply starts 12.56 ms into the cycle and ends at 14.13 ms: past both DCP 7.2 limits
+  /// ("Latest start of drive controller send: 11,5625 msec", driver off by 13,625 msec) yet
+  /// still before the next master frame at 15 ms.
+  std::chrono::microseconds late_reply_delay{11000};
   double border_speed_mps = 1.0;       ///< extended status bit 1 threshold
   double overspeed_mps = 1.8;          ///< extended status bit 2 threshold
   std::int64_t start_position_mm = 0;  ///< car position at power-on
   bool require_init = true;            ///< DCP 5.12.2: no travel before a valid I0
+  /// An older drive: never answers I1 (DCP 5.12.3.1 "If no message ('I' '1') is transmitted
+  /// ..., the data-information-type will be set to '0' on both controllers") and answers I0
+  /// with version and date fields that are not digits / not a date.
+  bool older_drive = false;
 };
 
 /// Phase of the drive, as the status bits show it.
@@ -120,6 +126,7 @@ struct SimEvent {
     ChannelMessage,    ///< value = I-message digit ('0'..'9') handled
     ChannelReset,      ///< STX ETX or 1 s timeout
     DriveReset,        ///< I2 'R' executed
+    Violation,         ///< the master broke a spec rule; value = Violation
   };
   MonoTime at{};            ///< when
   Kind kind{};              ///< what
@@ -138,6 +145,27 @@ enum class FaultCause : std::uint8_t {
 };
 /// "injected", "link-timeout", ...
 std::string_view to_string(FaultCause cause) noexcept;
+
+/// A master behaviour the spec forbids, as the drive sees it.
+enum class Violation : std::uint8_t {
+  /// DCP 3.5.3.2: stop mode 0001 is used only "During deceleration"; DCP 11.1.1 d: "Stop switch
+  /// bit B2 remains activated until the lift car comes to the level". A stop message while the
+  /// car still runs at speed is answered with an emergency stop.
+  StopAtSpeed,
+  /// DCP 5.12.9: "The actual position of the lift car will be send after each stopping": a new
+  /// travel started although the last stop was not followed by an I9.
+  NoPositionAfterStop,
+};
+inline constexpr std::size_t kViolationCount = 2;
+/// "stop-at-speed", ...
+std::string_view to_string(Violation violation) noexcept;
+
+/// Faults of the communication channel alone (DCP 5), independent of the real-time bytes.
+enum class ChannelFault : std::uint8_t {
+  Partial,  ///< STX and part of a message, never the ETX (DCP 5.4: the master resets after 1 s)
+  Garbage,  ///< a malformed message: unknown mode byte and stray control characters
+  Silence,  ///< channel bytes 00 and the master's channel ignored for the given time (DCP 5.4)
+};
 
 /// What to send back for one master frame.
 struct Reply {
@@ -159,6 +187,9 @@ struct SimCounters {
   std::uint64_t extensions = 0;          ///< target extensions accepted
   std::uint64_t refused_extensions = 0;  ///< target extensions refused
   std::uint64_t i_messages = 0;          ///< I-messages answered
+  std::uint64_t violations = 0;          ///< spec violations of the master (see Violation)
+  std::uint64_t implausible = 0;         ///< target changes refused with S5 = 0 (DCP 4.1)
+  std::uint64_t shortened = 0;           ///< target changes to a nearer level accepted
 };
 
 /// The simulated drive. Not thread-safe: one owner calls it.
@@ -243,6 +274,13 @@ class DriveSim {
   void set_fault_rate(ReplyFault fault, double probability) noexcept;
   /// Clears every reply fault and rate.
   void clear_reply_faults() noexcept;
+  /// Injects a communication-channel fault; `duration` applies to Silence.
+  void inject_channel(ChannelFault fault, MonoTime now,
+                      MonoTime duration = std::chrono::milliseconds(1500)) noexcept;
+  /// Violations seen so far, by kind.
+  std::uint64_t violations(Violation kind) const noexcept {
+    return violations_[static_cast<std::size_t>(kind)];
+  }
 
  private:
   void process(const dcp::MasterFrame& frame, MonoTime now) noexcept;
@@ -265,6 +303,9 @@ class DriveSim {
   void abort_travel(MonoTime now) noexcept;
   void controlled_abort(MonoTime now) noexcept;
   void raise_fault(FaultCause cause, MonoTime now) noexcept;
+  void report_violation(Violation kind, MonoTime now) noexcept;
+  bool decelerating(MonoTime now) const noexcept;
+  void refuse_target(std::uint16_t word, MonoTime now) noexcept;
   void clear_fault(FaultCause cause, MonoTime now) noexcept;
   void set_phase(Phase phase, MonoTime now) noexcept;
   void emit(SimEvent::Kind kind, MonoTime now, std::int64_t value,
@@ -283,7 +324,6 @@ class DriveSim {
   bool travel_measured_ = false;
   bool rd_saturated_ = false;   // the last remaining distance was 0x7FFF / 0xFFFF
   bool crawl_limited_ = false;  // DCP 11.1.2: start distance below 20 cm
-  double refused_target_s_m_ = -1.0;
 
   // Link layer (DCP 6, 7.3).
   dcp::FrameBytes last_reply_{};
@@ -319,6 +359,11 @@ class DriveSim {
 
   // Faults.
   std::array<bool, 4> faults_{};
+  std::array<std::uint64_t, kViolationCount> violations_{};
+  bool stop_without_i9_ = false;     // a travel stopped; no I9 since (DCP 5.12.9)
+  double i7_decel_m_ = -1.0;         // Sv of the last I7 answer, for the next travel (-1: none)
+  double travel_i7_decel_m_ = -1.0;  // Sv that applies to the running travel
+  MonoTime channel_silent_until_{};
   bool advance_warning_ = false;
   bool not_ready_ = false;
   dcp::ExtendedStatus ext_flags_{};

@@ -33,7 +33,8 @@ int poll_timeout_ms(MonoTime left) noexcept {
 }
 
 bool important(const SimEvent& e) noexcept {
-  return e.kind == SimEvent::Kind::Fault || e.kind == SimEvent::Kind::FaultCleared;
+  return e.kind == SimEvent::Kind::Fault || e.kind == SimEvent::Kind::FaultCleared ||
+         e.kind == SimEvent::Kind::Violation;
 }
 
 }  // namespace
@@ -75,6 +76,10 @@ std::string format_event(const SimEvent& event, MonoTime epoch) {
       break;
     case K::ChannelMessage:
       what = std::string("I") + static_cast<char>(event.value);
+      break;
+    case K::Violation:
+      what =
+          "master broke the spec: " + std::string(to_string(static_cast<Violation>(event.value)));
       break;
     default:
       what = std::to_string(event.value);
@@ -247,6 +252,23 @@ void SerialDriveRunner::set_not_ready(bool on) {
 void SerialDriveRunner::inject(ReplyFault fault, std::uint32_t frames) {
   std::lock_guard lock(mutex_);
   sim_.inject(fault, frames);
+}
+
+void SerialDriveRunner::inject_channel(ChannelFault fault) {
+  std::lock_guard lock(mutex_);
+  sim_.inject_channel(fault, mono_now());
+}
+
+bool parse_channel_fault(std::string_view name, ChannelFault& out) noexcept {
+  if (name == "partial")
+    out = ChannelFault::Partial;
+  else if (name == "garbage")
+    out = ChannelFault::Garbage;
+  else if (name == "silence")
+    out = ChannelFault::Silence;
+  else
+    return false;
+  return true;
 }
 
 void SerialDriveRunner::set_fault_rate(ReplyFault fault, double probability) {

@@ -95,6 +95,8 @@ std::string format_event(const SimEvent& event, MonoTime epoch);
 std::string format_status(const RunnerStatus& status);
 /// Parses a reply fault name: badsum, s7, late, noreply, garbage. False when unknown.
 bool parse_reply_fault(std::string_view name, ReplyFault& out) noexcept;
+/// Parses a channel fault name: partial, garbage, silence. False when unknown.
+bool parse_channel_fault(std::string_view name, ChannelFault& out) noexcept;
 
 /// The simulated drive served on a serial device by its own thread.
 class SerialDriveRunner {
@@ -150,6 +152,8 @@ class SerialDriveRunner {
   void set_not_ready(bool on);
   /// Applies `fault` to the next `frames` replies.
   void inject(ReplyFault fault, std::uint32_t frames);
+  /// Injects a communication-channel fault (DCP 5) now.
+  void inject_channel(ChannelFault fault);
   /// Applies `fault` to each reply with `probability` (0..1).
   void set_fault_rate(ReplyFault fault, double probability);
   /// Clears every reply fault and rate.

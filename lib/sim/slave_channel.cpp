@@ -18,6 +18,15 @@ bool ChannelOutput::push_message(std::uint8_t mode, std::span<const std::uint8_t
   return true;
 }
 
+bool ChannelOutput::push_raw(std::span<const std::uint8_t> bytes) noexcept {
+  if (size_ + bytes.size() > kCapacity) return false;
+  for (std::uint8_t b : bytes) {
+    ring_[(head_ + size_) % kCapacity] = b;
+    ++size_;
+  }
+  return true;
+}
+
 std::uint8_t ChannelOutput::pop() noexcept {
   if (size_ == 0) return dcp::channel_char::kIdle;
   const std::uint8_t b = ring_[head_];

@@ -20,6 +20,8 @@ class ChannelOutput {
 
   /// Queues STX mode body ETX, or nothing if it does not fit. Returns whether it was queued.
   bool push_message(std::uint8_t mode, std::span<const std::uint8_t> body) noexcept;
+  /// Queues raw bytes as they are (fault injection), or nothing if they do not fit.
+  bool push_raw(std::span<const std::uint8_t> bytes) noexcept;
   /// The next channel byte, 0x00 (idle) when nothing is queued.
   std::uint8_t pop() noexcept;
   /// Bytes waiting.

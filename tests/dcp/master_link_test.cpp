@@ -395,21 +395,15 @@ TEST(DcpMasterLink, StxWithoutEtxForOneSecondReinitialises) {
   EXPECT_EQ(h.count_messages(MessageId::Init), 2);
 }
 
-TEST(DcpMasterLink, OneSecondWithoutExchangeReinitialises) {
-  // Our frames arrive corrupt for over a second: the drive answers every one with S7 (good
-  // replies, so no link fault) but no channel byte is exchanged.
+TEST(DcpMasterLink, S7RepliesCountTowardTheSupervision) {
+  // DCP 7.3: "10 successive messages are received incorrectly or were completely lost": the
+  // drive answers each of our frames with S7, i.e. it received them incorrectly.
   Harness h;
   h.bring_up();
   h.corrupt_masters = 80;
-  ASSERT_GE(h.run_until([&] { return h.link.state() != LinkState::Up; }, 100), 60);
-  EXPECT_EQ(h.link.state(), LinkState::Init);
-  const auto it = std::find_if(h.events.begin(), h.events.end(), [](const LinkEvent& e) {
-    return e.kind == LinkEventKind::ChannelReset &&
-           e.detail == to_string(ChannelReset::IdleTimeout);
-  });
-  EXPECT_NE(it, h.events.end());
-  h.corrupt_masters = 0;
-  h.bring_up();
+  EXPECT_EQ(h.run_until([&] { return h.link.state() == LinkState::Fault; }, 100), 10);
+  EXPECT_EQ(h.link.counters().s7_seen, 10U);
+  EXPECT_EQ(h.link.counters().link_faults, 1U);
 }
 
 // ---- I3
@@ -545,10 +539,10 @@ TEST(DcpMasterLink, MalformedReplyIsADecodeError) {
 TEST(DcpMasterLink, ResetCanBeCancelledInsideTheWindow) {
   Harness h;
   h.bring_up();
-  h.link.set_process(kB0B2, 0);
   ASSERT_EQ(h.link.submit(SwitchRequest{SwitchFunction::Reset}, 1), SubmitResult::Accepted);
   ASSERT_GE(h.run_until([&] { return h.link.state() == LinkState::Resetting; }), 0);
-  EXPECT_FALSE(h.link.travel_allowed());
+  EXPECT_FALSE(h.link.travel_allowed());  // at rest: no new travel while the drive resets
+  h.link.set_process(kB0B2, 0);
   ASSERT_EQ(h.completions.size(), 1U);
   EXPECT_EQ(h.completions[0].reply, DriveMessage(SwitchReply{SwitchFunction::Reset}));
   EXPECT_EQ(h.link.submit(LoadRequest{10}, 2), SubmitResult::LinkNotUp);
@@ -694,6 +688,140 @@ TEST(DcpMasterLinkConfig, NamesTheBadSetting) {
     EXPECT_FALSE(config_error(c).empty()) << what;
     EXPECT_THROW(MasterLink{c}, std::invalid_argument) << what;
   }
+}
+
+// ---- the channel is subordinate to the real-time channel (DCP 5.1, 5.4) --------------------
+
+TEST(DcpMasterLink, ChannelTimeoutDuringATravelKeepsB0AndReinitialisesAtRest) {
+  // DCP 5.1: "The communication data channel is subordinate to the real time channel". An STX
+  // without ETX for 1 s (DCP 5.4) resets the channel; the travel goes on with B0/B2, and I0
+  // runs again only once the car is at rest.
+  Harness h;
+  h.bring_up();
+  h.link.set_process(kB0B2, 100);
+  h.drive.status = status_bit::kReady | status_bit::kTravelActive | status_bit::kBrakeOpen;
+  h.run(2);
+  h.drive.send_raw({channel_char::kStx, channel_char::kModeExpanded, 'I'});
+  const int inits_before = h.count_messages(MessageId::Init);
+  h.run(80);  // 1.2 s: the frame timeout has fired
+  EXPECT_GE(h.link.counters().deferred_resets, 1U);
+  for (std::size_t i = h.sent.size() - 80; i < h.sent.size(); ++i) {
+    EXPECT_EQ(h.sent[i][0] & kB0B2, kB0B2) << "frame " << i << " lost B0/B2 to a channel fault";
+  }
+  EXPECT_TRUE(h.link.travel_allowed());
+  EXPECT_EQ(h.count_messages(MessageId::Init), inits_before) << "no handshake during a travel";
+  // The car arrives: S1 falls, B0 goes; now the handshake runs again.
+  h.drive.status = status_bit::kReady;
+  h.link.set_process(0, 0);
+  ASSERT_GE(h.run_until([&] { return h.count_messages(MessageId::Init) > inits_before; }), 0);
+  ASSERT_GE(h.run_until([&] { return h.up(); }), 0);
+}
+
+TEST(DcpMasterLink, GarbageOnTheChannelNeverTouchesTheCommandByte) {
+  Harness h;
+  h.bring_up();
+  h.link.set_process(kB0B2, 100);
+  h.drive.status = status_bit::kReady | status_bit::kTravelActive | status_bit::kBrakeOpen;
+  h.drive.send_raw({channel_char::kStx, 0x11, 'X', channel_char::kEtx, 0x05, 0x17});
+  h.run(20);
+  EXPECT_GE(h.link.counters().channel_errors, 1U);
+  EXPECT_EQ(h.link.state(), LinkState::Up);
+  for (std::size_t i = h.sent.size() - 20; i < h.sent.size(); ++i) {
+    EXPECT_EQ(h.sent[i][0] & kB0B2, kB0B2) << "frame " << i;
+  }
+}
+
+TEST(DcpMasterLink, ResetReplyDuringATravelKeepsB0) {
+  // Issue reading of DCP 5.1 / 5.12.4: an I2 'R' reply resets the channel side, never the
+  // running travel's B0/B2; the re-initialisation waits for rest.
+  Harness h;
+  h.bring_up();
+  h.link.set_process(kB0B2, 100);
+  h.drive.status = status_bit::kReady | status_bit::kTravelActive | status_bit::kBrakeOpen;
+  h.run(1);
+  ASSERT_EQ(h.link.submit(SwitchRequest{SwitchFunction::Reset}, 1), SubmitResult::Accepted);
+  ASSERT_GE(h.run_until([&] { return h.link.state() == LinkState::Resetting; }), 0);
+  h.run(400);  // past the 5 s re-initialisation delay
+  EXPECT_TRUE(h.link.travel_allowed());
+  EXPECT_EQ(h.sent.back()[0] & kB0B2, kB0B2);
+  EXPECT_EQ(h.count_messages(MessageId::Init), 1) << "no I0 while the car travels";
+  h.drive.status = status_bit::kReady;
+  h.link.set_process(0, 0);
+  ASSERT_GE(h.run_until([&] { return h.up(); }), 0);
+  EXPECT_EQ(h.count_messages(MessageId::Init), 2);
+}
+
+TEST(DcpMasterLink, B7IsSentAgainWhenItsFrameGotAnS7Reply) {
+  // DCP 6.1: after a bad reply we set B7; if that very frame reached the drive corrupted (S7),
+  // the drive never saw our B7, so the next frame carries it again.
+  Harness h;
+  h.bring_up();
+  h.drive.corrupt_replies = 1;
+  h.cycle();  // reply corrupted -> B7 in the next frame
+  h.corrupt_masters = 1;
+  h.cycle();  // that frame (with B7) arrives corrupted: S7 reply
+  ASSERT_NE(h.sent[h.sent.size() - 1][0] & command_bit::kReplyChecksumError, 0);
+  h.cycle();
+  EXPECT_NE(h.sent.back()[0] & command_bit::kReplyChecksumError, 0) << "B7 repeated";
+  EXPECT_EQ(h.link.counters().b7_sent, 2U);
+}
+
+// ---- tolerant handshake (DCP 5.12.2, 5.12.3.1) --------------------------------------------------
+
+TEST(DcpMasterLink, DriveThatIgnoresI1RunsWithTypeZero) {
+  // DCP 5.12.3.1: "If no message ('I' '1') is transmitted by the lift controller, the
+  // data-information-type will be set to '0' on both controllers."
+  MasterLinkConfig c;
+  c.data_info_type = DataInfoType::Decel16;
+  Harness h(c);
+  h.drive.mute.insert(MessageId::DataInfo);
+  ASSERT_GE(h.run_until([&] { return h.up(); }, 400), 0);
+  EXPECT_TRUE(h.link.travel_allowed());
+  EXPECT_EQ(h.link.active_data_info_type(), DataInfoType::Alternating);
+  EXPECT_EQ(h.count_messages(MessageId::Init), 1) << "no restart for a missing I1 reply";
+  EXPECT_NE(std::find_if(h.events.begin(), h.events.end(),
+                         [](const LinkEvent& e) { return e.kind == LinkEventKind::Tolerated; }),
+            h.events.end());
+}
+
+TEST(DcpMasterLink, OddI0FieldsAreAcceptedForTheirDcpType) {
+  // An older drive: version "1.00" and date "000000" in its I0 reply (DCP 5.12.2.2 wants four
+  // digits and DDMMYY). Its DCP type '3' is readable, so the link comes up as DCP3.
+  Harness h;
+  h.drive.mute.insert(MessageId::Init);
+  ASSERT_GE(h.run_until([&] { return h.count_messages(MessageId::Init) == 1; }), 0);
+  h.drive.send_frame(ChannelMode::Expanded, bytes("I0ZA1.00000000"
+                                                  "3DE"));
+  ASSERT_GE(h.run_until([&] { return h.up(); }), 0);
+  EXPECT_TRUE(h.link.travel_allowed());
+  EXPECT_EQ(h.link.protocol(), Protocol::Dcp3);
+  ASSERT_TRUE(h.link.drive_info());
+  EXPECT_EQ(h.link.drive_info()->anomalies, init_anomaly::kVersion | init_anomaly::kDate);
+}
+
+TEST(DcpMasterLink, UnknownDcpTypeKeepsTravelsOffAndSaysWhy) {
+  Harness h;
+  h.drive.mute.insert(MessageId::Init);
+  ASSERT_GE(h.run_until([&] { return h.count_messages(MessageId::Init) == 1; }), 0);
+  h.drive.send_frame(ChannelMode::Expanded, bytes("I0ZA0102010215"
+                                                  "9DE"));
+  h.run(80);
+  EXPECT_FALSE(h.link.travel_allowed());
+  EXPECT_EQ(h.link.handshake_problem(),
+            "the drive's I0 reply names no known DCP type (DCP 5.12.2.2)");
+}
+
+TEST(DcpMasterLink, UnknownDcpTypeIsReportedNotRetriedSilently) {
+  Harness h;
+  h.drive.mute.insert(MessageId::Init);
+  h.run(400);  // 6 s: several attempts
+  EXPECT_FALSE(h.link.travel_allowed());
+  EXPECT_EQ(h.link.handshake_problem(), "no reply to I0");
+  EXPECT_GE(h.link.counters().handshake_attempts, 4U);
+  const auto problems = std::count_if(h.events.begin(), h.events.end(), [](const LinkEvent& e) {
+    return e.kind == LinkEventKind::HandshakeProblem;
+  });
+  EXPECT_EQ(problems, 1) << "said once, not every second";
 }
 
 }  // namespace

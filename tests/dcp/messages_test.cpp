@@ -145,28 +145,11 @@ TEST(DcpMessages, RejectsMalformedDriveReplies) {
       {"I4 is not defined", "I4", MessageError::UnknownId, 1},
       {"I5 is not defined", "I5", MessageError::UnknownId, 1},
       {"letter instead of a number", "IA", MessageError::UnknownId, 1},
-      {"I0 reply one character short", i0.substr(0, 16), MessageError::WrongLength, 0},
-      {"I0 reply one character long", i0 + "X", MessageError::WrongLength, 0},
-      {"I0 request layout (no DCP type) as reply", "I0ZA0102010215DE", MessageError::WrongLength,
-       0},
-      {"I0 maker in lower case", with(2, 'z'), MessageError::BadMaker, 2},
-      {"I0 maker with a digit", with(3, '1'), MessageError::BadMaker, 3},
-      {"I0 version with a letter", with(6, 'A'), MessageError::BadDigit, 6},
-      {"I0 date with day 32",
-       "I0ZA0102320215"
-       "4DE",
-       MessageError::BadDate, 8},
-      {"I0 date with month 13",
-       "I0ZA0102011315"
-       "4DE",
-       MessageError::BadDate, 8},
-      {"I0 date 29.02.23 (no leap year)",
-       "I0ZA0102290223"
-       "4DE",
-       MessageError::BadDate, 8},
+      {"I0 reply without its DCP type", i0.substr(0, 14), MessageError::WrongLength, 0},
+      {"I0 request layout (no DCP type) as reply", "I0ZA0102010215DE", MessageError::BadDcpType,
+       14},
       {"I0 DCP type '2'", with(14, '2'), MessageError::BadDcpType, 14},
       {"I0 DCP type 'A'", with(14, 'A'), MessageError::BadDcpType, 14},
-      {"I0 language in lower case", with(16, 'e'), MessageError::BadLanguage, 16},
       {"I0 with a control character", with(9, '\x05'), MessageError::NotDataChar, 9},
       {"I1 reply with '2'", "I12", MessageError::BadProtocolType, 2},
       {"I1 reply too long", "I110", MessageError::WrongLength, 0},
@@ -194,6 +177,61 @@ TEST(DcpMessages, RejectsMalformedDriveReplies) {
     EXPECT_EQ(decoded.error, c.error) << c.what << ": got " << to_string(decoded.error);
     EXPECT_EQ(decoded.offset, c.offset) << c.what;
     EXPECT_FALSE(to_string(decoded.error).empty());
+  }
+}
+
+TEST(DcpMessages, InitReplyToleratesOddFieldsWhileItsDcpTypeIsReadable) {
+  // Issue: older and other drives fill the I0 fields their own way; only the DCP type character
+  // (DCP 5.12.2.2) decides. Each odd field is accepted and flagged, never refused.
+  const std::string i0 =
+      "I0ZA0102010215"
+      "4DE";
+  auto with = [&](std::size_t at, char c) {
+    std::string s = i0;
+    s[at] = c;
+    return s;
+  };
+  struct Case {
+    std::string what;
+    std::string payload;
+    std::uint8_t anomalies;
+    Protocol dcp_type;
+  };
+  const std::vector<Case> cases = {
+      {"as defined", i0, 0, Protocol::Dcp4},
+      {"one character short (no second language letter)", i0.substr(0, 16),
+       init_anomaly::kLength | init_anomaly::kLanguage, Protocol::Dcp4},
+      {"one character long", i0 + "X", init_anomaly::kLength, Protocol::Dcp4},
+      {"without a language", i0.substr(0, 15), init_anomaly::kLength | init_anomaly::kLanguage,
+       Protocol::Dcp4},
+      {"maker in lower case", with(2, 'z'), init_anomaly::kMaker, Protocol::Dcp4},
+      {"maker with a digit", with(3, '1'), init_anomaly::kMaker, Protocol::Dcp4},
+      {"version with a letter", with(6, 'A'), init_anomaly::kVersion, Protocol::Dcp4},
+      {"version 1.00 with a point",
+       "I0ZA1.00010215"
+       "3DE",
+       init_anomaly::kVersion, Protocol::Dcp3},
+      {"date with day 32",
+       "I0ZA0102320215"
+       "4DE",
+       init_anomaly::kDate, Protocol::Dcp4},
+      {"date 000000",
+       "I0ZA0102000000"
+       "0DE",
+       init_anomaly::kDate, Protocol::ComChan},
+      {"date 29.02.23 (no leap year)",
+       "I0ZA0102290223"
+       "4DE",
+       init_anomaly::kDate, Protocol::Dcp4},
+      {"language in lower case", with(16, 'e'), init_anomaly::kLanguage, Protocol::Dcp4},
+  };
+  for (const auto& c : cases) {
+    const auto decoded = decode_drive_message(bytes(c.payload));
+    ASSERT_TRUE(decoded.ok()) << c.what << ": " << to_string(decoded.error);
+    const auto* reply = std::get_if<InitReply>(&decoded.value);
+    ASSERT_NE(reply, nullptr) << c.what;
+    EXPECT_EQ(reply->anomalies, c.anomalies) << c.what;
+    EXPECT_EQ(reply->dcp_type, c.dcp_type) << c.what;
   }
 }
 

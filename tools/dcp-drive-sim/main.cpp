@@ -46,12 +46,14 @@ void usage(std::FILE* out) {
                "  --position-mm N      car position at start (default 0)\n"
                "  --maker XX           drive maker code in I0 (default KW)\n"
                "  --no-init            travel without a prior I0 exchange\n"
+               "  --older-drive        ignore I1, answer I0 with odd version/date fields\n"
                "  --frames N           exit after N master frames\n"
                "  --status S           print a status line every S seconds\n"
                "  --reconnect          reopen a lost device instead of exiting\n"
                "  --quiet              print only start, faults and the summary\n"
                "stdin commands: fault|warn|notready on|off, badsum|s7|late|noreply|garbage N,\n"
-               "  rate badsum|s7|late|noreply|garbage P, clear, status, help\n");
+               "  rate badsum|s7|late|noreply|garbage P, channel partial|garbage|silence,\n"
+               "  clear, status, help\n");
 }
 
 bool parse(int argc, char** argv, Options& o) {
@@ -77,6 +79,8 @@ bool parse(int argc, char** argv, Options& o) {
       o.config.start_position_mm = std::strtoll(v, nullptr, 10);
     } else if (a == "--maker" && (v = next()) && std::strlen(v) == 2) {
       o.config.maker = {v[0], v[1]};
+    } else if (a == "--older-drive") {
+      o.config.older_drive = true;
     } else if (a == "--no-init") {
       o.config.require_init = false;
     } else if (a == "--frames" && (v = next())) {
@@ -100,6 +104,7 @@ bool command(SerialDriveRunner& runner, const std::string& line) {
   std::string verb, arg;
   in >> verb >> arg;
   ReplyFault f{};
+  liftd::sim::ChannelFault channel{};
   if (verb == "fault")
     runner.set_general_fault(arg == "on");
   else if (verb == "warn")
@@ -110,6 +115,8 @@ bool command(SerialDriveRunner& runner, const std::string& line) {
     runner.clear_reply_faults();
   else if (verb == "status")
     std::printf("%s\n", liftd::sim::format_status(runner.status()).c_str());
+  else if (verb == "channel" && liftd::sim::parse_channel_fault(arg, channel))
+    runner.inject_channel(channel);
   else if (verb == "help")
     usage(stdout);
   else if (verb == "rate" && liftd::sim::parse_reply_fault(arg, f)) {
