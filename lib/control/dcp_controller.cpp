@@ -142,9 +142,26 @@ std::span<const std::uint8_t> DcpController::frame_to_send(MonoTime now) noexcep
   for (std::size_t i = 0; i < deferred; ++i) handle(deferred_[i], now);
 
   last_output_ = travel_.step(last_input_);
-  if (last_output_.channel_request) submit_channel(*last_output_.channel_request);
+  if (last_output_.channel_request) {
+    submit_channel(*last_output_.channel_request);
+  } else if (position_owed_ && travel_.active_kind() == TravelKind::None &&
+             !last_input_.status.travel_active && !last_input_.status.brake_open &&
+             link_.travel_allowed() && !internal_.active) {
+    // DCP 5.12.9: "The actual position of the lift car will be send after each stopping ...
+    // That also applies to travels using the speed assignments VI (inspection), V0 (crawling)
+    // or VN (relevelling)"; 5.12.9.1: "while the drive is stationary". DCP3 without an
+    // absolute position sends 'E' (invalid value).
+    travel::ChannelRequest request;
+    request.kind = travel::ChannelRequest::Kind::Position;
+    request.position_mm = last_input_.position_mm;
+    submit_channel(request);
+    position_owed_ = !internal_.active;
+  }
   link_.set_process(last_output_.command, last_output_.data_word);
   frame_ = link_.next_frame(now);
+  constexpr std::uint8_t kMotionBits =
+      dcp::command_bit::kDriveEnable | dcp::command_bit::kTravel | dcp::command_bit::kStopSwitch;
+  frames_at_rest_ = (frame_[0] & kMotionBits) != 0 ? 0 : frames_at_rest_ + 1;
   return frame_;
 }
 
@@ -161,6 +178,10 @@ bool DcpController::on_reply(std::span<const std::uint8_t> reply, MonoTime now) 
 void DcpController::after_cycle(MonoTime now) noexcept {
   drain_link(now);
   drain_travel(now);
+  // DCP 5.12.9: every stop owes the drive an I9, whatever ended the travel.
+  const TravelKind kind = travel_.active_kind();
+  if (last_kind_ != TravelKind::None && kind == TravelKind::None) position_owed_ = true;
+  last_kind_ = kind;
   lift_.update(last_input_.position_mm, travel_.direction(), travel_.decel_distance_mm());
   update_faults(last_input_, now);
   serve_calls();
@@ -170,8 +191,8 @@ void DcpController::after_cycle(MonoTime now) noexcept {
 travel::CycleInput DcpController::build_input(MonoTime now) noexcept {
   travel::CycleInput in;
   in.now = now;
-  const dcp::LinkState state = link_.state();
-  in.link_up = state == dcp::LinkState::Up || state == dcp::LinkState::Init;
+  in.link_up = link_.realtime_up();  // DCP 7.3: the real-time channel alone (DCP 5.1)
+  in.reply_fresh = link_.last_exchange_good();
   in.handshake_done = link_.travel_allowed();
   in.protocol = link_.protocol().value_or(dcp::Protocol::ComChan);
   const dcp::DriveSnapshot& drive = link_.drive();
@@ -220,8 +241,12 @@ void DcpController::handle(const Command& command, MonoTime now) noexcept {
         if constexpr (std::is_same_v<T, TravelCommand>) {
           handle_travel(tag, body);
         } else if constexpr (std::is_same_v<T, StopCommand>) {
+          handle_stop(tag);
+        } else if constexpr (std::is_same_v<T, ShutdownCommand>) {
+          shutting_down_ = true;
+          travel_.shut_down(body.force);
+          if (!body.force) handle_stop(0);
           lift_.calls().clear();
-          travel_.stop();
           reply(tag, ReplyCode::Ok);
         } else if constexpr (std::is_same_v<T, FastStopCommand>) {
           if (travel_.active_kind() == TravelKind::None) {
@@ -278,6 +303,12 @@ void DcpController::handle(const Command& command, MonoTime now) noexcept {
           inputs_seen_ = true;
           reply(tag, ReplyCode::Ok);
         } else if constexpr (std::is_same_v<T, LinkCommand>) {
+          const auto* sw = std::get_if<dcp::SwitchRequest>(&body.request);
+          if (sw != nullptr && sw->function == dcp::SwitchFunction::Reset &&
+              (travel_.active_kind() != TravelKind::None || last_input_.status.travel_active)) {
+            reply(tag, ReplyCode::Busy, "a travel is running: reset the drive when it is at rest");
+            return;
+          }
           const dcp::SubmitResult r = link_.submit(body.request, tag);
           switch (r) {
             case dcp::SubmitResult::Accepted:
@@ -324,6 +355,10 @@ void DcpController::handle_travel(std::uint32_t tag, const TravelCommand& cmd) n
     reply(tag, ReplyCode::BadRequest, "no such floor");
     return;
   }
+  if (shutting_down_) {
+    reply(tag, ReplyCode::NotReady, "liftd is stopping: no new travel");
+    return;
+  }
   if (!link_.travel_allowed()) {
     reply(tag, ReplyCode::NotReady, abort_text(AbortCause::LinkDown));
     return;
@@ -336,6 +371,10 @@ void DcpController::handle_travel(std::uint32_t tag, const TravelCommand& cmd) n
     if (r == travel::ExtendResult::Accepted) {
       target_floor_ = cmd.floor;
       reply(tag, ReplyCode::Ok, "target extended", true);
+    } else if (r == travel::ExtendResult::Pending) {
+      // DCP 4.1 / 7.2: answered once the drive's S5 accepts or refuses the new distance.
+      extend_tag_ = tag == 0 ? kInternalTag : tag;
+      extend_floor_ = cmd.floor;
     } else {
       reply(tag, r == travel::ExtendResult::AdvanceWarning ? ReplyCode::NotReady : ReplyCode::Busy,
             travel::to_string(r));
@@ -376,6 +415,64 @@ void DcpController::handle_travel(std::uint32_t tag, const TravelCommand& cmd) n
   target_floor_ = cmd.floor;
   travel_tag_ = tag;
   reply(tag, ReplyCode::Ok);
+}
+
+std::optional<std::size_t> DcpController::next_stop_floor() const noexcept {
+  const auto position = last_input_.position_mm;
+  const lift::Direction direction = travel_.direction();
+  if (!position || direction == lift::Direction::None) return std::nullopt;
+  std::optional<std::int64_t> needed_mm;
+  if (travel_.active_kind() == TravelKind::Dcp4Distance && travel_.dcp4().moving()) {
+    needed_mm = travel_.stop_distance_mm();
+  } else if (travel_.active_kind() == TravelKind::Dcp3Speed &&
+             travel_.dcp3().state() == travel::Dcp3Travel::State::Travel) {
+    // DCP 10.1.1 step 3: the car slows to crawl within SVx after B1 drops, so the stop floor's
+    // deceleration point must still lie ahead.
+    needed_mm =
+        static_cast<std::int64_t>(
+            config_.travel.dcp3_decel_distance_mm[travel::speed_index(travel_.dcp3().speed())]) +
+        static_cast<std::int64_t>(config_.travel.extension_margin_mm);
+  }
+  if (!needed_mm) return std::nullopt;
+  return lift::next_possible_stop(lift_.floors(), *position, direction,
+                                  static_cast<std::uint32_t>(*needed_mm), 0);
+}
+
+void DcpController::handle_stop(std::uint32_t tag) noexcept {
+  lift_.calls().clear();
+  std::optional<std::size_t> stop_floor;
+  if (const auto floor = next_stop_floor()) {
+    if (const auto level = travel_.stop_at(floors_mm_[*floor])) {
+      stop_floor = lift_.floors().floor_at(*level, config_.lift.level_tolerance_mm);
+      if (stop_floor) target_floor_ = stop_floor;
+    }
+  } else if (travel_.active_kind() == TravelKind::Dcp4Distance && travel_.dcp4().moving()) {
+    // No level nearer than the target can still be reached: the car lands at its target.
+    stop_floor = target_floor_;
+  } else {
+    travel_.stop();
+  }
+  if (tag == 0) return;
+  CommandReply r;
+  r.tag = tag;
+  r.code = ReplyCode::Ok;
+  r.floor = stop_floor;
+  (void)replies_.try_push(r);
+}
+
+void DcpController::settle_extension(const travel::Event& event) noexcept {
+  if (extend_tag_ == 0) return;
+  const std::uint32_t tag = extend_tag_ == kInternalTag ? 0 : extend_tag_;
+  extend_tag_ = 0;
+  if (event.type == travel::Event::Type::TargetExtended) {
+    target_floor_ = extend_floor_;
+    reply(tag, ReplyCode::Ok, "target extended", true);
+  } else if (event.type == travel::Event::Type::TargetRefused) {
+    reply(tag, ReplyCode::Fault,
+          "the drive refused the new target (S5 cleared, DCP 4.1): it stops on its emergency ramp");
+  } else {
+    reply(tag, ReplyCode::Fault, "the travel ended before the drive accepted the new target");
+  }
 }
 
 void DcpController::handle_relevel(std::uint32_t tag) noexcept {
@@ -506,6 +603,11 @@ void DcpController::drain_link(MonoTime now) noexcept {
 
 void DcpController::drain_travel(MonoTime now) noexcept {
   while (auto e = travel_.pop_event()) {
+    if (e->type == travel::Event::Type::TargetExtended ||
+        e->type == travel::Event::Type::TargetRefused || e->type == travel::Event::Type::Finished ||
+        e->type == travel::Event::Type::Aborted) {
+      settle_extension(*e);
+    }
     ControllerEvent ev;
     ev.kind = ControllerEvent::Kind::Travel;
     ev.at = e->at;
@@ -635,6 +737,11 @@ void DcpController::publish(MonoTime now) noexcept {
   s.fault_since = fault_since_;
   s.last_travel_measured_mm = measured_mm_;
   s.last_travel_slip_mm = slip_mm_;
+  s.handshake_problem = link_.handshake_problem();
+  s.shutting_down = shutting_down_;
+  s.quiesced = shutting_down_ && travel_.active_kind() == TravelKind::None &&
+               !last_input_.status.travel_active &&
+               frames_at_rest_ >= static_cast<std::uint32_t>(config_.link.fault_after_bad_frames);
   snapshot_.publish(s);
 }
 

@@ -75,8 +75,14 @@ struct TravelCommand {
   std::optional<std::uint8_t> load_percent;
   bool fast_start = false;  ///< DCP 12: arm fast start, go when the doors are locked
 };
-/// Controlled stop of the running travel (normal stop).
+/// Stop at the next possible floor (DCP4: remaining distance retargeted; DCP3: crawl from that
+/// floor's deceleration point); other travels end with the controlled stop.
 struct StopCommand {};
+/// The service is stopping: no new travel, the running one stops as StopCommand does; `force`
+/// (deadline passed) withdraws the drive enable at once.
+struct ShutdownCommand {
+  bool force = false;
+};
 /// DCP 13 fast stop.
 struct FastStopCommand {};
 /// Relevel to the floor the car is at (DCP4 VN', DCP3 relevelling without distance).
@@ -109,9 +115,9 @@ struct ClockCommand {
   dcp::CivilTime time;
 };
 
-using CommandBody =
-    std::variant<TravelCommand, StopCommand, FastStopCommand, RelevelCommand, InspectionCommand,
-                 FastStartCommand, CallCommand, InputsCommand, LinkCommand, ClockCommand>;
+using CommandBody = std::variant<TravelCommand, StopCommand, FastStopCommand, RelevelCommand,
+                                 InspectionCommand, FastStartCommand, CallCommand, InputsCommand,
+                                 LinkCommand, ClockCommand, ShutdownCommand>;
 
 /// A command with the caller's tag (echoed in the reply; 0 = no reply wanted).
 struct Command {
@@ -138,6 +144,7 @@ struct CommandReply {
   std::string_view detail;
   std::optional<dcp::DriveMessage> drive_reply;  ///< for link commands
   bool extended = false;                         ///< travel command extended a running travel
+  std::optional<std::size_t> floor;              ///< stop: the floor the car will stop at
 };
 
 /// Faults the controller tracks; each is reported once when it starts and once when it ends.
@@ -209,6 +216,12 @@ struct ControllerSnapshot {
   std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
   std::optional<std::int64_t> last_travel_measured_mm;  ///< I9 extended reply (rope slip)
   std::optional<std::int64_t> last_travel_slip_mm;      ///< measured minus commanded distance
+  /// Why the handshake has not completed (empty when it has, DCP 5.12.2).
+  std::string_view handshake_problem;
+  bool shutting_down = false;  ///< ShutdownCommand received
+  /// Shutting down and at rest: no travel, S1 = 0, and at least one DCP 7.3 supervision window
+  /// of frames without B0/B1/B2 has gone out.
+  bool quiesced = false;
 };
 
 inline constexpr std::size_t kCommandQueueSize = 64;
@@ -255,10 +268,15 @@ class DcpController final : public rt::CycleEngine {
     travel::ChannelRequest::Kind kind = travel::ChannelRequest::Kind::StartParameters;
   };
   static constexpr dcp::RequestTag kTravelTag = 0xFFFF'FFFFU;
+  static constexpr std::uint32_t kInternalTag = 0xFFFF'FFFEU;  ///< a change without a caller
 
   void handle(const Command& command, MonoTime now) noexcept;
   void handle_travel(std::uint32_t tag, const TravelCommand& cmd) noexcept;
   void handle_relevel(std::uint32_t tag) noexcept;
+  void handle_stop(std::uint32_t tag) noexcept;
+  std::optional<std::size_t> next_stop_floor() const noexcept;
+  void settle_extension(const travel::Event& event) noexcept;
+  void owe_position(MonoTime now) noexcept;
   void reply(std::uint32_t tag, ReplyCode code, std::string_view detail = {},
              bool extended = false) noexcept;
   void push_event(const ControllerEvent& event) noexcept;
@@ -302,6 +320,12 @@ class DcpController final : public rt::CycleEngine {
   std::optional<travel::ChannelReply> pending_reply_;
   std::optional<std::size_t> target_floor_;
   std::uint32_t travel_tag_ = 0;  ///< tag of the command that started the running travel
+  std::uint32_t extend_tag_ = 0;  ///< a travel command whose target change waits for S5
+  std::size_t extend_floor_ = 0;
+  bool position_owed_ = false;  ///< DCP 5.12.9: I9 after every stop, not sent yet
+  travel::TravelKind last_kind_ = travel::TravelKind::None;
+  bool shutting_down_ = false;
+  std::uint32_t frames_at_rest_ = 0;  ///< frames in a row without B0/B1/B2
   std::optional<std::int64_t> travel_start_mm_;
   std::optional<std::int64_t> pending_i9_travel_mm_;  ///< commanded distance, for slip
   std::optional<std::int64_t> measured_mm_;

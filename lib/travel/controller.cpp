@@ -41,6 +41,7 @@ std::optional<std::uint32_t> TravelController::decel_distance_mm() const noexcep
 }
 
 StartResult TravelController::start(const TravelRequest& request) noexcept {
+  if (shut_down_) return StartResult::ShuttingDown;
   if (busy() || last_.status.travel_active) return StartResult::Busy;
   if (last_.inputs.inspection || last_.inputs.recall) return StartResult::InspectionMode;
   const dcp::Protocol protocol = last_.protocol;
@@ -146,17 +147,50 @@ void TravelController::fast_stop() noexcept {
 ExtendResult TravelController::extend_target(std::int64_t target_mm) noexcept {
   if (!dcp4_.active()) return ExtendResult::NoDistanceTravel;
   const ExtendResult result = dcp4_.extend(target_mm, last_, config_);
-  if (result == ExtendResult::Accepted) {
+  if (result == ExtendResult::Accepted || result == ExtendResult::Pending) {
     home_level_mm_ = target_mm;
-    Event event;
-    event.type = Event::Type::TargetExtended;
-    event.kind = dcp4_.kind();
-    event.at = last_.now;
-    event.target_mm = target_mm;
-    event.position_mm = last_.position_mm;
-    events_.push(event);
   }
-  return result;
+  if (result == ExtendResult::Accepted) {  // before the start: goes out with the first distance
+    StepContext ctx{config_, last_, events_};
+    ctx.emit(Event::Type::TargetExtended, dcp4_.kind(), AbortCause::None, target_mm);
+  }
+  return result;  // Pending: the machine reports S5's verdict
+}
+
+std::optional<std::int64_t> TravelController::stop_distance_mm() const noexcept {
+  if (!dcp4_.active()) return std::nullopt;
+  return dcp4_.stop_distance_mm(last_, config_);
+}
+
+std::optional<std::int64_t> TravelController::stop_at(std::int64_t target_mm) noexcept {
+  pending_.reset();
+  if (dcp4_.active() && dcp4_.kind() == TravelKind::Dcp4Distance && dcp4_.moving()) {
+    // DCP 11.1.1 d: B2 stays until S6 falls at a level; the remaining distance now ends at the
+    // next possible stop instead of a stop message at speed (DCP 3.5.3.2: "During
+    // deceleration" only).
+    const ExtendResult r = dcp4_.shorten(target_mm, last_, config_);
+    if (r == ExtendResult::Pending) home_level_mm_ = target_mm;
+    return dcp4_.target_mm();
+  }
+  if (dcp3_.active() && dcp3_.stop_at(target_mm)) {
+    if (config_.dcp3_reference == Dcp3Reference::Position) home_level_mm_ = target_mm;
+    return target_mm;
+  }
+  if (dcp3_.active() && dcp3_.state() == Dcp3Travel::State::Creep) return dcp3_.target_mm();
+  stop();
+  return std::nullopt;
+}
+
+void TravelController::shut_down(bool force) noexcept {
+  shut_down_ = true;
+  pending_.reset();
+  home_level_mm_.reset();  // no automatic relevelling from now on
+  if (force && (dcp4_.active() || dcp3_.active() || relevel_.active() || inspection_.active())) {
+    const TravelKind kind = active_kind();
+    abort_all_immediately();
+    StepContext ctx{config_, last_, events_};
+    ctx.emit(Event::Type::Aborted, kind, AbortCause::ShuttingDown, 0);
+  }
 }
 
 void TravelController::abort_all_immediately() noexcept {
@@ -167,7 +201,7 @@ void TravelController::abort_all_immediately() noexcept {
 }
 
 void TravelController::maybe_auto_relevel(const CycleInput& in) noexcept {
-  if (!config_.auto_relevel || busy() || !home_level_mm_ || !in.position_mm) return;
+  if (shut_down_ || !config_.auto_relevel || busy() || !home_level_mm_ || !in.position_mm) return;
   if (in.protocol != dcp::Protocol::Dcp4 || in.status.travel_active) return;
   if (in.inputs.inspection || in.inputs.recall || in.now < relevel_blocked_until_) return;
   const std::int64_t drift = *home_level_mm_ - *in.position_mm;
@@ -233,7 +267,7 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
     demand = dcp3_.step(ctx);
   } else if (relevel_.active()) {
     demand = relevel_.step(ctx);
-  } else if (inspection_.active() || in.inputs.inspection || in.inputs.recall) {
+  } else if (inspection_.active() || ((in.inputs.inspection || in.inputs.recall) && !shut_down_)) {
     demand = inspection_.step(ctx);
   }
 

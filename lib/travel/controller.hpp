@@ -30,6 +30,16 @@ class TravelController {
   void fast_stop() noexcept;
   /// DCP4 target extension of the running distance travel.
   ExtendResult extend_target(std::int64_t target_mm) noexcept;
+  /// A user stop at a level: DCP4 retargets a moving distance travel to `target_mm` (a nearer
+  /// level it can still reach), DCP3 crawls from that level's deceleration point; any other
+  /// travel gets the controlled stop of stop(). Returns the level the car will stop at, or
+  /// nullopt when it stops where stop() stops it.
+  std::optional<std::int64_t> stop_at(std::int64_t target_mm) noexcept;
+  /// The shortest remaining distance a running DCP4 travel can be retargeted to now.
+  std::optional<std::int64_t> stop_distance_mm() const noexcept;
+  /// Service stop: no new travel, no automatic relevelling from now on; `force` also withdraws
+  /// the drive enable at once (the deadline passed with the car still moving).
+  void shut_down(bool force) noexcept;
   /// The level the car should stand at (auto relevelling reference); set after every travel to
   /// its target, or by the caller.
   void set_home_level(std::optional<std::int64_t> level_mm) noexcept { home_level_mm_ = level_mm; }
@@ -75,6 +85,7 @@ class TravelController {
   MonoTime relevel_blocked_until_{};
   CycleInput last_{};
   bool fault_seen_ = false;
+  bool shut_down_ = false;
 };
 
 }  // namespace liftd::travel

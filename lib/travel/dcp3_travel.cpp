@@ -32,6 +32,13 @@ void Dcp3Travel::request_stop(AbortCause cause) noexcept {
   enter(State::ControlledAbort, now_);
 }
 
+bool Dcp3Travel::stop_at(std::int64_t target_mm) noexcept {
+  // Only before the deceleration point: from there on the car already crawls to its level.
+  if (state_ != State::Travel || speed_ == dcp::Speed::V0) return false;
+  target_mm_ = target_mm;
+  return true;
+}
+
 void Dcp3Travel::request_fast_stop() noexcept {
   if (state_ == State::Travel || state_ == State::Creep || state_ == State::FastStartGo) {
     end_cause_ = AbortCause::StopRequested;
@@ -73,7 +80,6 @@ bool Dcp3Travel::at_level(const StepContext& ctx) const noexcept {
 
 void Dcp3Travel::finish(StepContext& ctx) noexcept {
   ctx.emit_end(kind_, end_cause_, target_mm_);
-  if (go_sent_) ctx.request_position_after_stop();  // DCP 5.12.9: I9 after every stop
   state_ = State::Idle;
 }
 
@@ -131,6 +137,14 @@ Demand Dcp3Travel::step(StepContext& ctx) noexcept {
 
     case State::SpeedMessage:
       if (cycles_in_state_ <= speed_cycles(config)) {
+        return demand(nibble::kSpeed, dcp::speed_word(speed_));
+      }
+      // DCP 4.1 S5: the drive confirms the speed message before the travel command follows.
+      if (!(in.reply_fresh && in.status.accepted)) {
+        if (since_ms >= config.start_timeout_ms) {
+          request_stop(AbortCause::TargetRefused);
+          return demand(nibble::kStop, 0);
+        }
         return demand(nibble::kSpeed, dcp::speed_word(speed_));
       }
       enter(State::Travel, in.now);

@@ -35,6 +35,13 @@ class Dcp3Travel {
   void request_stop(AbortCause cause) noexcept;
   /// DCP 13: fast stop during the travel.
   void request_fast_stop() noexcept;
+  /// A user stop with a known position: crawl from `target_mm`'s deceleration point SVx on
+  /// (DCP 10.1.1 step 3). False when the car is already past its deceleration point.
+  bool stop_at(std::int64_t target_mm) noexcept;
+  /// Destination level.
+  std::int64_t target_mm() const noexcept { return target_mm_; }
+  /// The speed of the running travel.
+  dcp::Speed speed() const noexcept { return speed_; }
 
   /// Whether a travel is in progress.
   bool active() const noexcept { return state_ != State::Idle; }

@@ -22,6 +22,8 @@ void Dcp4Travel::begin(const TravelRequest& request, const CycleInput& in,
   brake_seen_open_ = false;
   travel_seen_ = false;
   go_sent_ = false;
+  start_reported_ = false;
+  unconfirmed_target_mm_.reset();
   end_cause_ = AbortCause::None;
   i7_decel_mm_.reset();
   i7_reply_.reset();
@@ -70,6 +72,21 @@ std::optional<std::uint32_t> Dcp4Travel::decel_distance_mm(const CycleInput& in)
   return i7_decel_mm_;
 }
 
+std::optional<std::int64_t> Dcp4Travel::stop_distance_mm(
+    const CycleInput& in, const TravelConfig& config) const noexcept {
+  // DCP 11.1.2 note: a target may move "while it is greater than the deceleration distance the
+  // drive controller had transmitted before the beginning of the travel" (I7's Sv); the live
+  // value of the data bytes still grows while the car accelerates: take the larger.
+  std::optional<std::uint32_t> decel = in.decel_distance_mm;
+  if (i7_decel_mm_ && (!decel || *i7_decel_mm_ > *decel)) decel = i7_decel_mm_;
+  if (!decel) return std::nullopt;
+  // DCP 7.2: the new distance must reach the drive 30 ms before the deceleration point, "even
+  // if the exchange of message has to be repeated": kExtensionLeadMs at the current speed.
+  const std::int64_t lead_mm = speed_mm_per_s_ * kExtensionLeadMs / 1000;
+  return static_cast<std::int64_t>(*decel) + static_cast<std::int64_t>(config.extension_margin_mm) +
+         lead_mm;
+}
+
 ExtendResult Dcp4Travel::extend(std::int64_t target_mm, const CycleInput& in,
                                 const TravelConfig& config) noexcept {
   if (kind_ != TravelKind::Dcp4Distance) return ExtendResult::NoDistanceTravel;
@@ -90,18 +107,35 @@ ExtendResult Dcp4Travel::extend(std::int64_t target_mm, const CycleInput& in,
     target_mm_ = target_mm;
     return ExtendResult::Accepted;
   }
+  if (unconfirmed_target_mm_) return ExtendResult::Busy;
   if (in.status.advance_warning) return ExtendResult::AdvanceWarning;  // DCP 9.1.5
-  const auto decel_mm = decel_distance_mm(in);
-  if (!decel_mm || !in.position_mm) return ExtendResult::DecelUnknown;
+  const auto limit_mm = stop_distance_mm(in, config);
+  if (!limit_mm || !in.position_mm) return ExtendResult::DecelUnknown;
   const std::int64_t remaining = remaining_mm(target_mm_, *in.position_mm, direction_);
-  const std::int64_t lead_mm = speed_mm_per_s_ * kExtensionLeadMs / 1000;
-  // DCP 11.1.2 note: only while the remaining distance exceeds the deceleration distance.
-  if (remaining <= static_cast<std::int64_t>(*decel_mm) +
-                       static_cast<std::int64_t>(config.extension_margin_mm) + lead_mm) {
+  if (remaining <= *limit_mm) return ExtendResult::TooLate;
+  target_mm_ = target_mm;
+  unconfirmed_target_mm_ = target_mm;
+  cycles_since_change_ = 0;
+  return ExtendResult::Pending;
+}
+
+ExtendResult Dcp4Travel::shorten(std::int64_t target_mm, const CycleInput& in,
+                                 const TravelConfig& config) noexcept {
+  if (kind_ != TravelKind::Dcp4Distance || state_ != State::Distance) {
+    return ExtendResult::NoDistanceTravel;
+  }
+  if (unconfirmed_target_mm_) return ExtendResult::Busy;
+  const auto limit_mm = stop_distance_mm(in, config);
+  if (!limit_mm || !in.position_mm) return ExtendResult::DecelUnknown;
+  if (remaining_mm(target_mm, *in.position_mm, direction_) <= *limit_mm) {
     return ExtendResult::TooLate;
   }
+  const bool nearer = direction_ == Direction::Up ? target_mm < target_mm_ : target_mm > target_mm_;
+  if (!nearer) return ExtendResult::NotFurther;
   target_mm_ = target_mm;
-  return ExtendResult::Accepted;
+  unconfirmed_target_mm_ = target_mm;
+  cycles_since_change_ = 0;
+  return ExtendResult::Pending;
 }
 
 Demand Dcp4Travel::speed_demand(std::uint8_t message, dcp::Speed speed) const noexcept {
@@ -129,6 +163,28 @@ Demand Dcp4Travel::distance_demand(std::uint8_t message, const StepContext& ctx)
   return demand;
 }
 
+void Dcp4Travel::track_acceptance(StepContext& ctx) noexcept {
+  const CycleInput& in = ctx.in;
+  if (unconfirmed_target_mm_) ++cycles_since_change_;
+  // The reply to the first frame that carried the change tells (DCP 4.1, 7.2).
+  const bool answered = unconfirmed_target_mm_ && cycles_since_change_ >= 2 && in.reply_fresh;
+  if (answered && in.status.accepted) {
+    ctx.emit(Event::Type::TargetExtended, kind_, AbortCause::None, *unconfirmed_target_mm_);
+    unconfirmed_target_mm_.reset();
+  }
+  // DCP 4.1 note: a plausibility error makes the drive stop on its emergency ramp with S5
+  // cleared "until the lift has stopped". B2 stays until S6 falls (DCP 11.1.2 step 4).
+  if (travel_seen_ && in.reply_fresh && in.status.brake_open && !in.status.accepted &&
+      end_cause_ == AbortCause::None) {
+    end_cause_ = AbortCause::TargetRefused;
+    if (unconfirmed_target_mm_) {
+      ctx.emit(Event::Type::TargetRefused, kind_, AbortCause::TargetRefused,
+               *unconfirmed_target_mm_);
+      unconfirmed_target_mm_.reset();
+    }
+  }
+}
+
 void Dcp4Travel::finish(StepContext& ctx) noexcept {
   if (end_cause_ == AbortCause::None && ctx.in.position_mm) {
     const std::int64_t off = remaining_mm(target_mm_, *ctx.in.position_mm, direction_);
@@ -136,8 +192,11 @@ void Dcp4Travel::finish(StepContext& ctx) noexcept {
       end_cause_ = AbortCause::StoppedOffLevel;
     }
   }
+  if (unconfirmed_target_mm_) {  // ended before the drive answered the change
+    ctx.emit(Event::Type::TargetRefused, kind_, end_cause_, *unconfirmed_target_mm_);
+    unconfirmed_target_mm_.reset();
+  }
   ctx.emit_end(kind_, end_cause_, target_mm_);
-  if (go_sent_) ctx.request_position_after_stop();  // DCP 5.12.9: I9 after every stop
   state_ = State::Idle;
 }
 
@@ -157,6 +216,11 @@ Demand Dcp4Travel::step(StepContext& ctx) noexcept {
   if (in.status.travel_active && !travel_seen_ &&
       (state_ == State::Distance || state_ == State::FastStartGo)) {
     travel_seen_ = true;
+  }
+  // DCP 4.1 S5 "Desired distance / speed accepted": the travel counts as started only once the
+  // drive runs (S1) and has accepted it.
+  if (travel_seen_ && !start_reported_ && in.status.accepted && end_cause_ == AbortCause::None) {
+    start_reported_ = true;
     ctx.emit(Event::Type::Started, kind_, AbortCause::None, target_mm_);
   }
   ++cycles_in_state_;
@@ -255,11 +319,20 @@ Demand Dcp4Travel::step(StepContext& ctx) noexcept {
       if (cycles_in_state_ <= speed_cycles(config)) {
         return speed_demand(nibble::kSpeed, speed_);
       }
+      // DCP 4.1 S5: the drive confirms the speed message before the travel starts.
+      if (!(in.reply_fresh && in.status.accepted)) {
+        if (since_ms >= config.start_timeout_ms) {
+          request_stop(AbortCause::TargetRefused);
+          return distance_demand(nibble::kStop, ctx);
+        }
+        return speed_demand(nibble::kSpeed, speed_);
+      }
       enter(State::Distance, in.now);
       go_sent_ = true;
       return distance_demand(nibble::kDistance, ctx);
 
     case State::Distance:
+      track_acceptance(ctx);
       if (!brake_seen_open_ && since_ms >= config.start_timeout_ms) {
         request_stop(AbortCause::DriveDidNotStart);
         return distance_demand(nibble::kStop, ctx);

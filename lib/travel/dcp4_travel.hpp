@@ -40,6 +40,16 @@ class Dcp4Travel {
   /// Target extension (DCP 9.1.5, 11.1.2 note, 7.2: 30 ms before the deceleration point).
   ExtendResult extend(std::int64_t target_mm, const CycleInput& in,
                       const TravelConfig& config) noexcept;
+  /// A user stop: land at `target_mm`, a level before the current target that the car can
+  /// still reach (the caller picks it with stop_distance_mm()). Pending until S5 confirms.
+  ExtendResult shorten(std::int64_t target_mm, const CycleInput& in,
+                       const TravelConfig& config) noexcept;
+  /// The shortest remaining distance a new target may have now: the larger of I7's Sv and the
+  /// live deceleration distance, plus the margin and the DCP 7.2 lead. Nullopt when unknown.
+  std::optional<std::int64_t> stop_distance_mm(const CycleInput& in,
+                                               const TravelConfig& config) const noexcept;
+  /// Whether the car is moving under a distance travel (a stop retargets instead of stopping).
+  bool moving() const noexcept { return state_ == State::Distance && brake_seen_open_; }
   /// The deceleration distance known now: data bytes, else I7's Sv.
   std::optional<std::uint32_t> decel_distance_mm(const CycleInput& in) const noexcept;
 
@@ -61,6 +71,7 @@ class Dcp4Travel {
   Demand distance_demand(std::uint8_t nibble, const StepContext& ctx) const noexcept;
   Demand speed_demand(std::uint8_t nibble, dcp::Speed speed) const noexcept;
   void finish(StepContext& ctx) noexcept;
+  void track_acceptance(StepContext& ctx) noexcept;
 
   State state_ = State::Idle;
   TravelKind kind_ = TravelKind::Dcp4Distance;
@@ -74,6 +85,9 @@ class Dcp4Travel {
   bool brake_seen_open_ = false;
   bool travel_seen_ = false;
   bool go_sent_ = false;
+  bool start_reported_ = false;                        ///< Started sent (S1 with S5, DCP 4.1)
+  std::optional<std::int64_t> unconfirmed_target_mm_;  ///< a change S5 has not confirmed yet
+  std::uint32_t cycles_since_change_ = 0;
   AbortCause end_cause_ = AbortCause::None;
   std::optional<std::uint32_t> i7_decel_mm_;
   std::optional<ChannelReply> i7_reply_;

@@ -81,7 +81,6 @@ Demand InspectionTravel::step(StepContext& ctx) noexcept {
     case State::Released:
       if (!in.status.travel_active || !in.link_up) {
         if (!aborted_) ctx.emit(Event::Type::Finished, kind_, AbortCause::None, 0);
-        ctx.request_position_after_stop();  // DCP 5.12.9: also after VI and V0 travels
         state_ = State::Idle;
         direction_ = Direction::None;
       }

@@ -43,7 +43,6 @@ bool RelevelTravel::at_level(const StepContext& ctx) const noexcept {
 
 void RelevelTravel::finish(StepContext& ctx) noexcept {
   ctx.emit_end(TravelKind::Relevel, end_cause_, target_mm_);
-  ctx.request_position_after_stop();
   state_ = State::Idle;
 }
 

@@ -37,14 +37,6 @@ struct StepContext {
     emit(cause == AbortCause::None ? Event::Type::Finished : Event::Type::Aborted, kind, cause,
          target_mm);
   }
-  /// DCP 5.12.9: after every stop in DCP4, tell the drive where the car is (I9).
-  void request_position_after_stop() noexcept {
-    if (in.protocol != dcp::Protocol::Dcp4) return;
-    ChannelRequest request;
-    request.kind = ChannelRequest::Kind::Position;
-    request.position_mm = in.position_mm;
-    channel_request = request;
-  }
 };
 
 /// A command byte from its message nibble B3..B0 plus the direction bit B4 (DCP 3.1, 3.5).

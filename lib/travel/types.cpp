@@ -141,6 +141,10 @@ std::string_view to_string(AbortCause cause) noexcept {
       return "stopped_off_level";
     case AbortCause::LevelNotReached:
       return "level_not_reached";
+    case AbortCause::TargetRefused:
+      return "target_refused";
+    case AbortCause::ShuttingDown:
+      return "shutting_down";
   }
   return "none";
 }
@@ -155,6 +159,8 @@ std::string_view to_string(Event::Type type) noexcept {
       return "aborted";
     case Event::Type::TargetExtended:
       return "target_extended";
+    case Event::Type::TargetRefused:
+      return "target_refused";
     case Event::Type::FastStartArmed:
       return "fast_start_armed";
     case Event::Type::DriveFault:
@@ -183,6 +189,8 @@ std::string_view to_string(StartResult result) noexcept {
       return "direction unknown";
     case StartResult::InspectionMode:
       return "inspection or recall is switched on";
+    case StartResult::ShuttingDown:
+      return "liftd is stopping: no new travel";
   }
   return "accepted";
 }
@@ -191,6 +199,10 @@ std::string_view to_string(ExtendResult result) noexcept {
   switch (result) {
     case ExtendResult::Accepted:
       return "accepted";
+    case ExtendResult::Pending:
+      return "sent to the drive, waiting for its acceptance (S5)";
+    case ExtendResult::Busy:
+      return "an earlier target change still waits for the drive's acceptance (S5)";
     case ExtendResult::NoDistanceTravel:
       return "no DCP4 distance travel running";
     case ExtendResult::NotFurther:

@@ -49,6 +49,8 @@ enum class AbortCause : std::uint8_t {
   ModeChanged,       ///< inspection / recall switched during a normal travel
   StoppedOffLevel,   ///< DCP4: the drive ended the travel farther than the arrival tolerance
   LevelNotReached,   ///< crawl / relevelling ran longer than crawl_timeout_ms
+  TargetRefused,     ///< the drive cleared S5: speed or target not accepted (DCP 4.1)
+  ShuttingDown,      ///< liftd stopped before the car came to rest; drive enable withdrawn
 };
 
 /// Fixed-capacity ASCII text of an I-message body (between 0x1C and ETX).
@@ -84,7 +86,10 @@ struct CycleInput {
   bool link_up = false;         ///< link supervision good (no 10-lost-frames fault)
   bool handshake_done = false;  ///< valid I0 exchange done
   dcp::Protocol protocol = dcp::Protocol::Dcp4;
-  dcp::Status status{};                            ///< last good status byte
+  dcp::Status status{};  ///< last good status byte
+  /// The previous frame got a good reply without S7 that is no repetition (DCP 6): `status`
+  /// shows how the drive took that frame (S5 for a new speed or target, DCP 4.1).
+  bool reply_fresh = false;
   std::optional<std::uint32_t> decel_distance_mm;  ///< from the data bytes, if known (not 7FFF)
   std::optional<dcp::ExtendedStatus> extended;     ///< from the data bytes, if any
   std::optional<std::int64_t> position_mm;         ///< absolute car position if valid
@@ -108,7 +113,8 @@ struct Event {
     Started,            ///< drive reported travel active (S1) for a travel
     Finished,           ///< travel ended normally (S1 = 0 after the stop)
     Aborted,            ///< travel ended early; see cause
-    TargetExtended,     ///< a target extension was taken over
+    TargetExtended,     ///< the drive confirmed a new target with S5 (DCP 4.1)
+    TargetRefused,      ///< the drive refused a new target: S5 cleared, emergency stop
     FastStartArmed,     ///< fast start holding the car, waiting for the doors
     DriveFault,         ///< the drive raised S3 (DCP 9.1.6)
     DriveFaultCleared,  ///< the drive cleared S3
@@ -221,7 +227,9 @@ std::size_t speed_index(dcp::Speed speed) noexcept;
 
 /// Why a target extension was refused.
 enum class ExtendResult : std::uint8_t {
-  Accepted,          ///< new target taken over
+  Accepted,          ///< new target taken over before the car moves (goes out with the start)
+  Pending,           ///< new target sent; the drive's S5 confirms or refuses it (DCP 4.1, 7.2)
+  Busy,              ///< an earlier target change still waits for the drive's S5
   NoDistanceTravel,  ///< no DCP4 distance travel running
   NotFurther,        ///< not beyond the current target in the travel direction
   AdvanceWarning,    ///< S2 set: DCP 9.1.5 forbids extending
@@ -239,6 +247,7 @@ enum class StartResult : std::uint8_t {
   AlreadyThere,    ///< target within the level tolerance
   NoDirection,     ///< direction unknown
   InspectionMode,  ///< inspection / recall switched on: only button travels
+  ShuttingDown,    ///< the service is stopping: no new travel
 };
 
 /// snake_case names for the API and the journal.

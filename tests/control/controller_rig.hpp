@@ -173,7 +173,7 @@ struct Rig {
         if (r.tag == tag) return r;
       }
     }
-    return CommandReply{tag, ReplyCode::Timeout, "rig: no reply", {}, false};
+    return CommandReply{tag, ReplyCode::Timeout, "rig: no reply", {}, false, {}};
   }
 
   /// Link up, inputs posted, first statuses seen: ready for a travel command.

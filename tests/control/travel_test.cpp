@@ -276,30 +276,86 @@ TEST(Dcp4Extension, RefusedWhileAdvanceWarning) {
 
 // ---- stop and fast stop ----
 
+/// Wire-level rule (DCP 11.1.1 d, 11.1.2 step 4): no frame with B2 clear while the last reply
+/// the controller had seen showed S6 set. Returns the first offending record index, or -1.
+long b2_dropped_while_brake_open(const Rig& rig, std::size_t from) {
+  for (std::size_t i = from + 1; i < rig.log.size(); ++i) {
+    const bool b2_before = (rig.log[i - 1].frame[0] & dcp::command_bit::kStopSwitch) != 0;
+    const bool b2_now = (rig.log[i].frame[0] & dcp::command_bit::kStopSwitch) != 0;
+    const bool s6 = rig.log[i].seen && (*rig.log[i].seen & dcp::status_bit::kBrakeOpen) != 0;
+    if (b2_before && !b2_now && s6) return static_cast<long>(i);
+  }
+  return -1;
+}
+
 struct StopCase {
   const char* legend;
   dcp::Protocol protocol;
-  bool fast;
-  std::uint8_t nibble;  // what must be on the wire after the request
+  std::uint8_t nibble;  // what must be on the wire right after the request
 };
 
 class StopDuringTravel : public ::testing::TestWithParam<StopCase> {};
 
-TEST_P(StopDuringTravel, StopsAndEndsTheTravel) {
+TEST_P(StopDuringTravel, LandsAtTheNextPossibleFloor) {
+  // Issue: `stop` means the next possible floor. DCP4: the remaining distance now ends there,
+  // B2 until S6 = 0 (DCP 11.1.1 d). DCP3: crawl from that floor's deceleration point SVx
+  // (DCP 10.1.1 step 3). Never the stop message at speed (DCP 3.5.3.2).
   const StopCase c = GetParam();
   Rig rig(c.protocol);
   ASSERT_TRUE(rig.warm_up());
   ASSERT_EQ(rig.command(TravelCommand{5, std::nullopt, std::nullopt, false}).code, ReplyCode::Ok);
   ASSERT_TRUE(rig.run_until([&] { return rig.sim.velocity_mps() > 1.2; }, 20s)) << c.legend;
+  const double at_mm = rig.sim.position_mm();
   const std::size_t at = rig.frames.size();
-  const CommandReply r = c.fast ? rig.command(FastStopCommand{}) : rig.command(StopCommand{});
+  const std::size_t log_at = rig.log.size();
+  const CommandReply r = rig.command(StopCommand{});
   ASSERT_EQ(r.code, ReplyCode::Ok) << c.legend;
+  ASSERT_TRUE(r.floor.has_value()) << c.legend;
+  EXPECT_LT(*r.floor, 5U) << c.legend << ": a floor before the target";
+  EXPECT_GT(static_cast<double>(testing::six_floors()[*r.floor]), at_mm) << c.legend;
+  EXPECT_EQ(nibble_of(rig.frames[at]), c.nibble) << c.legend;
+  ASSERT_TRUE(rig.run_until([&] { return rig.idle(); }, 30s)) << c.legend;
+  EXPECT_TRUE(rig.travel_events(travel::Event::Type::Aborted).empty()) << c.legend;
+  EXPECT_EQ(rig.travel_events(travel::Event::Type::Finished).size(), 1U) << c.legend;
+  EXPECT_NEAR(rig.sim.position_mm(), static_cast<double>(testing::six_floors()[*r.floor]), 10.0)
+      << c.legend;
+  // DCP4 holds B2 until S6 falls (11.1.1 d); DCP3 positions with B2 at crawl (10.1.1 step 4),
+  // which the simulator checks: a stop message at speed would count as a violation.
+  if (c.protocol == dcp::Protocol::Dcp4) {
+    EXPECT_EQ(b2_dropped_while_brake_open(rig, log_at), -1) << c.legend;
+  }
+  EXPECT_EQ(rig.sim.counters().violations, 0U) << c.legend;
+  EXPECT_FALSE(enable_of(rig.frames.back())) << c.legend;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Table, StopDuringTravel,
+    ::testing::Values(StopCase{"DCP4 stop: remaining distance retargeted, B2 held (0101)",
+                               dcp::Protocol::Dcp4, 0x5},
+                      StopCase{"DCP3 stop: travel message until the deceleration point (0111)",
+                               dcp::Protocol::Dcp3, 0x7}),
+    [](const auto& p) { return "Case" + std::to_string(p.index); });
+
+struct FastStopCase {
+  const char* legend;
+  dcp::Protocol protocol;
+  std::uint8_t nibble;
+};
+
+class FastStopDuringTravel : public ::testing::TestWithParam<FastStopCase> {};
+
+TEST_P(FastStopDuringTravel, StopsOnTheFastStopRamp) {
+  const FastStopCase c = GetParam();
+  Rig rig(c.protocol);
+  ASSERT_TRUE(rig.warm_up());
+  ASSERT_EQ(rig.command(TravelCommand{5, std::nullopt, std::nullopt, false}).code, ReplyCode::Ok);
+  ASSERT_TRUE(rig.run_until([&] { return rig.sim.velocity_mps() > 1.2; }, 20s)) << c.legend;
+  const std::size_t at = rig.frames.size();
+  ASSERT_EQ(rig.command(FastStopCommand{}).code, ReplyCode::Ok) << c.legend;
   // The request is handled before the next frame: that frame already carries it.
   EXPECT_EQ(nibble_of(rig.frames[at]), c.nibble) << c.legend;
-  if (c.fast) {
-    // DCP 13.1: speed-after-fast-start message with VF in the data bytes.
-    EXPECT_EQ(word_of(rig.frames[at]), dcp::speed_word(dcp::Speed::VF)) << c.legend;
-  }
+  // DCP 13.1: speed-after-fast-start message with VF in the data bytes.
+  EXPECT_EQ(word_of(rig.frames[at]), dcp::speed_word(dcp::Speed::VF)) << c.legend;
   ASSERT_TRUE(rig.run_until([&] { return rig.idle(); }, 30s)) << c.legend;
   const auto aborted = rig.travel_events(travel::Event::Type::Aborted);
   ASSERT_EQ(aborted.size(), 1U) << c.legend;
@@ -308,14 +364,12 @@ TEST_P(StopDuringTravel, StopsAndEndsTheTravel) {
   EXPECT_FALSE(enable_of(rig.frames.back())) << c.legend;
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Table, StopDuringTravel,
-    ::testing::Values(
-        StopCase{"DCP4 stop: stop message 0001", dcp::Protocol::Dcp4, false, 0x1},
-        StopCase{"DCP3 stop: stop message 0001", dcp::Protocol::Dcp3, false, 0x1},
-        StopCase{"DCP4 fast stop: 1101 with VF (DCP 3.5.2)", dcp::Protocol::Dcp4, true, 0xD},
-        StopCase{"DCP3 fast stop: 1111 with VF (DCP 3.5.1)", dcp::Protocol::Dcp3, true, 0xF}),
-    [](const auto& p) { return "Case" + std::to_string(p.index); });
+INSTANTIATE_TEST_SUITE_P(Table, FastStopDuringTravel,
+                         ::testing::Values(FastStopCase{"DCP4 fast stop: 1101 with VF (DCP 3.5.2)",
+                                                        dcp::Protocol::Dcp4, 0xD},
+                                           FastStopCase{"DCP3 fast stop: 1111 with VF (DCP 3.5.1)",
+                                                        dcp::Protocol::Dcp3, 0xF}),
+                         [](const auto& p) { return "Case" + std::to_string(p.index); });
 
 TEST(FastStop, FasterThanAControlledStop) {
   double stop_mm[2] = {};

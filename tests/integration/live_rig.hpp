@@ -166,7 +166,7 @@ struct LiveMaster {
         },
         timeout);
     return got.value_or(
-        control::CommandReply{tag, control::ReplyCode::Timeout, "test: no reply", {}, false});
+        control::CommandReply{tag, control::ReplyCode::Timeout, "test: no reply", {}, false, {}});
   }
 
   bool link_up() { return controller.snapshot().link == dcp::LinkState::Up; }

@@ -345,7 +345,15 @@ TEST(SimFaults, ReplyFaultsForNFrames) {
   EXPECT_TRUE(has(m.cycle(cmd::kIdle).status, sb::kMessageChecksumError));
 
   m.sim.inject(ReplyFault::Late, 1);
-  EXPECT_EQ(m.cycle(cmd::kIdle).reply.delay, 10500us);
+  // DCP 7.2: the master frame ends at 1.5625 ms (6 bytes at 38400 baud); a late reply must start
+  // after 11.5625 ms and end after 13.625 ms: 11 ms after the frame starts it at 12.5625 ms and
+  // ends it at 14.125 ms.
+  const auto late = m.cycle(cmd::kIdle).reply.delay;
+  EXPECT_EQ(late, 11000us);
+  const auto frame_us = 1562us;
+  EXPECT_GT(frame_us + late, 11563us);
+  EXPECT_GT(frame_us + late + frame_us, 13625us);
+  EXPECT_LT(frame_us + late + frame_us, 15000us);
   EXPECT_EQ(m.cycle(cmd::kIdle).reply.delay, 1000us);
 
   m.sim.inject(ReplyFault::NoReply, 1);

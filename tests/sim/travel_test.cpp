@@ -158,7 +158,7 @@ TEST(SimTravel, Dcp4SixteenBitDistanceWithDataInfoTypeThree) {
   EXPECT_EQ(m.sim.counters().extensions, 0U);  // one target from the start
 }
 
-TEST(SimTravel, Dcp4ExtensionAcceptedOnlyBeforeDecelerationPoint) {
+TEST(SimTravel, Dcp4LateExtensionIsImplausibleClearsS5AndStops) {
   Harness m;
   m.init();
   m.cycle(cmd::kSpeed, kV4);
@@ -176,8 +176,48 @@ TEST(SimTravel, Dcp4ExtensionAcceptedOnlyBeforeDecelerationPoint) {
     if (extended_late && c.velocity_mps == 0.0 && !has(c.status, sb::kBrakeOpen)) break;
   }
   EXPECT_EQ(m.sim.counters().extensions, 1U);
+  // DCP 4.1 note: "If a plausibility error is found in the remaining distance transmitted, the
+  // drive controller should carry out an emergency stop": the car stops short of even the old
+  // target on the emergency ramp, S5 cleared until it stands.
   EXPECT_EQ(m.sim.counters().refused_extensions, 1U);
-  EXPECT_NEAR(m.sim.position_mm(), 10000.0, 1.0);
+  EXPECT_EQ(m.sim.counters().implausible, 1U);
+  EXPECT_LT(m.sim.position_mm(), 10000.0 - 100.0);
+}
+
+TEST(SimTravel, Dcp4NearerLevelTheCarCanStillReachIsTakenOver) {
+  // DCP 3.5.3.4 "the drive unit must process always the remaining distance during the total
+  // travel": a nearer target beyond the stopping distance is plausible.
+  Harness m;
+  m.init();
+  m.cycle(cmd::kSpeed, kV4);
+  double target = 15000.0;
+  bool shortened = false;
+  for (int i = 0; i < 4000; ++i) {
+    const Cycle c = m.distance_cycle(cmd::kDecel, target);
+    if (!shortened && c.velocity_mps > 1.5) {
+      target = 9000.0;  // well beyond the ~2.5 m the car needs from 1.6 m/s
+      shortened = true;
+    }
+    if (shortened && c.velocity_mps == 0.0 && !has(c.status, sb::kBrakeOpen)) break;
+  }
+  EXPECT_EQ(m.sim.counters().shortened, 1U);
+  EXPECT_EQ(m.sim.counters().implausible, 0U);
+  EXPECT_NEAR(m.sim.position_mm(), 9000.0, 1.0);
+}
+
+TEST(SimTravel, StopMessageAtSpeedIsAViolationAndAnEmergencyStop) {
+  // DCP 3.5.3.2: stop mode 0001 "During deceleration" only; DCP 11.1.1 d: B2 "remains
+  // activated until the lift car comes to the level".
+  Harness m;
+  m.init();
+  m.cycle(cmd::kSpeed, kV4);
+  for (int i = 0; i < 4000; ++i) {
+    const Cycle c = m.distance_cycle(cmd::kDecel, 15000.0);
+    if (c.velocity_mps > 1.5) break;
+  }
+  for (int i = 0; i < 400 && m.sim.velocity_mps() != 0.0; ++i) m.cycle(cmd::kStop, 0);
+  EXPECT_EQ(m.sim.violations(sim::Violation::StopAtSpeed), 1U);
+  EXPECT_EQ(m.sim.counters().violations, 1U);
 }
 
 TEST(SimTravel, Dcp4StartBelow20cmLimitsToCrawl) {

@@ -45,7 +45,7 @@ TEST(CyclePath, AllocatesNothingThroughWholeTravels) {
   TravelController controller(config);
   FakeDrive drive(dcp::Protocol::Dcp4);
   CycleInput in;
-  in.link_up = in.handshake_done = true;
+  in.link_up = in.handshake_done = in.reply_fresh = true;
   in.protocol = dcp::Protocol::Dcp4;
   in.inputs.valid = in.inputs.safety_chain_closed = true;
   in.inputs.doors_closed = in.inputs.doors_locked = true;
@@ -76,7 +76,7 @@ TEST(CyclePath, AllocatesNothingThroughWholeTravels) {
   request.load_percent = 30;
   ASSERT_EQ(controller.start(request), StartResult::Accepted);
   for (int i = 0; i < 300; ++i) cycle();
-  EXPECT_EQ(controller.extend_target(16000), ExtendResult::Accepted);
+  EXPECT_EQ(controller.extend_target(16000), ExtendResult::Pending);
   for (int i = 0;
        i < 3000 && (controller.active_kind() != TravelKind::None || drive.status().travel_active);
        ++i) {

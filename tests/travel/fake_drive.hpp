@@ -235,6 +235,7 @@ class Rig {
   Rig(dcp::Protocol protocol, TravelConfig config = {}, FakeDriveConfig drive_config = {})
       : controller(config), drive(protocol, drive_config), config_(config) {
     input.link_up = true;
+    input.reply_fresh = true;  // the fake drive answers every frame
     input.handshake_done = true;
     input.protocol = protocol;
     input.inputs.valid = true;

@@ -79,6 +79,7 @@ class SimRig {
         std::span<const std::uint8_t, dcp::kFrameSize>(reply.bytes.data(), dcp::kFrameSize));
     ASSERT_TRUE(slave.has_value());
     input.status = dcp::Status::from_byte(slave->status);
+    input.reply_fresh = !input.status.message_error;
     const auto data = dcp::decode_drive_data(slave->data_word(), dcp::DataInfoType::Alternating);
     if (data && data->kind == dcp::DriveData::Kind::DecelerationDistance) {
       input.decel_distance_mm = data->saturated
@@ -159,7 +160,7 @@ TEST(SimTravel, Dcp4LongTravelWithI7AndExtension) {
   for (int i = 0; i < 4000; ++i) {
     rig.cycle();
     if (!extended && rig.sim.velocity_mps() > 1.0) {
-      ASSERT_EQ(rig.controller.extend_target(15000), ExtendResult::Accepted);
+      ASSERT_EQ(rig.controller.extend_target(15000), ExtendResult::Pending);
       extended = true;
     }
     if (rig.controller.active_kind() == TravelKind::None && !rig.input.status.travel_active &&
@@ -176,8 +177,13 @@ TEST(SimTravel, Dcp4LongTravelWithI7AndExtension) {
   EXPECT_NEAR(rig.sim.position_mm(), 15000.0, 10.0);
   EXPECT_EQ(rig.sim.counters().travels, 1U);
   EXPECT_EQ(rig.sim.counters().refused_extensions, 0U);
+  EXPECT_EQ(rig.sim.counters().violations, 0U);
   ASSERT_FALSE(rig.events.empty());
   EXPECT_EQ(rig.events.back().type, Event::Type::Finished);
+  // DCP 4.1: reported once the drive's S5 confirmed the new distance.
+  EXPECT_EQ(std::count_if(rig.events.begin(), rig.events.end(),
+                          [](const Event& e) { return e.type == Event::Type::TargetExtended; }),
+            1);
 }
 
 bool run_to_idle(SimRig& rig, int limit = 4000) {
