@@ -1,6 +1,7 @@
 // The daemon frame: start, READY=1, signals, STOPPING=1, stop.
 #include "daemon/daemon.hpp"
 
+#include <asio/post.hpp>
 #include <csignal>
 #include <cstring>
 
@@ -94,6 +95,20 @@ void Daemon::request_stop(std::string_view reason, int code) {
   notifier_.stopping("stopping: " + std::string(reason));
   log::event(log::Level::info, "daemon", "stopping", {{"reason", std::string(reason)}},
              "stopping: " + std::string(reason));
+  // Components wind down in reverse order (the car comes to rest) while the io_context still
+  // runs; the watchdog keeps pinging meanwhile, then everything stops.
+  wind_down_from(started_);
+}
+
+void Daemon::wind_down_from(std::size_t index) {
+  while (index > 0) {
+    --index;
+    if (components_[index].wind_down) {
+      components_[index].wind_down(
+          [this, index] { asio::post(io_, [this, index] { wind_down_from(index); }); });
+      return;
+    }
+  }
   if (watchdog_) watchdog_->stop();
   stop_components();
   signals_.cancel();

@@ -23,6 +23,9 @@ struct Component {
   std::string name;             ///< shown in logs ("dcp", "sim", "api")
   std::function<bool()> start;  ///< returns false (after logging why) when it cannot start
   std::function<void()> stop;   ///< undoes start; called only for started components
+  /// Optional, before any stop: brings the part to a safe rest (a moving car to a floor) while
+  /// the io_context keeps running; calls `done` once finished.
+  std::function<void(std::function<void()> done)> wind_down = nullptr;
 };
 
 /// Exit codes of the liftd process.
@@ -69,6 +72,7 @@ class Daemon {
   void wait_for_signal();
   void on_signal(int signal_number);
   void stop_components();
+  void wind_down_from(std::size_t index);
 
   config::Config config_;
   asio::io_context io_;

@@ -26,6 +26,12 @@ constexpr auto kPollPeriod = 20ms;
 constexpr auto kStatePublishMin = 100ms;
 // The simulated I/O board reports its inputs this often (well inside inputs.timeout_ms).
 constexpr auto kSimInputsPeriod = 100ms;
+// A service stop during a travel waits this long for the car to come to rest at a floor: a stop
+// from full speed at the next possible floor plus the drive's hold time takes a few seconds; the
+// unit's TimeoutStopSec=30s leaves room for the forced end below and the rest of the shutdown.
+constexpr auto kShutdownDeadline = std::chrono::seconds(20);
+// After a forced end: time for one DCP 7.3 supervision window (10 x 15 ms) of B0-off frames.
+constexpr auto kShutdownGrace = std::chrono::milliseconds(500);
 
 dcp::Code2 code2(const std::string& s) {
   return {s.at(0), s.at(1)};
@@ -111,8 +117,12 @@ std::string default_runtime_dir(const config::Config& c) {
   return std::filesystem::path(c.api.socket).parent_path().string();
 }
 
-log::Level level_for(control::ControllerEvent::Kind kind) {
-  switch (kind) {
+log::Level level_for(const control::ControllerEvent& event) {
+  if (event.kind == control::ControllerEvent::Kind::Link &&
+      event.link.kind == dcp::LinkEventKind::HandshakeProblem) {
+    return log::Level::warn;
+  }
+  switch (event.kind) {
     case control::ControllerEvent::Kind::FaultRaised:
     case control::ControllerEvent::Kind::DriveError:
       return log::Level::warn;
@@ -192,7 +202,8 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
   if (sim_) {
     daemon.add_component({"sim", [this] { return sim_->start(); }, [this] { sim_->stop(); }});
   }
-  daemon.add_component({"dcp", [this] { return start_cycle(); }, [this] { stop_cycle(); }});
+  daemon.add_component({"dcp", [this] { return start_cycle(); }, [this] { stop_cycle(); },
+                        [this](std::function<void()> done) { wind_down(std::move(done)); }});
   daemon.add_component({"api", [this] { return start_api(); }, [this] { stop_api(); }});
   daemon.set_progress_probe([this] {
     const std::uint64_t p = runner_->progress();
@@ -228,6 +239,56 @@ bool LiftApp::start_cycle() {
   backend_->send_clock(std::chrono::system_clock::now());
   schedule_poll();
   return true;
+}
+
+void LiftApp::wind_down(std::function<void()> done) {
+  if (!running_) {
+    done();
+    return;
+  }
+  // Issue 13: a service stop must not leave a moving car to the drive's link timeout. The
+  // controller stops the travel the way `stop` does, refuses new ones, and reports "quiesced"
+  // once the car is at rest and a DCP 7.3 supervision window of frames without B0 has gone out.
+  wind_down_done_ = std::move(done);
+  wind_down_deadline_ = mono_now() + kShutdownDeadline;
+  wind_down_forced_ = false;
+  const control::ControllerSnapshot s = controller_->snapshot();
+  const bool moving = s.travel_kind != travel::TravelKind::None ||
+                      (s.status_byte && (*s.status_byte & dcp::status_bit::kTravelActive) != 0);
+  if (moving) {
+    log::event(log::Level::info, "travel", "shutdown_stopping_travel",
+               {{"target_floor", s.target_floor ? std::to_string(*s.target_floor) : "none"}},
+               "stopping: bringing the car to rest at the next possible floor before exit");
+    daemon_.report_status("stopping: bringing the car to rest before exit");
+  }
+  backend_->send_shutdown(false);
+}
+
+void LiftApp::check_wind_down(MonoTime now) {
+  if (!wind_down_done_) return;
+  const control::ControllerSnapshot s = controller_->snapshot();
+  if (!s.shutting_down && !wind_down_forced_) (void)backend_->send_shutdown(false);  // queue full
+  if (!s.quiesced && now < wind_down_deadline_) return;
+  if (!s.quiesced && !wind_down_forced_) {
+    // The deadline inside the unit's TimeoutStopSec= passed with the car still moving: drive
+    // enable off now, then one supervision window of B0-off frames before exit.
+    wind_down_forced_ = true;
+    wind_down_deadline_ = now + kShutdownGrace;
+    backend_->send_shutdown(true);
+    log::event(log::Level::error, "travel", "shutdown_forced", {},
+               "stopping: the car did not come to rest in time; drive enable withdrawn");
+    return;
+  }
+  const std::string where =
+      s.floor ? "at floor " + std::to_string(*s.floor)
+              : (s.position_mm ? "at " + std::to_string(*s.position_mm) + " mm" : "");
+  log::event(log::Level::info, "travel", "shutdown_at_rest",
+             {{"floor", s.floor ? std::to_string(*s.floor) : "none"}},
+             "stopping: car at rest " + where + ", drive enable off");
+  daemon_.report_status("stopping: car at rest " + where);
+  auto done = std::move(wind_down_done_);
+  wind_down_done_ = nullptr;
+  done();
 }
 
 void LiftApp::stop_cycle() {
@@ -278,6 +339,7 @@ void LiftApp::poll() {
   while (controller_->poll_event(event)) handle_event(event);
   log_cycle_events();
   publish_state_if_changed(now);
+  check_wind_down(now);
 }
 
 void LiftApp::log_cycle_events() {
@@ -372,7 +434,7 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
       data = {{"floor", event.floor}};
       break;
   }
-  log::event(level_for(event.kind), component, log_event, {}, text);
+  log::event(level_for(event), component, log_event, {}, text);
   server_->publish(name, data);
 }
 

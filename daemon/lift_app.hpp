@@ -51,6 +51,8 @@ class LiftApp {
   void log_cycle_events();
   void handle_event(const control::ControllerEvent& event);
   void dump_flight_recorder(std::string_view why);
+  void wind_down(std::function<void()> done);
+  void check_wind_down(MonoTime now);
 
   Daemon& daemon_;
   const config::Config& config_;
@@ -75,6 +77,9 @@ class LiftApp {
   std::string last_state_key_;
   std::uint32_t last_display_version_ = 0;
   dcp::LinkState last_link_ = dcp::LinkState::Down;
+  std::function<void()> wind_down_done_;  ///< set while a service stop waits for rest
+  MonoTime wind_down_deadline_{};
+  bool wind_down_forced_ = false;
 };
 
 }  // namespace liftd::daemon

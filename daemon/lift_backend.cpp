@@ -111,6 +111,7 @@ api::StatusSnapshot LiftBackend::status() {
   const control::ControllerSnapshot s = controller_.snapshot();
   api::StatusSnapshot out;
   out.link = to_api(s.link);
+  if (!s.handshake_problem.empty()) out.handshake_problem = std::string(s.handshake_problem);
   out.drive_mode = s.protocol;
   if (s.status_byte) out.drive_status = dcp::Status::from_byte(*s.status_byte);
   out.extended = s.extended;
@@ -251,6 +252,7 @@ void LiftBackend::send_ok(control::CommandBody body, api::Responder done) {
     nlohmann::json result = nlohmann::json::object();
     if (!r.detail.empty()) result["detail"] = std::string(r.detail);
     if (r.extended) result["extended"] = true;
+    if (r.floor) result["floor"] = *r.floor;
     return Result::ok(std::move(result));
   });
 }
@@ -341,6 +343,10 @@ void LiftBackend::update_inputs(const api::InputUpdate& update, api::Responder d
 
 void LiftBackend::send_inputs(const lift::Inputs& inputs) {
   (void)controller_.post(control::Command{0, control::InputsCommand{inputs}});
+}
+
+bool LiftBackend::send_shutdown(bool force) {
+  return controller_.post(control::Command{0, control::ShutdownCommand{force}});
 }
 
 void LiftBackend::send_clock(std::chrono::system_clock::time_point now) {

@@ -59,6 +59,9 @@ class LiftBackend final : public api::Backend {
   void poll(MonoTime now);
   /// Sends a full input set to the cycle (the simulated I/O board uses this).
   void send_inputs(const lift::Inputs& inputs);
+  /// Service stop: no new travel, the running one stops at the next possible floor; `force`
+  /// withdraws drive enable at once. False when the command queue was full (send again).
+  bool send_shutdown(bool force);
   /// Sends the wall clock to the cycle for I3.
   void send_clock(std::chrono::system_clock::time_point now);
 

@@ -114,7 +114,19 @@ bool SimulatedLift::start() {
 void SimulatedLift::stop() {
   if (!started_) return;
   started_ = false;
+  log_events();
   drive_->stop();
+  // What the drive saw, as the drive side of the link: a technician (and the process tests) can
+  // tell from this line whether the master left the car to the drive's own link timeout.
+  const sim::RunnerStatus s = drive_->status();
+  const bool faulted = (s.status_byte & dcp::status_bit::kGeneralFault) != 0;
+  log::event(log::Level::info, "sim", "sim_stopped",
+             {{"position_mm", std::to_string(std::llround(s.position_mm))},
+              {"violations", std::to_string(s.sim.violations)}},
+             "simulated drive stopped: phase " + std::string(sim::to_string(s.phase)) +
+                 ", position " + std::to_string(std::llround(s.position_mm)) + " mm, " +
+                 (faulted ? "in fault" : "no fault") + ", " + std::to_string(s.sim.violations) +
+                 " spec violation(s) seen");
 }
 
 lift::Inputs SimulatedLift::inputs(MonoTime now) {
@@ -152,6 +164,9 @@ api::Result SimulatedLift::apply(const api::SimRequest& request, MonoTime now) {
           request.channel == api::SimChannelFault::Partial   ? sim::ChannelFault::Partial
           : request.channel == api::SimChannelFault::Garbage ? sim::ChannelFault::Garbage
                                                              : sim::ChannelFault::Silence);
+      break;
+    case SimAction::RefuseTarget:
+      drive_->refuse_next_target();
       break;
     case SimAction::ClearReplyFaults:
       drive_->clear_reply_faults();

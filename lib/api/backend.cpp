@@ -126,7 +126,7 @@ nlohmann::json to_json(const StatusSnapshot& s) {
     faults.push_back({{"code", f.code}, {"text", f.text}, {"since", format_utc(f.since)}});
   }
   return {
-      {"link", {{"state", to_string(s.link)}}},
+      {"link", {{"state", to_string(s.link)}, {"handshake_problem", or_null(s.handshake_problem)}}},
       {"drive",
        {{"mode", s.drive_mode ? nlohmann::json(mode_name(*s.drive_mode)) : nlohmann::json(nullptr)},
         {"status", to_json(s.drive_status)},

@@ -46,12 +46,13 @@ struct RtInfo {
 
 /// Everything `status` reports, filled by the backend.
 struct StatusSnapshot {
-  LinkState link = LinkState::Down;             ///< link.state
-  std::optional<dcp::Protocol> drive_mode;      ///< drive.mode; nullopt before I0
-  dcp::Status drive_status{};                   ///< drive.status, last good reply
-  std::optional<dcp::ExtendedStatus> extended;  ///< drive.extended; nullopt if never seen
-  std::optional<std::int64_t> position_mm;      ///< car.position_mm; nullopt if unknown
-  std::optional<int> floor;                     ///< car.floor (0 = lowest); nullopt between
+  LinkState link = LinkState::Down;              ///< link.state
+  std::optional<std::string> handshake_problem;  ///< link.handshake_problem (DCP 5.12.2)
+  std::optional<dcp::Protocol> drive_mode;       ///< drive.mode; nullopt before I0
+  dcp::Status drive_status{};                    ///< drive.status, last good reply
+  std::optional<dcp::ExtendedStatus> extended;   ///< drive.extended; nullopt if never seen
+  std::optional<std::int64_t> position_mm;       ///< car.position_mm; nullopt if unknown
+  std::optional<int> floor;                      ///< car.floor (0 = lowest); nullopt between
   std::optional<int> next_possible_stop;  ///< car.next_possible_stop: nearest floor it can stop at
   bool brake_open = false;                ///< car.brake_open: brake output (follows S6)
   bool contactors_on = false;             ///< car.contactors_on: motor contactor output
@@ -169,12 +170,13 @@ enum class SimAction : std::uint8_t {
   CloseDoors,        ///< starts closing the doors
   ObstructDoors,     ///< holds the doors open (on) or releases them (off)
   ChannelFault,      ///< a fault on the drive's communication channel only (DCP 5)
+  RefuseTarget,      ///< the drive refuses the next target change with S5 (DCP 4.1)
 };
 /// Wire names of SimAction, in enum order.
-inline constexpr std::array<std::string_view, 12> kSimActions = {
-    "general_fault",      "advance_warning", "not_ready",         "reply_fault",
-    "clear_reply_faults", "drift",           "safety_chain_open", "door_reversal",
-    "open_doors",         "close_doors",     "obstruct_doors",    "channel_fault"};
+inline constexpr std::array<std::string_view, 13> kSimActions = {
+    "general_fault",  "advance_warning",   "not_ready",     "reply_fault", "clear_reply_faults",
+    "drift",          "safety_chain_open", "door_reversal", "open_doors",  "close_doors",
+    "obstruct_doors", "channel_fault",     "refuse_target"};
 
 /// A fault on the simulated drive's communication channel (DCP 5), the real-time bytes intact.
 enum class SimChannelFault : std::uint8_t {

@@ -179,6 +179,43 @@ std::string two_capitals_rule(const std::string& text) {
   return {};
 }
 
+// DCP 5.12.2.3: the codes the spec's table gives to named companies, lift-controller and drive
+// makers alike. Sending one of them in I0 claims to be that company's controller.
+std::string maker_code_rule(const std::string& text) {
+  if (auto error = two_capitals_rule(text); !error.empty()) return error;
+  static constexpr std::array<std::pair<std::string_view, std::string_view>, 21> kTaken = {{
+      {"BP", "Boehnke + Partner"},
+      {"KN", "Kollmorgen"},
+      {"NL", "NEW LIFT"},
+      {"OS", "OSMA-Aufzuege"},
+      {"LI", "Schneider Steuerungstechnik"},
+      {"ST", "Strack Lift Automation"},
+      {"AB", "ABB"},
+      {"BF", "Brunner & Fecher"},
+      {"BH", "Bucher Hydraulics"},
+      {"CT", "Control Techniques"},
+      {"DA", "Danfoss"},
+      {"DE", "Emotron"},
+      {"FE", "Fuji Electric"},
+      {"SS", "Gefran"},
+      {"KW", "KW-Aufzugstechnik"},
+      {"MT", "MagneTek"},
+      {"RS", "RST Elektronik"},
+      {"TY", "Thyssen Krupp"},
+      {"VZ", "Venzke-DriveCon"},
+      {"YE", "Yaskawa"},
+      {"ZA", "Ziehl-Abegg"},
+  }};
+  for (const auto& [code, owner] : kTaken) {
+    if (text == code) {
+      return "is " + std::string(owner) +
+             "'s code in the DCP 5.12.2.3 table; use a code that table does not list (liftd's "
+             "default is LD)";
+    }
+  }
+  return {};
+}
+
 // --- Typed key builders: one call per table row. ---------------------------------------------
 
 template <class Section, class T>
@@ -389,9 +426,10 @@ const std::vector<Key>& schema() {
                          "required = refuse to start without it; off = never",
                          &Config::drive, &DriveConfig::rs485));
     // dcp
-    t.push_back(string_key("dcp.manufacturer", 2, 2, "two capital letters A-Z", two_capitals_rule,
-                           "lift-controller maker code sent in I0 (DCP 5.12.2.3)", &Config::dcp,
-                           &DcpConfig::manufacturer));
+    t.push_back(string_key("dcp.manufacturer", 2, 2,
+                           "two capital letters A-Z, not a code of the DCP 5.12.2.3 table",
+                           maker_code_rule, "lift-controller maker code sent in I0 (DCP 5.12.2.3)",
+                           &Config::dcp, &DcpConfig::manufacturer));
     t.push_back(string_key("dcp.language", 2, 2, "two capital letters A-Z (ISO 639)",
                            two_capitals_rule,
                            "language code sent in I0; the drive falls back to English "

@@ -43,13 +43,14 @@ struct DriveConfig {
 
 /// `dcp.*`
 struct DcpConfig {
-  std::string manufacturer = "LI";  ///< dcp.manufacturer, sent in I0 (DCP 5.12.2.3)
-  std::string language = "EN";      ///< dcp.language, sent in I0
-  char data_info_type = '0';        ///< dcp.data_info_type, set with I1 (DCP 4.2)
-  bool extended_position = true;    ///< dcp.extended_position: ask for the extended I9
-  int link_fault_frames = 10;       ///< dcp.link_fault_frames (DCP 7.3: 10 frames)
-  int link_recover_frames = 10;     ///< dcp.link_recover_frames (DCP 7.3: 10 frames)
-  int request_timeout_ms = 2000;    ///< dcp.request_timeout_ms for an I-message reply
+  /// dcp.manufacturer, sent in I0 (DCP 5.12.2.3); "LD" is in no company's row of that table.
+  std::string manufacturer = "LD";
+  std::string language = "EN";    ///< dcp.language, sent in I0
+  char data_info_type = '0';      ///< dcp.data_info_type, set with I1 (DCP 4.2)
+  bool extended_position = true;  ///< dcp.extended_position: ask for the extended I9
+  int link_fault_frames = 10;     ///< dcp.link_fault_frames (DCP 7.3: 10 frames)
+  int link_recover_frames = 10;   ///< dcp.link_recover_frames (DCP 7.3: 10 frames)
+  int request_timeout_ms = 2000;  ///< dcp.request_timeout_ms for an I-message reply
 };
 
 /// `rt.*`

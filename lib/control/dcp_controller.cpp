@@ -140,11 +140,20 @@ std::span<const std::uint8_t> DcpController::frame_to_send(MonoTime now) noexcep
   }
   last_input_ = build_input(now);
   for (std::size_t i = 0; i < deferred; ++i) handle(deferred_[i], now);
+  // DCP 5.12.9: the next travel begins once the I9 for the last stop has reached the drive.
+  travel_.hold_start(position_owed_ || (internal_.active &&
+                                        internal_.kind == travel::ChannelRequest::Kind::Position));
 
   last_output_ = travel_.step(last_input_);
+  // Stationary as the position shows it: a car whose drive enable was cut may still slide on the
+  // brake after S1 fell (at most 1 mm of encoder jitter between two cycles).
+  const auto position = last_input_.position_mm;
+  const bool car_stands =
+      !position || (previous_position_mm_ && std::abs(*position - *previous_position_mm_) <= 1);
+  previous_position_mm_ = position;
   if (last_output_.channel_request) {
     submit_channel(*last_output_.channel_request);
-  } else if (position_owed_ && travel_.active_kind() == TravelKind::None &&
+  } else if (position_owed_ && car_stands && travel_.active_kind() == TravelKind::None &&
              !last_input_.status.travel_active && !last_input_.status.brake_open &&
              link_.travel_allowed() && !internal_.active) {
     // DCP 5.12.9: "The actual position of the lift car will be send after each stopping ...
@@ -422,10 +431,9 @@ std::optional<std::size_t> DcpController::next_stop_floor() const noexcept {
   const lift::Direction direction = travel_.direction();
   if (!position || direction == lift::Direction::None) return std::nullopt;
   std::optional<std::int64_t> needed_mm;
-  if (travel_.active_kind() == TravelKind::Dcp4Distance && travel_.dcp4().moving()) {
+  if (travel_.active_kind() == TravelKind::Dcp4Distance) {
     needed_mm = travel_.stop_distance_mm();
-  } else if (travel_.active_kind() == TravelKind::Dcp3Speed &&
-             travel_.dcp3().state() == travel::Dcp3Travel::State::Travel) {
+  } else if (travel_.active_kind() == TravelKind::Dcp3Speed) {
     // DCP 10.1.1 step 3: the car slows to crawl within SVx after B1 drops, so the stop floor's
     // deceleration point must still lie ahead.
     needed_mm =
@@ -440,15 +448,27 @@ std::optional<std::size_t> DcpController::next_stop_floor() const noexcept {
 
 void DcpController::handle_stop(std::uint32_t tag) noexcept {
   lift_.calls().clear();
+  const TravelKind kind = travel_.active_kind();
+  // A car that moves under a distance or speed travel stops at a floor; the stop message of
+  // DCP 3.5.3.2 is only for the deceleration and for travels that do not move yet.
+  const bool dcp4_moving = kind == TravelKind::Dcp4Distance &&
+                           travel_.dcp4().state() == travel::Dcp4Travel::State::Distance &&
+                           (travel_.dcp4().moving() || last_input_.status.brake_open);
+  const bool dcp3_moving = kind == TravelKind::Dcp3Speed &&
+                           (travel_.dcp3().state() == travel::Dcp3Travel::State::Travel ||
+                            travel_.dcp3().state() == travel::Dcp3Travel::State::Creep);
   std::optional<std::size_t> stop_floor;
-  if (const auto floor = next_stop_floor()) {
-    if (const auto level = travel_.stop_at(floors_mm_[*floor])) {
-      stop_floor = lift_.floors().floor_at(*level, config_.lift.level_tolerance_mm);
-      if (stop_floor) target_floor_ = stop_floor;
-    }
-  } else if (travel_.active_kind() == TravelKind::Dcp4Distance && travel_.dcp4().moving()) {
-    // No level nearer than the target can still be reached: the car lands at its target.
-    stop_floor = target_floor_;
+  if (dcp4_moving || dcp3_moving) {
+    std::optional<std::int64_t> level;
+    const bool before_decel_point =
+        dcp4_moving || travel_.dcp3().state() == travel::Dcp3Travel::State::Travel;
+    const auto floor = before_decel_point ? next_stop_floor() : std::nullopt;
+    if (floor) level = travel_.stop_at(floors_mm_[*floor]);
+    // No nearer floor within reach (or no position): the car goes on to its own target.
+    if (!level && dcp4_moving) level = travel_.dcp4().target_mm();
+    if (!level && dcp3_moving) level = travel_.dcp3().target_mm();
+    stop_floor = lift_.floors().floor_at(*level, config_.lift.level_tolerance_mm);
+    if (stop_floor) target_floor_ = stop_floor;
   } else {
     travel_.stop();
   }
@@ -547,6 +567,10 @@ void DcpController::drain_link(MonoTime now) noexcept {
   while (auto c = link_.pop_completion()) {
     if (c->tag == kTravelTag) {
       internal_.active = false;
+      if (internal_.kind == travel::ChannelRequest::Kind::Position &&
+          c->result == dcp::RequestResult::LinkLost) {
+        position_owed_ = true;  // lost with the link: send it again once it is back
+      }
       if (c->result != dcp::RequestResult::Ok || !c->reply) continue;
       travel::ChannelReply r;
       r.kind = internal_.kind;

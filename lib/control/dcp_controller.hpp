@@ -323,6 +323,7 @@ class DcpController final : public rt::CycleEngine {
   std::uint32_t extend_tag_ = 0;  ///< a travel command whose target change waits for S5
   std::size_t extend_floor_ = 0;
   bool position_owed_ = false;  ///< DCP 5.12.9: I9 after every stop, not sent yet
+  std::optional<std::int64_t> previous_position_mm_;  ///< last cycle's position
   travel::TravelKind last_kind_ = travel::TravelKind::None;
   bool shutting_down_ = false;
   std::uint32_t frames_at_rest_ = 0;  ///< frames in a row without B0/B1/B2

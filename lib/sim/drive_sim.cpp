@@ -771,6 +771,11 @@ void DriveSim::on_remaining_distance(std::uint16_t raw, MonoTime now) noexcept {
   if (diff_m >= 0.0 ? diff_m <= extend_tol_m : -diff_m <= lag_tol_m) return;
   const double remaining_m = target_s_m_ - st.s_m;
   const double stop_m = MotionPlan::ramp_distance_from_m(st, 0.0, config_.accel, config_.decel);
+  if (refuse_next_target_) {  // injected: this drive's plausibility check says no
+    refuse_next_target_ = false;
+    refuse_target(word, now);
+    return;
+  }
   if (diff_m > 0.0) {
     // DCP 11.1.2 note: "The controller can increase the remaining distance while it is greater
     // than the deceleration distance the drive controller had transmitted before the beginning

@@ -266,6 +266,9 @@ class DriveSim {
   void set_advance_warning(bool on) noexcept { advance_warning_ = on; }
   /// DCP 4.1 S0 forced off.
   void set_not_ready(bool on) noexcept { not_ready_ = on; }
+  /// The drive finds the next change of the remaining distance implausible (DCP 4.1 note):
+  /// S5 cleared and an emergency stop, whatever the change.
+  void refuse_next_target() noexcept { refuse_next_target_ = true; }
   /// Extended status flags (emergency power and temperature bits) to report.
   void set_extended_flags(const dcp::ExtendedStatus& flags) noexcept { ext_flags_ = flags; }
   /// Applies `fault` to the next `frames` replies.
@@ -360,7 +363,8 @@ class DriveSim {
   // Faults.
   std::array<bool, 4> faults_{};
   std::array<std::uint64_t, kViolationCount> violations_{};
-  bool stop_without_i9_ = false;     // a travel stopped; no I9 since (DCP 5.12.9)
+  bool stop_without_i9_ = false;
+  bool refuse_next_target_ = false;  // a travel stopped; no I9 since (DCP 5.12.9)
   double i7_decel_m_ = -1.0;         // Sv of the last I7 answer, for the next travel (-1: none)
   double travel_i7_decel_m_ = -1.0;  // Sv that applies to the running travel
   MonoTime channel_silent_until_{};

@@ -254,6 +254,11 @@ void SerialDriveRunner::inject(ReplyFault fault, std::uint32_t frames) {
   sim_.inject(fault, frames);
 }
 
+void SerialDriveRunner::refuse_next_target() {
+  std::lock_guard lock(mutex_);
+  sim_.refuse_next_target();
+}
+
 void SerialDriveRunner::inject_channel(ChannelFault fault) {
   std::lock_guard lock(mutex_);
   sim_.inject_channel(fault, mono_now());

@@ -152,6 +152,8 @@ class SerialDriveRunner {
   void set_not_ready(bool on);
   /// Applies `fault` to the next `frames` replies.
   void inject(ReplyFault fault, std::uint32_t frames);
+  /// The drive refuses the next target change with S5 (DCP 4.1).
+  void refuse_next_target();
   /// Injects a communication-channel fault (DCP 5) now.
   void inject_channel(ChannelFault fault);
   /// Applies `fault` to each reply with `probability` (0..1).

@@ -102,7 +102,7 @@ StartResult TravelController::start(const TravelRequest& request) noexcept {
 }
 
 void TravelController::begin_pending(const CycleInput& in) noexcept {
-  if (!pending_) return;
+  if (!pending_ || start_held_) return;
   const TravelRequest request = *pending_;
   pending_.reset();
   switch (request.kind) {
@@ -164,19 +164,20 @@ std::optional<std::int64_t> TravelController::stop_distance_mm() const noexcept 
 
 std::optional<std::int64_t> TravelController::stop_at(std::int64_t target_mm) noexcept {
   pending_.reset();
-  if (dcp4_.active() && dcp4_.kind() == TravelKind::Dcp4Distance && dcp4_.moving()) {
+  if (dcp4_.active() && dcp4_.kind() == TravelKind::Dcp4Distance &&
+      dcp4_.state() == Dcp4Travel::State::Distance) {
     // DCP 11.1.1 d: B2 stays until S6 falls at a level; the remaining distance now ends at the
     // next possible stop instead of a stop message at speed (DCP 3.5.3.2: "During
-    // deceleration" only).
-    const ExtendResult r = dcp4_.shorten(target_mm, last_, config_);
-    if (r == ExtendResult::Pending) home_level_mm_ = target_mm;
+    // deceleration" only). A level the car can no longer reach leaves the target as it is.
+    if (dcp4_.shorten(target_mm, last_, config_) == ExtendResult::Pending) {
+      home_level_mm_ = target_mm;
+    }
     return dcp4_.target_mm();
   }
   if (dcp3_.active() && dcp3_.stop_at(target_mm)) {
     if (config_.dcp3_reference == Dcp3Reference::Position) home_level_mm_ = target_mm;
     return target_mm;
   }
-  if (dcp3_.active() && dcp3_.state() == Dcp3Travel::State::Creep) return dcp3_.target_mm();
   stop();
   return std::nullopt;
 }
@@ -201,7 +202,9 @@ void TravelController::abort_all_immediately() noexcept {
 }
 
 void TravelController::maybe_auto_relevel(const CycleInput& in) noexcept {
-  if (shut_down_ || !config_.auto_relevel || busy() || !home_level_mm_ || !in.position_mm) return;
+  if (shut_down_ || start_held_ || !config_.auto_relevel || busy() || !home_level_mm_ ||
+      !in.position_mm)
+    return;
   if (in.protocol != dcp::Protocol::Dcp4 || in.status.travel_active) return;
   if (in.inputs.inspection || in.inputs.recall || in.now < relevel_blocked_until_) return;
   const std::int64_t drift = *home_level_mm_ - *in.position_mm;

@@ -30,16 +30,19 @@ class TravelController {
   void fast_stop() noexcept;
   /// DCP4 target extension of the running distance travel.
   ExtendResult extend_target(std::int64_t target_mm) noexcept;
-  /// A user stop at a level: DCP4 retargets a moving distance travel to `target_mm` (a nearer
-  /// level it can still reach), DCP3 crawls from that level's deceleration point; any other
-  /// travel gets the controlled stop of stop(). Returns the level the car will stop at, or
-  /// nullopt when it stops where stop() stops it.
+  /// A user stop at a level, for a travel that moves: DCP4 retargets its distance travel to
+  /// `target_mm` (a nearer level it can still reach, else it keeps its target), DCP3 crawls from
+  /// that level's deceleration point; anything else gets the controlled stop of stop(). Returns
+  /// the level the car will stop at, or nullopt when it stops where stop() stops it.
   std::optional<std::int64_t> stop_at(std::int64_t target_mm) noexcept;
   /// The shortest remaining distance a running DCP4 travel can be retargeted to now.
   std::optional<std::int64_t> stop_distance_mm() const noexcept;
   /// Service stop: no new travel, no automatic relevelling from now on; `force` also withdraws
   /// the drive enable at once (the deadline passed with the car still moving).
   void shut_down(bool force) noexcept;
+  /// While held, a queued travel (and automatic relevelling) waits to begin: the DCP controller
+  /// holds it until the I9 owed for the last stop has reached the drive (DCP 5.12.9).
+  void hold_start(bool held) noexcept { start_held_ = held; }
   /// The level the car should stand at (auto relevelling reference); set after every travel to
   /// its target, or by the caller.
   void set_home_level(std::optional<std::int64_t> level_mm) noexcept { home_level_mm_ = level_mm; }
@@ -86,6 +89,7 @@ class TravelController {
   CycleInput last_{};
   bool fault_seen_ = false;
   bool shut_down_ = false;
+  bool start_held_ = false;
 };
 
 }  // namespace liftd::travel

@@ -217,7 +217,7 @@ const std::vector<std::string> kAbortCauses = {
     "drive_fault",         "safety_chain_open",  "doors_not_locked",   "position_lost",
     "inputs_lost",         "door_reversal",      "fast_start_timeout", "stop_requested",
     "drive_did_not_start", "drive_did_not_stop", "mode_changed",       "stopped_off_level",
-    "level_not_reached"};
+    "level_not_reached",   "target_refused",     "shutting_down"};
 
 TEST(ApiDocs, AbortCausesMatchTheTravelLibrary) {
   EXPECT_EQ(returned_names("lib/travel/types.cpp", "to_string(AbortCause cause)", {"none"}),
@@ -230,8 +230,8 @@ TEST(ApiDocs, AbortCausesMatchTheTravelLibrary) {
 }
 
 const std::vector<std::string> kTravelEvents = {
-    "started",     "finished",           "aborted", "target_extended", "fast_start_armed",
-    "drive_fault", "drive_fault_cleared"};
+    "started",        "finished",         "aborted",     "target_extended",
+    "target_refused", "fast_start_armed", "drive_fault", "drive_fault_cleared"};
 
 TEST(ApiDocs, TravelEventTypesMatchTheTravelLibrary) {
   EXPECT_EQ(returned_names("lib/travel/types.cpp", "to_string(Event::Type type)", {}),
@@ -267,8 +267,8 @@ TEST(ApiDocs, TravelKindsMatchTheTravelLibrary) {
 }
 
 const std::vector<std::string> kLinkEventKinds = {
-    "state changed",   "channel reset",   "channel error", "decode error",
-    "request timeout", "unmatched reply", "date/time sent"};
+    "state changed",   "channel reset",  "channel error",     "decode error", "request timeout",
+    "unmatched reply", "date/time sent", "handshake problem", "tolerated"};
 
 TEST(ApiDocs, LinkEventsMatchTheMasterLink) {
   EXPECT_EQ(returned_names("lib/dcp/master_link.cpp", "to_string(LinkEventKind kind)", {"unknown"}),

@@ -36,7 +36,7 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/drive/kind", "dcp"},
       {"/drive/device", "/dev/ttyS1"},
       {"/drive/rs485", "auto"},
-      {"/dcp/manufacturer", "LI"},
+      {"/dcp/manufacturer", "LD"},  // DCP 5.12.2.3: a code no company holds in the table
       {"/dcp/language", "EN"},
       {"/dcp/data_info_type", "0"},
       {"/dcp/extended_position", true},
@@ -108,7 +108,7 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
   const std::string text = R"({
     "log": {"level": "debug"},
     "drive": {"kind": "uss", "device": "/dev/ttyUSB0", "rs485": "required"},
-    "dcp": {"manufacturer": "KN", "language": "DE", "data_info_type": "3",
+    "dcp": {"manufacturer": "QX", "language": "DE", "data_info_type": "3",
             "extended_position": false, "link_fault_frames": 20, "link_recover_frames": 5,
             "request_timeout_ms": 100},
     "rt": {"priority": 99, "cpu": 1023, "lock_memory": false, "flight_recorder_s": 300},
@@ -132,7 +132,7 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
   EXPECT_EQ(c.drive.kind, DriveKind::uss);
   EXPECT_EQ(c.drive.device, "/dev/ttyUSB0");
   EXPECT_EQ(c.drive.rs485, Rs485Mode::required);
-  EXPECT_EQ(c.dcp.manufacturer, "KN");
+  EXPECT_EQ(c.dcp.manufacturer, "QX");
   EXPECT_EQ(c.dcp.language, "DE");
   EXPECT_EQ(c.dcp.data_info_type, '3');
   EXPECT_FALSE(c.dcp.extended_position);
@@ -196,6 +196,10 @@ TEST(ConfigProblems, NameTheKeyTheValueAndWhatIsAllowed) {
        "\"error\" (did you mean \"warn\"?)"},
       {"choice given as number", R"({"sim": {"dcp": "4"}})", "sim.dcp",
        "expected an integer 3..4, got \"4\""},
+      {"another company's I0 maker code", R"({"dcp": {"manufacturer": "LI"}})", "dcp.manufacturer",
+       "is Schneider Steuerungstechnik's code in the DCP 5.12.2.3 table"},
+      {"a drive maker's code", R"({"dcp": {"manufacturer": "ZA"}})", "dcp.manufacturer",
+       "is Ziehl-Abegg's code"},
       {"data info type out of set", R"({"dcp": {"data_info_type": "5"}})", "dcp.data_info_type",
        "\"5\" is not allowed"},
       {"manufacturer lower case", R"({"dcp": {"manufacturer": "li"}})", "dcp.manufacturer",

@@ -54,7 +54,16 @@ class GatingChecker {
       fs_hold_ = false;
     }
 
-    if (motion != 0) {
+    // DCP 11.1.1 d / 11.1.2 step 4: in DCP4 B2 stays until the drive drops S6 at the level. A
+    // frame that clears B2 but keeps B0 while the last reply showed S6 is a stop message at speed
+    // (DCP 3.5.3.2), except in the fast start, whose controlled end is that message (DCP 12.2.2).
+    // Safety aborts clear B0 with B2 and are judged by the rules below.
+    const bool b2 = (r.frame[0] & cb::kStopSwitch) != 0;
+    if (protocol_ == dcp::Protocol::Dcp4 && prev_b2_ && !b2 && enable && r.seen &&
+        (*r.seen & sb::kBrakeOpen) != 0 && !fs_hold_ && !prev_go_) {
+      broken = "DCP 11.1.1 d: B2 withdrawn while S6 is set";
+    }
+    if (motion != 0 && broken.empty()) {
       const lift::Inputs& in = r.inputs;
       const bool mode = in.inspection || in.recall || api.on;
       const bool api_held = api.on && r.at <= api.hold_until;
@@ -84,6 +93,9 @@ class GatingChecker {
       }
     }
     prev_enable_ = enable;
+    prev_b2_ = b2;
+    prev_go_ =
+        (nibble == 0xD || nibble == 0xF) && word_of(r.frame) != dcp::speed_word(dcp::Speed::VF);
     // The link supervision as the rig fed it: missing replies in a row, then good ones.
     if (r.reply) {
       ++good_run_;
@@ -100,6 +112,8 @@ class GatingChecker {
  private:
   dcp::Protocol protocol_;
   bool prev_enable_ = false;
+  bool prev_b2_ = false;
+  bool prev_go_ = false;  ///< the previous frame was a go after a fast start (DCP 12.1.3)
   bool fs_hold_ = false;
   bool link_fault_ = false;
   int bad_run_ = 0;
@@ -131,7 +145,7 @@ std::string run_seed(std::uint32_t seed, Coverage& coverage) {
   std::size_t checked = 0;
   for (int step = 0; step < 60; ++step) {
     std::string what;
-    switch (pick(24)) {
+    switch (pick(25)) {
       case 0:
       case 1:
       case 2:
@@ -224,6 +238,13 @@ std::string run_seed(std::uint32_t seed, Coverage& coverage) {
         rig.post_inputs = pick(4) != 0;
         what = "inputs posted " + std::to_string(rig.post_inputs);
         break;
+      case 23: {
+        // DCP 5.1: the communication channel is subordinate; its faults must not end a travel.
+        const auto fault = static_cast<sim::ChannelFault>(pick(3));
+        rig.sim.inject_channel(fault, rig.now);
+        what = "channel fault " + std::to_string(static_cast<int>(fault));
+        break;
+      }
       case 22:
         // Drift (the simulator moves the car only while idle).
         rig.sim.set_position_mm(rig.sim.position_mm() + (pick(2) == 0 ? 25.0 : -40.0));
@@ -256,6 +277,15 @@ std::string run_seed(std::uint32_t seed, Coverage& coverage) {
         return out.str();
       }
     }
+  }
+  // The drive's side: what the simulator counts as a spec violation of the master (a stop
+  // message at speed, a travel without the I9 owed for the last stop).
+  if (rig.sim.counters().violations != 0) {
+    std::ostringstream out;
+    out << "seed " << seed << ": the simulated drive saw "
+        << rig.sim.violations(sim::Violation::StopAtSpeed) << " stop message(s) at speed and "
+        << rig.sim.violations(sim::Violation::NoPositionAfterStop) << " travel(s) without I9";
+    return out.str();
   }
   coverage.finished += rig.travel_events(travel::Event::Type::Finished).size();
   coverage.aborted += rig.travel_events(travel::Event::Type::Aborted).size();
@@ -298,6 +328,20 @@ TEST(GatingProperty, CheckerFlagsForbiddenFrames) {
       {"B0 rising with S2", 0x09, sb::kReady | sb::kAdvanceWarning, true, "DCP 9.1.3"},
       {"idle frame is always fine", 0x00, sb::kGeneralFault, false, ""},
   };
+  // And the stop message at speed: 0101 with S6, then 0001 while S6 is still set.
+  {
+    GatingChecker checker(dcp::Protocol::Dcp4);
+    CycleRecord r;
+    r.at = MonoTime{10s};
+    r.inputs_at = r.at;
+    r.inputs.valid = r.inputs.doors_locked = r.inputs.doors_closed = true;
+    r.inputs.safety_chain_closed = true;
+    r.seen = r.reply = sb::kReady | sb::kTravelActive | sb::kBrakeOpen;
+    r.frame[0] = 0x05;
+    EXPECT_EQ(checker.check(r, ApiInspection{}), "");
+    r.frame[0] = 0x01;
+    EXPECT_EQ(checker.check(r, ApiInspection{}).rfind("DCP 11.1.1 d", 0), 0U);
+  }
   for (const Case& c : cases) {
     GatingChecker checker(dcp::Protocol::Dcp4);
     CycleRecord r;

@@ -171,6 +171,12 @@ class Lift {
   Client& api() { return *client_; }
   /// The daemon's stderr so far (for failure messages).
   std::string log() const { return daemon_->err(); }
+  /// Sends `signal_number` to the daemon and waits for it to exit: its exit code, or nullopt
+  /// if it still runs after `timeout`.
+  std::optional<int> stop_daemon(int signal_number, std::chrono::milliseconds timeout) {
+    daemon_->signal(signal_number);
+    return daemon_->wait(timeout);
+  }
 
   /// A request's reply (null on timeout).
   json call(const json& request) { return client_->call(request); }

@@ -264,6 +264,90 @@ TEST(Dcp4Travel, ExtensionLeadCoversThirtyMsPlusTwoCycles) {
   }
 }
 
+TEST(Dcp4Travel, ExtensionLimitIsTheLargerOfSvAndTheLiveDistance) {
+  // DCP 11.1.2 note: extend "while it is greater than the deceleration distance the drive
+  // controller had transmitted before the beginning of the travel" (I7's Sv, 2500 mm here),
+  // even while the live value (1600 mm, still growing while the car accelerates) is smaller.
+  // Lead as above: 1600 mm/s * 60 ms = 96 mm, margin 0.
+  struct Case {
+    std::int64_t remaining_mm;
+    ExtendResult expected;
+  };
+  const std::vector<Case> cases = {
+      {2597, ExtendResult::Pending},
+      {2596, ExtendResult::TooLate},
+      {2000, ExtendResult::TooLate},  // beyond live + lead, inside Sv + lead
+  };
+  for (const auto& c : cases) {
+    TravelConfig config;
+    config.speed_message_cycles = 1;
+    config.extension_margin_mm = 0;
+    TravelController controller(config);
+    CycleInput in;
+    in.link_up = in.handshake_done = in.reply_fresh = true;
+    in.protocol = Protocol::Dcp4;
+    in.status.ready = in.status.accepted = true;
+    in.inputs.valid = in.inputs.safety_chain_closed = true;
+    in.inputs.doors_closed = in.inputs.doors_locked = true;
+    const std::int64_t target = 30000;
+    std::int64_t position = target - c.remaining_mm - 24 * 4;
+    in.position_mm = position;
+    controller.step(in);
+    ASSERT_EQ(controller.start(dcp4_request(target)), StartResult::Accepted);
+    in.now += kCycle;
+    controller.step(in);  // I7 goes out
+    ChannelReply i7;
+    i7.kind = ChannelRequest::Kind::StartParameters;
+    i7.decel_distance_cm = 250;
+    in.channel_reply = i7;
+    for (int i = 0; i < 5; ++i) {
+      in.now += kCycle;
+      controller.step(in);
+      in.channel_reply.reset();
+    }
+    for (int i = 0; i < 4; ++i) {
+      in.now += kCycle;
+      position += 24;
+      in.position_mm = position;
+      in.status.travel_active = in.status.brake_open = true;
+      in.decel_distance_mm = 1600;
+      controller.step(in);
+    }
+    ASSERT_EQ(controller.dcp4().state(), Dcp4Travel::State::Distance);
+    EXPECT_EQ(controller.extend_target(target + 1000), c.expected) << c.remaining_mm;
+  }
+}
+
+TEST(Dcp4Travel, NoTravelCommandUntilTheDriveAcceptsTheSpeed) {
+  // DCP 4.1 S5 "Desired distance / speed accepted": without it after the speed message no B2
+  // goes out; after travel.start_timeout_ms the travel ends as refused.
+  TravelConfig config;
+  config.use_i7 = false;
+  config.speed_message_cycles = 1;
+  TravelController controller(config);
+  CycleInput in;
+  in.link_up = in.handshake_done = in.reply_fresh = true;
+  in.protocol = Protocol::Dcp4;
+  in.status.ready = true;  // S5 never comes
+  in.inputs.valid = in.inputs.safety_chain_closed = true;
+  in.inputs.doors_closed = in.inputs.doors_locked = true;
+  in.position_mm = 0;
+  controller.step(in);
+  ASSERT_EQ(controller.start(dcp4_request(3000)), StartResult::Accepted);
+  const int cycles = static_cast<int>(config.start_timeout_ms / 15) + 3;
+  for (int i = 0; i < cycles; ++i) {
+    in.now += kCycle;
+    const CycleOutput out = controller.step(in);
+    EXPECT_EQ(out.command & dcp::command_bit::kStopSwitch, 0) << "cycle " << i;
+  }
+  EXPECT_EQ(controller.active_kind(), TravelKind::None);
+  std::optional<Event> last;
+  while (auto e = controller.pop_event()) last = e;
+  ASSERT_TRUE(last);
+  EXPECT_EQ(last->type, Type::Aborted);
+  EXPECT_EQ(last->cause, AbortCause::TargetRefused);
+}
+
 TEST(Dcp4Travel, DriveStoppingShortIsReportedAsOffLevel) {
   // Hand-made cycles: the drive drops S6 and then S1 600 mm before the target.
   TravelConfig config;
