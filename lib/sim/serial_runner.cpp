@@ -1,5 +1,8 @@
 #include "sim/serial_runner.hpp"
 
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+
 #include <poll.h>
 #include <sys/eventfd.h>
 #include <time.h>
@@ -157,6 +160,7 @@ bool SerialDriveRunner::start() {
     std::lock_guard lock(mutex_);
     features_ = port_.features();
   }
+  wire_time_ = pty_wire_time(port_.fd());
   wake_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
   if (wake_fd_ < 0) {
     std::lock_guard lock(mutex_);
@@ -262,6 +266,15 @@ void SerialDriveRunner::refuse_next_target() {
 void SerialDriveRunner::inject_channel(ChannelFault fault) {
   std::lock_guard lock(mutex_);
   sim_.inject_channel(fault, mono_now());
+}
+
+std::chrono::microseconds pty_wire_time(int fd) noexcept {
+  struct stat st {};
+  if (fd < 0 || ::fstat(fd, &st) != 0 || !S_ISCHR(st.st_mode)) return {};
+  // Linux devices.txt: major 5 is /dev/ptmx (the master side), 136..143 the /dev/pts slaves.
+  const unsigned major_number = major(st.st_rdev);
+  const bool pty = major_number == 5 || (major_number >= 136 && major_number <= 143);
+  return pty ? 2 * kFrameWireTime : std::chrono::microseconds{};
 }
 
 bool parse_channel_fault(std::string_view name, ChannelFault& out) noexcept {
@@ -420,7 +433,7 @@ void SerialDriveRunner::run() noexcept {
         }
         ++frames;
         if (reply.size > 0 && !lost) {
-          sleep_until(now + reply.delay);
+          sleep_until(now + reply.delay + wire_time_);
           if (port_.write_frame(reply.view()).status != io::IoStatus::Ok) {
             std::lock_guard lock(mutex_);
             ++counters_.write_failures;

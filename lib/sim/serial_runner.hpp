@@ -53,6 +53,15 @@ struct RunnerOptions {
   std::size_t event_capacity = 1024;
 };
 
+/// DCP 7.1/7.2: six bytes of 10 bits at 38400 baud take 1.5625 ms on an RS485 wire.
+inline constexpr std::chrono::microseconds kFrameWireTime{1563};
+
+/// Extra delay a reply needs on `fd` so the master sees it when a real RS485 line would deliver
+/// it: a pseudo-terminal passes bytes at once, so the master's frame (which on the wire ends
+/// 1.5625 ms after it began) and our reply (which takes another 1.5625 ms) both arrive early by
+/// one frame's wire time each. Zero for a real serial port, whose UART takes that time itself.
+std::chrono::microseconds pty_wire_time(int fd) noexcept;
+
 /// What the runner's loop is doing.
 enum class RunnerState : std::uint8_t {
   Idle,          ///< not started
@@ -178,7 +187,8 @@ class SerialDriveRunner {
   RunnerOptions options_;
   MonoTime epoch_{};
   io::SerialPort port_;
-  int wake_fd_ = -1;  // eventfd: stop() wakes the loop's poll at once
+  int wake_fd_ = -1;                       // eventfd: stop() wakes the loop's poll at once
+  std::chrono::microseconds wire_time_{};  // pty_wire_time() of the port (0 on a real line)
   std::thread thread_;
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> running_{false};
