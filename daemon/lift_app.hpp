@@ -51,6 +51,7 @@ class LiftApp {
   void log_cycle_events();
   void handle_event(const control::ControllerEvent& event);
   void dump_flight_recorder(std::string_view why);
+  std::string apply_config(const config::Config& next);
 
   Daemon& daemon_;
   const config::Config& config_;
