@@ -305,6 +305,14 @@ TEST(DaemonSocketActivation, AClientConnectingDuringARestartIsQueuedNotRefused) 
   for (const std::string arg : {"/bin/sh", "-c"}) args.push_back(arg);
   args.push_back(run_liftd + "; sleep 1; " + run_liftd);
   Process manager(args, base_env(), notify.dir(), "manager");
+  // Whatever happens below, no liftd outlives the test (the manager's destructor kills only
+  // the shell, not the liftd it started).
+  struct KillChildren {
+    pid_t parent;
+    ~KillChildren() {
+      for (const pid_t child : children_of(parent)) ::kill(child, SIGKILL);
+    }
+  } kill_children{manager.pid()};
   const auto end = std::chrono::steady_clock::now() + kStartupLimit;
   while (!exists(socket) && std::chrono::steady_clock::now() < end) {
     std::this_thread::sleep_for(10ms);
