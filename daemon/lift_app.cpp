@@ -13,6 +13,7 @@
 #include "dcp/charset.hpp"
 #include "dcp/messages.hpp"
 #include "log/log.hpp"
+#include "service/notify.hpp"
 
 namespace liftd::daemon {
 namespace {
@@ -117,6 +118,20 @@ std::string default_runtime_dir(const config::Config& c) {
   return std::filesystem::path(c.api.socket).parent_path().string();
 }
 
+// The API socket systemd passed (socket activation, FileDescriptorName=api), or -1: then the
+// server creates it as without systemd. Other passed descriptors are closed.
+int take_listen_fd(const std::string& socket_path) {
+  const std::vector<service::ListenFd> fds = service::listen_fds_from_environment();
+  if (fds.empty()) return -1;
+  const int fd = service::pick_listen_fd(fds, "api");
+  service::close_unused_listen_fds(fds, fd);
+  if (fd < 0) return -1;
+  log::event(log::Level::info, "api", "socket_passed", {{"socket", socket_path}},
+             "using the API socket systemd passed (socket activation); connections wait in its "
+             "queue while liftd restarts");
+  return fd;
+}
+
 log::Level level_for(const control::ControllerEvent& event) {
   if (event.kind == control::ControllerEvent::Kind::Link &&
       event.link.kind == dcp::LinkEventKind::HandshakeProblem) {
@@ -190,6 +205,7 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
   server.inputs_group = config.api.inputs_group;
   server.max_clients = static_cast<std::size_t>(config.api.max_clients);
   server.idle_timeout = std::chrono::seconds(config.api.idle_timeout_s);
+  server.listen_fd = take_listen_fd(socket_path_);
   server_ = std::make_unique<api::Server>(
       daemon.io(), *backend_, server, [](api::LogLevel level, std::string_view text) {
         const log::Level l = level == api::LogLevel::Error  ? log::Level::error
@@ -211,6 +227,8 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
     last_progress_ = p;
     return advanced;
   });
+  daemon.set_config_applier([this](const config::Config& next) { return apply_config(next); });
+  daemon.set_dump_handler([this] { dump_flight_recorder("SIGUSR1"); });
   daemon.set_running_status(simulate_ ? "simulated lift running; API on " + socket_path_
                                       : "drive link starting on " + device);
 }
@@ -364,6 +382,7 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
   std::string name;
   std::string text;
   std::string log_event;
+  log::Fields fields;  // journal fields: the catalog (MESSAGE_ID) keys on code and cause
   std::string component = "travel";
   switch (event.kind) {
     case Kind::Link: {
@@ -388,9 +407,12 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
       log_event = "travel_" + std::string(travel::to_string(t.type));
       text = "travel " + std::string(travel::to_string(t.type)) + " (" +
              std::string(travel::to_string(t.kind)) + ")";
+      fields.push_back({"kind", std::string(travel::to_string(t.kind))});
       if (t.type == travel::Event::Type::Aborted) {
         text += ": " + std::string(travel::to_string(t.cause));
+        fields.push_back({"cause", std::string(travel::to_string(t.cause))});
       }
+      if (t.position_mm) fields.push_back({"position_mm", std::to_string(*t.position_mm)});
       if (t.position_mm) text += " at " + std::to_string(*t.position_mm) + " mm";
       data = {{"event", std::string(travel::to_string(t.type))},
               {"kind", std::string(travel::to_string(t.kind))},
@@ -407,6 +429,7 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
       name = "drive_error";
       log_event = "drive_error";
       text = "drive error: " + dcp::to_utf8(event.drive_error.chars());
+      fields.push_back({"drive_text", dcp::to_utf8(event.drive_error.chars())});
       data = {{"text", dcp::to_utf8(event.drive_error.chars())},
               {"at", api::format_utc(backend_->wall_time(event.at))}};
       break;
@@ -419,6 +442,7 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
       log_event = active ? "fault_raised" : "fault_cleared";
       text = std::string(active ? "fault: " : "fault cleared: ") +
              std::string(control::fault_text(event.fault));
+      fields.push_back({"code", std::string(control::fault_code_name(event.fault))});
       data = {{"code", std::string(control::fault_code_name(event.fault))},
               {"text", std::string(control::fault_text(event.fault))},
               {"active", active}};
@@ -434,7 +458,7 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
       data = {{"floor", event.floor}};
       break;
   }
-  log::event(level_for(event), component, log_event, {}, text);
+  log::event(level_for(event), component, log_event, fields, text);
   server_->publish(name, data);
 }
 
@@ -456,6 +480,21 @@ void LiftApp::publish_state_if_changed(MonoTime now) {
   last_state_key_ = key;
   last_state_publish_ = now;
   server_->publish("state", api::to_json(backend_->status()));
+}
+
+std::string LiftApp::apply_config(const config::Config& next) {
+  api::ServerConfig server;
+  server.read_group = next.api.read_group;
+  server.control_group = next.api.control_group;
+  server.inputs_group = next.api.inputs_group;
+  server.max_clients = static_cast<std::size_t>(next.api.max_clients);
+  server.idle_timeout = std::chrono::seconds(next.api.idle_timeout_s);
+  try {
+    server_->reconfigure(server);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return {};
 }
 
 void LiftApp::dump_flight_recorder(std::string_view why) {

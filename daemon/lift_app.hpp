@@ -53,6 +53,7 @@ class LiftApp {
   void dump_flight_recorder(std::string_view why);
   void wind_down(std::function<void()> done);
   void check_wind_down(MonoTime now);
+  std::string apply_config(const config::Config& next);
 
   Daemon& daemon_;
   const config::Config& config_;

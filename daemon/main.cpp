@@ -73,8 +73,7 @@ std::optional<config::Config> load_config(const CommandLine& cl, bool to_log) {
 }
 
 int run_daemon(const CommandLine& cl) {
-  log::init({cl.log_level.value_or(log::Level::info), log::Backend::automatic,
-             std::string(log::kDefaultJournalSocket), "liftd"});
+  log::init({cl.log_level.value_or(log::Level::info), log::Backend::automatic, "liftd"});
   auto cfg = load_config(cl, true);
   if (!cfg) return exit_code::kBadConfig;
   log::set_level(cl.log_level.value_or(to_log_level(cfg->log.level)));
@@ -88,9 +87,23 @@ int run_daemon(const CommandLine& cl) {
 
   liftd::daemon::Daemon daemon(*cfg, liftd::service::Notifier::from_environment(),
                                liftd::service::watchdog_from_environment());
+  daemon.keep_log_level(cl.log_level.has_value());
+  if (!cl.simulate || cl.config_path) {
+    const std::string path =
+        cl.config_path.value_or(std::string(liftd::daemon::kDefaultConfigPath));
+    const bool simulate = cl.simulate;
+    daemon.set_config_loader(
+        [path, simulate] {
+          auto result = config::load_file(path);
+          if (result.ok() && simulate) result.config.position.source = config::PositionSource::sim;
+          return result;
+        },
+        path);
+  }
   std::unique_ptr<liftd::daemon::LiftApp> app;
   try {
-    app = std::make_unique<liftd::daemon::LiftApp>(daemon, *cfg, cl.simulate);
+    // The daemon's copy: a reload updates it in place, and the parts read the keys it applies.
+    app = std::make_unique<liftd::daemon::LiftApp>(daemon, daemon.config(), cl.simulate);
   } catch (const std::exception& error) {
     log::event(log::Level::error, "daemon", "setup_failed", {}, error.what());
     log::flush();
@@ -131,6 +144,7 @@ int dispatch(const CommandLine& cl) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  liftd::daemon::ignore_sigpipe();  // before any thread starts: they inherit the disposition
   std::vector<std::string_view> args(argv + 1, argv + argc);
   const auto parsed = liftd::daemon::parse_command_line(args);
   if (!parsed.command_line) {

@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config
-  libasio-dev libspdlog-dev nlohmann-json3-dev libsystemd-dev
+  libasio-dev libspdlog-dev nlohmann-json3-dev libsystemd-dev systemd
   googletest libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev clang-format
   python3 python3-jsonschema

@@ -82,6 +82,7 @@ class Server::Impl : public std::enable_shared_from_this<Server::Impl> {
 
   void start();
   void stop();
+  void reconfigure(const ServerConfig& next);
   void publish(std::string_view event, const nlohmann::json& data);
   ServerCounters counters() const;
   void accept_next();
@@ -102,6 +103,8 @@ class Server::Impl : public std::enable_shared_from_this<Server::Impl> {
   std::uint64_t next_session_id_ = 1;
   bool listening_ = false;
   bool created_socket_file_ = false;
+  dev_t socket_dev_ = 0;  // the socket file this server bound, to remove only that one
+  ino_t socket_ino_ = 0;
 };
 
 namespace {
@@ -109,11 +112,13 @@ namespace {
 /// One connected client.
 class Session final : public std::enable_shared_from_this<Session>, public SessionControl {
  public:
-  Session(std::shared_ptr<Server::Impl> server, Socket socket, Peer peer, std::uint64_t id)
+  Session(std::shared_ptr<Server::Impl> server, Socket socket, Peer peer, std::vector<gid_t> groups,
+          std::uint64_t id)
       : server_(std::move(server)),
         socket_(std::move(socket)),
         timer_(server_->io_),
         peer_(peer),
+        groups_(std::move(groups)),
         id_(id),
         last_request_(SteadyClock::now()) {}
 
@@ -124,6 +129,13 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
                             {"max_line_bytes", server_->config_.max_line_bytes}};
     enqueue(std::make_shared<const std::string>(event_line("hello", hello)), false);
     read_more();
+    arm_timer();
+  }
+
+  /// Takes new settings: access from the server's current policy, the idle timeout.
+  void settings_changed() {
+    if (closed_) return;
+    peer_.access = server_->policy_.access_for(peer_.uid, groups_);
     arm_timer();
   }
 
@@ -335,6 +347,7 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
   Socket socket_;
   asio::steady_timer timer_;
   Peer peer_;
+  std::vector<gid_t> groups_;
   std::uint64_t id_;
   std::array<char, kReadChunkBytes> chunk_{};
   std::string pending_;
@@ -386,13 +399,26 @@ void clear_stale_socket(const std::string& path) {
 void Server::Impl::start() {
   if (listening_) return;
   const std::string& path = config_.socket_path;
+  asio::error_code ec;
+  if (config_.listen_fd >= 0) {
+    // Socket activation: systemd bound, set up and listens on it; its file stays systemd's.
+    acceptor_.assign(asio::local::stream_protocol(), config_.listen_fd, ec);
+    if (ec) {
+      throw std::runtime_error("api: cannot use the socket systemd passed (fd " +
+                               std::to_string(config_.listen_fd) + "): " + ec.message());
+    }
+    config_.listen_fd = -1;  // the acceptor owns it now
+    listening_ = true;
+    log_(LogLevel::Info, "api: listening on the socket systemd passed (" + path + ")");
+    accept_next();
+    return;
+  }
   if (path.empty() || path.size() >= sizeof(sockaddr_un{}.sun_path)) {
     throw std::runtime_error("api: socket path \"" + path + "\" is empty or too long");
   }
   std::optional<gid_t> socket_gid;
   if (!config_.socket_group.empty()) socket_gid = resolve_group(config_.socket_group);
   clear_stale_socket(path);
-  asio::error_code ec;
   acceptor_.open(asio::local::stream_protocol(), ec);
   if (!ec) acceptor_.bind(asio::local::stream_protocol::endpoint(path), ec);
   if (ec) {
@@ -401,6 +427,11 @@ void Server::Impl::start() {
                              " (does the directory exist?)");
   }
   created_socket_file_ = true;
+  struct stat bound {};
+  if (::lstat(path.c_str(), &bound) == 0) {
+    socket_dev_ = bound.st_dev;
+    socket_ino_ = bound.st_ino;
+  }
   // Nobody can connect before listen(), so fixing the mode and group here leaves no window.
   if (::chmod(path.c_str(), static_cast<mode_t>(config_.socket_mode)) != 0) {
     const int error = errno;
@@ -431,11 +462,42 @@ void Server::Impl::stop() {
   for (const auto& session : sessions) session->close("server stopping");
   sessions_.clear();
   if (created_socket_file_) {
-    ::unlink(config_.socket_path.c_str());
     created_socket_file_ = false;
+    const std::string& path = config_.socket_path;
+    struct stat now {};
+    if (::lstat(path.c_str(), &now) != 0) {
+      log_(LogLevel::Info, "api: " + path + " is already gone");
+    } else if (now.st_dev != socket_dev_ || now.st_ino != socket_ino_) {
+      log_(LogLevel::Warn, "api: not removing " + path +
+                               ": it is no longer the socket this daemon created (another "
+                               "process has bound it since)");
+    } else {
+      ::unlink(path.c_str());
+    }
+  }
+  if (config_.listen_fd >= 0) {  // passed by systemd but never taken over
+    ::close(config_.listen_fd);
+    config_.listen_fd = -1;
   }
   if (listening_) log_(LogLevel::Info, "api: stopped");
   listening_ = false;
+}
+
+void Server::Impl::reconfigure(const ServerConfig& next) {
+  AccessPolicy policy =
+      AccessPolicy::resolve(next.read_group, next.control_group, next.inputs_group);
+  policy_ = std::move(policy);
+  config_.read_group = next.read_group;
+  config_.control_group = next.control_group;
+  config_.inputs_group = next.inputs_group;
+  config_.max_clients = next.max_clients;
+  config_.idle_timeout = next.idle_timeout;
+  const auto sessions = std::vector<std::shared_ptr<Session>>(sessions_.begin(), sessions_.end());
+  for (const auto& session : sessions) session->settings_changed();
+  log_(LogLevel::Info, "api: settings changed: max_clients " + std::to_string(config_.max_clients) +
+                           ", idle timeout " + std::to_string(config_.idle_timeout.count()) +
+                           " ms, groups read \"" + config_.read_group + "\" control \"" +
+                           config_.control_group + "\" inputs \"" + config_.inputs_group + "\"");
 }
 
 void Server::Impl::accept_next() {
@@ -472,8 +534,8 @@ void Server::Impl::on_accept(const asio::error_code& ec, Socket socket) {
   peer.access = policy_.access_for(creds->uid, creds->groups);
   ++counters_.connections;
   ++counters_.clients;
-  auto session =
-      std::make_shared<Session>(shared_from_this(), std::move(socket), peer, next_session_id_++);
+  auto session = std::make_shared<Session>(shared_from_this(), std::move(socket), peer,
+                                           creds->groups, next_session_id_++);
   sessions_.insert(session);
   log_(LogLevel::Debug, "api: client pid " + std::to_string(peer.pid) + " uid " +
                             std::to_string(peer.uid) + " connected");
@@ -522,6 +584,9 @@ void Server::start() {
 }
 void Server::stop() {
   impl_->stop();
+}
+void Server::reconfigure(const ServerConfig& next) {
+  impl_->reconfigure(next);
 }
 Dispatcher& Server::dispatcher() {
   return impl_->dispatcher_;

@@ -21,6 +21,10 @@ namespace liftd::api {
 /// Server settings (the daemon fills them from its config file).
 struct ServerConfig {
   std::string socket_path = "/run/liftd/api.sock";  ///< where to listen
+  /// A listening Unix stream socket passed by systemd (socket activation), or -1: then the
+  /// server binds socket_path itself. A passed socket keeps the owner, group and mode its socket
+  /// unit gave it, and its file is systemd's: stop() leaves it in place.
+  int listen_fd = -1;
   std::string socket_group;      ///< group owning the socket file; empty: the daemon's group
   unsigned socket_mode = 0660;   ///< file mode of the socket (owner and group may connect)
   std::string read_group;        ///< members may run read commands; empty: root only
@@ -66,11 +70,19 @@ class Server {
   Server(const Server&) = delete;
   Server& operator=(const Server&) = delete;
 
-  /// Binds and listens. A stale socket file (nothing listening) is removed; if another process
-  /// listens there, or the path is not a socket, throws std::runtime_error saying so.
+  /// Binds and listens (or takes over config.listen_fd). A stale socket file (nothing
+  /// listening) is removed; if another process listens there, or the path is not a socket,
+  /// throws std::runtime_error saying so.
   void start();
-  /// Closes the listener and every client and removes the socket file. Idempotent.
+  /// Closes the listener and every client and removes the socket file, but only if the path is
+  /// still the socket this server bound (same device and inode): a socket another daemon has
+  /// bound there since is left alone. Idempotent.
   void stop();
+  /// Applies new access groups, client limit and idle timeout (a configuration reload). The
+  /// groups are resolved first: an unknown group throws std::runtime_error and changes nothing.
+  /// Connected clients get the new access and timeout from their next request on; clients above
+  /// a lower max_clients stay connected, and new ones are refused with `busy` until there is room.
+  void reconfigure(const ServerConfig& next);
 
   /// The command table: add later commands (travel, stop, ...) here before or after start().
   Dispatcher& dispatcher();

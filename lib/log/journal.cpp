@@ -1,23 +1,26 @@
-// journald native protocol: field building, encoding, and the datagram writer.
+// Journal records: field building (pure), the stderr line forms, and sd_journal_sendv(3).
 #include "log/journal.hpp"
 
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/socket.h>
-#include <sys/un.h>
-#include <unistd.h>
+#include <sys/stat.h>
+#include <sys/uio.h>
+// The record carries the caller's CODE_FILE/CODE_LINE/CODE_FUNC (journal_fields); without this
+// the header's sd_journal_sendv macro would add this file's location instead.
+#define SD_JOURNAL_SUPPRESS_LOCATION
+#include <systemd/sd-journal.h>
 
 #include <cerrno>
-#include <cstring>
+#include <cstdio>
 #include <ctime>
+
+#include "log/catalog.hpp"
 
 namespace liftd::log {
 namespace {
 
+// Where sd_journal_sendv(3) sends: journald's native socket (systemd-journald.service(8)).
+constexpr const char* kJournalSocket = "/run/systemd/journal/socket";
 // journald rejects field names longer than 64 characters.
 constexpr std::size_t kMaxFieldNameLength = 64;
-// The binary form carries the value length as a 64-bit little-endian integer.
-constexpr std::size_t kLengthBytes = 8;
 
 bool needs_quotes(std::string_view value) {
   if (value.empty()) return true;
@@ -62,38 +65,30 @@ std::string_view level_label(Level level) {
   return "?    ";
 }
 
-// Sends `data` as a sealed memfd: journald's way for records too large for one datagram.
-int send_as_memfd(int socket_fd, const sockaddr_un& address, socklen_t address_length,
-                  std::string_view data) {
-  const int memfd = memfd_create("liftd-journal", MFD_CLOEXEC | MFD_ALLOW_SEALING);
-  if (memfd < 0) return errno;
-  std::size_t written = 0;
-  while (written < data.size()) {
-    const ssize_t n = ::write(memfd, data.data() + written, data.size() - written);
-    if (n < 0) {
-      const int error = errno;
-      if (error == EINTR) continue;
-      ::close(memfd);
-      return error;
-    }
-    written += static_cast<std::size_t>(n);
+// "component: text [event=... k=v]", the part both line forms share.
+void append_body(std::string& out, const Record& record) {
+  out += record.component.empty() ? std::string_view("liftd") : record.component;
+  out += ": ";
+  out += record.text;
+  const bool has_fields = record.fields != nullptr && !record.fields->empty();
+  if (record.event.empty() && !has_fields) return;
+  out += " [";
+  bool first = true;
+  if (!record.event.empty()) {
+    out += "event=";
+    out += record.event;
+    first = false;
   }
-  ::fcntl(memfd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_WRITE | F_SEAL_SEAL);
-  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
-  msghdr message{};
-  message.msg_name = const_cast<sockaddr_un*>(&address);
-  message.msg_namelen = address_length;
-  message.msg_control = control;
-  message.msg_controllen = sizeof(control);
-  cmsghdr* header = CMSG_FIRSTHDR(&message);
-  header->cmsg_level = SOL_SOCKET;
-  header->cmsg_type = SCM_RIGHTS;
-  header->cmsg_len = CMSG_LEN(sizeof(int));
-  std::memcpy(CMSG_DATA(header), &memfd, sizeof(int));
-  const ssize_t sent = ::sendmsg(socket_fd, &message, MSG_NOSIGNAL | MSG_DONTWAIT);
-  const int error = sent < 0 ? errno : 0;
-  ::close(memfd);
-  return error;
+  if (has_fields) {
+    for (const auto& field : *record.fields) {
+      if (!first) out += ' ';
+      first = false;
+      out += field.key;
+      out += '=';
+      append_text_value(out, field.value);
+    }
+  }
+  out += ']';
 }
 
 }  // namespace
@@ -133,6 +128,9 @@ std::vector<JournalField> journal_fields(const Record& record, std::string_view 
   std::vector<JournalField> out;
   out.emplace_back("MESSAGE", std::string(record.text));
   out.emplace_back("PRIORITY", std::to_string(journal_priority(record.level)));
+  if (const auto id = message_id_for(record.event, record.fields)) {
+    out.emplace_back("MESSAGE_ID", std::string(*id));
+  }
   out.emplace_back("SYSLOG_IDENTIFIER", std::string(identifier));
   if (!record.component.empty()) {
     out.emplace_back("LIFTD_COMPONENT", std::string(record.component));
@@ -151,57 +149,21 @@ std::vector<JournalField> journal_fields(const Record& record, std::string_view 
   return out;
 }
 
-std::string encode_journal_datagram(const std::vector<JournalField>& fields) {
-  std::string out;
+int send_to_journal(const std::vector<JournalField>& fields) {
+  // sd_journal_sendv(3) returns success without a word when no journald listens (ENOENT on its
+  // socket); a record must never vanish, so look first.
+  struct stat socket_file {};
+  if (::stat(kJournalSocket, &socket_file) != 0) return errno;
+  std::vector<std::string> lines;
+  lines.reserve(fields.size());
+  std::vector<iovec> vector;
+  vector.reserve(fields.size());
   for (const auto& [name, value] : fields) {
-    out += name;
-    if (value.find('\n') == std::string::npos) {
-      out += '=';
-      out += value;
-    } else {
-      out += '\n';
-      std::uint64_t length = value.size();
-      for (std::size_t i = 0; i < kLengthBytes; ++i) {
-        out += static_cast<char>(length & 0xFFU);
-        length >>= 8U;
-      }
-      out += value;
-    }
-    out += '\n';
+    lines.push_back(name + "=" + value);  // sd_journal_sendv(3): one "FIELD=value" per iovec
   }
-  return out;
-}
-
-bool decode_journal_datagram(std::string_view datagram, std::vector<JournalField>& out) {
-  out.clear();
-  std::size_t pos = 0;
-  while (pos < datagram.size()) {
-    const std::size_t end = datagram.find_first_of("=\n", pos);
-    if (end == std::string_view::npos) return false;
-    std::string name(datagram.substr(pos, end - pos));
-    if (name.empty()) return false;
-    if (datagram[end] == '=') {
-      const std::size_t newline = datagram.find('\n', end + 1);
-      if (newline == std::string_view::npos) return false;
-      out.emplace_back(std::move(name), std::string(datagram.substr(end + 1, newline - end - 1)));
-      pos = newline + 1;
-      continue;
-    }
-    if (datagram.size() - end - 1 < kLengthBytes) return false;
-    std::uint64_t length = 0;
-    for (std::size_t i = 0; i < kLengthBytes; ++i) {
-      length |= static_cast<std::uint64_t>(static_cast<unsigned char>(datagram[end + 1 + i]))
-                << (8U * i);
-    }
-    const std::size_t start = end + 1 + kLengthBytes;
-    if (length > datagram.size() - start || datagram.size() - start - length < 1 ||
-        datagram[start + length] != '\n') {
-      return false;
-    }
-    out.emplace_back(std::move(name), std::string(datagram.substr(start, length)));
-    pos = start + length + 1;
-  }
-  return true;
+  for (auto& line : lines) vector.push_back({line.data(), line.size()});
+  const int result = sd_journal_sendv(vector.data(), static_cast<int>(vector.size()));
+  return result < 0 ? -result : 0;
 }
 
 std::string format_text_line(const Record& record, std::chrono::system_clock::time_point when) {
@@ -220,57 +182,18 @@ std::string format_text_line(const Record& record, std::chrono::system_clock::ti
   out += ' ';
   out += level_label(record.level);
   out += ' ';
-  out += record.component.empty() ? std::string_view("liftd") : record.component;
-  out += ": ";
-  out += record.text;
-  const bool has_fields = record.fields != nullptr && !record.fields->empty();
-  if (!record.event.empty() || has_fields) {
-    out += " [";
-    bool first = true;
-    if (!record.event.empty()) {
-      out += "event=";
-      out += record.event;
-      first = false;
-    }
-    if (has_fields) {
-      for (const auto& field : *record.fields) {
-        if (!first) out += ' ';
-        first = false;
-        out += field.key;
-        out += '=';
-        append_text_value(out, field.value);
-      }
-    }
-    out += ']';
-  }
+  append_body(out, record);
   return out;
 }
 
-JournalWriter::JournalWriter(std::string socket_path) : socket_path_(std::move(socket_path)) {}
-
-JournalWriter::~JournalWriter() {
-  if (fd_ >= 0) ::close(fd_);
-}
-
-int JournalWriter::send(std::string_view datagram) {
-  sockaddr_un address{};
-  address.sun_family = AF_UNIX;
-  if (socket_path_.size() >= sizeof(address.sun_path)) return ENAMETOOLONG;
-  std::memcpy(address.sun_path, socket_path_.data(), socket_path_.size());
-  const auto address_length =
-      static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + socket_path_.size() + 1);
-  if (fd_ < 0) {
-    fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    if (fd_ < 0) return errno;
+std::string format_stream_line(const Record& record) {
+  // sd-daemon(3): "<N>" at the start of a line sets its syslog priority.
+  std::string out = "<" + std::to_string(journal_priority(record.level)) + ">";
+  append_body(out, record);
+  for (std::size_t i = 1; i < out.size(); ++i) {
+    if (out[i] == '\n') out[i] = ' ';
   }
-  const ssize_t sent = ::sendto(fd_, datagram.data(), datagram.size(), MSG_NOSIGNAL | MSG_DONTWAIT,
-                                reinterpret_cast<const sockaddr*>(&address), address_length);
-  if (sent >= 0) return 0;
-  const int error = errno;
-  if (error == EMSGSIZE || error == ENOBUFS) {
-    return send_as_memfd(fd_, address, address_length, datagram);
-  }
-  return error;
+  return out;
 }
 
 }  // namespace liftd::log

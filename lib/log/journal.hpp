@@ -1,5 +1,5 @@
-// journald's native protocol, written by hand so the socket path is configurable and the send
-// path can be tested against a socket the test binds. Field building and encoding are pure.
+// What the journal sink writes: the fields of one record (pure, table-tested), the stderr line
+// forms, and the send itself through libsystemd's sd_journal_sendv(3).
 #pragma once
 
 #include <chrono>
@@ -35,39 +35,21 @@ int journal_priority(Level level);
 /// outside A-Z 0-9 _ become _, and the name is cut to journald's 64-character limit.
 std::string journal_field_name(std::string_view key);
 
-/// The fields of one record, in order: MESSAGE, PRIORITY, SYSLOG_IDENTIFIER, LIFTD_COMPONENT,
-/// LIFTD_EVENT (when set), the extra fields, CODE_FILE/CODE_LINE/CODE_FUNC (when known).
+/// The fields of one record, in order: MESSAGE, PRIORITY, MESSAGE_ID (when the event is in the
+/// catalog, see catalog.hpp), SYSLOG_IDENTIFIER, LIFTD_COMPONENT, LIFTD_EVENT (when set), the
+/// extra fields, CODE_FILE/CODE_LINE/CODE_FUNC (when known).
 std::vector<JournalField> journal_fields(const Record& record, std::string_view identifier);
 
-/// Encodes fields as one native-protocol datagram: "NAME=value\n" per field, or, for values
-/// containing a newline, "NAME\n" + 64-bit little-endian length + value + "\n".
-std::string encode_journal_datagram(const std::vector<JournalField>& fields);
+/// Sends the fields as one journal entry with sd_journal_sendv(3); returns 0 or the errno of
+/// the failure (ENOENT when no journald listens on this machine).
+int send_to_journal(const std::vector<JournalField>& fields);
 
-/// Decodes a native-protocol datagram (both forms), for tests and diagnostics. Returns false
-/// when the datagram is malformed.
-bool decode_journal_datagram(std::string_view datagram, std::vector<JournalField>& out);
-
-/// One readable line for stderr: "2026-11-22 03:00:43.123 WARN  dcp: text [event=... k=v]".
+/// One readable line for a terminal: "2026-11-22 03:00:43.123 WARN  dcp: text [event=... k=v]".
 std::string format_text_line(const Record& record, std::chrono::system_clock::time_point when);
 
-/// Sends datagrams to a journald socket (a Unix datagram socket path).
-class JournalWriter {
- public:
-  /// A writer for the socket at `socket_path`; nothing is opened until the first send.
-  explicit JournalWriter(std::string socket_path);
-  ~JournalWriter();
-  JournalWriter(const JournalWriter&) = delete;
-  JournalWriter& operator=(const JournalWriter&) = delete;
-
-  /// Sends one datagram; returns 0 or the errno of the failure.
-  int send(std::string_view datagram);
-
-  /// The socket path.
-  const std::string& socket_path() const { return socket_path_; }
-
- private:
-  std::string socket_path_;
-  int fd_ = -1;
-};
+/// One line for a stderr that journald (or syslog) reads: the priority as an sd-daemon(3)
+/// prefix, no time stamp (the reader adds its own): "<4>dcp: text [event=... k=v]". Newlines
+/// in the text become spaces, so one record stays one line.
+std::string format_stream_line(const Record& record);
 
 }  // namespace liftd::log

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <map>
 #include <mutex>
 
@@ -91,26 +92,25 @@ class TextSink final : public spdlog::sinks::base_sink<std::mutex> {
 
 class JournalSink final : public spdlog::sinks::base_sink<std::mutex> {
  public:
-  JournalSink(std::string socket_path, std::string identifier)
-      : writer_(std::move(socket_path)), identifier_(std::move(identifier)) {}
+  explicit JournalSink(std::string identifier) : identifier_(std::move(identifier)) {}
 
  protected:
   void sink_it_(const spdlog::details::log_msg& msg) override {
     const Record record = make_record(msg);
-    const int error = writer_.send(encode_journal_datagram(journal_fields(record, identifier_)));
+    const int error = send_to_journal(journal_fields(record, identifier_));
     if (error == 0) return;
-    // The journal is unreachable: keep the record on stderr (systemd captures it as well).
+    // journald is unreachable: keep the record on stderr, with its priority as a "<N>" prefix
+    // (systemd's stdout/stderr stream and syslog readers both honour it).
     if (!reported_failure_) {
       reported_failure_ = true;
-      write_stderr_line("liftd: cannot write to the journal at " + writer_.socket_path() + ": " +
-                        std::strerror(error) + "; logging to stderr");
+      write_stderr_line("<4>liftd: cannot write to the journal: " +
+                        std::string(std::strerror(error)) + "; logging to stderr");
     }
-    write_stderr_line(format_text_line(record, msg.time));
+    write_stderr_line(format_stream_line(record));
   }
   void flush_() override { std::fflush(stderr); }
 
  private:
-  JournalWriter writer_;
   std::string identifier_;
   bool reported_failure_ = false;
 };
@@ -192,7 +192,7 @@ Backend resolve(Backend backend) {
 void init(const Options& options) {
   spdlog::sink_ptr sink;
   if (resolve(options.backend) == Backend::journal) {
-    sink = std::make_shared<JournalSink>(options.journal_socket, options.identifier);
+    sink = std::make_shared<JournalSink>(options.identifier);
   } else {
     sink = std::make_shared<TextSink>();
   }

@@ -1,7 +1,7 @@
 // liftd logging: spdlog underneath, per-component loggers, named events with structured fields.
-// Under systemd records go natively to journald (journal.hpp); otherwise readable lines go to
-// stderr. Never call any of this from inside the real-time cycle: it formats, allocates and
-// takes a lock.
+// Under systemd records go to journald through libsystemd (journal.hpp); otherwise readable
+// lines go to stderr. Never call any of this from inside the real-time cycle: it formats, allocates
+// and takes a lock.
 #pragma once
 
 #include <cstdint>
@@ -41,19 +41,15 @@ using Fields = std::vector<Field>;
 /// Where records go.
 enum class Backend : std::uint8_t {
   automatic,  ///< journal when running under systemd (JOURNAL_STREAM or INVOCATION_ID), else text
-  journal,    ///< native journald protocol
+  journal,    ///< journald through sd_journal_sendv(3); "<N>"-prefixed stderr lines if it fails
   text,       ///< readable lines on stderr
 };
 
-/// journald's native protocol socket.
-inline constexpr std::string_view kDefaultJournalSocket = "/run/systemd/journal/socket";
-
 /// How to set up logging.
 struct Options {
-  Level level = Level::info;                          ///< least severe record written
-  Backend backend = Backend::automatic;               ///< where records go
-  std::string journal_socket{kDefaultJournalSocket};  ///< journald socket path
-  std::string identifier = "liftd";                   ///< SYSLOG_IDENTIFIER
+  Level level = Level::info;             ///< least severe record written
+  Backend backend = Backend::automatic;  ///< where records go
+  std::string identifier = "liftd";      ///< SYSLOG_IDENTIFIER
 };
 
 /// True when the process runs under systemd (JOURNAL_STREAM or INVOCATION_ID is set).

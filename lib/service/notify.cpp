@@ -1,103 +1,133 @@
-// sd_notify protocol and the progress-gated watchdog.
+// sd_notify(3), sd_watchdog_enabled(3), sd_listen_fds_with_names(3) and the progress-gated
+// watchdog.
 #include "service/notify.hpp"
 
 #include <sys/socket.h>
-#include <sys/un.h>
+#include <systemd/sd-daemon.h>
 #include <unistd.h>
 
 #include <cerrno>
-#include <charconv>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <string>
 
 #include "log/log.hpp"
 
 namespace liftd::service {
 
-Notifier::Notifier(std::string socket) : socket_(std::move(socket)) {}
-
 Notifier Notifier::from_environment() {
   const char* socket = std::getenv("NOTIFY_SOCKET");
-  if (socket == nullptr || *socket == '\0') return Notifier{};
-  return Notifier{socket};
-}
-
-Notifier::~Notifier() {
-  if (fd_ >= 0) ::close(fd_);
-}
-
-Notifier::Notifier(Notifier&& other) noexcept
-    : socket_(std::move(other.socket_)), fd_(std::exchange(other.fd_, -1)) {
-  other.socket_.clear();
-}
-
-Notifier& Notifier::operator=(Notifier&& other) noexcept {
-  if (this != &other) {
-    if (fd_ >= 0) ::close(fd_);
-    socket_ = std::move(other.socket_);
-    other.socket_.clear();
-    fd_ = std::exchange(other.fd_, -1);
-  }
-  return *this;
+  return Notifier{socket != nullptr && *socket != '\0'};
 }
 
 int Notifier::notify(std::string_view state) {
-  if (!enabled()) return 0;
-  sockaddr_un address{};
-  address.sun_family = AF_UNIX;
-  if (socket_.size() >= sizeof(address.sun_path)) return ENAMETOOLONG;
-  std::memcpy(address.sun_path, socket_.data(), socket_.size());
-  // "@name" is an abstract socket: the address starts with a NUL and has no terminator.
-  socklen_t length = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + socket_.size());
-  if (socket_.front() == '@') {
-    address.sun_path[0] = '\0';
-  } else {
-    length = static_cast<socklen_t>(length + 1);
-  }
-  if (fd_ < 0) {
-    fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    if (fd_ < 0) return errno;
-  }
-  const ssize_t sent = ::sendto(fd_, state.data(), state.size(), MSG_NOSIGNAL | MSG_DONTWAIT,
-                                reinterpret_cast<const sockaddr*>(&address), length);
-  return sent < 0 ? errno : 0;
+  if (!enabled_) return 0;
+  const std::string text(state);
+  // sd_notify: > 0 sent, 0 no socket (environment changed since), < 0 -errno.
+  const int result = sd_notify(0, text.c_str());
+  return result < 0 ? -result : 0;
 }
 
 int Notifier::ready(std::string_view status) {
-  return notify("READY=1\nSTATUS=" + std::string(status));
+  if (!enabled_) return 0;
+  const int result = sd_notifyf(0, "READY=1\nSTATUS=%s", status_line(status).c_str());
+  return result < 0 ? -result : 0;
 }
 
 int Notifier::status(std::string_view status) {
-  return notify("STATUS=" + std::string(status));
+  if (!enabled_) return 0;
+  const int result = sd_notifyf(0, "STATUS=%s", status_line(status).c_str());
+  return result < 0 ? -result : 0;
 }
 
 int Notifier::stopping(std::string_view status) {
-  return notify("STOPPING=1\nSTATUS=" + std::string(status));
+  if (!enabled_) return 0;
+  const int result = sd_notifyf(0, "STOPPING=1\nSTATUS=%s", status_line(status).c_str());
+  return result < 0 ? -result : 0;
+}
+
+int Notifier::reloading(std::string_view status) {
+  if (!enabled_) return 0;
+  timespec now{};
+  ::clock_gettime(CLOCK_MONOTONIC, &now);
+  const auto usec = static_cast<unsigned long long>(now.tv_sec) * 1000000ULL +
+                    static_cast<unsigned long long>(now.tv_nsec) / 1000ULL;
+  const int result = sd_notifyf(0, "RELOADING=1\nSTATUS=%s\nMONOTONIC_USEC=%llu",
+                                status_line(status).c_str(), usec);
+  return result < 0 ? -result : 0;
 }
 
 int Notifier::watchdog() {
   return notify("WATCHDOG=1");
 }
 
-std::optional<std::chrono::microseconds> parse_watchdog(const char* usec, const char* pid,
-                                                        pid_t self) {
-  if (usec == nullptr || *usec == '\0') return std::nullopt;
-  std::uint64_t value = 0;
-  const char* end = usec + std::strlen(usec);
-  const auto [rest, error] = std::from_chars(usec, end, value);
-  if (error != std::errc{} || rest != end || value == 0) return std::nullopt;
-  if (pid != nullptr && *pid != '\0') {
-    std::int64_t owner = 0;
-    const char* pid_end = pid + std::strlen(pid);
-    const auto [pid_rest, pid_error] = std::from_chars(pid, pid_end, owner);
-    if (pid_error != std::errc{} || pid_rest != pid_end || owner != self) return std::nullopt;
+std::string status_line(std::string_view text) {
+  std::string out(text);
+  for (char& c : out) {
+    if (c == '\n' || c == '\r') c = ' ';
   }
-  return std::chrono::microseconds(static_cast<std::chrono::microseconds::rep>(value));
+  return out;
 }
 
 std::optional<std::chrono::microseconds> watchdog_from_environment() {
-  return parse_watchdog(std::getenv("WATCHDOG_USEC"), std::getenv("WATCHDOG_PID"), ::getpid());
+  std::uint64_t usec = 0;
+  const int result = sd_watchdog_enabled(0, &usec);
+  if (result < 0) {
+    log::event(log::Level::warn, "service", "watchdog_invalid",
+               {{"errno", std::to_string(-result)}},
+               std::string("WATCHDOG_USEC/WATCHDOG_PID are malformed (") + std::strerror(-result) +
+                   "); running without the systemd watchdog");
+    return std::nullopt;
+  }
+  if (result == 0) return std::nullopt;
+  return std::chrono::microseconds(static_cast<std::chrono::microseconds::rep>(usec));
+}
+
+std::vector<ListenFd> listen_fds_from_environment() {
+  char** names = nullptr;
+  const int count = sd_listen_fds_with_names(1, &names);
+  std::vector<ListenFd> out;
+  if (count < 0) {
+    log::event(log::Level::warn, "service", "listen_fds_invalid",
+               {{"errno", std::to_string(-count)}},
+               std::string("LISTEN_FDS/LISTEN_PID are malformed (") + std::strerror(-count) +
+                   "); creating the API socket instead");
+    return out;
+  }
+  for (int i = 0; i < count; ++i) {
+    ListenFd fd;
+    fd.fd = SD_LISTEN_FDS_START + i;
+    if (names != nullptr && names[i] != nullptr) fd.name = names[i];
+    out.push_back(std::move(fd));
+  }
+  if (names != nullptr) {
+    for (int i = 0; i < count; ++i) std::free(names[i]);
+    std::free(static_cast<void*>(names));
+  }
+  return out;
+}
+
+int pick_listen_fd(const std::vector<ListenFd>& fds, std::string_view name) {
+  const auto usable = [](int fd) { return sd_is_socket_unix(fd, SOCK_STREAM, 1, nullptr, 0) > 0; };
+  for (const auto& fd : fds) {
+    if (fd.name == name && usable(fd.fd)) return fd.fd;
+  }
+  // A socket unit without FileDescriptorName= names its socket after the unit ("liftd.socket")
+  // in systemd and "unknown" in systemd-socket-activate: take it when it is the only one.
+  if (fds.size() == 1 && usable(fds.front().fd)) return fds.front().fd;
+  return -1;
+}
+
+void close_unused_listen_fds(const std::vector<ListenFd>& fds, int keep) {
+  for (const auto& fd : fds) {
+    if (fd.fd == keep) continue;
+    log::event(log::Level::warn, "service", "listen_fd_unused",
+               {{"fd", std::to_string(fd.fd)}, {"name", fd.name}},
+               "systemd passed socket " + std::to_string(fd.fd) + " (\"" + fd.name +
+                   "\") that is not a listening Unix stream socket for the API; closing it");
+    ::close(fd.fd);
+  }
 }
 
 Watchdog::Watchdog(asio::io_context& io, Notifier& notifier, std::chrono::microseconds timeout,

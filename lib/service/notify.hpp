@@ -1,6 +1,7 @@
-// systemd service protocol: sd_notify datagrams (READY=1, STATUS=, STOPPING=1, WATCHDOG=1) and
-// the watchdog that pings only while the daemon makes progress. Written by hand (a datagram to
-// $NOTIFY_SOCKET) so tests can point it at a socket they bind.
+// systemd service protocol through libsystemd: sd_notify(3) (READY=1, STATUS=, STOPPING=1,
+// RELOADING=1, WATCHDOG=1), sd_watchdog_enabled(3), sd_listen_fds_with_names(3), and our
+// watchdog that pings only while the daemon makes progress. Never call any of this from the
+// real-time cycle thread: libsystemd formats, allocates and makes system calls.
 #pragma once
 
 #include <sys/types.h>
@@ -13,52 +14,67 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace liftd::service {
 
-/// Sends notification datagrams to the service manager. Disabled (every call a no-op that
-/// succeeds) when there is no socket, i.e. when not started by systemd with Type=notify.
+/// Sends notifications to the service manager with sd_notify(3). Disabled (every call a no-op
+/// that succeeds) when $NOTIFY_SOCKET was not set at construction, i.e. when not started by
+/// systemd with Type=notify.
 class Notifier {
  public:
   /// A disabled notifier.
   Notifier() = default;
-  /// A notifier for `socket`: a filesystem path, or "@name" for an abstract socket.
-  explicit Notifier(std::string socket);
   /// The notifier for $NOTIFY_SOCKET (disabled when unset or empty).
   static Notifier from_environment();
-  ~Notifier();
-  Notifier(Notifier&& other) noexcept;
-  Notifier& operator=(Notifier&& other) noexcept;
-  Notifier(const Notifier&) = delete;
-  Notifier& operator=(const Notifier&) = delete;
 
-  /// True when a socket is configured.
-  bool enabled() const { return !socket_.empty(); }
-  /// The configured socket ("" when disabled).
-  const std::string& socket() const { return socket_; }
+  /// True when a notification socket was configured.
+  bool enabled() const { return enabled_; }
 
   /// Sends raw state lines ("KEY=value\n..."); returns 0 or the errno of the failure.
   int notify(std::string_view state);
-  /// READY=1 with a STATUS= line: startup is complete.
+  /// READY=1 with a STATUS= line: startup (or a reload) is complete.
   int ready(std::string_view status);
   /// STATUS= line a technician reads in `systemctl status liftd`.
   int status(std::string_view status);
   /// STOPPING=1 with a STATUS= line: shutdown has begun.
   int stopping(std::string_view status);
+  /// RELOADING=1 with a STATUS= line and MONOTONIC_USEC= (CLOCK_MONOTONIC now, as sd_notify(3)
+  /// asks for): a configuration reload has begun; READY=1 ends it.
+  int reloading(std::string_view status);
   /// WATCHDOG=1: the daemon is alive and making progress.
   int watchdog();
 
  private:
-  std::string socket_;
-  int fd_ = -1;
+  explicit Notifier(bool enabled) : enabled_(enabled) {}
+  bool enabled_ = false;
 };
 
-/// The watchdog timeout systemd asks for, from the values of WATCHDOG_USEC and WATCHDOG_PID:
-/// nullopt when usec is missing, malformed or 0, or when pid is set and is not `self`.
-std::optional<std::chrono::microseconds> parse_watchdog(const char* usec, const char* pid,
-                                                        pid_t self);
-/// parse_watchdog() on this process's environment.
+/// A STATUS= value on one line: newlines (which would start a new KEY=) become spaces.
+std::string status_line(std::string_view text);
+
+/// The watchdog timeout systemd asks for, from sd_watchdog_enabled(3) (WATCHDOG_USEC, checked
+/// against WATCHDOG_PID): nullopt when there is none, when it is meant for another process,
+/// or when the variables are malformed (then with a warning in the log).
 std::optional<std::chrono::microseconds> watchdog_from_environment();
+
+/// One socket passed by systemd (socket activation).
+struct ListenFd {
+  int fd = -1;       ///< the descriptor, from SD_LISTEN_FDS_START on
+  std::string name;  ///< FileDescriptorName= of the socket unit ("unknown" when not named)
+};
+
+/// The sockets systemd passed to this process, from sd_listen_fds_with_names(3); unsets the
+/// variables so nothing started later inherits them. Empty when not socket-activated.
+std::vector<ListenFd> listen_fds_from_environment();
+
+/// The passed descriptor that is a listening Unix stream socket named `name` (or the only
+/// one when there is a single unnamed socket), or -1. Passed descriptors that are not used are
+/// the caller's to close (close_unused_listen_fds).
+int pick_listen_fd(const std::vector<ListenFd>& fds, std::string_view name);
+
+/// Closes every passed descriptor except `keep`, logging each one it closes.
+void close_unused_listen_fds(const std::vector<ListenFd>& fds, int keep);
 
 /// Sends WATCHDOG=1 every half timeout on an io_context, but only while the progress probe
 /// returns true; a stuck probe lets systemd's watchdog fire and restart the service.

@@ -1,6 +1,7 @@
 // The server through a real Unix socket in a temp dir, with the fake backend.
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <sys/un.h>
 
 #include <fstream>
 #include <vector>
@@ -347,6 +348,96 @@ TEST_F(ApiServer, SocketFileGetsTheConfiguredMode) {
   EXPECT_EQ(st.st_mode & 0777, 0660U);
   stop_server();
   EXPECT_NE(::access(socket_path().c_str(), F_OK), 0) << "stop() removes the socket file";
+}
+
+TEST_F(ApiServer, StopLeavesASocketAnotherServerBoundSinceAlone) {
+  start_server();
+  // Someone deletes our socket file and another server binds the same path.
+  ASSERT_EQ(::unlink(socket_path().c_str()), 0);
+  asio::io_context other;
+  asio::local::stream_protocol::acceptor theirs(
+      other, asio::local::stream_protocol::endpoint(socket_path()));
+  struct stat before {};
+  ASSERT_EQ(::lstat(socket_path().c_str(), &before), 0);
+  stop_server();
+  struct stat after {};
+  ASSERT_EQ(::lstat(socket_path().c_str(), &after), 0) << "stop() removed someone else's socket";
+  EXPECT_EQ(after.st_ino, before.st_ino);
+}
+
+TEST_F(ApiServer, UsesAListeningSocketPassedToItAndLeavesItsFileAlone) {
+  // What systemd does for liftd.socket: bind, set the mode, listen, pass the descriptor.
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  socket_path().copy(address.sun_path, sizeof(address.sun_path) - 1);
+  ASSERT_EQ(::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address)), 0);
+  ASSERT_EQ(::chmod(socket_path().c_str(), 0600), 0);
+  ASSERT_EQ(::listen(fd, 16), 0);
+  ServerConfig config = default_config();
+  config.listen_fd = fd;
+  start_server(config);
+  auto client = connect();
+  EXPECT_EQ(client->call({{"cmd", "version"}}).at("ok"), true);
+  stop_server();
+  struct stat st {};
+  ASSERT_EQ(::stat(socket_path().c_str(), &st), 0) << "stop() removed the manager's socket file";
+  EXPECT_EQ(st.st_mode & 0777, 0600U) << "the passed socket keeps the mode its owner gave it";
+}
+
+// --- reconfigure (configuration reload) --------------------------------------------------------
+
+TEST_F(ApiServer, ReconfigureLowersTheClientLimitForNewClientsOnly) {
+  ServerConfig config = default_config();
+  config.max_clients = 3;
+  start_server(config);
+  auto first = connect();
+  auto second = connect();
+  ServerConfig next = config;
+  next.max_clients = 1;
+  on_io([&] { server_->reconfigure(next); });
+  // Connected clients stay; a new one is refused.
+  EXPECT_EQ(first->call({{"cmd", "version"}}).at("ok"), true);
+  EXPECT_EQ(second->call({{"cmd", "version"}}).at("ok"), true);
+  Client extra(socket_path());
+  const auto reply = extra.read_json();
+  ASSERT_TRUE(reply);
+  EXPECT_EQ(reply->at("error").at("code"), "busy");
+}
+
+TEST_F(ApiServer, ReconfigureWithAnUnknownGroupChangesNothing) {
+  ServerConfig config = default_config();
+  config.max_clients = 2;
+  start_server(config);
+  ServerConfig next = config;
+  next.max_clients = 1;
+  next.read_group = "liftd-no-such-group-xyz";
+  const std::string error = on_io([&]() -> std::string {
+    try {
+      server_->reconfigure(next);
+    } catch (const std::runtime_error& e) {
+      return e.what();
+    }
+    return "";
+  });
+  EXPECT_NE(error.find("liftd-no-such-group-xyz"), std::string::npos) << error;
+  // The limit is still 2.
+  auto first = connect();
+  auto second = connect();
+  EXPECT_EQ(second->call({{"cmd", "version"}}).at("ok"), true);
+  EXPECT_EQ(counters().rejected, 0U);
+}
+
+TEST_F(ApiServer, ReconfigureAppliesTheIdleTimeoutToConnectedClients) {
+  start_server();  // idle timeout 10 minutes
+  auto client = connect();
+  ServerConfig next = default_config();
+  next.idle_timeout = 50ms;
+  on_io([&] { server_->reconfigure(next); });
+  const auto reply = client->read_json();
+  ASSERT_TRUE(reply);
+  EXPECT_EQ(reply->at("error").at("code"), "timeout");
+  EXPECT_TRUE(client->wait_closed());
 }
 
 TEST_F(ApiServer, RemovesAStaleSocketFile) {

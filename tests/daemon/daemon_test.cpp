@@ -4,16 +4,24 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <chrono>
+#include <csignal>
+#include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "daemon/process.hpp"
 #include "daemon/test_socket.hpp"
+#include "support/api_client.hpp"
 
 namespace liftd {
 namespace {
@@ -132,20 +140,290 @@ TEST(DaemonSignals, SigintStopsCleanly) {
   EXPECT_EQ(liftd.wait(kStopLimit), 0) << liftd.err();
 }
 
-TEST(DaemonSignals, SighupIsRefusedAndTheDaemonKeepsRunning) {
+// A liftd --simulate --config with its own notify socket, waiting for READY=1.
+struct SimDaemon {
+  explicit SimDaemon(TestSocket& notify, const std::string& config,
+                     const std::string& name = "liftd", int stderr_fd = -1)
+      : process({kLiftd, "--simulate", "--config", config}, env_for(notify), notify.dir(), name,
+                stderr_fd) {}
+  static std::vector<std::string> env_for(TestSocket& notify) {
+    auto env = base_env();
+    env.push_back("NOTIFY_SOCKET=" + notify.path());
+    env.push_back("RUNTIME_DIRECTORY=" + notify.dir());  // flight recorder files go here
+    return env;
+  }
+  Process process;
+};
+
+// The "event" of an API line ("" when nothing arrived).
+std::string event_of(const nlohmann::json& line) {
+  return line.is_object() ? line.value("event", "") : "";
+}
+
+// The error code of an API reply ("" when it is not an error).
+std::string error_code_of(const nlohmann::json& line) {
+  return line.is_object() && line.contains("error") ? line["error"].value("code", "") : "";
+}
+
+bool exists(const std::string& path) {
+  struct stat info {};
+  return ::lstat(path.c_str(), &info) == 0;
+}
+
+TEST(DaemonSignals, StraySignalsAreLoggedAndIgnored) {
   TestSocket notify;
-  auto env = base_env();
-  env.push_back("NOTIFY_SOCKET=" + notify.path());
-  env.push_back("XDG_RUNTIME_DIR=" + notify.dir());  // its own API socket: tests run in parallel
-  Process liftd({kLiftd, "--simulate"}, env, notify.dir());
+  const std::string config = write_sim_config(notify.dir(), "info");
+  SimDaemon liftd(notify, config);
   std::vector<std::string> seen;
-  ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit)) << liftd.err();
-  liftd.signal(SIGHUP);
-  // Still running a while later, and said why nothing was reloaded.
-  EXPECT_FALSE(liftd.wait(500ms).has_value());
-  EXPECT_THAT(liftd.err(), HasSubstr("reloading the configuration is not supported"));
-  liftd.signal(SIGTERM);
-  EXPECT_EQ(liftd.wait(kStopLimit), 0) << liftd.err();
+  ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit)) << liftd.process.err();
+  // Before: each of these ended the daemon without a word and left its socket behind.
+  for (int number : {SIGUSR2, SIGALRM, SIGRTMIN + 1}) {
+    liftd.process.signal(number);
+    EXPECT_FALSE(liftd.process.wait(300ms).has_value()) << number << "\n" << liftd.process.err();
+  }
+  EXPECT_THAT(liftd.process.err(), HasSubstr("SIGUSR2 has no meaning for liftd; ignored"));
+  EXPECT_THAT(liftd.process.err(), HasSubstr("SIGALRM has no meaning for liftd; ignored"));
+  EXPECT_THAT(liftd.process.err(), HasSubstr("[event=signal_ignored signal=SIGRTMIN+1]"));
+  EXPECT_TRUE(exists(notify.dir() + "/api.sock"));
+  liftd.process.signal(SIGTERM);
+  EXPECT_EQ(liftd.process.wait(kStopLimit), 0) << liftd.process.err();
+  EXPECT_FALSE(exists(notify.dir() + "/api.sock"));
+}
+
+TEST(DaemonSignals, Sigusr1WritesTheFlightRecorder) {
+  TestSocket notify;
+  const std::string config = write_sim_config(notify.dir(), "info");
+  SimDaemon liftd(notify, config);
+  std::vector<std::string> seen;
+  ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit)) << liftd.process.err();
+  liftd.process.signal(SIGUSR1);
+  std::string trace;
+  const auto end = std::chrono::steady_clock::now() + kStopLimit;
+  while (trace.empty() && std::chrono::steady_clock::now() < end) {
+    for (const auto& entry : std::filesystem::directory_iterator(notify.dir())) {
+      const std::string name = entry.path().filename().string();
+      if (starts_with(name, "liftd-trace-")) trace = entry.path().string();
+    }
+    std::this_thread::sleep_for(20ms);
+  }
+  ASSERT_FALSE(trace.empty()) << liftd.process.err();
+  EXPECT_FALSE(liftd.process.wait(200ms).has_value());
+  EXPECT_THAT(liftd.process.err(), HasSubstr("written to " + trace + " after SIGUSR1"));
+  liftd.process.signal(SIGTERM);
+  EXPECT_EQ(liftd.process.wait(kStopLimit), 0) << liftd.process.err();
+}
+
+TEST(DaemonSignals, AStderrReaderThatGoesAwayDoesNotEndTheDaemon) {
+  TestSocket notify;
+  const std::string config = write_sim_config(notify.dir(), "debug");
+  int pipe_fds[2];
+  ASSERT_EQ(::pipe2(pipe_fds, O_CLOEXEC), 0);
+  ::close(pipe_fds[0]);  // nobody reads: every write to stderr is EPIPE (before: SIGPIPE, 141)
+  SimDaemon liftd(notify, config, "liftd", pipe_fds[1]);
+  ::close(pipe_fds[1]);
+  std::vector<std::string> seen;
+  ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit))
+      << "exit " << liftd.process.wait(0ms).value_or(-1);
+  liftd.process.signal(SIGUSR2);  // more log lines
+  EXPECT_FALSE(liftd.process.wait(300ms).has_value());
+  liftd.process.signal(SIGTERM);
+  EXPECT_EQ(liftd.process.wait(kStopLimit), 0);
+}
+
+TEST(DaemonSocket, LeavesASocketAnotherDaemonBoundSinceAlone) {
+  TestSocket notify_a;
+  TestSocket notify_b;
+  const std::string config = write_sim_config(notify_a.dir(), "info");
+  const std::string socket = notify_a.dir() + "/api.sock";
+  SimDaemon first(notify_a, config, "first");
+  std::vector<std::string> seen;
+  ASSERT_TRUE(receive_until(notify_a, "READY=1", seen, kStartupLimit)) << first.process.err();
+  // Someone deletes the socket; a second daemon starts on the same path.
+  ASSERT_EQ(::unlink(socket.c_str()), 0);
+  SimDaemon second(notify_b, config, "second");
+  ASSERT_TRUE(receive_until(notify_b, "READY=1", seen, kStartupLimit)) << second.process.err();
+  first.process.signal(SIGTERM);
+  ASSERT_EQ(first.process.wait(kStopLimit), 0) << first.process.err();
+  EXPECT_THAT(first.process.err(), HasSubstr("not removing " + socket));
+  // The second daemon still has its socket and answers on it.
+  ASSERT_TRUE(exists(socket));
+  testing::ApiClient client(socket);
+  ASSERT_TRUE(client.connected());
+  EXPECT_EQ(event_of(client.next(kStartupLimit)), "hello");
+  second.process.signal(SIGTERM);
+  EXPECT_EQ(second.process.wait(kStopLimit), 0) << second.process.err();
+  EXPECT_FALSE(exists(socket));  // its own socket it does remove
+}
+
+// The children of a process (from /proc), e.g. the liftd a shell started.
+std::vector<pid_t> children_of(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/task/" + std::to_string(pid) + "/children");
+  std::vector<pid_t> out;
+  pid_t child = 0;
+  while (in >> child) out.push_back(child);
+  return out;
+}
+
+// Waits until `pid` is the only child of `parent` or gone; returns its pid or 0.
+pid_t wait_for_child(pid_t parent, std::chrono::milliseconds limit) {
+  const auto end = std::chrono::steady_clock::now() + limit;
+  while (std::chrono::steady_clock::now() < end) {
+    const auto children = children_of(parent);
+    if (children.size() == 1) return children.front();
+    std::this_thread::sleep_for(10ms);
+  }
+  return 0;
+}
+
+TEST(DaemonSocketActivation, AClientConnectingDuringARestartIsQueuedNotRefused) {
+  const std::string activate = "/usr/bin/systemd-socket-activate";
+  if (::access(activate.c_str(), X_OK) != 0) {
+    GTEST_SKIP() << activate << " is not installed (Debian package systemd)";
+  }
+  TestSocket notify;
+  const std::string config = write_sim_config(notify.dir(), "info");
+  const std::string socket = notify.dir() + "/api.sock";
+  // What systemd does with liftd.socket and Restart=: the listening socket belongs to the
+  // manager (here systemd-socket-activate, then the shell it becomes), and each liftd started
+  // gets it as fd 3 with LISTEN_PID set to its own pid.
+  const std::string run_liftd =
+      "sh -c 'LISTEN_PID=$$ exec " + kLiftd + " --simulate --config " + config + "'";
+  // systemd-socket-activate passes on only PATH, TERM, USER, HOME and what -E names.
+  std::vector<std::string> args = {activate,
+                                   "--listen=" + socket,
+                                   "--fdname=api",
+                                   "-E",
+                                   "NOTIFY_SOCKET=" + notify.path(),
+                                   "-E",
+                                   "RUNTIME_DIRECTORY=" + notify.dir()};
+  for (const auto& variable : base_env()) {
+    if (!starts_with(variable, "PATH=")) {
+      args.push_back("-E");
+      args.push_back(variable);
+    }
+  }
+  for (const std::string arg : {"/bin/sh", "-c"}) args.push_back(arg);
+  args.push_back(run_liftd + "; sleep 1; " + run_liftd);
+  Process manager(args, base_env(), notify.dir(), "manager");
+  // Whatever happens below, no liftd outlives the test (the manager's destructor kills only
+  // the shell, not the liftd it started).
+  struct KillChildren {
+    pid_t parent;
+    ~KillChildren() {
+      for (const pid_t child : children_of(parent)) ::kill(child, SIGKILL);
+    }
+  } kill_children{manager.pid()};
+  const auto end = std::chrono::steady_clock::now() + kStartupLimit;
+  while (!exists(socket) && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_TRUE(exists(socket)) << manager.err();
+  struct stat before {};
+  ASSERT_EQ(::lstat(socket.c_str(), &before), 0);
+
+  // The first client starts the first liftd and is served by it.
+  testing::ApiClient first(socket);
+  ASSERT_TRUE(first.connected());
+  const auto hello = first.next(kStartupLimit);
+  ASSERT_EQ(event_of(hello), "hello") << manager.err();
+  std::vector<std::string> seen;
+  ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit)) << manager.err();
+  EXPECT_THAT(manager.err(), HasSubstr("using the API socket systemd passed"));
+
+  // Restart: the first liftd stops; while none runs, a client connects and waits in the queue.
+  const pid_t liftd1 = wait_for_child(manager.pid(), kStartupLimit);
+  ASSERT_NE(liftd1, 0);
+  ::kill(liftd1, SIGTERM);
+  ASSERT_TRUE(receive_until(notify, "STOPPING=1", seen, kStopLimit));
+  while (::kill(liftd1, 0) == 0 && std::chrono::steady_clock::now() < end + kStopLimit) {
+    std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_TRUE(exists(socket)) << "the stopping liftd removed systemd's socket";
+  testing::ApiClient waiting(socket);
+  ASSERT_TRUE(waiting.connected()) << "refused during the restart: " << std::strerror(errno);
+  ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit)) << manager.err();
+  const auto second_hello = waiting.next(kStartupLimit);
+  EXPECT_EQ(event_of(second_hello), "hello") << manager.err();
+
+  // The socket is the one the manager made, untouched by liftd (owner, group, mode), and a
+  // connection gets the same access as on a socket liftd creates itself.
+  struct stat after {};
+  ASSERT_EQ(::lstat(socket.c_str(), &after), 0);
+  EXPECT_EQ(after.st_ino, before.st_ino);
+  EXPECT_EQ(after.st_mode, before.st_mode);
+  EXPECT_EQ(after.st_uid, before.st_uid);
+  EXPECT_EQ(after.st_gid, before.st_gid);
+  {
+    TestSocket own_notify;
+    const std::string own_config = write_sim_config(own_notify.dir(), "info");
+    SimDaemon own(own_notify, own_config, "own");
+    ASSERT_TRUE(receive_until(own_notify, "READY=1", seen, kStartupLimit)) << own.process.err();
+    testing::ApiClient client(own_notify.dir() + "/api.sock");
+    const auto own_hello = client.next(kStartupLimit);
+    ASSERT_EQ(event_of(own_hello), "hello");
+    EXPECT_EQ(own_hello["data"]["access"], hello["data"]["access"]);
+    EXPECT_EQ(own_hello["data"]["access"], second_hello["data"]["access"]);
+    own.process.signal(SIGTERM);
+    EXPECT_EQ(own.process.wait(kStopLimit), 0);
+  }
+
+  const pid_t liftd2 = wait_for_child(manager.pid(), kStartupLimit);
+  ASSERT_NE(liftd2, 0);
+  ::kill(liftd2, SIGTERM);
+  EXPECT_EQ(manager.wait(kStopLimit), 0) << manager.err();
+  EXPECT_TRUE(exists(socket));  // systemd's file: liftd never removes it
+}
+
+TEST(DaemonReload, SighupAppliesWhatItCanAndNamesWhatNeedsARestart) {
+  TestSocket notify;
+  const std::string config = write_sim_config(notify.dir(), "info");
+  SimDaemon liftd(notify, config);
+  std::vector<std::string> seen;
+  ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit)) << liftd.process.err();
+  auto before = std::make_unique<testing::ApiClient>(notify.dir() + "/api.sock");
+  ASSERT_EQ(event_of(before->next(kStartupLimit)), "hello");
+
+  // Valid file: log level and client limit apply now; the drive device needs a restart.
+  write_file(notify.dir(), "liftd.json",
+             R"({"log": {"level": "debug"}, "drive": {"device": "/dev/ttyUSB7"},
+                 "api": {"socket": ")" +
+                 notify.dir() + R"(/api.sock", "socket_group": "",
+                 "read_group": "", "control_group": "", "inputs_group": "", "max_clients": 1}})");
+  liftd.process.signal(SIGHUP);
+  std::vector<std::string> reload;
+  ASSERT_TRUE(receive_until(notify, "READY=1", reload, kStopLimit)) << liftd.process.err();
+  ASSERT_EQ(reload.size(), 2U) << joined(reload);
+  EXPECT_THAT(reload[0], ::testing::StartsWith("RELOADING=1\nSTATUS=reloading " + config +
+                                               "\nMONOTONIC_USEC="));
+  EXPECT_THAT(reload[1], HasSubstr("(1 changed key(s) wait for a restart)"));
+  const std::string err = liftd.process.err();
+  EXPECT_THAT(err, HasSubstr("drive.device changed from \"/dev/ttyS1\" to \"/dev/ttyUSB7\": it "
+                             "takes effect only after a restart"));
+  EXPECT_THAT(err, HasSubstr("applied api.max_clients, log.level"));
+  // max_clients 1: a second client is now refused with busy; debug lines now appear.
+  testing::ApiClient extra(notify.dir() + "/api.sock");
+  const auto refused = extra.next(kStartupLimit);
+  EXPECT_EQ(error_code_of(refused), "busy") << refused;
+  before.reset();  // its goodbye is a debug line, written only at the new level
+  const auto end = std::chrono::steady_clock::now() + kStopLimit;
+  while (liftd.process.err().find("DEBUG api:") == std::string::npos &&
+         std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(20ms);
+  }
+  EXPECT_THAT(liftd.process.err(), HasSubstr("DEBUG api:"));
+
+  // Invalid file: refused, nothing changes, the daemon runs on.
+  write_file(notify.dir(), "liftd.json", R"({"log": {"level": "loud"}})");
+  liftd.process.signal(SIGHUP);
+  std::vector<std::string> refused_reload;
+  ASSERT_TRUE(receive_until(notify, "READY=1", refused_reload, kStopLimit));
+  EXPECT_THAT(refused_reload.back(), HasSubstr("STATUS=reload refused (1 problem(s) in " + config));
+  EXPECT_THAT(liftd.process.err(),
+              HasSubstr("reload refused, the running configuration stays: log.level: \"loud\" is "
+                        "not allowed"));
+  EXPECT_FALSE(liftd.process.wait(200ms).has_value());
+  liftd.process.signal(SIGTERM);
+  EXPECT_EQ(liftd.process.wait(kStopLimit), 0) << liftd.process.err();
 }
 
 TEST(DaemonWatchdog, PingsAtHalfTheTimeout) {

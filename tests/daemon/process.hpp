@@ -24,15 +24,20 @@ class Process {
  public:
   /// Starts `args[0]` with `args` and exactly the environment `env` ("KEY=value"); output goes
   /// to `<dir>/<name>.out` and `<dir>/<name>.err`.
+  /// With `stderr_fd` >= 0 the child's stderr is that descriptor instead of the file.
   Process(const std::vector<std::string>& args, const std::vector<std::string>& env,
-          const std::string& dir, const std::string& name = "child")
+          const std::string& dir, const std::string& name = "child", int stderr_fd = -1)
       : out_path_(dir + "/" + name + ".out"), err_path_(dir + "/" + name + ".err") {
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addopen(&actions, 1, out_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
                                      0644);
-    posix_spawn_file_actions_addopen(&actions, 2, err_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                     0644);
+    if (stderr_fd >= 0) {
+      posix_spawn_file_actions_adddup2(&actions, stderr_fd, 2);
+    } else {
+      posix_spawn_file_actions_addopen(&actions, 2, err_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                       0644);
+    }
     std::vector<char*> argv;
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
@@ -55,6 +60,8 @@ class Process {
 
   /// Sends a signal.
   void signal(int signal_number) { ::kill(pid_, signal_number); }
+  /// The process id.
+  pid_t pid() const { return pid_; }
 
   /// The exit code (128 + signal when killed), or nullopt if still running after `timeout`.
   std::optional<int> wait(std::chrono::milliseconds timeout) {

@@ -1,4 +1,6 @@
-// sd_notify datagrams, WATCHDOG_USEC parsing and the progress-gated watchdog.
+// sd_notify datagrams through libsystemd, sd_watchdog_enabled, listen fds, and the
+// progress-gated watchdog. libsystemd reads $NOTIFY_SOCKET, $WATCHDOG_USEC and $LISTEN_FDS, so
+// these tests set them (ScopedEnv) to sockets the test binds.
 #include "service/notify.hpp"
 
 #include <gtest/gtest.h>
@@ -12,11 +14,13 @@ namespace liftd::service {
 namespace {
 
 using namespace std::chrono_literals;
+using testing::ScopedEnv;
 using testing::TestSocket;
 
 TEST(Notifier, SendsEachNotificationAsOneDatagram) {
   TestSocket socket;
-  Notifier notifier(socket.path());
+  ScopedEnv env("NOTIFY_SOCKET", socket.path());
+  Notifier notifier = Notifier::from_environment();
   ASSERT_TRUE(notifier.enabled());
   // Legend: call -> exact datagram (sd_notify(3) format: newline-separated KEY=value).
   EXPECT_EQ(notifier.status("starting"), 0);
@@ -27,6 +31,29 @@ TEST(Notifier, SendsEachNotificationAsOneDatagram) {
   EXPECT_EQ(socket.receive(2s), "WATCHDOG=1");
   EXPECT_EQ(notifier.stopping("stopping: SIGTERM"), 0);
   EXPECT_EQ(socket.receive(2s), "STOPPING=1\nSTATUS=stopping: SIGTERM");
+  EXPECT_EQ(notifier.status("two\nlines"), 0);
+  EXPECT_EQ(socket.receive(2s), "STATUS=two lines");  // a newline would start a new key
+}
+
+TEST(Notifier, ReloadingCarriesTheMonotonicTime) {
+  TestSocket socket;
+  ScopedEnv env("NOTIFY_SOCKET", socket.path());
+  Notifier notifier = Notifier::from_environment();
+  timespec before{};
+  ::clock_gettime(CLOCK_MONOTONIC, &before);
+  ASSERT_EQ(notifier.reloading("reloading /etc/liftd/liftd.json"), 0);
+  timespec after{};
+  ::clock_gettime(CLOCK_MONOTONIC, &after);
+  const std::string datagram = socket.receive(2s).value_or("");
+  const std::string head = "RELOADING=1\nSTATUS=reloading /etc/liftd/liftd.json\nMONOTONIC_USEC=";
+  ASSERT_EQ(datagram.substr(0, head.size()), head) << datagram;
+  const auto usec = std::stoull(datagram.substr(head.size()));
+  const auto to_usec = [](const timespec& t) {
+    return static_cast<unsigned long long>(t.tv_sec) * 1000000ULL +
+           static_cast<unsigned long long>(t.tv_nsec) / 1000ULL;
+  };
+  EXPECT_GE(usec, to_usec(before));
+  EXPECT_LE(usec, to_usec(after));
 }
 
 TEST(Notifier, ReachesAnAbstractSocket) {
@@ -38,8 +65,8 @@ TEST(Notifier, ReachesAnAbstractSocket) {
   std::memcpy(address.sun_path + 1, name.data(), name.size());  // sun_path[0] = 0: abstract
   const auto length = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + 1 + name.size());
   ASSERT_EQ(::bind(fd, reinterpret_cast<const sockaddr*>(&address), length), 0);
-  Notifier notifier("@" + name);
-  EXPECT_EQ(notifier.notify("READY=1"), 0);
+  ScopedEnv env("NOTIFY_SOCKET", "@" + name);
+  EXPECT_EQ(Notifier::from_environment().notify("READY=1"), 0);
   char buffer[64] = {};
   const ssize_t n = ::recv(fd, buffer, sizeof(buffer), 0);
   ::close(fd);
@@ -50,43 +77,68 @@ TEST(Notifier, DisabledWithoutASocketAndHarmless) {
   Notifier notifier;
   EXPECT_FALSE(notifier.enabled());
   EXPECT_EQ(notifier.ready("x"), 0);
-  ::unsetenv("NOTIFY_SOCKET");
+  {
+    ScopedEnv env("NOTIFY_SOCKET", nullptr);
+    EXPECT_FALSE(Notifier::from_environment().enabled());
+  }
+  ScopedEnv env("NOTIFY_SOCKET", "");
   EXPECT_FALSE(Notifier::from_environment().enabled());
-  ::setenv("NOTIFY_SOCKET", "/run/systemd/notify", 1);
-  EXPECT_EQ(Notifier::from_environment().socket(), "/run/systemd/notify");
-  ::unsetenv("NOTIFY_SOCKET");
 }
 
 TEST(Notifier, ReportsAnUnreachableSocket) {
-  Notifier notifier("/nonexistent/notify");
-  EXPECT_EQ(notifier.status("x"), ENOENT);
+  ScopedEnv env("NOTIFY_SOCKET", "/nonexistent/notify");
+  EXPECT_EQ(Notifier::from_environment().status("x"), ENOENT);
 }
 
-TEST(WatchdogEnvironment, ParsesUsecAndChecksPid) {
-  // Legend: WATCHDOG_USEC, WATCHDOG_PID, our pid -> timeout (nullopt: no watchdog).
+TEST(WatchdogEnvironment, FollowsSdWatchdogEnabled) {
+  // Legend: WATCHDOG_USEC, WATCHDOG_PID ("self": this process) -> timeout (nullopt: none).
+  const std::string self = std::to_string(::getpid());
   struct Case {
     const char* usec;
     const char* pid;
-    pid_t self;
     std::optional<std::chrono::microseconds> expected;
   };
   const std::vector<Case> cases = {
-      {"5000000", nullptr, 42, 5s},
-      {"5000000", "42", 42, 5s},
-      {"5000000", "", 42, 5s},
-      {"5000000", "43", 42, std::nullopt},
-      {"5000000", "4x", 42, std::nullopt},
-      {nullptr, nullptr, 42, std::nullopt},
-      {"", nullptr, 42, std::nullopt},
-      {"0", nullptr, 42, std::nullopt},
-      {"-5", nullptr, 42, std::nullopt},
-      {"12abc", nullptr, 42, std::nullopt},
-      {"200000", nullptr, 42, 200ms},
+      {"5000000", nullptr, 5s},         {"5000000", "self", 5s},
+      {"5000000", "1", std::nullopt},   // meant for another process
+      {"5000000", "4x", std::nullopt},  // malformed pid
+      {"5000000", "", std::nullopt},    // malformed pid
+      {nullptr, nullptr, std::nullopt}, {"", nullptr, std::nullopt},
+      {"0", nullptr, std::nullopt},     {"-5", nullptr, std::nullopt},
+      {"12abc", nullptr, std::nullopt}, {"200000", nullptr, 200ms},
   };
   for (const auto& c : cases) {
-    EXPECT_EQ(parse_watchdog(c.usec, c.pid, c.self), c.expected)
+    const char* pid = c.pid != nullptr && std::string(c.pid) == "self" ? self.c_str() : c.pid;
+    ScopedEnv usec("WATCHDOG_USEC", c.usec);
+    ScopedEnv owner("WATCHDOG_PID", pid);
+    EXPECT_EQ(watchdog_from_environment(), c.expected)
         << (c.usec ? c.usec : "(unset)") << " / " << (c.pid ? c.pid : "(unset)");
   }
+}
+
+TEST(ListenFds, NoneWithoutSocketActivation) {
+  ScopedEnv fds("LISTEN_FDS", nullptr);
+  ScopedEnv pid("LISTEN_PID", nullptr);
+  EXPECT_TRUE(listen_fds_from_environment().empty());
+}
+
+TEST(ListenFds, PicksTheNamedListeningUnixStreamSocket) {
+  // A listening Unix stream socket, a datagram socket and an unbound stream socket.
+  const int listening = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;  // autobind: an abstract address chosen by the kernel
+  ASSERT_EQ(::bind(listening, reinterpret_cast<const sockaddr*>(&address), sizeof(sa_family_t)), 0);
+  ASSERT_EQ(::listen(listening, 4), 0);
+  const int datagram = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  const int idle = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  // Legend: passed fds -> what pick_listen_fd takes for "api".
+  EXPECT_EQ(pick_listen_fd({{datagram, "api"}, {listening, "api"}}, "api"), listening);
+  EXPECT_EQ(pick_listen_fd({{listening, "liftd.socket"}}, "api"), listening);  // the only one
+  EXPECT_EQ(pick_listen_fd({{listening, "other"}, {idle, "x"}}, "api"), -1);
+  EXPECT_EQ(pick_listen_fd({{datagram, "api"}}, "api"), -1);
+  EXPECT_EQ(pick_listen_fd({{idle, "api"}}, "api"), -1);  // not listening
+  EXPECT_EQ(pick_listen_fd({}, "api"), -1);
+  for (int fd : {listening, datagram, idle}) ::close(fd);
 }
 
 TEST(Watchdog, PeriodIsHalfTheTimeout) {
@@ -98,8 +150,9 @@ TEST(Watchdog, PeriodIsHalfTheTimeout) {
 
 TEST(Watchdog, PingsOnlyWhileTheProbeReportsProgress) {
   TestSocket socket;
+  ScopedEnv env("NOTIFY_SOCKET", socket.path());
   asio::io_context io;
-  Notifier notifier(socket.path());
+  Notifier notifier = Notifier::from_environment();
   bool progress = true;
   Watchdog dog(io, notifier, 20ms, [&] { return progress; });
   dog.start();  // first ping at once

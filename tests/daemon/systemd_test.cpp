@@ -1,5 +1,6 @@
-// The systemd files: the unit passes `systemd-analyze verify` without a single warning and has
-// the settings the task requires; sysusers.d and tmpfiles.d apply cleanly to a scratch root.
+// The systemd files: the units pass `systemd-analyze verify` without a single warning and have
+// the settings the task requires; sysusers.d and tmpfiles.d apply cleanly to a scratch root; the
+// journal catalog builds with journalctl and names exactly the ids the code can emit.
 #include <sys/stat.h>
 
 #include <gmock/gmock.h>
@@ -7,12 +8,16 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "api/server.hpp"
+#include "config/config.hpp"
 #include "daemon/process.hpp"
 #include "daemon/test_socket.hpp"
+#include "log/catalog.hpp"
 
 namespace liftd {
 namespace {
@@ -72,7 +77,10 @@ TEST(SystemdUnit, VerifiesWithoutWarnings) {
     GTEST_SKIP() << "systemd-analyze verify cannot run in this environment (exit " << check.code
                  << "): " << check.output;
   }
-  const ToolRun result = run({tool, "verify", unit_for_this_build(scratch.dir())}, scratch.dir());
+  const std::string socket_unit = scratch.dir() + "/liftd.socket";
+  std::ofstream(socket_unit) << read_text(LIFTD_SOCKET_UNIT);
+  const ToolRun result =
+      run({tool, "verify", unit_for_this_build(scratch.dir()), socket_unit}, scratch.dir());
   EXPECT_EQ(result.code, 0) << result.output;
   // verify exits 0 on unknown or misspelt settings; it only prints them. Demand silence.
   EXPECT_EQ(result.output, "");
@@ -104,8 +112,69 @@ TEST(SystemdUnit, HasTheRequiredSettings) {
     EXPECT_THAT(unit, HasSubstr("\n" + line + "\n")) << line;
   }
   EXPECT_THAT(unit, HasSubstr("/liftd --config /etc/liftd/liftd.json\n"));
+  // Reload: Debian 12's systemd 252 has no Type=notify-reload (253); ExecReload= sends SIGHUP.
+  for (const std::string line :
+       {"ExecReload=kill -HUP $MAINPID", "RuntimeDirectoryPreserve=yes", "Wants=liftd.socket",
+        "WantedBy=multi-user.target", "Also=liftd.socket"}) {
+    EXPECT_THAT(unit, HasSubstr("\n" + line + "\n")) << line;
+  }
   // SCHED_FIFO must stay possible.
   EXPECT_THAT(unit, ::testing::Not(HasSubstr("\nRestrictRealtime=yes")));
+}
+
+TEST(SystemdSocketUnit, MatchesWhatLiftdDoesWithoutIt) {
+  const std::string unit = read_text(LIFTD_SOCKET_UNIT);
+  const config::Config defaults;
+  const api::ServerConfig server;
+  char mode[8];
+  std::snprintf(mode, sizeof mode, "%04o", server.socket_mode);
+  // Legend: a line the socket unit must contain, and the setting of liftd it mirrors.
+  const std::vector<std::string> required = {
+      "ListenStream=" + defaults.api.socket,       // api.socket
+      "FileDescriptorName=api",                    // the name liftd looks for
+      "SocketUser=liftd",                          // User= of the service
+      "SocketGroup=" + defaults.api.socket_group,  // api.socket_group
+      std::string("SocketMode=") + mode,           // the mode liftd gives its own socket
+      "WantedBy=sockets.target",
+  };
+  for (const auto& line : required) EXPECT_THAT(unit, HasSubstr("\n" + line + "\n")) << line;
+  // The service, not the first client, starts liftd.
+  EXPECT_THAT(unit, ::testing::Not(HasSubstr("Accept=yes")));
+}
+
+TEST(JournalCatalog, BuildsAndExplainsExactlyTheIdsTheCodeEmits) {
+  const std::string journalctl = find_tool("journalctl");
+  if (journalctl.empty()) GTEST_SKIP() << "journalctl is not installed on this machine";
+  TestSocket scratch;
+  const std::string root = scratch.dir() + "/root";
+  std::filesystem::create_directories(root + "/usr/lib/systemd/catalog");
+  std::filesystem::copy_file(LIFTD_CATALOG, root + "/usr/lib/systemd/catalog/liftd.catalog");
+  const ToolRun update = run({journalctl, "--root=" + root, "--update-catalog"}, scratch.dir());
+  ASSERT_EQ(update.code, 0) << update.output;
+  EXPECT_EQ(update.output, "");  // a malformed entry is a warning here
+  const ToolRun list = run({journalctl, "--root=" + root, "--list-catalog"}, scratch.dir());
+  ASSERT_EQ(list.code, 0) << list.output;
+  // "<id> liftd: <subject>" per entry.
+  std::set<std::string> in_catalog;
+  std::istringstream lines(list.output);
+  for (std::string line; std::getline(lines, line);) {
+    ASSERT_GE(line.size(), 33U) << line;
+    EXPECT_THAT(line.substr(32), ::testing::StartsWith(" liftd: ")) << line;
+    EXPECT_GT(line.size(), 32U + 8U + 10U) << "no subject: " << line;
+    in_catalog.insert(line.substr(0, 32));
+  }
+  std::set<std::string> in_code;
+  for (const auto& entry : log::catalog()) in_code.insert(std::string(entry.id));
+  for (const auto& id : in_code) EXPECT_TRUE(in_catalog.count(id)) << "no catalog entry: " << id;
+  for (const auto& id : in_catalog) EXPECT_TRUE(in_code.count(id)) << "orphaned entry: " << id;
+  // Every entry explains something: a text of some lines under the headers.
+  for (const auto& id : in_code) {
+    const ToolRun dump = run({journalctl, "--root=" + root, "--dump-catalog", id}, scratch.dir());
+    ASSERT_EQ(dump.code, 0) << id;
+    EXPECT_THAT(dump.output, HasSubstr("Subject: ")) << id;
+    EXPECT_THAT(dump.output, HasSubstr("Check")) << id << ": says what to check";
+    EXPECT_GT(std::count(dump.output.begin(), dump.output.end(), '\n'), 8) << id;
+  }
 }
 
 TEST(SystemdFiles, SysusersAndTmpfilesApplyToAScratchRoot) {

@@ -142,7 +142,7 @@ int main(int argc, char** argv) {
   const fs::path dir = fs::temp_directory_path() / ("liftd-api-load-" + std::to_string(getpid()));
   fs::create_directories(dir);
   ::setenv("XDG_RUNTIME_DIR", dir.c_str(), 1);
-  liftd::log::init({liftd::log::Level::warn, liftd::log::Backend::text, {}, "api-load-bench"});
+  liftd::log::init({liftd::log::Level::warn, liftd::log::Backend::text, "api-load-bench"});
 
   liftd::config::Config cfg = liftd::daemon::simulation_defaults();
   cfg.rt.lock_memory = true;  // as the service runs
