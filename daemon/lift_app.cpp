@@ -181,6 +181,9 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
   server.inputs_group = config.api.inputs_group;
   server.max_clients = static_cast<std::size_t>(config.api.max_clients);
   server.idle_timeout = std::chrono::seconds(config.api.idle_timeout_s);
+  server.max_clients_per_uid = static_cast<std::size_t>(config.api.max_clients_per_uid);
+  server.reserved_clients = static_cast<std::size_t>(config.api.reserved_clients);
+  server.stalled_reader_timeout = std::chrono::seconds(config.api.stalled_reader_timeout_s);
   server_ = std::make_unique<api::Server>(
       daemon.io(), *backend_, server, [](api::LogLevel level, std::string_view text) {
         const log::Level l = level == api::LogLevel::Error  ? log::Level::error
