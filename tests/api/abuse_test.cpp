@@ -79,6 +79,26 @@ TEST_F(ApiAbuse, ErrorMessagesEchoAtMost64BytesOfInput) {
             std::string(63, 'a') + "... (75 bytes)");
 }
 
+TEST_F(ApiAbuse, IdsComeBackAsTheSameValueByTheDocumentedRule) {
+  start_server();
+  auto client = connect();
+  // Legend: id as sent -> id as echoed (docs/api.md: the value, re-serialised).
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"("req-7")", R"("req-7")"},
+      {"42", "42"},
+      {"-3", "-3"},
+      {"1e2", "100.0"},
+      {"2.50", "2.5"},
+      {R"({"a":[1,true]})", R"({"a":[1,true]})"},
+  };
+  for (const auto& [sent, echoed] : cases) {
+    ASSERT_TRUE(client->send(R"({"cmd":"version","id":)" + sent + "}\n"));
+    const auto line = client->read_line();
+    ASSERT_TRUE(line) << sent;
+    EXPECT_EQ(line->substr(0, 7 + echoed.size()), R"({"id":)" + echoed + ",") << sent;
+  }
+}
+
 TEST_F(ApiAbuse, HalfClosedClientGetsItsRepliesThenTheClose) {
   start_server();
   on_io([this] { backend_.defer = true; });
