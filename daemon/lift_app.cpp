@@ -158,7 +158,8 @@ config::Config simulation_defaults() {
   cfg.api.read_group.clear();
   cfg.api.control_group.clear();
   cfg.api.inputs_group.clear();
-  cfg.rt.lock_memory = false;  // an ordinary user may not lock memory; say nothing about it
+  cfg.rt.lock_memory = false;       // an ordinary user may not lock memory; say nothing about it
+  cfg.rt.require_realtime = false;  // nor get SCHED_FIFO: the simulation runs anyway, warned
   // The simulator's crawl (V0) stop takes about 8 mm: DCP3 travels withdraw B2 that early.
   cfg.travel.dcp3_stop_lead_mm = 8;
   return cfg;
@@ -206,6 +207,9 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
   server.max_clients = static_cast<std::size_t>(config.api.max_clients);
   server.idle_timeout = std::chrono::seconds(config.api.idle_timeout_s);
   server.listen_fd = take_listen_fd(socket_path_);
+  server.max_clients_per_uid = static_cast<std::size_t>(config.api.max_clients_per_uid);
+  server.reserved_clients = static_cast<std::size_t>(config.api.reserved_clients);
+  server.stalled_reader_timeout = std::chrono::seconds(config.api.stalled_reader_timeout_s);
   server_ = std::make_unique<api::Server>(
       daemon.io(), *backend_, server, [](api::LogLevel level, std::string_view text) {
         const log::Level l = level == api::LogLevel::Error  ? log::Level::error
@@ -244,6 +248,14 @@ bool LiftApp::start_cycle() {
   if (error != 0) {
     log::event(log::Level::error, "dcp", "cycle_start_failed", {{"errno", std::to_string(error)}},
                std::string("cannot start the cycle thread: ") + std::strerror(error));
+    return false;
+  }
+  if (config_.rt.require_realtime && !runner_->thread_status().realtime) {
+    // main() checked this before starting; a refusal only now is still no cycle to run a car on.
+    log::event(log::Level::error, "rt", "realtime_refused", {},
+               "rt.require_realtime is true but the cycle thread runs without real time: " +
+                   runner_->thread_status().describe());
+    runner_->stop();
     return false;
   }
   for (const std::string& line : {runner_->thread_status().describe()}) {

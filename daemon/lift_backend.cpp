@@ -1,5 +1,7 @@
 #include "daemon/lift_backend.hpp"
 
+#include <sstream>
+
 #include <algorithm>
 #include <ctime>
 
@@ -95,7 +97,7 @@ LiftBackend::LiftBackend(const config::Config& config, control::DcpController& c
       controller_(controller),
       runner_(runner),
       position_feed_(position_feed),
-      runtime_dir_(std::move(runtime_dir)),
+      trace_files_(std::move(runtime_dir), static_cast<std::size_t>(config.rt.trace_files_kept)),
       sim_(sim),
       mono_at_start_(mono_now()),
       wall_at_start_(std::chrono::system_clock::now()) {}
@@ -189,6 +191,9 @@ std::vector<api::TraceEntry> LiftBackend::trace(std::size_t max_entries) {
 }
 
 api::Result LiftBackend::save_trace() {
+  if (const auto wait = trace_files_.admit_request(std::chrono::steady_clock::now())) {
+    return Result::fail(api::ErrorCode::Busy, *wait);
+  }
   return write_flight_recorder("request");
 }
 
@@ -199,16 +204,22 @@ api::Result LiftBackend::write_flight_recorder(std::string_view why) {
   std::tm tm{};
   gmtime_r(&t, &tm);
   std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
-  const std::string path = runtime_dir_ + "/liftd-trace-" + stamp + ".txt";
   dcp::TraceOptions options;
   options.protocol = controller_.snapshot().protocol.value_or(dcp::Protocol::Dcp4);
   options.data_info = *dcp::data_info_type_from_char(config_.dcp.data_info_type);
-  const int error = rt::write_text_file(path, records, dcp::trace_decoder(options));
-  if (error != 0) {
-    const std::string text =
-        "could not write the flight recorder to " + path + ": " + std::strerror(error);
-    log::event(log::Level::warn, "dcp", "trace_not_written", {{"path", path}}, text);
+  std::ostringstream text_out;
+  rt::write_text(text_out, records, dcp::trace_decoder(options));
+  const TraceWrite written = trace_files_.write(stamp, text_out.str());
+  if (!written.ok()) {
+    const std::string text = "could not write the flight recorder: " + written.error;
+    log::event(log::Level::warn, "dcp", "trace_not_written", {{"dir", trace_files_.dir()}}, text);
     return Result::fail(api::ErrorCode::Internal, text);
+  }
+  const std::string& path = written.path;
+  for (const auto& old : written.removed) {
+    log::event(log::Level::info, "dcp", "trace_removed", {{"path", old}},
+               "removed the old flight recorder " + old + " (rt.trace_files_kept " +
+                   std::to_string(config_.rt.trace_files_kept) + ")");
   }
   std::size_t bad = 0;
   for (const auto& r : records) {

@@ -15,6 +15,7 @@
 #include "api/dispatcher.hpp"
 #include "config/config.hpp"
 #include "control/dcp_controller.hpp"
+#include "daemon/trace_files.hpp"
 #include "rt/cycle_runner.hpp"
 
 namespace liftd::daemon {
@@ -88,9 +89,9 @@ class LiftBackend final : public api::Backend {
   control::DcpController& controller_;
   rt::CycleRunner& runner_;
   control::PositionFeed* position_feed_;
-  std::string runtime_dir_;
-  SimulatedLift* sim_;    ///< the simulated lift (liftd --simulate), else nullptr
-  api::Inputs inputs_{};  ///< merged API input state (partial updates keep the rest)
+  TraceFiles trace_files_;  ///< flight-recorder files in the runtime directory
+  SimulatedLift* sim_;      ///< the simulated lift (liftd --simulate), else nullptr
+  api::Inputs inputs_{};    ///< merged API input state (partial updates keep the rest)
   std::map<std::uint32_t, Pending> pending_;
   std::uint32_t next_tag_ = 0;
   MonoTime mono_at_start_{};

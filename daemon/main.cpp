@@ -1,9 +1,11 @@
 // liftd entry point: command line, configuration, logging, then the daemon frame.
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -14,6 +16,7 @@
 #include "daemon/daemon.hpp"
 #include "daemon/lift_app.hpp"
 #include "log/log.hpp"
+#include "rt/rt_thread.hpp"
 #include "service/notify.hpp"
 
 namespace {
@@ -68,8 +71,33 @@ std::optional<config::Config> load_config(const CommandLine& cl, bool to_log) {
     }
     return std::nullopt;
   }
-  if (cl.simulate) result.config.position.source = config::PositionSource::sim;
+  if (cl.simulate) {
+    result.config.position.source = config::PositionSource::sim;
+    // A simulated lift moves no car: it runs for anyone, real time or not (and says which).
+    result.config.rt.require_realtime = false;
+  }
   return result.config;
+}
+
+// When the configuration requires real time, tries a thread with the cycle's scheduling before
+// anything starts: a refusal is a configuration this host cannot run, so it ends with exit 2
+// (the unit does not restart on it) instead of a cycle without real time behind one warning.
+// Returns the refusal text, or nothing when the cycle can run.
+std::optional<std::string> realtime_refusal(const config::Config& cfg) {
+  if (!cfg.rt.require_realtime) return std::nullopt;
+  liftd::rt::RtThreadOptions options;
+  options.priority = cfg.rt.priority;
+  options.cpu = cfg.rt.cpu;
+  options.lock_memory = false;  // the cycle's own start locks memory
+  options.stack_prefault_bytes = 0;
+  liftd::rt::RtThread probe;
+  if (const int error = probe.start(options, [] {}); error != 0) {
+    return std::string("cannot start a thread: ") + std::strerror(error);
+  }
+  probe.join();
+  const auto& status = probe.status();
+  if (status.realtime && (cfg.rt.cpu < 0 || status.pinned)) return std::nullopt;
+  return status.describe();
 }
 
 int run_daemon(const CommandLine& cl) {
@@ -77,6 +105,21 @@ int run_daemon(const CommandLine& cl) {
   auto cfg = load_config(cl, true);
   if (!cfg) return exit_code::kBadConfig;
   log::set_level(cl.log_level.value_or(to_log_level(cfg->log.level)));
+  if (const auto refusal = realtime_refusal(*cfg)) {
+    const std::string text =
+        "rt.require_realtime is true but the cycle thread cannot run with SCHED_FIFO priority " +
+        std::to_string(cfg->rt.priority) +
+        (cfg->rt.cpu >= 0 ? " on CPU " + std::to_string(cfg->rt.cpu) : std::string()) + ": " +
+        *refusal +
+        "; grant CAP_SYS_NICE (the unit does) or LimitRTPRIO, or set rt.require_realtime to "
+        "false to run without real time";
+    log::event(log::Level::error, "rt", "realtime_refused",
+               {{"priority", std::to_string(cfg->rt.priority)}}, text);
+    liftd::service::Notifier::from_environment().status("real-time scheduling refused: " +
+                                                        *refusal);
+    log::flush();
+    return exit_code::kBadConfig;
+  }
   log::event(
       log::Level::info, "daemon", "starting",
       {{"version", std::string(liftd::kVersion)},

@@ -88,16 +88,26 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
       {"trace",
        Access::Read,
        {int_arg("count", false, 1, kMaxTraceEntries, "newest frames to return (default 100)"),
-        flag_arg("save", "also write the whole flight recorder, decoded, to a file")},
+        flag_arg("save",
+                 "also write the whole flight recorder, decoded, to a file (needs control "
+                 "access; at most one every 10 s)")},
        "the newest DCP frames sent and received",
        [b](const Call& call, Responder done) {
+         const bool save = arg_or<bool>(call.request, "save", false);
+         if (save && !call.peer.access.control) {
+           // A file in the runtime directory (RAM under systemd) per request: not for readers.
+           done(Result::fail(ErrorCode::Forbidden,
+                             "\"trace\" with \"save\" needs control access; uid " +
+                                 std::to_string(call.peer.uid) + " is not in that group"));
+           return;
+         }
          const auto count = arg_or<std::int64_t>(call.request, "count", 100);
          nlohmann::json frames = nlohmann::json::array();
          for (const auto& entry : b->trace(static_cast<std::size_t>(count))) {
            frames.push_back(to_json(entry));
          }
          nlohmann::json result = {{"frames", std::move(frames)}};
-         if (arg_or<bool>(call.request, "save", false)) {
+         if (save) {
            Result saved = b->save_trace();
            if (!saved.is_ok()) {
              done(std::move(saved));

@@ -1,5 +1,6 @@
 #include "api/dispatcher.hpp"
 
+#include <algorithm>
 #include <exception>
 #include <memory>
 #include <stdexcept>
@@ -94,6 +95,50 @@ class ReplyState {
 
 }  // namespace
 
+namespace {
+
+// Parses `line` (discarded on error) and records the first key that appears twice in one object.
+nlohmann::json parse_checked(std::string_view line, std::optional<std::string>& duplicate) {
+  // nlohmann keeps the last of duplicate keys silently; a request with two "cmd" keys must not
+  // run either. The callback sees every key with the object it belongs to.
+  std::vector<std::vector<std::string>> objects;
+  const nlohmann::json::parser_callback_t callback =
+      [&](int /*depth*/, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+        using Event = nlohmann::json::parse_event_t;
+        switch (event) {
+          case Event::object_start:
+            objects.emplace_back();
+            break;
+          case Event::object_end:
+            if (!objects.empty()) objects.pop_back();
+            break;
+          case Event::key:
+            if (!objects.empty() && !duplicate) {
+              auto& keys = objects.back();
+              const auto& key = parsed.get_ref<const std::string&>();
+              if (std::find(keys.begin(), keys.end(), key) != keys.end()) {
+                duplicate = key;
+              } else {
+                keys.push_back(key);
+              }
+            }
+            break;
+          default:
+            break;
+        }
+        return true;
+      };
+  return nlohmann::json::parse(line.begin(), line.end(), callback, false);
+}
+
+}  // namespace
+
+std::optional<std::string> find_duplicate_key(std::string_view line) {
+  std::optional<std::string> duplicate;
+  (void)parse_checked(line, duplicate).is_discarded();
+  return duplicate;
+}
+
 void Dispatcher::handle_line(std::string_view line, const Peer& peer, SessionControl& session,
                              SendFn send) const {
   const auto fail = [&send](const nlohmann::json& id, ErrorCode code, std::string message,
@@ -105,9 +150,23 @@ void Dispatcher::handle_line(std::string_view line, const Peer& peer, SessionCon
          "JSON nests deeper than " + std::to_string(limits_.max_depth) + " levels");
     return;
   }
-  nlohmann::json request = nlohmann::json::parse(line.begin(), line.end(), nullptr, false);
+  if (const auto nul = line.find('\0'); nul != std::string_view::npos) {
+    // The parser would take the NUL for the end of the text and run the part before it.
+    fail(nullptr, ErrorCode::BadJson,
+         "raw NUL byte at offset " + std::to_string(nul) +
+             ": JSON text cannot contain one (inside a string write \\u0000)");
+    return;
+  }
+  std::optional<std::string> duplicate;
+  nlohmann::json request = parse_checked(line, duplicate);
   if (request.is_discarded()) {
     fail(nullptr, ErrorCode::BadJson, "not valid JSON (expected one object per line)");
+    return;
+  }
+  if (duplicate) {
+    // Which of two "cmd" keys was meant is unknowable: run neither.
+    fail(nullptr, ErrorCode::BadJson,
+         "duplicate key \"" + capped(*duplicate) + "\": each key may appear once per object");
     return;
   }
   if (!request.is_object()) {
@@ -128,7 +187,7 @@ void Dispatcher::handle_line(std::string_view line, const Peer& peer, SessionCon
   const std::string& name = cmd->get_ref<const std::string&>();
   const CommandSpec* spec = find(name);
   if (spec == nullptr) {
-    fail(id, ErrorCode::UnknownCmd, "unknown command \"" + name + "\"", "cmd");
+    fail(id, ErrorCode::UnknownCmd, "unknown command \"" + capped(name) + "\"", "cmd");
     return;
   }
   if (!peer.access.allows(spec->access)) {

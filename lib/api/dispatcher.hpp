@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -84,6 +85,10 @@ struct DispatchLimits {
   int max_depth = 32;              ///< deepest object/array nesting accepted in a request
   std::size_t max_in_flight = 32;  ///< unanswered requests per connection before `busy`
 };
+
+/// The first key that appears twice in one object of `line`, or nothing (also nothing for text
+/// that is not JSON: the parser reports that).
+std::optional<std::string> find_duplicate_key(std::string_view line);
 
 /// The command table and request handling.
 class Dispatcher {

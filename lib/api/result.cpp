@@ -93,4 +93,12 @@ int json_nesting_depth(std::string_view text, int limit) noexcept {
   return deepest;
 }
 
+std::string capped(std::string_view text) {
+  if (text.size() <= kMaxEchoBytes) return std::string(text);
+  std::size_t cut = kMaxEchoBytes;
+  // Do not split a UTF-8 sequence: back up over continuation bytes (10xxxxxx).
+  while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0U) == 0x80U) --cut;
+  return std::string(text.substr(0, cut)) + "... (" + std::to_string(text.size()) + " bytes)";
+}
+
 }  // namespace liftd::api

@@ -65,6 +65,13 @@ using Responder = std::function<void(Result)>;
 /// Serialises one JSON value as a single line without the newline; invalid UTF-8 in strings is
 /// replaced, never thrown.
 std::string dump_compact(const nlohmann::json& value);
+/// Longest piece of client input echoed in an error message, in bytes.
+inline constexpr std::size_t kMaxEchoBytes = 64;
+
+/// `text` for an error message: at most kMaxEchoBytes (cut at a UTF-8 character boundary), with
+/// "... (N bytes)" appended when it was cut, so a 1 MB key gives a short message.
+std::string capped(std::string_view text);
+
 /// A reply line with its trailing '\n'.
 std::string reply_line(const nlohmann::json& id, const Result& result);
 /// An event line {"event":name,"data":data} with its trailing '\n'.

@@ -76,7 +76,8 @@ std::optional<Error> validate_args(const nlohmann::json& request, const ArgSchem
       for (const auto& s : schema) names.push_back(s.name);
       std::string allowed = names.empty() ? "this command takes no arguments"
                                           : "allowed fields: " + quoted_list(names);
-      return Error{ErrorCode::BadRequest, "unknown field \"" + key + "\" (" + allowed + ")", key};
+      return Error{ErrorCode::BadRequest, "unknown field \"" + capped(key) + "\" (" + allowed + ")",
+                   capped(key)};
     }
     if (!fits(*spec, value)) {
       return Error{ErrorCode::BadRequest,

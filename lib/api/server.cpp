@@ -1,14 +1,17 @@
 #include "api/server.hpp"
 
+#include <poll.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
 #include <deque>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <utility>
@@ -88,6 +91,8 @@ class Server::Impl : public std::enable_shared_from_this<Server::Impl> {
   void accept_next();
   void on_accept(const asio::error_code& ec, Socket socket);
   void reject(Socket socket, ErrorCode code, const std::string& message);
+  /// Why a new connection from `peer` is refused (limits), or nothing.
+  std::optional<std::string> admission_refusal(const Peer& peer) const;
   void remove(const std::shared_ptr<Session>& session) { sessions_.erase(session); }
 
   asio::io_context& io_;
@@ -139,6 +144,9 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
     arm_timer();
   }
 
+  /// The peer's credentials and access.
+  const Peer& peer() const { return peer_; }
+
   /// Closes the socket now and forgets the session.
   void close(std::string_view reason) {
     if (closed_) return;
@@ -156,17 +164,19 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
     server_->remove(shared_from_this());
   }
 
-  /// Queues a line; drops the client if its queue is full.
+  /// Queues a line. Replies are always queued: reading pauses while the queue is full, so they
+  /// stay bounded. An event that does not fit drops the watcher (it has fallen behind).
   void enqueue(std::shared_ptr<const std::string> line, bool is_event) {
     if (closed_) return;
     const ServerConfig& cfg = server_->config_;
-    if (queue_.size() + 1 > cfg.write_queue_max_messages ||
-        queued_bytes_ + line->size() > cfg.write_queue_max_bytes) {
+    if (is_event && (queue_.size() + 1 > cfg.write_queue_max_messages ||
+                     queued_bytes_ + line->size() > cfg.write_queue_max_bytes)) {
       ++server_->counters_.dropped;
-      server_->log_(LogLevel::Warn, describe() + " dropped: it does not read fast enough (" +
+      server_->log_(LogLevel::Warn, describe() +
+                                        " dropped: it does not read its events fast "
+                                        "enough (" +
                                         std::to_string(queue_.size()) + " lines, " +
-                                        std::to_string(queued_bytes_) + " bytes queued" +
-                                        (is_event ? ", while watching" : "") + ")");
+                                        std::to_string(queued_bytes_) + " bytes queued)");
       close("write queue full");
       return;
     }
@@ -196,25 +206,76 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
            std::to_string(peer_.uid) + ")";
   }
 
+  /// True while the replies already queued or owed fill the write queue: take no more requests.
+  bool backlogged() const {
+    const ServerConfig& cfg = server_->config_;
+    return queue_.size() + in_flight_ >= cfg.write_queue_max_messages ||
+           queued_bytes_ >= cfg.write_queue_max_bytes;
+  }
+  /// True once the queue has drained to half: take requests again.
+  bool drained() const {
+    const ServerConfig& cfg = server_->config_;
+    return queue_.size() + in_flight_ <= cfg.write_queue_max_messages / 2 &&
+           queued_bytes_ <= cfg.write_queue_max_bytes / 2;
+  }
+
   void read_more() {
+    if (reading_ || closed_ || closing_ || peer_done_) return;
+    reading_ = true;
     socket_.async_read_some(asio::buffer(chunk_),
                             [self = shared_from_this()](const asio::error_code& ec, std::size_t n) {
+                              self->reading_ = false;
                               self->on_read(ec, n);
                             });
   }
 
   void on_read(const asio::error_code& ec, std::size_t n) {
     if (closed_) return;
+    if (ec == asio::error::eof) {
+      // A client that closed its socket is gone (POLLHUP: both directions shut down): nothing
+      // can reach it. One that only shut down writing (half-close) has said all it will:
+      // answer what it sent (a last line without a newline counts), then close once every
+      // reply is written.
+      pollfd probe{socket_.native_handle(), POLLOUT, 0};
+      if (::poll(&probe, 1, 0) > 0 && (probe.revents & (POLLHUP | POLLERR)) != 0) {
+        close("client disconnected");
+        return;
+      }
+      peer_done_ = true;
+      if (!closing_ && !pending_.empty()) {
+        pending_ += '\n';
+        process_lines();
+        if (closed_) return;
+      }
+      pending_.clear();
+      close_if_done();
+      if (!closed_) arm_timer();
+      return;
+    }
     if (ec) {
-      close(ec == asio::error::eof ? "client disconnected" : "read failed: " + ec.message());
+      close("read failed: " + ec.message());
       return;
     }
     if (closing_) return;
     if (pending_.empty() && n > 0) partial_since_ = SteadyClock::now();
     pending_.append(chunk_.data(), n);
+    process_lines();
+    if (closed_) return;
+    if (!closing_ && !paused_) read_more();
+    arm_timer();
+  }
+
+  /// Handles the complete lines in pending_ until they run out or the write queue is full.
+  void process_lines() {
     const std::size_t max_line = server_->config_.max_line_bytes;
     std::size_t start = 0;
+    paused_ = false;
     while (!closed_ && !closing_) {
+      if (backlogged()) {
+        // Backpressure: leave the rest unread until the client has taken its replies.
+        paused_ = true;
+        break;
+      }
       const std::size_t newline = pending_.find('\n', start);
       if (newline == std::string::npos) break;
       std::string_view line(pending_.data() + start, newline - start);
@@ -230,13 +291,30 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
     }
     if (closed_) return;
     pending_.erase(0, start);
-    if (!closing_ && pending_.size() > max_line) {
+    if (!closing_ && !paused_ && pending_.size() > max_line) {
       fail_and_close(ErrorCode::TooLarge, too_large_message());
     }
     if (closed_) return;
     if (start > 0 && !pending_.empty()) partial_since_ = SteadyClock::now();
-    if (!closing_) read_more();
-    arm_timer();
+  }
+
+  /// After a line was written or a reply queued: resume a paused client once drained.
+  void maybe_resume() {
+    if (!paused_ || closed_ || closing_ || !drained()) return;
+    process_lines();
+    if (closed_) return;
+    if (peer_done_) {
+      close_if_done();
+    } else if (!paused_ && !closing_) {
+      read_more();
+    }
+    if (!closed_) arm_timer();
+  }
+
+  /// Closes a half-closed client once nothing is owed to it any more.
+  void close_if_done() {
+    if (closed_ || !peer_done_ || paused_) return;
+    if (in_flight_ == 0 && queue_.empty() && !writing_) close("client finished (half-close)");
   }
 
   std::string too_large_message() const {
@@ -275,8 +353,10 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
     if (queue_.empty() || closed_) {
       writing_ = false;
       if (closing_ && !closed_) close("closed after error");
+      if (!closed_) close_if_done();
       return;
     }
+    if (!writing_) write_since_ = SteadyClock::now();
     writing_ = true;
     const auto line = queue_.front();
     asio::async_write(socket_, asio::buffer(*line),
@@ -288,7 +368,10 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
                         }
                         self->queued_bytes_ -= line->size();
                         self->queue_.pop_front();
+                        self->write_since_ = SteadyClock::now();  // the client took a line
                         self->write_next();
+                        self->maybe_resume();
+                        if (!self->closed_) self->arm_timer();
                       });
   }
 
@@ -296,6 +379,8 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
   std::optional<SteadyClock::time_point> deadline() const {
     const ServerConfig& cfg = server_->config_;
     if (closing_) return close_deadline_;
+    if (writing_) return write_since_ + cfg.stalled_reader_timeout;
+    if (peer_done_ || paused_) return std::nullopt;
     if (!pending_.empty()) return partial_since_ + cfg.partial_line_timeout;
     if (cfg.idle_timeout.count() > 0 && !watching_ && in_flight_ == 0) {
       return last_request_ + cfg.idle_timeout;
@@ -330,8 +415,17 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
       close("client did not take its last error line");
       return;
     }
-    ++server_->counters_.timeouts;
     const ServerConfig& cfg = server_->config_;
+    if (writing_) {
+      // It cannot take a message either: log it and close.
+      ++server_->counters_.dropped;
+      server_->log_(LogLevel::Warn, describe() + " dropped: it took none of its " +
+                                        std::to_string(queue_.size()) + " queued lines for " +
+                                        std::to_string(cfg.stalled_reader_timeout.count()) + " ms");
+      close("stalled reader");
+      return;
+    }
+    ++server_->counters_.timeouts;
     if (!pending_.empty()) {
       fail_and_close(ErrorCode::Timeout, "request line not finished with a newline within " +
                                              std::to_string(cfg.partial_line_timeout.count()) +
@@ -355,12 +449,16 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
   std::size_t queued_bytes_ = 0;
   std::size_t in_flight_ = 0;
   bool writing_ = false;
+  bool reading_ = false;    // an async read is outstanding
+  bool paused_ = false;     // requests wait in pending_ until the write queue drains
+  bool peer_done_ = false;  // the client half-closed: no more requests will come
   bool watching_ = false;
   bool closing_ = false;
   bool closed_ = false;
   SteadyClock::time_point last_request_;
   SteadyClock::time_point partial_since_{};
   SteadyClock::time_point close_deadline_{};
+  SteadyClock::time_point write_since_{};  // the queue's head has waited since then
   std::optional<SteadyClock::time_point> armed_;
 };
 
@@ -522,16 +620,15 @@ void Server::Impl::on_accept(const asio::error_code& ec, Socket socket) {
     reject(std::move(socket), ErrorCode::Forbidden, "peer credentials unavailable");
     return;
   }
-  if (sessions_.size() >= config_.max_clients) {
-    reject(std::move(socket), ErrorCode::Busy,
-           "too many clients (limit " + std::to_string(config_.max_clients) + "); try later");
-    return;
-  }
   Peer peer;
   peer.pid = creds->pid;
   peer.uid = creds->uid;
   peer.gid = creds->gid;
   peer.access = policy_.access_for(creds->uid, creds->groups);
+  if (const auto refusal = admission_refusal(peer)) {
+    reject(std::move(socket), ErrorCode::Busy, *refusal);
+    return;
+  }
   ++counters_.connections;
   ++counters_.clients;
   auto session = std::make_shared<Session>(shared_from_this(), std::move(socket), peer,
@@ -540,6 +637,33 @@ void Server::Impl::on_accept(const asio::error_code& ec, Socket socket) {
   log_(LogLevel::Debug, "api: client pid " + std::to_string(peer.pid) + " uid " +
                             std::to_string(peer.uid) + " connected");
   session->start();
+}
+
+std::optional<std::string> Server::Impl::admission_refusal(const Peer& peer) const {
+  if (sessions_.size() >= config_.max_clients) {
+    return "too many clients (limit " + std::to_string(config_.max_clients) + "); try later";
+  }
+  // The last reserved_clients slots are for control access, so that a read-only user holding
+  // connections cannot lock the dispatcher or a technician out.
+  const std::size_t open_slots = config_.max_clients > config_.reserved_clients
+                                     ? config_.max_clients - config_.reserved_clients
+                                     : 0;
+  if (!peer.access.control && sessions_.size() >= open_slots) {
+    return "too many clients: the last " + std::to_string(config_.reserved_clients) + " of " +
+           std::to_string(config_.max_clients) +
+           " connections are kept for control access; try later";
+  }
+  if (peer.uid != 0) {
+    const auto same_uid = static_cast<std::size_t>(std::count_if(
+        sessions_.begin(), sessions_.end(),
+        [&](const std::shared_ptr<Session>& s) { return s->peer().uid == peer.uid; }));
+    if (same_uid >= config_.max_clients_per_uid) {
+      return "uid " + std::to_string(peer.uid) + " already has " + std::to_string(same_uid) +
+             " connections (limit " + std::to_string(config_.max_clients_per_uid) +
+             " per user); close one first";
+    }
+  }
+  return std::nullopt;
 }
 
 void Server::Impl::reject(Socket socket, ErrorCode code, const std::string& message) {

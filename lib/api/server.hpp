@@ -30,14 +30,24 @@ struct ServerConfig {
   std::string read_group;        ///< members may run read commands; empty: root only
   std::string control_group;     ///< members may run control and read commands
   std::string inputs_group;      ///< members may send inputs and run read commands
-  std::size_t max_clients = 16;  ///< more connections get `busy` and are closed
-  std::size_t max_line_bytes = 64 * 1024;           ///< longest request line; longer: `too_large`
-  int max_depth = 32;                               ///< deepest JSON nesting in a request
-  std::size_t max_in_flight = 32;                   ///< unanswered requests per client
-  std::size_t write_queue_max_bytes = 1024 * 1024;  ///< per client; beyond it the client is dropped
-  std::size_t write_queue_max_messages = 4096;      ///< per client; beyond it the client is dropped
+  std::size_t max_clients = 32;  ///< more connections get `busy` and are closed
+  /// Connections one uid may hold at once (root is exempt); more get `busy`.
+  std::size_t max_clients_per_uid = 8;
+  /// Of max_clients, this many are kept for peers with control access (the control group, root,
+  /// the daemon's user): a read-only user cannot lock the dispatcher or a technician out.
+  std::size_t reserved_clients = 4;
+  std::size_t max_line_bytes = 64 * 1024;  ///< longest request line; longer: `too_large`
+  int max_depth = 32;                      ///< deepest JSON nesting in a request
+  std::size_t max_in_flight = 32;          ///< unanswered requests per client
+  /// Per client. When its replies fill the queue to this, the server stops reading its requests
+  /// until the queue has drained to half; events beyond it drop a watcher that falls behind.
+  std::size_t write_queue_max_bytes = 1024 * 1024;
+  /// Per client, in lines; the same rule as write_queue_max_bytes.
+  std::size_t write_queue_max_messages = 4096;
+  /// A client whose queued lines have not been taken for this long is dropped.
+  std::chrono::milliseconds stalled_reader_timeout{std::chrono::seconds(30)};
   /// A client that sends nothing for this long (and is not watching) is closed; 0 disables.
-  std::chrono::milliseconds idle_timeout{std::chrono::minutes(10)};
+  std::chrono::milliseconds idle_timeout{0};
   /// A request line must be complete this long after its first byte arrived.
   std::chrono::milliseconds partial_line_timeout{std::chrono::seconds(5)};
 };
@@ -50,10 +60,10 @@ using LogFn = std::function<void(LogLevel level, std::string_view message)>;
 /// Counters the server keeps (also reported by `stats` as "api").
 struct ServerCounters {
   std::uint64_t connections = 0;  ///< connections accepted since start
-  std::uint64_t rejected = 0;     ///< connections refused (max clients, no credentials)
+  std::uint64_t rejected = 0;     ///< connections refused (limits, no credentials)
   std::uint64_t requests = 0;     ///< request lines handled
   std::uint64_t errors = 0;       ///< replies with ok:false
-  std::uint64_t dropped = 0;      ///< clients dropped because their write queue was full
+  std::uint64_t dropped = 0;      ///< clients dropped: a watcher behind, or a stalled reader
   std::uint64_t timeouts = 0;     ///< clients closed by the idle or partial-line timeout
   std::uint64_t events = 0;       ///< events published
   std::size_t clients = 0;        ///< clients connected now

@@ -3,6 +3,8 @@
 #include "config/config.hpp"
 
 #include <fcntl.h>
+#include <sched.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -11,6 +13,8 @@
 #include <cstring>
 #include <functional>
 #include <sstream>
+
+#include "dcp/charset.hpp"
 
 namespace liftd::config {
 namespace {
@@ -154,9 +158,33 @@ bool check_integer(const json& value, const std::string& where, std::int64_t min
   return true;
 }
 
+// The byte offset of the first control character (C0, DEL, or a UTF-8 encoded C1 U+0080..U+009F),
+// or npos. A NUL would cut a path short where the kernel reads it; the others hide in logs.
+std::size_t find_control(std::string_view text) {
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const auto byte = static_cast<unsigned char>(text[i]);
+    if (byte < 0x20U || byte == 0x7FU) return i;
+    if (byte == 0xC2U && i + 1 < text.size()) {
+      const auto next = static_cast<unsigned char>(text[i + 1]);
+      if (next >= 0x80U && next <= 0x9FU) return i;
+    }
+  }
+  return std::string_view::npos;
+}
+
+std::string control_rule(const std::string& text) {
+  const std::size_t at = find_control(text);
+  if (at == std::string::npos) return {};
+  char code[8];
+  std::snprintf(code, sizeof code, "0x%02X",
+                static_cast<unsigned>(static_cast<unsigned char>(text[at])));
+  return std::string("contains a control character (byte ") + code + " at offset " +
+         std::to_string(at) + "): not allowed";
+}
+
 std::string absolute_path_rule(const std::string& text) {
   if (text.empty() || text.front() != '/') return "must be an absolute path (start with /)";
-  return {};
+  return control_rule(text);
 }
 
 std::string group_name_rule(const std::string& text) {
@@ -284,6 +312,23 @@ Key enum_key(std::string path, const std::array<std::string_view, N>& names,
 
 // --- Custom keys. ----------------------------------------------------------------------------
 
+// A floor name is shown on the drive's display (DCP 5.2, appendix A), so it must consist of
+// characters that character set has. None of them has a canonical decomposition or is a
+// combining mark, so every allowed name is already in Unicode NFC: two names that are equal after
+// normalisation are equal byte for byte, and no normalisation table is needed.
+constexpr std::string_view kFloorNameRule =
+    "1..16 printable characters of the DCP display character set (DCP appendix A: ASCII "
+    "letters, digits, space and signs except \\ ~, and \u00e4 \u00f6 \u00fc \u00c4 "
+    "\u00d6 \u00dc \u00df \u00b0 \u00b1 \u00b5 and some Greek letters and arrows), no "
+    "space at either end";
+
+std::optional<std::string> display_bytes(std::string_view name) {
+  std::array<std::uint8_t, 64> out{};
+  const dcp::CharsetResult r = dcp::from_utf8(name, out);
+  if (!r.ok()) return std::nullopt;
+  return std::string(reinterpret_cast<const char*>(out.data()), r.written);
+}
+
 void apply_floors(const json& value, const std::string& where, Config& config, Problems& problems) {
   if (!value.is_array()) {
     problems.push_back(
@@ -322,12 +367,13 @@ void apply_floors(const json& value, const std::string& where, Config& config, P
     } else {
       floor.name = entry["name"].get<std::string>();
       const std::size_t length = utf8_length(floor.name);
-      const bool control = std::any_of(floor.name.begin(), floor.name.end(), [](char c) {
-        return static_cast<unsigned char>(c) < 0x20U;
-      });
-      if (length < 1 || length > static_cast<std::size_t>(kFloorNameMaxChars) || control) {
-        problems.push_back(
-            {at + ".name", show(entry["name"]) + " is not allowed: 1..16 printable characters"});
+      const bool displayable = display_bytes(floor.name).has_value();
+      const bool padded =
+          !floor.name.empty() && (floor.name.front() == ' ' || floor.name.back() == ' ');
+      if (length < 1 || length > static_cast<std::size_t>(kFloorNameMaxChars) || !displayable ||
+          padded) {
+        problems.push_back({at + ".name", show(entry["name"]) +
+                                              " is not allowed: " + std::string(kFloorNameRule)});
         good = false;
       }
     }
@@ -344,8 +390,10 @@ void apply_floors(const json& value, const std::string& where, Config& config, P
       all_good = false;
       continue;
     }
+    // Unique as shown on the drive's display: names that differ only in a character the display
+    // shows the same way (the micro sign and the Greek mu) are the same name.
     for (std::size_t j = 0; j < floors.size(); ++j) {
-      if (floors[j].name == floor.name) {
+      if (display_bytes(floors[j].name) == display_bytes(floor.name)) {
         problems.push_back({at + ".name", json_quoted(floor.name) + " is already the name of " +
                                               where + "[" + std::to_string(j) +
                                               "]: names must be unique"});
@@ -417,7 +465,8 @@ const std::vector<Key>& schema() {
                          &LogConfig::level));
     // drive
     t.push_back(enum_key("drive.kind", kDriveKindNames,
-                         "protocol of the drive: DCP over RS485, Siemens USS, or SCH001 over CAN",
+                         "protocol of the drive: DCP over RS485, Siemens USS, or SCH001 over CAN "
+                         "(\"uss\" and \"sch001\" are refused: not implemented in this version)",
                          &Config::drive, &DriveConfig::kind));
     t.push_back(string_key("drive.device", 1, 4096, "absolute path", absolute_path_rule,
                            "serial port of the drive link", &Config::drive, &DriveConfig::device));
@@ -462,13 +511,24 @@ const std::vector<Key>& schema() {
     // rt
     t.push_back(int_key("rt.priority", 1, 99, "SCHED_FIFO priority of the cycle thread",
                         &Config::rt, &RtConfig::priority));
-    t.push_back(int_key("rt.cpu", -1, 1023, "CPU the cycle thread is pinned to; -1 = none",
+    t.push_back(bool_key("rt.require_realtime",
+                         "refuse to start (exit 2) when the cycle thread cannot get SCHED_FIFO at "
+                         "rt.priority; false = run with normal scheduling and warn (--simulate "
+                         "always runs)",
+                         &Config::rt, &RtConfig::require_realtime));
+    t.push_back(int_key("rt.cpu", -1, 1023,
+                        "CPU the cycle thread is pinned to; -1 = none; must be online and "
+                        "allowed for the daemon",
                         &Config::rt, &RtConfig::cpu));
     t.push_back(bool_key("rt.lock_memory", "lock all memory (mlockall) so the cycle never pages",
                          &Config::rt, &RtConfig::lock_memory));
     t.push_back(int_key("rt.flight_recorder_s", 1, 300,
                         "seconds of link traffic kept in memory for fault analysis", &Config::rt,
                         &RtConfig::flight_recorder_s));
+    t.push_back(int_key("rt.trace_files_kept", 1, 100,
+                        "flight-recorder files (liftd-trace-*.txt) kept in the runtime directory; "
+                        "the oldest are removed beyond it",
+                        &Config::rt, &RtConfig::trace_files_kept));
     // api
     t.push_back(string_key("api.socket", 1, kMaxSocketPathLength,
                            "absolute path, at most 107 bytes", absolute_path_rule,
@@ -492,6 +552,17 @@ const std::vector<Key>& schema() {
                            &Config::api, &ApiConfig::inputs_group));
     t.push_back(int_key("api.max_clients", 1, 256, "API connections served at once", &Config::api,
                         &ApiConfig::max_clients));
+    t.push_back(int_key("api.max_clients_per_uid", 1, 256,
+                        "API connections one user (uid) may hold at once; root is exempt",
+                        &Config::api, &ApiConfig::max_clients_per_uid));
+    t.push_back(int_key("api.reserved_clients", 0, 255,
+                        "of api.max_clients, this many are kept for clients with control access "
+                        "(api.control_group, root, the daemon's user); less than api.max_clients",
+                        &Config::api, &ApiConfig::reserved_clients));
+    t.push_back(int_key("api.stalled_reader_timeout_s", 1, 3600,
+                        "drop a client whose replies have waited unread this long (a pipelining "
+                        "client that reads is never dropped: liftd stops reading from it instead)",
+                        &Config::api, &ApiConfig::stalled_reader_timeout_s));
     t.push_back(int_key("api.idle_timeout_s", 0, 86400,
                         "close a client silent this long; 0 = never", &Config::api,
                         &ApiConfig::idle_timeout_s));
@@ -504,8 +575,8 @@ const std::vector<Key>& schema() {
       k.path = "floors";
       k.type = Type::floors;
       k.allowed_text =
-          "2..64 entries; name 1..16 characters, unique; level_mm -999999..999999, "
-          "strictly increasing";
+          "2..64 entries; name 1..16 characters of the DCP display character set, unique, no "
+          "space at either end; level_mm -999999..999999, strictly increasing";
       k.description = "the building's floors, lowest first, level in mm above the lowest floor";
       k.custom = apply_floors;
       k.get = [](const Config& c) {
@@ -516,7 +587,8 @@ const std::vector<Key>& schema() {
       t.push_back(std::move(k));
     }
     t.push_back(enum_key("position.source", kPositionSourceNames,
-                         "where the car's absolute position comes from (--simulate forces sim)",
+                         "where the car's absolute position comes from (--simulate forces sim; "
+                         "\"can\" is refused: not implemented in this version)",
                          &Config::position, &PositionConfig::source));
     // travel
     t.push_back(int_key("travel.level_tolerance_mm", 1, 50,
@@ -675,7 +747,27 @@ void apply_key(const Key& key, const json& value, Config& config, Problems& prob
   key.set(config, value);
 }
 
+// Values the schema names for later versions but this build cannot run: refused here, so that
+// --check-config and the daemon agree (a later implementation only removes the refusal).
+void check_implemented(const Config& config, Problems& problems) {
+  if (config.drive.kind != DriveKind::dcp) {
+    problems.push_back({"drive.kind", json_quoted(to_string(config.drive.kind)) +
+                                          " is not implemented in this version: use \"dcp\""});
+  }
+  if (config.position.source == PositionSource::can) {
+    problems.push_back(
+        {"position.source",
+         "\"can\" is not implemented in this version: use \"api\" (or \"sim\" with --simulate)"});
+  }
+}
+
 void check_cross_keys(const Config& config, const json& document, Problems& problems) {
+  // Reserving every slot would leave none for read-only clients.
+  if (config.api.reserved_clients >= config.api.max_clients) {
+    problems.push_back({"api.reserved_clients", std::to_string(config.api.reserved_clients) +
+                                                    " must be less than api.max_clients (" +
+                                                    std::to_string(config.api.max_clients) + ")"});
+  }
   // Relevelling inside the level tolerance would make the car hunt around the level.
   if (config.travel.relevel_threshold_mm <= config.travel.level_tolerance_mm) {
     const bool set_here = find_value(document, "travel.relevel_threshold_mm") != nullptr;
@@ -807,6 +899,7 @@ LoadResult from_json(const json& document) {
       }
     }
   }
+  check_implemented(result.config, result.problems);
   check_cross_keys(result.config, document, result.problems);
   return result;
 }
@@ -887,15 +980,59 @@ LoadResult parse(std::string_view text, std::string_view origin) {
   return result;
 }
 
+namespace {
+
+std::string file_type_name(mode_t mode) {
+  if (S_ISDIR(mode)) return std::strerror(EISDIR);  // "Is a directory", as read() would say
+  if (S_ISFIFO(mode)) return "it is a FIFO";
+  if (S_ISCHR(mode)) return "it is a character device";
+  if (S_ISBLK(mode)) return "it is a block device";
+  if (S_ISSOCK(mode)) return "it is a socket";
+  return "it is of an unknown type";
+}
+
+}  // namespace
+
 LoadResult load_file(const std::filesystem::path& path) {
-  const auto unreadable = [&](int error) {
+  const auto problem = [&](std::string message) {
     LoadResult result;
-    result.problems.push_back(
-        {path.string(), std::string("cannot read the config file: ") + std::strerror(error)});
+    result.problems.push_back({path.string(), std::move(message)});
     return result;
   };
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  const auto unreadable = [&](int error) {
+    return problem(std::string("cannot read the config file: ") + std::strerror(error));
+  };
+  const auto not_regular = [&](mode_t mode) {
+    return problem("cannot read the config file: " + file_type_name(mode) +
+                   "; only a regular file is read");
+  };
+  const auto too_large = [&]() {
+    return problem("cannot read the config file: it is larger than " +
+                   std::to_string(kMaxFileBytes) + " bytes");
+  };
+  // Look before opening: opening a device can have effects (a serial port drops DTR) and a FIFO
+  // blocks. Symbolic links are followed (a config under /etc may well be one).
+  struct stat before {};
+  if (::stat(path.c_str(), &before) != 0) return unreadable(errno);
+  if (!S_ISREG(before.st_mode)) return not_regular(before.st_mode);
+  // O_NONBLOCK: should the path become a FIFO between stat() and open(), open() still returns;
+  // fstat() then tells what was really opened.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
   if (fd < 0) return unreadable(errno);
+  struct stat opened {};
+  if (::fstat(fd, &opened) != 0) {
+    const int error = errno;
+    ::close(fd);
+    return unreadable(error);
+  }
+  if (!S_ISREG(opened.st_mode)) {
+    ::close(fd);
+    return not_regular(opened.st_mode);
+  }
+  if (static_cast<std::uintmax_t>(opened.st_size) > kMaxFileBytes) {
+    ::close(fd);
+    return too_large();
+  }
   std::string text;
   char buffer[4096];
   while (true) {
@@ -907,10 +1044,57 @@ LoadResult load_file(const std::filesystem::path& path) {
       return unreadable(error);
     }
     if (n == 0) break;
+    // The file may grow while we read it: the limit holds for what is read, too.
+    if (text.size() + static_cast<std::size_t>(n) > kMaxFileBytes) {
+      ::close(fd);
+      return too_large();
+    }
     text.append(buffer, static_cast<std::size_t>(n));
   }
   ::close(fd);
-  return parse(text, path.string());
+  LoadResult result = parse(text, path.string());
+  const Problems host = check_host(result.config, HostFacts::current());
+  result.problems.insert(result.problems.end(), host.begin(), host.end());
+  return result;
+}
+
+HostFacts HostFacts::current() {
+  HostFacts facts;
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  // The affinity mask holds only CPUs that are online and that this process (its cgroup's
+  // cpuset, the unit's CPUAffinity=) may use: exactly where the cycle thread can be pinned.
+  if (::sched_getaffinity(0, sizeof set, &set) == 0) {
+    for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
+      if (CPU_ISSET(static_cast<std::size_t>(cpu), &set)) facts.usable_cpus.push_back(cpu);
+    }
+  }
+  return facts;
+}
+
+std::vector<Problem> check_host(const Config& config, const HostFacts& host) {
+  Problems problems;
+  if (config.rt.cpu >= 0 && std::find(host.usable_cpus.begin(), host.usable_cpus.end(),
+                                      config.rt.cpu) == host.usable_cpus.end()) {
+    std::string usable;
+    for (std::size_t i = 0; i < host.usable_cpus.size(); ++i) {
+      // Ranges as the kernel writes them: 0-3,6.
+      std::size_t j = i;
+      while (j + 1 < host.usable_cpus.size() &&
+             host.usable_cpus[j + 1] == host.usable_cpus[j] + 1) {
+        ++j;
+      }
+      if (!usable.empty()) usable += ",";
+      usable += std::to_string(host.usable_cpus[i]);
+      if (j > i) usable += "-" + std::to_string(host.usable_cpus[j]);
+      i = j;
+    }
+    problems.push_back({"rt.cpu", std::to_string(config.rt.cpu) +
+                                      " is not a CPU this machine lets liftd run on: use -1 or "
+                                      "one of " +
+                                      (usable.empty() ? std::string("(none found)") : usable)});
+  }
+  return problems;
 }
 
 nlohmann::json to_json(const Config& config) {

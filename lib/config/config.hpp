@@ -2,6 +2,7 @@
 // table (config/schema.cpp). Exceptions are used only while loading; the result is plain data.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -55,10 +56,12 @@ struct DcpConfig {
 
 /// `rt.*`
 struct RtConfig {
-  int priority = 80;           ///< rt.priority (SCHED_FIFO)
-  int cpu = -1;                ///< rt.cpu, -1 = no pinning
-  bool lock_memory = true;     ///< rt.lock_memory (mlockall)
-  int flight_recorder_s = 30;  ///< rt.flight_recorder_s
+  int priority = 80;             ///< rt.priority (SCHED_FIFO)
+  bool require_realtime = true;  ///< rt.require_realtime: refuse to run without SCHED_FIFO
+  int cpu = -1;                  ///< rt.cpu, -1 = no pinning
+  bool lock_memory = true;       ///< rt.lock_memory (mlockall)
+  int flight_recorder_s = 30;    ///< rt.flight_recorder_s
+  int trace_files_kept = 10;     ///< rt.trace_files_kept
 };
 
 /// `api.*`
@@ -69,6 +72,9 @@ struct ApiConfig {
   std::string control_group = "liftd-control";  ///< api.control_group
   std::string inputs_group = "liftd-io";        ///< api.inputs_group
   int max_clients = 32;                         ///< api.max_clients
+  int max_clients_per_uid = 8;                  ///< api.max_clients_per_uid (root exempt)
+  int reserved_clients = 4;                     ///< api.reserved_clients, for control access
+  int stalled_reader_timeout_s = 30;            ///< api.stalled_reader_timeout_s
   int idle_timeout_s = 0;                       ///< api.idle_timeout_s, 0 = none
 };
 
@@ -149,9 +155,27 @@ struct LoadResult {
 /// Parses and validates JSON text; `origin` names it in messages (usually the file path).
 LoadResult parse(std::string_view text, std::string_view origin);
 
-/// Reads, parses and validates a file. An unreadable file is one problem naming the path
-/// and the errno text.
+/// The largest configuration file load_file() reads, in bytes (1 MiB; a full 64-floor file is
+/// a few KiB).
+inline constexpr std::size_t kMaxFileBytes = 1024 * 1024;
+
+/// Reads, parses and validates a file, then checks it against this host (check_host()): the one
+/// validation both `--check-config` and the daemon's start use. Only a regular file of at most
+/// kMaxFileBytes is read (symbolic links are followed); a FIFO, device or directory is one
+/// problem and is never read, so this never blocks. An unreadable file is one problem naming the
+/// path and the errno text.
 LoadResult load_file(const std::filesystem::path& path);
+
+/// Facts about the machine a configuration must fit.
+struct HostFacts {
+  /// CPUs this process may run on (online and in its affinity mask), ascending.
+  std::vector<int> usable_cpus;
+  /// The facts of the machine and process this runs in.
+  static HostFacts current();
+};
+
+/// The problems a valid configuration has on this host: `rt.cpu` must be a usable CPU.
+std::vector<Problem> check_host(const Config& config, const HostFacts& host);
 
 /// Validates a JSON document that is already parsed (shared by parse() and tests).
 LoadResult from_json(const nlohmann::json& document);

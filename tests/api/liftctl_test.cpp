@@ -114,5 +114,15 @@ TEST_F(Liftctl, RejectsBadUsage) {
   EXPECT_EQ(run(liftctl("raw 'not json'")).exit_code, 2);
 }
 
+TEST_F(Liftctl, SocketWithoutAValueSaysWhatIsMissing) {
+  const RunResult bare = run(std::string(LIFTCTL_PATH) + " --socket");
+  EXPECT_EQ(bare.exit_code, 2);
+  EXPECT_EQ(bare.output,
+            "liftctl: --socket needs a PATH (the API socket, e.g. /run/liftd/api.sock)\n");
+  const RunResult empty = run(std::string(LIFTCTL_PATH) + " --socket= status");
+  EXPECT_EQ(empty.exit_code, 2);
+  EXPECT_EQ(empty.output, "liftctl: --socket needs a PATH, got an empty one\n");
+}
+
 }  // namespace
 }  // namespace liftd::api::testing

@@ -278,6 +278,9 @@ TEST_F(ApiServer, SlowWatcherIsDroppedWhileAnotherKeepsItsStream) {
 TEST_F(ApiServer, ClientThatNeverReadsRepliesIsDropped) {
   ServerConfig config = default_config();
   config.write_queue_max_bytes = 16 * 1024;
+  // The server stops reading from it once its queue is full, then drops it when it has taken
+  // nothing for this long (30 s by default).
+  config.stalled_reader_timeout = 300ms;
   start_server(config);
   auto hog = connect();
   auto other = connect();

@@ -5,7 +5,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <chrono>
 #include <fstream>
+#include <future>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -44,15 +50,20 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/dcp/link_recover_frames", 10},
       {"/dcp/request_timeout_ms", 2000},
       {"/rt/priority", 80},
+      {"/rt/require_realtime", true},
       {"/rt/cpu", -1},
       {"/rt/lock_memory", true},
       {"/rt/flight_recorder_s", 30},
+      {"/rt/trace_files_kept", 10},
       {"/api/socket", "/run/liftd/api.sock"},
       {"/api/socket_group", "liftd"},
       {"/api/read_group", "liftd"},
       {"/api/control_group", "liftd-control"},
       {"/api/inputs_group", "liftd-io"},
       {"/api/max_clients", 32},
+      {"/api/max_clients_per_uid", 8},
+      {"/api/reserved_clients", 4},
+      {"/api/stalled_reader_timeout_s", 30},
       {"/api/idle_timeout_s", 0},
       {"/inputs/timeout_ms", 500},
       {"/position/source", "api"},
@@ -111,9 +122,11 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
     "dcp": {"manufacturer": "QX", "language": "DE", "data_info_type": "3",
             "extended_position": false, "link_fault_frames": 20, "link_recover_frames": 5,
             "request_timeout_ms": 100},
-    "rt": {"priority": 99, "cpu": 1023, "lock_memory": false, "flight_recorder_s": 300},
+    "rt": {"priority": 99, "require_realtime": false, "cpu": 1023, "lock_memory": false,
+           "flight_recorder_s": 300, "trace_files_kept": 100},
     "api": {"socket": "/tmp/x.sock", "socket_group": "a", "read_group": "b",
             "control_group": "c_d", "inputs_group": "e-f", "max_clients": 256,
+            "max_clients_per_uid": 3, "reserved_clients": 255, "stalled_reader_timeout_s": 3600,
             "idle_timeout_s": 86400},
     "inputs": {"timeout_ms": 50},
     "floors": [{"name": "UG", "level_mm": -2800}, {"name": "EG", "level_mm": 0}],
@@ -126,7 +139,11 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
     "sim": {"dcp": 3}
   })";
   const LoadResult r = parse(text, "test");
-  ASSERT_TRUE(r.ok()) << all_problems(r);
+  // The values reach the struct; the two this version cannot run are refused (and nothing else).
+  ASSERT_EQ(all_problems(r),
+            "drive.kind: \"uss\" is not implemented in this version: use \"dcp\"\n"
+            "position.source: \"can\" is not implemented in this version: use \"api\" (or "
+            "\"sim\" with --simulate)\n");
   const Config& c = r.config;
   EXPECT_EQ(c.log.level, LogLevel::debug);
   EXPECT_EQ(c.drive.kind, DriveKind::uss);
@@ -143,6 +160,11 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
   EXPECT_EQ(c.rt.cpu, 1023);
   EXPECT_FALSE(c.rt.lock_memory);
   EXPECT_EQ(c.rt.flight_recorder_s, 300);
+  EXPECT_FALSE(c.rt.require_realtime);
+  EXPECT_EQ(c.rt.trace_files_kept, 100);
+  EXPECT_EQ(c.api.max_clients_per_uid, 3);
+  EXPECT_EQ(c.api.reserved_clients, 255);
+  EXPECT_EQ(c.api.stalled_reader_timeout_s, 3600);
   EXPECT_EQ(c.api.socket, "/tmp/x.sock");
   EXPECT_EQ(c.api.socket_group, "a");
   EXPECT_EQ(c.api.read_group, "b");
@@ -166,7 +188,7 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
   EXPECT_EQ(c.sim.dcp, 3);
   // The dump reads back to the same configuration.
   const LoadResult again = from_json(to_json(c));
-  ASSERT_TRUE(again.ok()) << all_problems(again);
+  EXPECT_EQ(all_problems(again), all_problems(r));  // the same two refusals, nothing else
   EXPECT_EQ(to_json(again.config), to_json(c));
 }
 
@@ -319,6 +341,166 @@ TEST(ConfigFile, UnreadableFileNamesThePathAndTheErrnoText) {
   ASSERT_EQ(directory.problems.size(), 1U);
   EXPECT_EQ(directory.problems[0].where, "/");
   EXPECT_THAT(directory.problems[0].message, HasSubstr("Is a directory"));
+}
+
+// Legend: what a file says -> the key refused and why. Every case is something the daemon
+// would refuse (or misuse) at start, so --check-config must refuse it too.
+TEST(ConfigProblems, WhatTheDaemonCannotRunIsRefused) {
+  const std::vector<BadCase> cases = {
+      {"USS drive: not implemented yet", R"({"drive": {"kind": "uss"}})", "drive.kind",
+       "\"uss\" is not implemented in this version: use \"dcp\""},
+      {"SCH001 drive: not implemented yet", R"({"drive": {"kind": "sch001"}})", "drive.kind",
+       "\"sch001\" is not implemented in this version: use \"dcp\""},
+      {"CAN position: not implemented yet", R"({"position": {"source": "can"}})", "position.source",
+       "\"can\" is not implemented in this version"},
+      {"NUL inside the socket path (bound at the text before it)",
+       R"({"api": {"socket": "/run/liftd/api.sock\u0000.evil"}})", "api.socket",
+       "contains a control character (byte 0x00 at offset 19): not allowed"},
+      {"escape inside the device path", R"({"drive": {"device": "/dev/tty\u001bS1"}})",
+       "drive.device", "contains a control character (byte 0x1B at offset 8)"},
+      {"DEL inside the device path", R"({"drive": {"device": "/dev/ttyS1\u007f"}})", "drive.device",
+       "contains a control character (byte 0x7F at offset 10)"},
+      {"C1 control (NEL) inside the socket path", R"({"api": {"socket": "/run/a\u0085b"}})",
+       "api.socket", "contains a control character (byte 0xC2 at offset 6)"},
+      {"control character in a floor name",
+       R"({"floors": [{"name": "0\u0007", "level_mm": 0}, {"name": "1", "level_mm": 1}]})",
+       "floors[0].name", "1..16 printable characters of the DCP display character set"},
+      {"C1 control in a floor name",
+       R"({"floors": [{"name": "0\u0085", "level_mm": 0}, {"name": "1", "level_mm": 1}]})",
+       "floors[0].name", "is not allowed"},
+      {"reserved API slots leave none for readers",
+       R"({"api": {"max_clients": 4, "reserved_clients": 4}})", "api.reserved_clients",
+       "4 must be less than api.max_clients (4)"},
+  };
+  for (const auto& c : cases) {
+    const LoadResult r = parse(c.json_text, "test.json");
+    ASSERT_FALSE(r.ok()) << c.legend;
+    EXPECT_EQ(r.problems[0].where, c.where) << c.legend << "\n" << all_problems(r);
+    EXPECT_THAT(r.problems[0].message, HasSubstr(c.message)) << c.legend;
+  }
+}
+
+// Floor names are shown on the drive's display, so they are the display's characters (DCP
+// appendix A); every such name is already in Unicode NFC, and names the display shows alike are
+// the same name.
+TEST(ConfigFloorNames, EqualAfterNormalisationOrOnTheDisplayIsTheSameName) {
+  const auto floors = [](const std::string& a, const std::string& b) {
+    return R"({"floors": [{"name": ")" + a + R"(", "level_mm": 0}, {"name": ")" + b +
+           R"(", "level_mm": 3000}]})";
+  };
+  struct Case {
+    const char* legend;
+    std::string text;
+    const char* where;    // empty: valid
+    const char* message;  // substring
+  };
+  const std::vector<Case> cases = {
+      {"German names with umlauts are fine", floors("Erdgeschoß", "Über"), "", ""},
+      {"Greek and signs the display has", floors("α", "±0"), "", ""},
+      {"decomposed A + combining diaeresis is refused (NFC would make it \u00c4)",
+       floors("\u00c4", "A\u0308"), "floors[1].name", "is not allowed"},
+      {"micro sign and Greek mu look alike on the display", floors("\u00b5", "\u03bc"),
+       "floors[1].name", "is already the name of floors[0]"},
+      {"ohm sign (NFC: capital omega) is refused", floors("\u03a9", "\u2126"), "floors[1].name",
+       "is not allowed"},
+      {"a character the display lacks", floors("\u00c5", "1"), "floors[0].name",
+       "DCP display character set"},
+      {"fullwidth digit look-alike", floors("1", "\uff11"), "floors[1].name", "is not allowed"},
+      {"leading space", floors(" 1", "2"), "floors[0].name", "no space at either end"},
+      {"trailing space", floors("1", "1 "), "floors[1].name", "no space at either end"},
+  };
+  for (const auto& c : cases) {
+    const LoadResult r = parse(c.text, "test.json");
+    if (std::string(c.where).empty()) {
+      EXPECT_TRUE(r.ok()) << c.legend << "\n" << all_problems(r);
+      continue;
+    }
+    ASSERT_FALSE(r.ok()) << c.legend;
+    EXPECT_EQ(r.problems[0].where, c.where) << c.legend << "\n" << all_problems(r);
+    EXPECT_THAT(r.problems[0].message, HasSubstr(c.message)) << c.legend;
+  }
+}
+
+TEST(ConfigHost, RtCpuMustBeAUsableCpu) {
+  Config config;
+  const HostFacts two_cpus{{0, 1}};
+  EXPECT_TRUE(check_host(config, two_cpus).empty());  // -1: no pinning
+  config.rt.cpu = 1;
+  EXPECT_TRUE(check_host(config, two_cpus).empty());
+  config.rt.cpu = 2;
+  auto problems = check_host(config, two_cpus);
+  ASSERT_EQ(problems.size(), 1U);
+  EXPECT_EQ(to_string(problems[0]),
+            "rt.cpu: 2 is not a CPU this machine lets liftd run on: use -1 or one of 0-1");
+  problems = check_host(config, HostFacts{{0, 1, 3, 4, 5, 7}});
+  ASSERT_EQ(problems.size(), 1U);
+  EXPECT_THAT(problems[0].message, HasSubstr("one of 0-1,3-5,7"));
+  // This machine has fewer than 1024 CPUs: load_file (what both --check-config and the daemon
+  // use) refuses the last allowed value.
+  EXPECT_THAT(HostFacts::current().usable_cpus, ::testing::Not(::testing::IsEmpty()));
+  const std::string path = ::testing::TempDir() + "/cpu1023.json";
+  std::ofstream(path) << R"({"rt": {"cpu": 1023}})";
+  const LoadResult loaded = load_file(path);
+  ASSERT_EQ(loaded.problems.size(), 1U) << all_problems(loaded);
+  EXPECT_EQ(loaded.problems[0].where, "rt.cpu");
+}
+
+TEST(ConfigFile, OnlyRegularFilesAreReadAndNeverBlock) {
+  // A FIFO nobody writes to would block open() and read() forever. The guard thread waits
+  // 10 s, then opens the FIFO's write end and closes it, so a blocked reader gets EOF.
+  const std::string fifo = ::testing::TempDir() + "/liftd-config-fifo";
+  ::unlink(fifo.c_str());
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  auto loading = std::async(std::launch::async, [&] { return load_file(fifo); });
+  if (loading.wait_for(std::chrono::seconds(10)) != std::future_status::ready) {
+    const int fd = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
+    if (fd >= 0) ::close(fd);
+    ADD_FAILURE() << "load_file blocked on a FIFO";
+  }
+  const LoadResult from_fifo = loading.get();
+  ::unlink(fifo.c_str());
+  ASSERT_EQ(from_fifo.problems.size(), 1U) << all_problems(from_fifo);
+  EXPECT_EQ(to_string(from_fifo.problems[0]),
+            fifo + ": cannot read the config file: it is a FIFO; only a regular file is read");
+
+  // A character device is never opened: /dev/zero would be read until memory runs out (that
+  // one is tested on the liftd process, under a memory limit, in tests/daemon); /dev/null shows
+  // the rule here without the risk.
+  const LoadResult null_device = load_file("/dev/null");
+  ASSERT_EQ(null_device.problems.size(), 1U);
+  EXPECT_EQ(to_string(null_device.problems[0]),
+            "/dev/null: cannot read the config file: it is a character device; only a regular "
+            "file is read");
+}
+
+TEST(ConfigFile, SizeLimitAndSymlinks) {
+  const std::string dir = ::testing::TempDir();
+  const std::string at_limit = dir + "/liftd-at-limit.json";
+  std::ofstream(at_limit) << "{}" << std::string(kMaxFileBytes - 2, ' ');
+  EXPECT_TRUE(load_file(at_limit).ok()) << all_problems(load_file(at_limit));
+
+  const std::string over = dir + "/liftd-over-limit.json";
+  std::ofstream(over) << "{}" << std::string(kMaxFileBytes - 1, ' ');
+  const LoadResult too_big = load_file(over);
+  ASSERT_EQ(too_big.problems.size(), 1U);
+  EXPECT_EQ(to_string(too_big.problems[0]),
+            over + ": cannot read the config file: it is larger than 1048576 bytes");
+
+  // A configuration under /etc may be a symbolic link to the real file: followed.
+  const std::string target = dir + "/liftd-target.json";
+  std::ofstream(target) << R"({"sim": {"dcp": 3}})";
+  const std::string link = dir + "/liftd-link.json";
+  ::unlink(link.c_str());
+  ASSERT_EQ(::symlink(target.c_str(), link.c_str()), 0);
+  const LoadResult via_link = load_file(link);
+  ASSERT_TRUE(via_link.ok()) << all_problems(via_link);
+  EXPECT_EQ(via_link.config.sim.dcp, 3);
+  // ... but a link to a device is refused like the device.
+  const std::string to_device = dir + "/liftd-link-null.json";
+  ::unlink(to_device.c_str());
+  ASSERT_EQ(::symlink("/dev/null", to_device.c_str()), 0);
+  EXPECT_THAT(all_problems(load_file(to_device)), HasSubstr("it is a character device"));
+  for (const auto& p : {at_limit, over, target, link, to_device}) ::unlink(p.c_str());
 }
 
 TEST(ConfigSpeeds, Dcp3SpeedsFollowTheSpecTable) {

@@ -3,6 +3,9 @@
 //   api-bench --socket PATH     against a running liftd
 //   api-bench --serve PATH      only serve the fake backend at PATH (for trying liftctl)
 //   --seconds N                 measuring time per client count (default 2)
+//   --pipeline N                instead: one client writes N requests without waiting and reads
+//                               every reply (backpressure, not disconnection); exit 1 if any is
+//                               missing or out of order
 #include <poll.h>
 #include <sys/socket.h>
 #include <sys/un.h>
@@ -122,12 +125,79 @@ bool bench(const std::string& path, int clients, double seconds) {
   return true;
 }
 
+/// One client writes `count` requests without waiting (a writer thread) while reading the
+/// replies; every id must come back, in order.
+bool pipeline(const std::string& path, long count) {
+  const int fd = connect_to(path);
+  if (fd < 0) {
+    std::fprintf(stderr, "api-bench: cannot connect to %s\n", path.c_str());
+    return false;
+  }
+  std::string buffer;
+  if (!read_lines(fd, 1, buffer)) {
+    std::fprintf(stderr, "api-bench: no greeting\n");
+    ::close(fd);
+    return false;
+  }
+  const auto t0 = Clock::now();
+  bool sent_all = true;
+  std::thread writer([fd, count, &sent_all] {
+    std::string batch;
+    for (long i = 0; i < count; ++i) {
+      batch += "{\"cmd\":\"status\",\"id\":" + std::to_string(i) + "}\n";
+      if (batch.size() >= 64 * 1024 || i + 1 == count) {
+        std::string_view rest(batch);
+        while (!rest.empty()) {
+          const ssize_t n = ::send(fd, rest.data(), rest.size(), MSG_NOSIGNAL);
+          if (n <= 0) {
+            sent_all = false;
+            return;
+          }
+          rest.remove_prefix(static_cast<std::size_t>(n));
+        }
+        batch.clear();
+      }
+    }
+  });
+  long received = 0;
+  bool in_order = true;
+  while (received < count) {
+    const auto nl = buffer.find('\n');
+    if (nl == std::string::npos) {
+      char chunk[65536];
+      const ssize_t n = ::recv(fd, chunk, sizeof chunk, 0);
+      if (n <= 0) break;
+      buffer.append(chunk, static_cast<std::size_t>(n));
+      continue;
+    }
+    const std::string expected = "{\"id\":" + std::to_string(received) + ",";
+    if (buffer.compare(0, expected.size(), expected) != 0) in_order = false;
+    buffer.erase(0, nl + 1);
+    ++received;
+  }
+  const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  ::shutdown(fd, SHUT_RDWR);
+  writer.join();
+  ::close(fd);
+  std::printf("api-bench: pipelined %ld status requests on %s\n", count, path.c_str());
+  std::printf("%10s %10s %12s %10s\n", "sent", "replies", "requests/s", "seconds");
+  std::printf("%10ld %10ld %12.0f %10.3f\n", sent_all ? count : -1L, received,
+              static_cast<double>(received) / seconds, seconds);
+  if (received != count || !in_order) {
+    std::fprintf(stderr, "api-bench: %ld of %ld replies%s\n", received, count,
+                 in_order ? "" : ", not in order");
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string external;
   std::string serve_path;
   double seconds = 2.0;
+  long pipeline_count = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--socket" && i + 1 < argc) {
@@ -136,8 +206,16 @@ int main(int argc, char** argv) {
       serve_path = argv[++i];
     } else if (arg == "--seconds" && i + 1 < argc) {
       seconds = std::atof(argv[++i]);
+    } else if (arg == "--pipeline" && i + 1 < argc) {
+      pipeline_count = std::atol(argv[++i]);
+      if (pipeline_count <= 0) {
+        std::fprintf(stderr, "api-bench: --pipeline needs a positive count\n");
+        return 2;
+      }
     } else {
-      std::fprintf(stderr, "usage: api-bench [--socket PATH | --serve PATH] [--seconds N]\n");
+      std::fprintf(stderr,
+                   "usage: api-bench [--socket PATH | --serve PATH] [--seconds N] "
+                   "[--pipeline N]\n");
       return 2;
     }
   }
@@ -192,11 +270,16 @@ int main(int argc, char** argv) {
     work.emplace(io.get_executor());
     io_thread = std::thread([&io] { io.run(); });
   }
-  std::printf("api-bench: status round trips on %s, %.1f s per client count\n", path.c_str(),
-              seconds);
-  std::printf("%7s %12s %10s %10s %10s\n", "clients", "requests/s", "p50 us", "p99 us", "requests");
   bool ok = true;
-  for (const int clients : {1, 8, 32}) ok = bench(path, clients, seconds) && ok;
+  if (pipeline_count > 0) {
+    ok = pipeline(path, pipeline_count);
+  } else {
+    std::printf("api-bench: status round trips on %s, %.1f s per client count\n", path.c_str(),
+                seconds);
+    std::printf("%7s %12s %10s %10s %10s\n", "clients", "requests/s", "p50 us", "p99 us",
+                "requests");
+    for (const int clients : {1, 8, 32}) ok = bench(path, clients, seconds) && ok;
+  }
   if (server) {
     asio::post(io, [&] { server->stop(); });
     work.reset();

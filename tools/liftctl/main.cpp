@@ -271,10 +271,19 @@ int main(int argc, char** argv) {
   std::vector<std::string> args;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--socket" && i + 1 < argc) {
-      socket_path = argv[++i];
-    } else if (arg.rfind("--socket=", 0) == 0) {
-      socket_path = arg.substr(9);
+    if (arg == "--socket" || arg.rfind("--socket=", 0) == 0) {
+      const bool inline_value = arg != "--socket";
+      if (!inline_value && i + 1 >= argc) {
+        std::fprintf(stderr,
+                     "liftctl: --socket needs a PATH (the API socket, e.g. "
+                     "/run/liftd/api.sock)\n");
+        return kExitUsage;
+      }
+      socket_path = inline_value ? arg.substr(9) : argv[++i];
+      if (socket_path.empty()) {
+        std::fprintf(stderr, "liftctl: --socket needs a PATH, got an empty one\n");
+        return kExitUsage;
+      }
     } else if (arg == "--json") {
       raw_json = true;
     } else if (arg == "-h" || arg == "--help") {
