@@ -58,6 +58,7 @@ struct RtConfig {
   int cpu = -1;                ///< rt.cpu, -1 = no pinning
   bool lock_memory = true;     ///< rt.lock_memory (mlockall)
   int flight_recorder_s = 30;  ///< rt.flight_recorder_s
+  int send_window_us = 1375;   ///< rt.send_window_us (DCP 7.2: 15 - 13.625 ms at most)
 };
 
 /// `api.*`
@@ -69,6 +70,7 @@ struct ApiConfig {
   std::string inputs_group = "liftd-io";        ///< api.inputs_group
   int max_clients = 32;                         ///< api.max_clients
   int idle_timeout_s = 0;                       ///< api.idle_timeout_s, 0 = none
+  int state_rate_hz = 10;                       ///< api.state_rate_hz (position/speed events)
 };
 
 /// `inputs.*`
