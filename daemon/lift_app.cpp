@@ -1,5 +1,10 @@
 #include "daemon/lift_app.hpp"
 
+#include <sys/eventfd.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
 #include <cstdlib>
 #include <ctime>
 #include <filesystem>
@@ -20,11 +25,9 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// How often the io thread drains the cycle's queues: a few cycles, so API replies and events
-// follow within tens of milliseconds without waking the io thread every cycle.
-constexpr auto kPollPeriod = 20ms;
-// The `state` watch event is sent on a change, at most this often.
-constexpr auto kStatePublishMin = 100ms;
+// The cycle thread wakes the io thread after every cycle; this timer only matters if the cycle
+// thread stalls (API replies still time out, the clock and simulated inputs still go out).
+constexpr auto kFallbackPoll = 100ms;
 // The simulated I/O board reports its inputs this often (well inside inputs.timeout_ms).
 constexpr auto kSimInputsPeriod = 100ms;
 // A service stop during a travel waits this long for the car to come to rest at a floor: a stop
@@ -45,12 +48,6 @@ std::string snake(std::string_view text) {
     if (c == ' ' || c == '/' || c == '-') c = '_';
   }
   return out;
-}
-
-std::string hex_word(std::uint16_t w) {
-  char buf[8];
-  std::snprintf(buf, sizeof buf, "%04X", w);
-  return buf;
 }
 
 control::ControllerConfig controller_config(const config::Config& c) {
@@ -110,6 +107,7 @@ rt::CycleConfig cycle_config(const config::Config& c, const std::string& device)
   out.thread.cpu = c.rt.cpu;
   out.thread.lock_memory = c.rt.lock_memory;
   out.recorder_span = std::chrono::seconds(c.rt.flight_recorder_s);
+  out.send_window = std::chrono::microseconds(c.rt.send_window_us);
   return out;
 }
 
@@ -171,7 +169,11 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
       simulate_(simulate),
       socket_path_(config.api.socket),
       runtime_dir_(default_runtime_dir(config)),
-      poll_timer_(daemon.io()) {
+      cycle_wake_(daemon.io()),
+      poll_timer_(daemon.io()),
+      state_interval_(std::chrono::nanoseconds(std::chrono::seconds(1)) /
+                      std::max(1, config.api.state_rate_hz)),
+      overruns_(rt::CycleConfig{}.period) {
   if (config.drive.kind != config::DriveKind::dcp) {
     throw std::invalid_argument("drive.kind \"" +
                                 std::string(config::to_string(config.drive.kind)) +
@@ -193,6 +195,13 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
   }
   controller_ = std::make_unique<control::DcpController>(controller_config(config), *position_);
   runner_ = std::make_unique<rt::CycleRunner>(cycle_config(config, device), *controller_);
+  cycle_wake_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+  if (cycle_wake_fd_ < 0) {
+    throw std::runtime_error(std::string("cannot create the cycle's wake-up eventfd: ") +
+                             std::strerror(errno));
+  }
+  cycle_wake_.assign(cycle_wake_fd_);  // closed by cycle_wake_, after the cycle has stopped
+  runner_->set_cycle_notify_fd(cycle_wake_fd_);
   backend_ = std::make_unique<LiftBackend>(
       config, *controller_, *runner_,
       config.position.source == config::PositionSource::api ? position_feed_.get() : nullptr,
@@ -267,6 +276,7 @@ bool LiftApp::start_cycle() {
              "DCP cycle running every 15 ms on " + runner_->config().device_path);
   running_ = true;
   backend_->send_clock(std::chrono::system_clock::now());
+  wait_for_cycle();
   schedule_poll();
   return true;
 }
@@ -325,6 +335,7 @@ void LiftApp::stop_cycle() {
   if (!running_) return;
   running_ = false;
   poll_timer_.cancel();
+  cycle_wake_.cancel();
   runner_->stop();
 }
 
@@ -344,8 +355,20 @@ void LiftApp::stop_api() {
   if (server_) server_->stop();
 }
 
+void LiftApp::wait_for_cycle() {
+  cycle_wake_.async_wait(
+      asio::posix::stream_descriptor::wait_read, [this](const asio::error_code& ec) {
+        if (ec || !running_) return;
+        std::uint64_t count = 0;
+        // Resets the eventfd; EAGAIN (already read) is harmless.
+        [[maybe_unused]] const ssize_t n = ::read(cycle_wake_fd_, &count, sizeof count);
+        poll();
+        wait_for_cycle();
+      });
+}
+
 void LiftApp::schedule_poll() {
-  poll_timer_.expires_after(kPollPeriod);
+  poll_timer_.expires_after(kFallbackPoll);
   poll_timer_.async_wait([this](const asio::error_code& ec) {
     if (ec || !running_) return;
     poll();
@@ -375,14 +398,23 @@ void LiftApp::poll() {
 void LiftApp::log_cycle_events() {
   rt::CycleEvent e;
   while (runner_->poll_event(e)) {
-    const bool bad = e.kind == rt::CycleEventKind::PortLost ||
-                     e.kind == rt::CycleEventKind::PortOpenFailed ||
-                     e.kind == rt::CycleEventKind::Overruns;
+    if (e.kind == rt::CycleEventKind::SkipRunStarted ||
+        e.kind == rt::CycleEventKind::SkipRunEnded) {
+      // Rare and meaningful: WARN only when skips threaten the link supervision.
+      if (auto line = overruns_.on_event(e)) {
+        log::event(line->warn ? log::Level::warn : log::Level::info, "rt", line->event,
+                   {{"skipped", std::to_string(e.count)},
+                    {"lateness_us", std::to_string(e.lateness.count() / 1000)}},
+                   line->text);
+      }
+      continue;
+    }
+    const bool bad =
+        e.kind == rt::CycleEventKind::PortLost || e.kind == rt::CycleEventKind::PortOpenFailed;
     log::event(bad ? log::Level::warn : log::Level::info, "rt",
                e.kind == rt::CycleEventKind::PortLost         ? "port_lost"
                : e.kind == rt::CycleEventKind::PortOpenFailed ? "port_open_failed"
                : e.kind == rt::CycleEventKind::PortOpened     ? "port_opened"
-               : e.kind == rt::CycleEventKind::Overruns       ? "overruns"
                                                               : "thread_status",
                {}, rt::describe(e));
   }
@@ -480,16 +512,28 @@ void LiftApp::publish_state_if_changed(MonoTime now) {
     last_display_version_ = s.display_version;
     server_->publish("display", api::to_json(backend_->display()));
   }
-  // A cheap fingerprint of what a watcher cares about; position in 10 mm steps.
-  std::string key = std::to_string(static_cast<int>(s.link)) + "/" +
-                    std::to_string(s.status_byte.value_or(0)) + "/" +
-                    std::to_string(s.floor ? static_cast<long>(*s.floor) : -1L) + "/" +
-                    std::to_string(static_cast<int>(s.travel_kind)) + "/" +
-                    std::to_string(s.position_mm ? *s.position_mm / 10 : -1) + "/" +
-                    hex_word(s.data_word) + "/" + std::to_string(s.call_count);
-  for (bool f : s.faults) key += f ? "1" : "0";
-  if (key == last_state_key_ || now - last_state_publish_ < kStatePublishMin) return;
-  last_state_key_ = key;
+  DiscreteState d;
+  d.link = s.link;
+  d.status_byte = s.status_byte;
+  d.floor = s.floor;
+  d.travel_kind = s.travel_kind;
+  d.direction = s.direction;
+  d.target_floor = s.target_floor;
+  d.brake_open = s.brake_open;
+  d.contactors_on = s.contactors_on;
+  d.command = s.command;
+  d.call_count = s.call_count;
+  d.calls = s.calls;
+  d.faults = s.faults;
+  const ContinuousState c{
+      s.position_mm ? std::optional<std::int64_t>(*s.position_mm / 10) : std::nullopt, s.data_word};
+  const bool discrete_changed = !last_discrete_ || d != *last_discrete_;
+  if (!discrete_changed) {
+    // Position and speed only: coalesced to api.state_rate_hz.
+    if (c == last_continuous_ || now - last_state_publish_ < state_interval_) return;
+  }
+  last_discrete_ = d;
+  last_continuous_ = c;
   last_state_publish_ = now;
   server_->publish("state", api::to_json(backend_->status()));
 }

@@ -155,7 +155,9 @@ api::StatsSnapshot LiftBackend::stats() {
   out.repeats = link.s7_seen;
   out.link_losses = link.link_faults;
   out.cycles = cycle.counters.cycles;
+  out.late_sends = cycle.counters.late_sends;
   out.overruns = cycle.counters.overruns;
+  out.skipped_cycles = cycle.counters.skipped_cycles;
   out.max_lateness_us = static_cast<std::uint64_t>(cycle.wake_lateness.max_us());
   out.max_work_us = static_cast<std::uint64_t>(cycle.work_time.max_us());
   out.lateness_p99_us = cycle.wake_lateness.percentile_us(0.99);

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The test command: installs what is missing, builds the default and the sanitizer preset,
-# runs every test in both, then runs each fuzz target briefly. Exits non-zero on any failure.
+# runs every test in both (tests labelled "slow" in the default preset only: real-time
+# end-to-end runs the sanitizers add nothing to), then runs each fuzz target briefly, and
+# prints how long each part took. Exits non-zero on any failure.
 #   tools/test.sh            everything
 #   LIFTD_SKIP_ASAN=1 ...    skip the sanitizer build (quicker local runs)
 #   LIFTD_SKIP_FUZZ=1 ...    skip the fuzz targets
@@ -10,20 +12,30 @@ cd "$(dirname "$0")/.."
 tools/install-deps.sh
 jobs=${LIFTD_JOBS:-$(nproc)}
 
+timings=()
+timed() {  # timed LABEL COMMAND...: runs it and notes how long it took
+  local label=$1 start=$SECONDS
+  shift
+  "$@"
+  timings+=("$(printf '%-22s %5d s' "$label" $((SECONDS - start)))")
+}
+
 run_preset() {
   local preset=$1
+  shift
   echo "=== preset: $preset ==="
   cmake --preset "$preset" >/dev/null
-  cmake --build --preset "$preset" --parallel "$jobs"
-  ctest --preset "$preset" --parallel "$jobs"
+  timed "$preset build" cmake --build --preset "$preset" --parallel "$jobs"
+  timed "$preset tests" ctest --preset "$preset" --parallel "$jobs" "$@"
 }
 
 run_preset default
-[ "${LIFTD_SKIP_ASAN:-0}" = 1 ] || run_preset asan
+[ "${LIFTD_SKIP_ASAN:-0}" = 1 ] || run_preset asan -LE slow
 if [ "${LIFTD_SKIP_FUZZ:-0}" != 1 ]; then
   echo "=== preset: fuzz ==="
   cmake --preset fuzz >/dev/null
-  cmake --build --preset fuzz --parallel "$jobs"
-  ctest --preset fuzz
+  timed "fuzz build" cmake --build --preset fuzz --parallel "$jobs"
+  timed "fuzz runs" ctest --preset fuzz
 fi
 echo "tools/test.sh: all presets passed"
+printf '  %s\n' "${timings[@]}"

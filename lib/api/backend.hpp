@@ -74,7 +74,9 @@ struct StatsSnapshot {
   std::uint64_t repeats = 0;            ///< replies with S7 set (drive saw our frame corrupt)
   std::uint64_t link_losses = 0;        ///< times the link supervision tripped
   std::uint64_t cycles = 0;             ///< cycles run
-  std::uint64_t overruns = 0;           ///< cycles started late by more than a period
+  std::uint64_t late_sends = 0;         ///< frames sent late, inside the DCP 7.2 slack
+  std::uint64_t overruns = 0;           ///< wake-ups too late to send (beyond the slack)
+  std::uint64_t skipped_cycles = 0;     ///< cycles not run because of overruns
   std::uint64_t max_lateness_us = 0;    ///< worst wake-up lateness
   std::uint64_t max_work_us = 0;        ///< worst time spent inside one cycle
   double lateness_p99_us = 0;           ///< wake-up lateness, 99th percentile

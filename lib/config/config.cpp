@@ -529,6 +529,12 @@ const std::vector<Key>& schema() {
                         "flight-recorder files (liftd-trace-*.txt) kept in the runtime directory; "
                         "the oldest are removed beyond it",
                         &Config::rt, &RtConfig::trace_files_kept));
+    // DCP 7.2: the drive's reply ends by 13.625 ms, the next master frame starts at 15 ms.
+    t.push_back(int_key("rt.send_window_us", 0, 1375,
+                        "a cycle that wakes up at most this late still sends (counted as a late "
+                        "send above 500 us); later wake-ups skip the cycle. DCP 7.2 allows at "
+                        "most 15 ms - 13.625 ms = 1375 us",
+                        &Config::rt, &RtConfig::send_window_us));
     // api
     t.push_back(string_key("api.socket", 1, kMaxSocketPathLength,
                            "absolute path, at most 107 bytes", absolute_path_rule,
@@ -566,6 +572,12 @@ const std::vector<Key>& schema() {
     t.push_back(int_key("api.idle_timeout_s", 0, 86400,
                         "close a client silent this long; 0 = never", &Config::api,
                         &ApiConfig::idle_timeout_s));
+    // 66 Hz is one event per 15 ms cycle (DCP 7.2).
+    t.push_back(int_key("api.state_rate_hz", 1, 66,
+                        "`state` watch events that only carry new position or speed go out at "
+                        "most this often; discrete changes (drive status, link, travel, faults, "
+                        "calls) go out from the cycle that saw them",
+                        &Config::api, &ApiConfig::state_rate_hz));
     // inputs
     t.push_back(int_key("inputs.timeout_ms", 50, 10000,
                         "machine inputs older than this count as lost (safe stop)", &Config::inputs,

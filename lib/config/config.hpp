@@ -62,6 +62,7 @@ struct RtConfig {
   bool lock_memory = true;       ///< rt.lock_memory (mlockall)
   int flight_recorder_s = 30;    ///< rt.flight_recorder_s
   int trace_files_kept = 10;     ///< rt.trace_files_kept
+  int send_window_us = 1375;     ///< rt.send_window_us (DCP 7.2: 15 - 13.625 ms at most)
 };
 
 /// `api.*`
@@ -76,6 +77,7 @@ struct ApiConfig {
   int reserved_clients = 4;                     ///< api.reserved_clients, for control access
   int stalled_reader_timeout_s = 30;            ///< api.stalled_reader_timeout_s
   int idle_timeout_s = 0;                       ///< api.idle_timeout_s, 0 = none
+  int state_rate_hz = 10;                       ///< api.state_rate_hz (position/speed events)
 };
 
 /// `inputs.*`

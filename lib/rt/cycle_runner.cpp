@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <stdexcept>
 #include <string_view>
 #include <utility>
 
@@ -14,7 +16,6 @@ namespace liftd::rt {
 namespace {
 
 constexpr auto kKeeperTick = std::chrono::milliseconds(5);  // keeper's polling interval
-constexpr auto kReportInterval = std::chrono::seconds(1);   // overruns: one report a second
 
 timespec to_timespec(MonoTime t) noexcept {
   constexpr std::int64_t kNsPerS = 1'000'000'000;
@@ -57,15 +58,28 @@ std::string describe(const CycleEvent& event) {
       return "serial port lost (" +
              std::string(event.error_number != 0 ? std::strerror(event.error_number) : "hang-up") +
              "), reopening";
-    case CycleEventKind::Overruns:
-      return "cycle overrun: " + std::to_string(event.count) +
-             " cycle(s) skipped since the last report (woke too late to send in time)";
+    case CycleEventKind::SkipRunStarted:
+      return "cycle overrun: woke " + std::to_string(event.lateness.count() / 1000) +
+             " us late, beyond the send window; " + std::to_string(event.count) +
+             " cycle(s) skipped";
+    case CycleEventKind::SkipRunEnded:
+      return "cycle overrun ended: " + std::to_string(event.count) +
+             " cycle(s) skipped in the run, worst wake-up " +
+             std::to_string(event.lateness.count() / 1000) + " us late";
   }
   return "unknown cycle event";
 }
 
 CycleRunner::CycleRunner(CycleConfig config, CycleEngine& engine)
-    : config_(std::move(config)), engine_(engine), recorder_(recorder_capacity(config_)) {}
+    : config_(std::move(config)), engine_(engine), recorder_(recorder_capacity(config_)) {
+  const auto max = max_send_window(config_.period, config_.reply_deadline);
+  if (config_.send_window.count() < 0 || config_.send_window > max) {
+    throw std::invalid_argument(
+        "cycle send window " + std::to_string(config_.send_window.count() / 1000) +
+        " us is out of range: allowed 0.." + std::to_string(max.count() / 1000) +
+        " us (period minus reply deadline, DCP 7.2)");
+  }
+}
 
 CycleRunner::~CycleRunner() {
   stop();
@@ -114,8 +128,10 @@ CycleStats CycleRunner::stats() const {
   s.counters.bad_replies = get(counters_.bad_replies);
   s.counters.missing_replies = get(counters_.missing_replies);
   s.counters.partial_replies = get(counters_.partial_replies);
+  s.counters.late_sends = get(counters_.late_sends);
   s.counters.overruns = get(counters_.overruns);
   s.counters.skipped_cycles = get(counters_.skipped_cycles);
+  s.counters.late_replies = get(counters_.late_replies);
   s.counters.port_losses = get(counters_.port_losses);
   s.counters.port_opens = get(counters_.port_opens);
   s.counters.send_failures = get(counters_.send_failures);
@@ -128,42 +144,76 @@ CycleStats CycleRunner::stats() const {
 
 void CycleRunner::cycle_loop() noexcept {
   MonoTime next = mono_now() + config_.period;
-  last_overrun_report_ = next - kReportInterval;  // the first overrun is reported at once
   while (!stop_.load(std::memory_order_relaxed)) {
     sleep_until(next);
     const MonoTime wake = mono_now();
-    const MonoTime late = wake - next;
+    const auto late = wake - next;
     wake_lateness_.record(late);
-    if (late > config_.send_window) {
-      // Too late to get the frame out inside the window: skip rather than send late, and skip
-      // every period that has already passed as well.
-      const auto skipped = static_cast<std::uint64_t>(late / config_.period) + 1;
-      bump(counters_.overruns);
-      bump(counters_.skipped_cycles, skipped);
-      pending_overruns_ += skipped;
-      recorder_.record(wake, Direction::Event, record_flag::kSkipped, {});
-      next += config_.period * static_cast<std::int64_t>(skipped);
-    } else {
+    const WakeDecision d = decide_wake(late, config_.send_window, config_.period);
+    if (d.send) {
+      // Within the window (DCP 7.2 slack): send now, even if late; the reply deadline in
+      // run_one_cycle still ends by the next planned start.
+      if (d.late) bump(counters_.late_sends);
+      end_skip_run(wake);
       run_one_cycle(wake, next);
       work_time_.record(mono_now() - wake);
       bump(counters_.cycles);
       next += config_.period;
+    } else {
+      // Too late to send without risking a collision: skip this cycle and every period that
+      // has already begun, and keep the absolute schedule.
+      bump(counters_.overruns);
+      bump(counters_.skipped_cycles, d.skipped);
+      recorder_.record(wake, Direction::Event, record_flag::kSkipped, {});
+      note_skip(wake, late, d.skipped);
+      next += config_.period * static_cast<std::int64_t>(d.skipped);
     }
-    report_overruns(wake);
     progress_.fetch_add(1, std::memory_order_relaxed);
+    notify();
   }
 }
 
-void CycleRunner::report_overruns(MonoTime now) noexcept {
-  if (pending_overruns_ == 0 || now - last_overrun_report_ < kReportInterval) return;
-  CycleEvent e;
-  e.kind = CycleEventKind::Overruns;
-  e.time = now;
-  e.count = pending_overruns_;
-  if (cycle_events_.try_push(e)) {
-    pending_overruns_ = 0;
-    last_overrun_report_ = now;
+void CycleRunner::note_skip(MonoTime now, std::chrono::nanoseconds lateness,
+                            std::uint64_t skipped) noexcept {
+  if (!in_skip_run_) {
+    in_skip_run_ = true;
+    run_skipped_ = 0;
+    run_worst_ = lateness;
+    run_started_ = now;
+    skip_start_pending_ = true;
   }
+  run_skipped_ += skipped;
+  run_worst_ = std::max(run_worst_, lateness);
+  if (skip_start_pending_) {
+    CycleEvent e;
+    e.kind = CycleEventKind::SkipRunStarted;
+    e.time = run_started_;
+    e.count = run_skipped_;
+    e.lateness = run_worst_;
+    if (cycle_events_.try_push(e)) skip_start_pending_ = false;
+  }
+}
+
+void CycleRunner::end_skip_run(MonoTime now) noexcept {
+  if (in_skip_run_) {
+    in_skip_run_ = false;
+    // The summary replaces a start event that never fitted (the queue was full).
+    skip_start_pending_ = false;
+    pending_end_ = CycleEvent{};
+    pending_end_.kind = CycleEventKind::SkipRunEnded;
+    pending_end_.time = now;
+    pending_end_.count = run_skipped_;
+    pending_end_.lateness = run_worst_;
+    skip_end_pending_ = true;
+  }
+  if (skip_end_pending_ && cycle_events_.try_push(pending_end_)) skip_end_pending_ = false;
+}
+
+void CycleRunner::notify() noexcept {
+  if (notify_fd_ < 0) return;
+  const std::uint64_t one = 1;
+  // eventfd, non-blocking: EAGAIN only if the counter were near 2^64 (never in practice).
+  [[maybe_unused]] const ssize_t n = ::write(notify_fd_, &one, sizeof one);
 }
 
 void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
@@ -193,7 +243,12 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
           const io::IoResult got = port_.read_until(reply, deadline);
           const MonoTime now = mono_now();
           const auto partial = reply.first(got.bytes);
-          if (got.status == io::IoStatus::Ok) {
+          // DCP 7.2: a reply not complete by the deadline is lost. If this thread was held up
+          // and only saw the reply after the deadline, nobody can tell when it completed:
+          // count it as missing, never as a good reply.
+          const bool seen_late = got.status == io::IoStatus::Ok && now > deadline;
+          if (seen_late) bump(counters_.late_replies);
+          if (got.status == io::IoStatus::Ok && !seen_late) {
             reply_latency_.record(now - sent_at);
             const bool good = engine_.on_reply(reply, now);
             bump(good ? counters_.good_replies : counters_.bad_replies);
@@ -209,7 +264,7 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
           } else {
             bump(counters_.missing_replies);
             std::uint8_t flags = record_flag::kMissing;
-            if (got.bytes > 0) {
+            if (got.bytes > 0 && !seen_late) {
               bump(counters_.partial_replies);
               flags |= record_flag::kPartial;
             }

@@ -51,9 +51,12 @@ struct CycleConfig {
   std::chrono::nanoseconds period = std::chrono::milliseconds(15);
   /// DCP 7.2: the drive's reply must be complete (its driver off) by 13.625 ms after our start.
   std::chrono::nanoseconds reply_deadline = std::chrono::microseconds(13625);
-  /// Latest wake-up lateness at which we still send. DCP 7.2: our driver must be off by
-  /// 2.0624 ms and 6 bytes at 38400 baud take 1.5625 ms, so the frame must start by 0.5 ms.
-  std::chrono::nanoseconds send_window = std::chrono::microseconds(500);
+  /// Latest wake-up lateness at which we still send (a "late send" past kOnTimeBudget). DCP
+  /// 7.2: the drive's reply ends by 13.625 ms and the next master frame starts at 15 ms, so a
+  /// frame up to 15 - 13.625 = 1.375 ms late still cannot collide with the reply to it (its
+  /// reply deadline moves with it and still ends by the next planned start). Never above
+  /// max_send_window(); the constructor refuses more.
+  std::chrono::nanoseconds send_window = std::chrono::microseconds(1375);
   RtThreadOptions thread;  ///< SCHED_FIFO priority, memory locking, affinity
   std::chrono::nanoseconds reopen_backoff_min =
       std::chrono::milliseconds(100);  ///< first retry after a loss
@@ -63,13 +66,43 @@ struct CycleConfig {
   std::chrono::nanoseconds recorder_span = std::chrono::seconds(30);
 };
 
+/// DCP 7.2: our driver must be off by 2.0624 ms and 6 bytes at 38400 baud take 1.5625 ms, so a
+/// frame that starts within 0.5 ms of its planned time is on time; later ones count as late.
+inline constexpr std::chrono::nanoseconds kOnTimeBudget = std::chrono::microseconds(500);
+
+/// The largest send window the spec's timing allows: period minus reply deadline (DCP 7.2:
+/// 15 - 13.625 = 1.375 ms), so a late frame's reply still ends before the next planned frame.
+constexpr std::chrono::nanoseconds max_send_window(std::chrono::nanoseconds period,
+                                                   std::chrono::nanoseconds reply_deadline) {
+  return period > reply_deadline ? period - reply_deadline : std::chrono::nanoseconds{0};
+}
+
+/// What the cycle does with one wake-up, decided from its lateness alone.
+struct WakeDecision {
+  bool send = false;          ///< run the cycle now
+  bool late = false;          ///< sent, but later than kOnTimeBudget
+  std::uint64_t skipped = 0;  ///< cycles skipped (0 when sending)
+};
+
+/// The rule: send when `lateness` is within `window` (late past kOnTimeBudget), otherwise skip
+/// this cycle and every further period that has already begun. Absolute schedule: the caller
+/// plans the next wake-up `skipped` (or 1) periods after the missed one.
+constexpr WakeDecision decide_wake(std::chrono::nanoseconds lateness,
+                                   std::chrono::nanoseconds window,
+                                   std::chrono::nanoseconds period) {
+  if (lateness <= window) return WakeDecision{true, lateness > kOnTimeBudget, 0};
+  const auto p = period.count() > 0 ? period.count() : 1;
+  return WakeDecision{false, false, static_cast<std::uint64_t>(lateness.count() / p) + 1};
+}
+
 /// Kinds of events the cycle reports to the non-real-time side.
 enum class CycleEventKind : std::uint8_t {
   ThreadStatus,    ///< real-time wishes refused at start (text in describe())
   PortOpened,      ///< device opened (error_number: RS485/low-latency notes in text)
   PortOpenFailed,  ///< open failed; will retry (text names device, call and errno)
   PortLost,        ///< device lost (error_number = errno)
-  Overruns,        ///< `count` cycles skipped since the last report (at most once a second)
+  SkipRunStarted,  ///< a run of skipped cycles began: `count` skipped, `lateness` of the wake
+  SkipRunEnded,    ///< the run ended (a cycle was sent): `count` skipped in all, worst `lateness`
 };
 
 /// One event. Plain data so it can cross the SPSC queue without allocation.
@@ -78,6 +111,7 @@ struct CycleEvent {
   MonoTime time{};                                 ///< when
   int error_number = 0;                            ///< errno where relevant
   std::uint64_t count = 0;                         ///< e.g. skipped cycles
+  std::chrono::nanoseconds lateness{0};            ///< skip runs: wake-up lateness
   std::array<char, 240> text{};                    ///< message (filled off the cycle thread)
 };
 
@@ -92,26 +126,29 @@ struct CycleCounters {
   std::uint64_t bad_replies = 0;      ///< complete, in time, rejected by the engine
   std::uint64_t missing_replies = 0;  ///< not complete by the deadline (incl. partial)
   std::uint64_t partial_replies = 0;  ///< of the missing ones: some bytes came
-  std::uint64_t overruns = 0;         ///< wake-ups too late to send
+  std::uint64_t late_sends = 0;       ///< frames sent later than kOnTimeBudget, within the window
+  std::uint64_t overruns = 0;         ///< wake-ups too late to send (beyond the send window)
   std::uint64_t skipped_cycles = 0;   ///< cycles not run because of overruns
-  std::uint64_t port_losses = 0;      ///< device losses
-  std::uint64_t port_opens = 0;       ///< successful opens (first one included)
-  std::uint64_t send_failures = 0;    ///< frames the port refused
-  std::uint64_t stray_bytes = 0;      ///< bytes flushed before sending
+  std::uint64_t late_replies = 0;   ///< of the missing ones: complete, but seen after the deadline
+  std::uint64_t port_losses = 0;    ///< device losses
+  std::uint64_t port_opens = 0;     ///< successful opens (first one included)
+  std::uint64_t send_failures = 0;  ///< frames the port refused
+  std::uint64_t stray_bytes = 0;    ///< bytes flushed before sending
 };
 
 /// A copy of the cycle's statistics, taken on any thread.
 struct CycleStats {
   CycleCounters counters;       ///< counters
-  HistogramData wake_lateness;  ///< wake-up minus planned time, 1 us bins
-  HistogramData reply_latency;  ///< send start to complete reply, 10 us bins
-  HistogramData work_time;      ///< wake-up to end of cycle work, 1 us bins
+  HistogramData wake_lateness;  ///< wake-up minus planned time, 1 us bins up to 20 ms
+  HistogramData reply_latency;  ///< send start to complete reply, 10 us bins up to 15 ms
+  HistogramData work_time;      ///< wake-up to end of cycle work, 1 us bins up to 20 ms
 };
 
 /// Runs the cycle on its own real-time thread and a helper thread that (re)opens the device.
 class CycleRunner {
  public:
-  /// Everything is allocated here; `engine` must outlive the runner.
+  /// Everything is allocated here; `engine` must outlive the runner. Throws
+  /// std::invalid_argument if the send window is negative or above max_send_window().
   CycleRunner(CycleConfig config, CycleEngine& engine);
   CycleRunner(const CycleRunner&) = delete;
   CycleRunner& operator=(const CycleRunner&) = delete;
@@ -135,6 +172,10 @@ class CycleRunner {
   const FlightRecorder& recorder() const noexcept { return recorder_; }
   /// Any thread: goes up every period while the cycle thread is alive (systemd watchdog).
   std::uint64_t progress() const noexcept { return progress_.load(std::memory_order_relaxed); }
+  /// Wakes another thread after every cycle: the cycle thread adds 1 to this eventfd (created
+  /// non-blocking; one write(2), no allocation, never blocks). -1 (default) = none. Set before
+  /// start(); the caller owns the descriptor and keeps it open until stop().
+  void set_cycle_notify_fd(int fd) noexcept { notify_fd_ = fd; }
   /// Any thread: true while a port is open on the cycle thread.
   bool port_ready() const noexcept { return port_ready_.load(std::memory_order_relaxed); }
   /// The configuration in use.
@@ -148,7 +189,9 @@ class CycleRunner {
   void run_one_cycle(MonoTime wake, MonoTime planned) noexcept;
   void lose_port(MonoTime now, int error_number) noexcept;
   void keeper_loop();
-  void report_overruns(MonoTime now) noexcept;
+  void note_skip(MonoTime now, std::chrono::nanoseconds lateness, std::uint64_t skipped) noexcept;
+  void end_skip_run(MonoTime now) noexcept;
+  void notify() noexcept;
   static void bump(std::atomic<std::uint64_t>& a, std::uint64_t by = 1) noexcept {
     a.store(a.load(std::memory_order_relaxed) + by, std::memory_order_relaxed);
   }
@@ -159,8 +202,15 @@ class CycleRunner {
   // Cycle thread state.
   io::SerialPort port_;
   std::array<std::uint8_t, kMaxReply> reply_{};
-  std::uint64_t pending_overruns_ = 0;
-  MonoTime last_overrun_report_{};
+  // The current run of skipped cycles (between two sent cycles).
+  bool in_skip_run_ = false;
+  bool skip_start_pending_ = false;  // its start event did not fit in the queue yet
+  std::uint64_t run_skipped_ = 0;
+  std::chrono::nanoseconds run_worst_{0};
+  MonoTime run_started_{};
+  bool skip_end_pending_ = false;  // a finished run's summary still to push
+  CycleEvent pending_end_{};
+  int notify_fd_ = -1;
 
   // Shared with the keeper thread: a freshly opened descriptor, a dead one to close, and
   // whether the cycle wants a port.
@@ -174,12 +224,14 @@ class CycleRunner {
   // Statistics (written by the cycle thread only).
   struct Counters {
     std::atomic<std::uint64_t> cycles{0}, frames_sent{0}, good_replies{0}, bad_replies{0},
-        missing_replies{0}, partial_replies{0}, overruns{0}, skipped_cycles{0}, port_losses{0},
-        port_opens{0}, send_failures{0}, stray_bytes{0};
+        missing_replies{0}, partial_replies{0}, late_sends{0}, overruns{0}, skipped_cycles{0},
+        late_replies{0}, port_losses{0}, port_opens{0}, send_failures{0}, stray_bytes{0};
   } counters_;
-  Histogram<5000> wake_lateness_{std::chrono::microseconds(1)};   // 0..5 ms in 1 us bins
+  // Lateness and work beyond a period are what matter most: 0..20 ms in 1 us bins (a period of
+  // DCP 7.2 plus margin); anything beyond lands in the last bin and prints as "> 20000".
+  Histogram<20000> wake_lateness_{std::chrono::microseconds(1)};
   Histogram<1500> reply_latency_{std::chrono::microseconds(10)};  // 0..15 ms in 10 us bins
-  Histogram<5000> work_time_{std::chrono::microseconds(1)};       // 0..5 ms in 1 us bins
+  Histogram<20000> work_time_{std::chrono::microseconds(1)};
   FlightRecorder recorder_;
 
   // Events: one queue per producing thread, both drained by poll_event().

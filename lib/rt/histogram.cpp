@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace liftd::rt {
 
@@ -20,6 +21,29 @@ double HistogramData::percentile_us(double fraction) const noexcept {
     }
   }
   return max_us();
+}
+
+bool HistogramData::beyond_range(double fraction) const noexcept {
+  if (count == 0 || bins.empty()) return false;
+  const double clamped = std::clamp(fraction, 0.0, 1.0);
+  auto rank = static_cast<std::uint64_t>(std::ceil(clamped * static_cast<double>(count)));
+  rank = std::max<std::uint64_t>(rank, 1);
+  // Beyond the range when fewer than `rank` samples lie in the bins before the last one, and
+  // the largest sample reached the last bin's lower edge.
+  std::uint64_t below = 0;
+  for (std::size_t i = 0; i + 1 < bins.size(); ++i) below += bins[i];
+  const auto last_edge = static_cast<std::int64_t>(bins.size() - 1) * bin_width_ns;
+  return below < rank && max_ns >= last_edge + bin_width_ns;
+}
+
+std::string HistogramData::percentile_text(double fraction) const {
+  char buf[32];
+  if (beyond_range(fraction)) {
+    std::snprintf(buf, sizeof buf, "> %.0f", range_us());
+  } else {
+    std::snprintf(buf, sizeof buf, "%.1f", percentile_us(fraction));
+  }
+  return buf;
 }
 
 double HistogramData::mean_us() const noexcept {

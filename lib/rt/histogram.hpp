@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace liftd::rt {
@@ -22,6 +23,16 @@ struct HistogramData {
   /// The value at or below which `fraction` (0..1) of the samples lie, in microseconds; the
   /// upper edge of the bin that crosses the fraction, but never above the maximum. 0 if empty.
   double percentile_us(double fraction) const noexcept;
+  /// True if the `fraction` percentile lies in the last bin, i.e. at or beyond the range the
+  /// bins cover: its true value is only known to be >= range_us().
+  bool beyond_range(double fraction) const noexcept;
+  /// The range the bins cover (bins * width) in microseconds.
+  double range_us() const noexcept {
+    return static_cast<double>(bin_width_ns) * static_cast<double>(bins.size()) / 1000.0;
+  }
+  /// percentile_us() as text with one decimal, or "> R" (R = range_us()) when beyond_range():
+  /// a figure a benchmark can print without claiming a value the bins cannot tell.
+  std::string percentile_text(double fraction) const;
   /// Mean of the samples in microseconds (0 if empty).
   double mean_us() const noexcept;
   /// Largest sample in microseconds.

@@ -35,9 +35,8 @@ CycleConfig test_config(const std::string& path) {
   c.device_path = path;
   c.thread.priority = kTestPriority;
   c.thread.lock_memory = false;  // the test process is not ours to pin into RAM
-  // The shared test machine may wake us a few ms late; the spec's 0.5 ms window would turn
-  // that into skipped cycles, which this test does not study (RtCycle.Overrun... does).
-  c.send_window = milliseconds(3);
+  // The send window is the spec's (DCP 7.2: 1.375 ms). A loaded machine may wake us later:
+  // the tests assert how the cycle accounted for each wake-up, not that none was late.
   return c;
 }
 
@@ -132,7 +131,10 @@ TEST(RtCycle, TwoThousandCyclesWithoutErrorsAtFifteenMsSpacing) {
   EXPECT_EQ(c.good_replies + c.bad_replies + c.missing_replies, c.frames_sent);
   EXPECT_EQ(engine.good_.load(), c.good_replies);
   EXPECT_EQ(engine.after_.load(), c.cycles);
-  EXPECT_LE(c.overruns, c.cycles / 100) << "scheduling too noisy even for a 3 ms window";
+  // Every wake-up was either a cycle run (on time or late) or an overrun: nothing lost.
+  EXPECT_EQ(s.wake_lateness.count, c.cycles + c.overruns);
+  EXPECT_LE(c.late_sends, c.cycles);
+  EXPECT_GE(c.skipped_cycles, c.overruns);
   // The reply cannot be faster than the responder's delay.
   EXPECT_GE(s.reply_latency.percentile_us(0.01), 2000.0);
   EXPECT_LT(s.reply_latency.percentile_us(0.5), 13625.0);
@@ -419,34 +421,55 @@ class StallingEngine : public EchoEngine {
   int cycles_ = 0;
 };
 
-TEST(RtCycle, OverrunSkipsLateCyclesCountsThemAndReportsOnce) {
-  // Legend: cycle 20 ends ~37 ms after its wake-up, so the next planned wake-up (15 ms) is
-  // ~22-24 ms in the past: one overrun, skipping that cycle and the one after it (2 periods).
+TEST(RtCycle, OverrunSkipsLateCyclesCountsThemAndReportsTheRun) {
+  // Legend: cycle 20 ends at least 37 ms after its wake-up, so the next planned wake-up (15 ms
+  // after the planned one) is at least 22 ms in the past: an overrun skipping that cycle and
+  // every period that has begun since (2 for 22..29 ms). A loaded machine may add overruns of
+  // its own; each must be accounted for exactly as the rule says, from its own lateness.
   io::PtyPair pty = make_pty();
   FakeResponder responder(pty.master_fd(), std::chrono::microseconds(1000), kTestPriority);
   ASSERT_EQ(responder.start(), 0);
   StallingEngine engine;
-  CycleRunner runner(test_config(pty.slave_path()), engine);
+  const CycleConfig config = test_config(pty.slave_path());
+  CycleRunner runner(config, engine);
   ASSERT_EQ(runner.start(), 0);
   ASSERT_TRUE(wait_for([&] { return runner.stats().counters.cycles >= 60; }, milliseconds(5000)));
   runner.stop();
   responder.stop();
   const CycleCounters c = runner.stats().counters;
-  EXPECT_EQ(c.overruns, 1U);
-  EXPECT_EQ(c.skipped_cycles, 2U);
-  EXPECT_EQ(c.missing_replies, 0U);
+  EXPECT_GE(c.overruns, 1U);
+  EXPECT_GE(c.skipped_cycles, 2U);
   const auto events = drain(runner);
-  ASSERT_EQ(count_kind(events, CycleEventKind::Overruns), 1U);
+  // Runs alternate: start, end.
+  std::uint64_t started = 0, ended = 0, skipped_in_runs = 0;
+  bool stall_seen = false;
   for (const auto& e : events) {
-    if (e.kind == CycleEventKind::Overruns) {
-      EXPECT_EQ(e.count, 2U);
+    if (e.kind == CycleEventKind::SkipRunStarted) {
+      ASSERT_EQ(started, ended);
+      ++started;
+      EXPECT_GT(e.lateness, config.send_window);
+      // The rule, applied to the lateness the cycle saw: every period begun is skipped.
+      EXPECT_EQ(e.count, static_cast<std::uint64_t>(e.lateness / config.period) + 1);
+      stall_seen = stall_seen || e.lateness >= milliseconds(22);
+    } else if (e.kind == CycleEventKind::SkipRunEnded) {
+      ++ended;
+      ASSERT_EQ(started, ended);
+      skipped_in_runs += e.count;
     }
+  }
+  EXPECT_TRUE(stall_seen);
+  // Only a run still going when the test stopped the cycle lacks its summary.
+  ASSERT_LE(started, ended + 1);
+  if (started == ended) {
+    EXPECT_EQ(skipped_in_runs, c.skipped_cycles);
+  } else {
+    EXPECT_LT(skipped_in_runs, c.skipped_cycles);
   }
   std::size_t skipped_records = 0;
   for (const auto& r : runner.recorder().copy()) {
     skipped_records += (r.flags & record_flag::kSkipped) != 0 ? 1 : 0;
   }
-  EXPECT_EQ(skipped_records, 1U);
+  EXPECT_EQ(skipped_records, c.overruns);
 }
 
 TEST(RtCycle, ReplyAfterTheDeadlineCountsAsNoReply) {
@@ -469,6 +492,8 @@ TEST(RtCycle, ReplyAfterTheDeadlineCountsAsNoReply) {
   // loaded machine it may slip past the next send and be read (and rejected) as stale.
   EXPECT_EQ(engine.corrupt_.load(), 0U);
   EXPECT_EQ(c.missing_replies + c.bad_replies, c.frames_sent);
+  // Replies this thread only saw after their deadline (it was held up) are missing ones.
+  EXPECT_LE(c.late_replies, c.missing_replies);
   EXPECT_GE(c.missing_replies, c.frames_sent / 2);
   EXPECT_GE(c.stray_bytes, 6 * (c.frames_sent / 4));
 }

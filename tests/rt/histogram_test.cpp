@@ -45,6 +45,35 @@ TEST(RtHistogram, OverflowLandsInLastBinAndMaxStaysExact) {
   EXPECT_DOUBLE_EQ(d.max_us(), 5000.0);
 }
 
+TEST(RtHistogram, PercentilesBeyondTheRangePrintAsMoreThanTheRange) {
+  // Legend: 0..100 us in 10 us bins; 90 samples of 5 us and 10 of 5 ms. p50 and p90 lie in
+  // range, p95 and p99 among the 5 ms samples: the bins cannot tell their value, only "> 100".
+  Histogram<10> h(microseconds(10));
+  for (int i = 0; i < 90; ++i) h.record(microseconds(5));
+  for (int i = 0; i < 10; ++i) h.record(microseconds(5000));
+  const HistogramData d = h.copy();
+  struct Case {
+    double fraction;
+    bool beyond;
+    const char* text;
+  };
+  const Case cases[] = {
+      {0.5, false, "10.0"}, {0.9, false, "10.0"}, {0.95, true, "> 100"}, {0.99, true, "> 100"}};
+  for (const auto& c : cases) {
+    EXPECT_EQ(d.beyond_range(c.fraction), c.beyond) << c.fraction;
+    EXPECT_EQ(d.percentile_text(c.fraction), c.text) << c.fraction;
+  }
+  EXPECT_DOUBLE_EQ(d.range_us(), 100.0);
+}
+
+TEST(RtHistogram, LastBinWithinTheRangeIsNotBeyondIt) {
+  Histogram<10> h(microseconds(10));  // covers 0..100 us
+  h.record(microseconds(95));         // in the last bin, but inside the range
+  const HistogramData d = h.copy();
+  EXPECT_FALSE(d.beyond_range(1.0));
+  EXPECT_EQ(d.percentile_text(1.0), "95.0");
+}
+
 TEST(RtHistogram, NegativeSamplesCountAsZero) {
   Histogram<4> h(microseconds(1));
   h.record(microseconds(-30));
