@@ -545,6 +545,9 @@ std::string LiftApp::apply_config(const config::Config& next) {
   server.inputs_group = next.api.inputs_group;
   server.max_clients = static_cast<std::size_t>(next.api.max_clients);
   server.idle_timeout = std::chrono::seconds(next.api.idle_timeout_s);
+  server.max_clients_per_uid = static_cast<std::size_t>(next.api.max_clients_per_uid);
+  server.reserved_clients = static_cast<std::size_t>(next.api.reserved_clients);
+  server.stalled_reader_timeout = std::chrono::seconds(next.api.stalled_reader_timeout_s);
   try {
     server_->reconfigure(server);
   } catch (const std::exception& e) {

@@ -52,6 +52,14 @@ int check_config(const std::string& path) {
   return exit_code::kOk;
 }
 
+// What --simulate changes in any configuration file, at start and on every reload alike: the
+// simulated encoder is the position source, and a simulated lift moves no car, so it runs for
+// anyone, real time or not (and says which).
+void simulate_overrides(config::Config& cfg) {
+  cfg.position.source = config::PositionSource::sim;
+  cfg.rt.require_realtime = false;
+}
+
 // Loads the configuration the command line names; the defaults when simulating without one.
 std::optional<config::Config> load_config(const CommandLine& cl, bool to_log) {
   if (cl.simulate && !cl.config_path) return liftd::daemon::simulation_defaults();
@@ -71,11 +79,7 @@ std::optional<config::Config> load_config(const CommandLine& cl, bool to_log) {
     }
     return std::nullopt;
   }
-  if (cl.simulate) {
-    result.config.position.source = config::PositionSource::sim;
-    // A simulated lift moves no car: it runs for anyone, real time or not (and says which).
-    result.config.rt.require_realtime = false;
-  }
+  if (cl.simulate) simulate_overrides(result.config);
   return result.config;
 }
 
@@ -138,7 +142,7 @@ int run_daemon(const CommandLine& cl) {
     daemon.set_config_loader(
         [path, simulate] {
           auto result = config::load_file(path);
-          if (result.ok() && simulate) result.config.position.source = config::PositionSource::sim;
+          if (result.ok() && simulate) simulate_overrides(result.config);
           return result;
         },
         path);

@@ -32,8 +32,15 @@ bool is_live(const std::string& key) {
 const std::vector<std::string>& live_keys() {
   // Log verbosity, who may use the API and how much: read by the io thread at each use.
   static const std::vector<std::string> keys = {
-      "log.level",        "api.read_group",  "api.control_group",
-      "api.inputs_group", "api.max_clients", "api.idle_timeout_s",
+      "log.level",
+      "api.read_group",
+      "api.control_group",
+      "api.inputs_group",
+      "api.max_clients",
+      "api.idle_timeout_s",
+      "api.max_clients_per_uid",
+      "api.reserved_clients",
+      "api.stalled_reader_timeout_s",
   };
   return keys;
 }
@@ -52,6 +59,9 @@ ReloadPlan plan_reload(const config::Config& running, const config::Config& next
   plan.effective.api.inputs_group = next.api.inputs_group;
   plan.effective.api.max_clients = next.api.max_clients;
   plan.effective.api.idle_timeout_s = next.api.idle_timeout_s;
+  plan.effective.api.max_clients_per_uid = next.api.max_clients_per_uid;
+  plan.effective.api.reserved_clients = next.api.reserved_clients;
+  plan.effective.api.stalled_reader_timeout_s = next.api.stalled_reader_timeout_s;
   return plan;
 }
 

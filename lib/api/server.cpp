@@ -590,6 +590,9 @@ void Server::Impl::reconfigure(const ServerConfig& next) {
   config_.inputs_group = next.inputs_group;
   config_.max_clients = next.max_clients;
   config_.idle_timeout = next.idle_timeout;
+  config_.max_clients_per_uid = next.max_clients_per_uid;
+  config_.reserved_clients = next.reserved_clients;
+  config_.stalled_reader_timeout = next.stalled_reader_timeout;
   const auto sessions = std::vector<std::shared_ptr<Session>>(sessions_.begin(), sessions_.end());
   for (const auto& session : sessions) session->settings_changed();
   log_(LogLevel::Info, "api: settings changed: max_clients " + std::to_string(config_.max_clients) +

@@ -454,14 +454,22 @@ void DcpController::handle_stop(std::uint32_t tag) noexcept {
   const bool dcp4_moving = kind == TravelKind::Dcp4Distance &&
                            travel_.dcp4().state() == travel::Dcp4Travel::State::Distance &&
                            (travel_.dcp4().moving() || last_input_.status.brake_open);
-  const bool dcp3_moving = kind == TravelKind::Dcp3Speed &&
-                           (travel_.dcp3().state() == travel::Dcp3Travel::State::Travel ||
-                            travel_.dcp3().state() == travel::Dcp3Travel::State::Creep);
+  const auto dcp3_state = travel_.dcp3().state();
+  const bool dcp3_moving =
+      kind == TravelKind::Dcp3Speed && (dcp3_state == travel::Dcp3Travel::State::FastStartGo ||
+                                        dcp3_state == travel::Dcp3Travel::State::Travel ||
+                                        dcp3_state == travel::Dcp3Travel::State::Creep);
+  // A VN' relevelling (DCP 11.1.4) already ends at the nearest level, B2 held until S6 falls
+  // (step 4): it is left to finish there.
+  const bool dcp4_relevel = kind == TravelKind::Dcp4Relevel &&
+                            travel_.dcp4().state() == travel::Dcp4Travel::State::Distance;
   std::optional<std::size_t> stop_floor;
-  if (dcp4_moving || dcp3_moving) {
+  if (dcp4_relevel) {
+    stop_floor =
+        lift_.floors().floor_at(travel_.dcp4().target_mm(), config_.lift.level_tolerance_mm);
+  } else if (dcp4_moving || dcp3_moving) {
     std::optional<std::int64_t> level;
-    const bool before_decel_point =
-        dcp4_moving || travel_.dcp3().state() == travel::Dcp3Travel::State::Travel;
+    const bool before_decel_point = dcp4_moving || dcp3_state != travel::Dcp3Travel::State::Creep;
     const auto floor = before_decel_point ? next_stop_floor() : std::nullopt;
     if (floor) level = travel_.stop_at(floors_mm_[*floor]);
     // No nearer floor within reach (or no position): the car goes on to its own target.

@@ -243,7 +243,8 @@ void DriveSim::update_timers(MonoTime now) noexcept {
         ++counters_.travels;
         emit(SimEvent::Kind::TravelEnded, now, last_travel_mm_);
         stop_without_i9_ = true;  // DCP 5.12.9: the master now owes an I9
-        max_torque_ = false;      // DCP 5.12.4: only for the next travel
+        stop_at_ = now;
+        max_torque_ = false;  // DCP 5.12.4: only for the next travel
         accepted_ = false;
         set_phase(Phase::Finished, now);
       }
@@ -675,7 +676,11 @@ void DriveSim::start_travel(TravelKind kind, dcp::Speed speed, bool down, MonoTi
   // The Sv of an I7 exchanged just before this travel bounds its extensions (DCP 11.1.2 note).
   travel_i7_decel_m_ = i7_decel_m_;
   i7_decel_m_ = -1.0;
-  if (stop_without_i9_ && initialised_) report_violation(Violation::NoPositionAfterStop, now);
+  // An injected channel silence since the stop may have eaten the I9: not the master's fault.
+  const bool channel_deaf_since_stop = channel_silent_until_ > stop_at_;
+  if (stop_without_i9_ && initialised_ && !channel_deaf_since_stop) {
+    report_violation(Violation::NoPositionAfterStop, now);
+  }
   stop_without_i9_ = false;
   crawl_limited_ = false;
   rd_saturated_ = false;
@@ -846,6 +851,7 @@ void DriveSim::abort_travel(MonoTime now) noexcept {
     last_travel_mm_ = std::llround(origin_mm_ + (down_ ? -end_s_mm : end_s_mm) - travel_start_mm_);
     travel_measured_ = true;
     stop_without_i9_ = true;  // DCP 5.12.9: an aborted travel is a stop too
+    stop_at_ = now;
   }
   kind_ = TravelKind::None;
   go_pending_ = false;

@@ -364,6 +364,7 @@ class DriveSim {
   std::array<bool, 4> faults_{};
   std::array<std::uint64_t, kViolationCount> violations_{};
   bool stop_without_i9_ = false;
+  MonoTime stop_at_{};               // when the stop that owes an I9 was
   bool refuse_next_target_ = false;  // a travel stopped; no I9 since (DCP 5.12.9)
   double i7_decel_m_ = -1.0;         // Sv of the last I7 answer, for the next travel (-1: none)
   double travel_i7_decel_m_ = -1.0;  // Sv that applies to the running travel

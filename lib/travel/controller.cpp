@@ -270,7 +270,8 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
     demand = dcp3_.step(ctx);
   } else if (relevel_.active()) {
     demand = relevel_.step(ctx);
-  } else if (inspection_.active() || ((in.inputs.inspection || in.inputs.recall) && !shut_down_)) {
+  } else if (inspection_.active() ||
+             ((in.inputs.inspection || in.inputs.recall) && !shut_down_ && !start_held_)) {
     demand = inspection_.step(ctx);
   }
 

@@ -25,7 +25,9 @@ void Dcp3Travel::enter(State state, MonoTime now) noexcept {
 }
 
 void Dcp3Travel::request_stop(AbortCause cause) noexcept {
-  if (state_ == State::Idle || state_ == State::TravelEnd || state_ == State::ControlledAbort) {
+  // A fast stop (DCP 13) already ends the travel on its own ramp.
+  if (state_ == State::Idle || state_ == State::TravelEnd || state_ == State::ControlledAbort ||
+      state_ == State::FastStop) {
     return;
   }
   end_cause_ = cause;
@@ -33,8 +35,11 @@ void Dcp3Travel::request_stop(AbortCause cause) noexcept {
 }
 
 bool Dcp3Travel::stop_at(std::int64_t target_mm) noexcept {
-  // Only before the deceleration point: from there on the car already crawls to its level.
-  if (state_ != State::Travel || speed_ == dcp::Speed::V0) return false;
+  // Only before the deceleration point: from there on the car already crawls to its level. The
+  // go after a fast start (DCP 12.1.3) is a moving travel too.
+  if ((state_ != State::Travel && state_ != State::FastStartGo) || speed_ == dcp::Speed::V0) {
+    return false;
+  }
   target_mm_ = target_mm;
   return true;
 }
@@ -169,8 +174,11 @@ Demand Dcp3Travel::step(StepContext& ctx) noexcept {
         return demand(nibble::kTravel, 0);
       }
       if (decel_point(ctx)) {  // DCP 10.1.1 step 3: B1 off at SVx before the level
+        // B1 alone first, whatever the position says: the drive slows to crawl on it, and only
+        // then does B2 position the car (step 4); both at once would be a stop message at
+        // speed (DCP 3.5.3.2).
         enter(State::Creep, in.now);
-        return step(ctx);
+        return demand(nibble::kDistance, 0);
       }
       return demand(nibble::kTravel, 0);
 

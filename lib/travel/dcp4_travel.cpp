@@ -47,7 +47,10 @@ void Dcp4Travel::enter(State state, MonoTime now) noexcept {
 }
 
 void Dcp4Travel::request_stop(AbortCause cause) noexcept {
-  if (state_ == State::Idle || state_ == State::TravelEnd || state_ == State::ControlledAbort) {
+  // A fast stop (DCP 13) already ends the travel on its own ramp: a stop message now would drop
+  // B2 while the brake is still open (DCP 11.1.1 d).
+  if (state_ == State::Idle || state_ == State::TravelEnd || state_ == State::ControlledAbort ||
+      state_ == State::FastStop) {
     return;
   }
   end_cause_ = cause;

@@ -259,7 +259,12 @@ std::string run_seed(std::uint32_t seed, Coverage& coverage) {
     for (int i = 0; i < cycles; ++i) {
       rig.cycle();
       const CycleRecord& r = rig.log.back();
-      const std::string broken = checker.check(r, api);
+      std::string broken = checker.check(r, api);
+      if (broken.empty() && rig.sim.counters().violations != 0) {
+        broken = std::string("the simulated drive saw a spec violation: ") +
+                 (rig.sim.violations(sim::Violation::StopAtSpeed) != 0 ? "stop message at speed"
+                                                                       : "travel without I9");
+      }
       ++coverage.frames;
       if ((r.frame[0] & cb::kDriveEnable) != 0) {
         ++coverage.enabled_frames;
@@ -284,7 +289,9 @@ std::string run_seed(std::uint32_t seed, Coverage& coverage) {
     std::ostringstream out;
     out << "seed " << seed << ": the simulated drive saw "
         << rig.sim.violations(sim::Violation::StopAtSpeed) << " stop message(s) at speed and "
-        << rig.sim.violations(sim::Violation::NoPositionAfterStop) << " travel(s) without I9";
+        << rig.sim.violations(sim::Violation::NoPositionAfterStop) << " travel(s) without I9"
+        << "\nactions:";
+    for (const auto& a : actions) out << "\n  " << a;
     return out.str();
   }
   coverage.finished += rig.travel_events(travel::Event::Type::Finished).size();

@@ -388,7 +388,7 @@ TEST(DaemonReload, SighupAppliesWhatItCanAndNamesWhatNeedsARestart) {
              R"({"log": {"level": "debug"}, "drive": {"device": "/dev/ttyUSB7"},
                  "api": {"socket": ")" +
                  notify.dir() + R"(/api.sock", "socket_group": "",
-                 "read_group": "", "control_group": "", "inputs_group": "", "max_clients": 1}})");
+                 "read_group": "", "control_group": "", "inputs_group": "", "max_clients": 1, "reserved_clients": 0}})");
   liftd.process.signal(SIGHUP);
   std::vector<std::string> reload;
   ASSERT_TRUE(receive_until(notify, "READY=1", reload, kStopLimit)) << liftd.process.err();
@@ -399,7 +399,7 @@ TEST(DaemonReload, SighupAppliesWhatItCanAndNamesWhatNeedsARestart) {
   const std::string err = liftd.process.err();
   EXPECT_THAT(err, HasSubstr("drive.device changed from \"/dev/ttyS1\" to \"/dev/ttyUSB7\": it "
                              "takes effect only after a restart"));
-  EXPECT_THAT(err, HasSubstr("applied api.max_clients, log.level"));
+  EXPECT_THAT(err, HasSubstr("applied api.max_clients, api.reserved_clients, log.level"));
   // max_clients 1: a second client is now refused with busy; debug lines now appear.
   testing::ApiClient extra(notify.dir() + "/api.sock");
   const auto refused = extra.next(kStartupLimit);

@@ -113,10 +113,11 @@ TEST(ReloadPlan, NamesRunningAndRequestedValues) {
             (KeyChange{"drive.device", "\"/dev/ttyS1\"", "\"/dev/ttyUSB0\""}));
 }
 
-TEST(ReloadPlan, LiveKeysAreExactlyTheseSix) {
-  EXPECT_EQ(live_keys(), (std::vector<std::string>{"log.level", "api.read_group",
-                                                   "api.control_group", "api.inputs_group",
-                                                   "api.max_clients", "api.idle_timeout_s"}));
+TEST(ReloadPlan, LiveKeysAreExactlyTheseNine) {
+  EXPECT_EQ(live_keys(), (std::vector<std::string>{
+                             "log.level", "api.read_group", "api.control_group", "api.inputs_group",
+                             "api.max_clients", "api.idle_timeout_s", "api.max_clients_per_uid",
+                             "api.reserved_clients", "api.stalled_reader_timeout_s"}));
 }
 
 }  // namespace

@@ -75,9 +75,11 @@ TEST(Travel, ExtendedMidTravelLandsOnTheNewFloor) {
   EXPECT_EQ(end["data"]["event"], "finished") << end.dump();
   EXPECT_EQ(end["data"]["target_mm"], level_mm(4));
   EXPECT_NEAR(end["data"]["position_mm"].get<double>(), level_mm(4), kLandingMm);
-  // One travel, moved on: no second start. (The travel library names a `target_extended` event
-  // but does not emit it; the reply's `extended` is the sign.)
+  // One travel, moved on: no second start; the drive's S5 confirmed the new target once.
   EXPECT_EQ(lift.count_events("travel", [](const json& d) { return d["event"] == "started"; }), 1);
+  EXPECT_EQ(
+      lift.count_events("travel", [](const json& d) { return d["event"] == "target_extended"; }),
+      1);
   EXPECT_EQ(lift.status()["car"]["floor"], 4);
   EXPECT_TRUE(lift.b0_off_in_newest());
 }
@@ -92,8 +94,14 @@ double stop_distance(Lift& lift, const std::string& cmd) {
   EXPECT_TRUE(is_ok(r)) << r.dump();
   const json end = lift.wait_travel_end();
   if (end.is_null()) return std::nan("");
-  EXPECT_EQ(end["data"]["event"], "aborted") << end.dump();
-  EXPECT_EQ(end["data"]["cause"], "stop_requested") << end.dump();
+  if (cmd == "stop") {
+    // `stop` lands at the next possible floor (DCP 11.1.1 d: B2 until S6 falls at a level).
+    EXPECT_EQ(end["data"]["event"], "finished") << end.dump();
+    EXPECT_EQ(end["data"]["target_mm"], level_mm(r["result"]["floor"].get<int>())) << r.dump();
+  } else {
+    EXPECT_EQ(end["data"]["event"], "aborted") << end.dump();
+    EXPECT_EQ(end["data"]["cause"], "stop_requested") << end.dump();
+  }
   EXPECT_TRUE(lift.b0_off_in_newest());
   const json status = lift.status();
   EXPECT_EQ(status["travel"]["state"], "idle");
