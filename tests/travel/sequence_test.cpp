@@ -216,6 +216,20 @@ TEST(Dcp4Travel, TargetExtensionRules) {
   EXPECT_NEAR(rig.drive.position_mm(), 15000.0, 1.0);
 }
 
+/// Hand-made cycles of a car running at 1600 mm/s (24 mm per 15 ms cycle, DCP 7.2) whose
+/// drive reports a live deceleration distance of 1600 mm; `position` advances with it.
+void run_at_full_speed(TravelController& controller, CycleInput& in, std::int64_t& position,
+                       int cycles) {
+  for (int i = 0; i < cycles; ++i) {
+    in.now += kCycle;
+    position += 24;
+    in.position_mm = position;
+    in.status.travel_active = in.status.brake_open = true;
+    in.decel_distance_mm = 1600;
+    controller.step(in);
+  }
+}
+
 TEST(Dcp4Travel, ExtensionLeadCoversThirtyMsPlusTwoCycles) {
   // Hand-made cycles: the car runs at 1600 mm/s (24 mm per 15 ms cycle), the drive reports a
   // deceleration distance of 1600 mm. Lead = 1600 mm/s * (30 ms + 2 cycles) = 96 mm (DCP 7.2),
@@ -251,14 +265,7 @@ TEST(Dcp4Travel, ExtensionLeadCoversThirtyMsPlusTwoCycles) {
     in.position_mm = position;
     controller.step(in);
     ASSERT_EQ(controller.start(dcp4_request(target)), StartResult::Accepted);
-    for (int i = 0; i < 5; ++i) {  // speed message, then B2 + B0 while the car runs
-      in.now += kCycle;
-      position += 24;
-      in.position_mm = position;
-      in.status.travel_active = in.status.brake_open = true;
-      in.decel_distance_mm = 1600;
-      controller.step(in);
-    }
+    run_at_full_speed(controller, in, position, 5);  // speed message, then B2 + B0
     ASSERT_EQ(controller.dcp4().state(), Dcp4Travel::State::Distance);
     EXPECT_EQ(controller.extend_target(target + 1000), c.expected) << c.remaining_mm;
   }
@@ -305,14 +312,7 @@ TEST(Dcp4Travel, ExtensionLimitIsTheLargerOfSvAndTheLiveDistance) {
       controller.step(in);
       in.channel_reply.reset();
     }
-    for (int i = 0; i < 4; ++i) {
-      in.now += kCycle;
-      position += 24;
-      in.position_mm = position;
-      in.status.travel_active = in.status.brake_open = true;
-      in.decel_distance_mm = 1600;
-      controller.step(in);
-    }
+    run_at_full_speed(controller, in, position, 4);
     ASSERT_EQ(controller.dcp4().state(), Dcp4Travel::State::Distance);
     EXPECT_EQ(controller.extend_target(target + 1000), c.expected) << c.remaining_mm;
   }
