@@ -55,8 +55,7 @@ function(liftd_executable name)
 endfunction()
 
 # liftd_test(<name> SOURCES ... [DEPS ...] [LABELS ...]): a GoogleTest binary whose cases are
-# registered with CTest one by one. gtest_discover_tests keeps only the FIRST label (it splits
-# the property list again when it writes the test file): give each binary one main label.
+# registered with CTest one by one, each carrying every label given (so `ctest -LE slow` works).
 function(liftd_test name)
   if(NOT LIFTD_TESTS)
     return()
@@ -67,8 +66,11 @@ function(liftd_test name)
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gmock GTest::gtest_main)
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tests)
+  # gtest_discover_tests expands its PROPERTIES list three more times before it writes the test
+  # file; the separators between labels are escaped for each of those expansions.
+  string(REPLACE ";" "\\\\\\\\\\\\\\;" labels "${ARG_LABELS}")
   gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-                       PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT 300)
+                       PROPERTIES LABELS "${labels}" TIMEOUT 300)
 endfunction()
 
 # liftd_fuzzer(<name> SOURCES ... [DEPS ...]): a libFuzzer target, built only with LIFTD_FUZZ,
