@@ -167,7 +167,6 @@ api::StatsSnapshot LiftBackend::stats() {
   out.decode_errors = link.decode_errors;
   out.request_timeouts = link.request_timeouts;
   out.longest_error_run = link.longest_error_run;
-  out.late_start_replies = cycle.counters.late_start_replies;
   return out;
 }
 

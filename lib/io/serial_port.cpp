@@ -286,12 +286,10 @@ IoResult SerialPort::wait_readable(MonoTime deadline) noexcept {
   }
 }
 
-IoResult SerialPort::read_until(std::span<std::uint8_t> buffer, MonoTime deadline,
-                                FirstArrival* first) noexcept {
+IoResult SerialPort::read_until(std::span<std::uint8_t> buffer, MonoTime deadline) noexcept {
   std::size_t got = 0;
   while (got < buffer.size()) {
     const IoResult r = read_available(buffer.subspan(got));
-    if (first != nullptr && got == 0 && r.bytes > 0) *first = FirstArrival{mono_now(), r.bytes};
     got += r.bytes;
     if (r.status != IoStatus::Ok) return IoResult{r.status, got, r.error_number};
     if (got == buffer.size()) break;

@@ -67,12 +67,6 @@ enum class IoStatus : std::uint8_t {
 };
 
 /// Result of one I/O call.
-/// The first read of a read_until() that returned bytes: when, and how many it returned.
-struct FirstArrival {
-  MonoTime at{};          ///< monotonic time right after that read (zero when nothing came)
-  std::size_t bytes = 0;  ///< bytes it returned
-};
-
 struct IoResult {
   IoStatus status = IoStatus::Ok;  ///< outcome
   std::size_t bytes = 0;           ///< bytes moved
@@ -116,10 +110,8 @@ class SerialPort {
   IoResult write_frame(std::span<const std::uint8_t> frame) noexcept;
 
   /// Reads until `buffer` is full or the monotonic `deadline` passes (ppoll). Ok when full,
-  /// Timeout with the partial count otherwise, DeviceLost on hang-up. `first`, when given, is
-  /// filled with the first read that returned bytes.
-  IoResult read_until(std::span<std::uint8_t> buffer, MonoTime deadline,
-                      FirstArrival* first = nullptr) noexcept;
+  /// Timeout with the partial count otherwise, DeviceLost on hang-up.
+  IoResult read_until(std::span<std::uint8_t> buffer, MonoTime deadline) noexcept;
 
   /// Reads whatever is available now, without waiting (up to buffer.size()).
   IoResult read_available(std::span<std::uint8_t> buffer) noexcept;

@@ -71,10 +71,7 @@ std::string describe(const CycleEvent& event) {
 }
 
 CycleRunner::CycleRunner(CycleConfig config, CycleEngine& engine)
-    : config_(std::move(config)),
-      engine_(engine),
-      recorder_(recorder_capacity(config_)),
-      char_time_(character_time(config_.serial)) {
+    : config_(std::move(config)), engine_(engine), recorder_(recorder_capacity(config_)) {
   const auto max = max_send_window(config_.period, config_.reply_deadline);
   if (config_.send_window.count() < 0 || config_.send_window > max) {
     throw std::invalid_argument(
@@ -135,7 +132,6 @@ CycleStats CycleRunner::stats() const {
   s.counters.overruns = get(counters_.overruns);
   s.counters.skipped_cycles = get(counters_.skipped_cycles);
   s.counters.late_replies = get(counters_.late_replies);
-  s.counters.late_start_replies = get(counters_.late_start_replies);
   s.counters.port_losses = get(counters_.port_losses);
   s.counters.port_opens = get(counters_.port_opens);
   s.counters.send_failures = get(counters_.send_failures);
@@ -244,8 +240,7 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
               std::min(sent_at + config_.reply_deadline, planned + config_.period);
           const std::size_t size = std::min(engine_.reply_size(), kMaxReply);
           const std::span<std::uint8_t> reply(reply_.data(), size);
-          io::FirstArrival first;
-          const io::IoResult got = port_.read_until(reply, deadline, &first);
+          const io::IoResult got = port_.read_until(reply, deadline);
           const MonoTime now = mono_now();
           const auto partial = reply.first(got.bytes);
           // DCP 7.2: a reply not complete by the deadline is lost. If this thread was held up
@@ -257,16 +252,9 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
             reply_latency_.record(now - sent_at);
             const bool good = engine_.on_reply(reply, now);
             bump(good ? counters_.good_replies : counters_.bad_replies);
-            // A reply begun too late has still ended in time, so it cannot have collided with
-            // anything: it is used, and counted as the drive's timing fault.
-            std::uint16_t flags =
-                good ? record_flag::kReply : record_flag::kReply | record_flag::kBad;
-            if (reply_started_late(first.at - sent_at, first.bytes, reply.size(), char_time_,
-                                   config_.reply_latest_start)) {
-              bump(counters_.late_start_replies);
-              flags |= record_flag::kLateStart;
-            }
-            recorder_.record(now, Direction::Rx, flags, reply);
+            recorder_.record(now, Direction::Rx,
+                             good ? record_flag::kReply : record_flag::kReply | record_flag::kBad,
+                             reply);
           } else if (got.status == io::IoStatus::DeviceLost) {
             if (got.bytes > 0) {
               recorder_.record(now, Direction::Rx, record_flag::kMissing | record_flag::kPartial,
@@ -275,7 +263,7 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
             lose_port(now, got.error_number);
           } else {
             bump(counters_.missing_replies);
-            std::uint16_t flags = record_flag::kMissing;
+            std::uint8_t flags = record_flag::kMissing;
             if (got.bytes > 0 && !seen_late) {
               bump(counters_.partial_replies);
               flags |= record_flag::kPartial;

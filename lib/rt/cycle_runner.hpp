@@ -51,9 +51,6 @@ struct CycleConfig {
   std::chrono::nanoseconds period = std::chrono::milliseconds(15);
   /// DCP 7.2: the drive's reply must be complete (its driver off) by 13.625 ms after our start.
   std::chrono::nanoseconds reply_deadline = std::chrono::microseconds(13625);
-  /// DCP 7.2: "latest start of drive controller send: 11,5625 msec" after our start.
-  std::chrono::nanoseconds reply_latest_start =
-      std::chrono::microseconds(11562) + std::chrono::nanoseconds(500);
   /// Latest wake-up lateness at which we still send (a "late send" past kOnTimeBudget). DCP
   /// 7.2: the drive's reply ends by 13.625 ms and the next master frame starts at 15 ms, so a
   /// frame up to 15 - 13.625 = 1.375 ms late still cannot collide with the reply to it (its
@@ -98,39 +95,6 @@ constexpr WakeDecision decide_wake(std::chrono::nanoseconds lateness,
   return WakeDecision{false, false, static_cast<std::uint64_t>(lateness.count() / p) + 1};
 }
 
-/// Time one character takes on the line: start bit, data bits, parity bit, stop bits (DCP 7.1,
-/// 38400 8N1: 10 bits, 260.4 us).
-constexpr std::chrono::nanoseconds character_time(const io::SerialSettings& s) {
-  const std::uint32_t bits =
-      1U + s.data_bits + (s.parity == io::Parity::None ? 0U : 1U) + s.stop_bits;
-  return std::chrono::nanoseconds(1'000'000'000LL * bits / (s.baud > 0 ? s.baud : 1));
-}
-
-/// Receive delay the reply-start estimate forgives, in characters: the one being assembled when
-/// the read happened. (A 16550 with its FIFO trigger above the 6-byte DCP reply hands over the
-/// whole reply at once, 4 character times after its end; such a reply is never judged.)
-inline constexpr int kReceiveHoldCharacters = 1;
-
-/// DCP 7.2: the drive must begin its reply by the latest start (11.5625 ms after our frame
-/// began). This thread cannot see when the first bit came, only when a read first returned
-/// bytes, and it may have been held up before that read. It judges the start only when it
-/// watched the reply arrive: the first read returned part of the reply, not all of it. The line
-/// delivers one character per `char_time` (DCP 7.1, asynchronous 8N1), so the reply began no
-/// earlier than `bytes` characters (plus the receive hold) before that read, however late this
-/// thread woke; late when even that earliest start is past the latest start. A reply seen whole
-/// at once is never judged: nobody can tell when it began. The count is the drive's timing fault
-/// for the technician; the reply itself ended in time and is used.
-constexpr bool reply_started_late(std::chrono::nanoseconds first_seen_after_send,
-                                  std::size_t first_bytes, std::size_t reply_size,
-                                  std::chrono::nanoseconds char_time,
-                                  std::chrono::nanoseconds latest_start) {
-  if (first_bytes == 0 || first_bytes >= reply_size) return false;
-  const auto earliest_start =
-      first_seen_after_send -
-      char_time * static_cast<std::int64_t>(first_bytes + kReceiveHoldCharacters);
-  return earliest_start > latest_start;
-}
-
 /// Kinds of events the cycle reports to the non-real-time side.
 enum class CycleEventKind : std::uint8_t {
   ThreadStatus,    ///< real-time wishes refused at start (text in describe())
@@ -165,12 +129,11 @@ struct CycleCounters {
   std::uint64_t late_sends = 0;       ///< frames sent later than kOnTimeBudget, within the window
   std::uint64_t overruns = 0;         ///< wake-ups too late to send (beyond the send window)
   std::uint64_t skipped_cycles = 0;   ///< cycles not run because of overruns
-  std::uint64_t late_replies = 0;  ///< of the missing ones: complete, but seen after the deadline
-  std::uint64_t late_start_replies = 0;  ///< complete in time, begun after the 7.2 latest start
-  std::uint64_t port_losses = 0;         ///< device losses
-  std::uint64_t port_opens = 0;          ///< successful opens (first one included)
-  std::uint64_t send_failures = 0;       ///< frames the port refused
-  std::uint64_t stray_bytes = 0;         ///< bytes flushed before sending
+  std::uint64_t late_replies = 0;   ///< of the missing ones: complete, but seen after the deadline
+  std::uint64_t port_losses = 0;    ///< device losses
+  std::uint64_t port_opens = 0;     ///< successful opens (first one included)
+  std::uint64_t send_failures = 0;  ///< frames the port refused
+  std::uint64_t stray_bytes = 0;    ///< bytes flushed before sending
 };
 
 /// A copy of the cycle's statistics, taken on any thread.
@@ -262,8 +225,7 @@ class CycleRunner {
   struct Counters {
     std::atomic<std::uint64_t> cycles{0}, frames_sent{0}, good_replies{0}, bad_replies{0},
         missing_replies{0}, partial_replies{0}, late_sends{0}, overruns{0}, skipped_cycles{0},
-        late_replies{0}, late_start_replies{0}, port_losses{0}, port_opens{0}, send_failures{0},
-        stray_bytes{0};
+        late_replies{0}, port_losses{0}, port_opens{0}, send_failures{0}, stray_bytes{0};
   } counters_;
   // Lateness and work beyond a period are what matter most: 0..20 ms in 1 us bins (a period of
   // DCP 7.2 plus margin); anything beyond lands in the last bin and prints as "> 20000".
@@ -271,7 +233,6 @@ class CycleRunner {
   Histogram<1500> reply_latency_{std::chrono::microseconds(10)};  // 0..15 ms in 10 us bins
   Histogram<20000> work_time_{std::chrono::microseconds(1)};
   FlightRecorder recorder_;
-  std::chrono::nanoseconds char_time_;  // one character on the line (from config_.serial)
 
   // Events: one queue per producing thread, both drained by poll_event().
   SpscQueue<CycleEvent, kEventSlots> cycle_events_;

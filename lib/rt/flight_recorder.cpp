@@ -24,7 +24,7 @@ std::uint64_t pack_word(std::span<const std::uint8_t> bytes, std::size_t word) n
 FlightRecorder::FlightRecorder(std::size_t capacity)
     : capacity_(std::max<std::size_t>(capacity, 1)), slots_(std::make_unique<Slot[]>(capacity_)) {}
 
-void FlightRecorder::record(MonoTime time, Direction direction, std::uint16_t flags,
+void FlightRecorder::record(MonoTime time, Direction direction, std::uint8_t flags,
                             std::span<const std::uint8_t> bytes) noexcept {
   const std::uint64_t index = next_.load(std::memory_order_relaxed);
   Slot& slot = slots_[index % capacity_];
@@ -35,7 +35,7 @@ void FlightRecorder::record(MonoTime time, Direction direction, std::uint16_t fl
   const std::uint64_t length = std::min<std::size_t>(bytes.size(), 0xFFFF);
   slot.time_ns.store(time.count(), std::memory_order_release);
   slot.meta.store(
-      static_cast<std::uint64_t>(direction) | static_cast<std::uint64_t>(flags) << 8 | length << 32,
+      static_cast<std::uint64_t>(direction) | static_cast<std::uint64_t>(flags) << 8 | length << 16,
       std::memory_order_release);
   for (std::size_t w = 0; w < slot.words.size(); ++w) {
     slot.words[w].store(pack_word(bytes.first(kept), w), std::memory_order_release);
@@ -64,8 +64,8 @@ std::vector<FrameRecord> FlightRecorder::copy() const {
     // Skip a slot the writer has moved on to (or is writing) since we read `end`.
     if (before != after || before != 2 * (index + 1)) continue;
     r.direction = static_cast<Direction>(meta & 0xFF);
-    r.flags = static_cast<std::uint16_t>((meta >> 8) & 0xFFFF);
-    r.length = static_cast<std::uint16_t>((meta >> 32) & 0xFFFF);
+    r.flags = static_cast<std::uint8_t>((meta >> 8) & 0xFF);
+    r.length = static_cast<std::uint16_t>((meta >> 16) & 0xFFFF);
     for (std::size_t i = 0; i < FrameRecord::kMaxBytes; ++i) {
       r.bytes[i] = static_cast<std::uint8_t>(words[i / 8] >> (8 * (i % 8)));
     }
@@ -74,10 +74,9 @@ std::vector<FrameRecord> FlightRecorder::copy() const {
   return out;
 }
 
-std::string flags_to_string(std::uint16_t flags) {
-  static constexpr std::array<const char*, 9> kNames = {"sent",        "reply",   "missing",
-                                                        "bad",         "partial", "port-lost",
-                                                        "send-failed", "skipped", "late-start"};
+std::string flags_to_string(std::uint8_t flags) {
+  static constexpr std::array<const char*, 8> kNames = {
+      "sent", "reply", "missing", "bad", "partial", "port-lost", "send-failed", "skipped"};
   std::string text;
   for (std::size_t bit = 0; bit < kNames.size(); ++bit) {
     if ((flags & (1U << bit)) == 0) continue;

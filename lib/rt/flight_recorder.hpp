@@ -26,16 +26,14 @@ enum class Direction : std::uint8_t {
 
 /// What happened to a recorded frame; bit flags.
 namespace record_flag {
-inline constexpr std::uint16_t kSent = 0x01;        ///< frame handed to the port
-inline constexpr std::uint16_t kReply = 0x02;       ///< complete reply in time
-inline constexpr std::uint16_t kMissing = 0x04;     ///< no complete reply by the deadline
-inline constexpr std::uint16_t kBad = 0x08;         ///< complete but rejected by the engine
-inline constexpr std::uint16_t kPartial = 0x10;     ///< some bytes came, not all
-inline constexpr std::uint16_t kPortLost = 0x20;    ///< the device went away
-inline constexpr std::uint16_t kSendFailed = 0x40;  ///< the port refused the frame
-inline constexpr std::uint16_t kSkipped = 0x80;     ///< cycle skipped: woke too late to send
-/// Reply complete in time but begun after the latest start DCP 7.2 allows (11.5625 ms).
-inline constexpr std::uint16_t kLateStart = 0x100;
+inline constexpr std::uint8_t kSent = 0x01;        ///< frame handed to the port
+inline constexpr std::uint8_t kReply = 0x02;       ///< complete reply in time
+inline constexpr std::uint8_t kMissing = 0x04;     ///< no complete reply by the deadline
+inline constexpr std::uint8_t kBad = 0x08;         ///< complete but rejected by the engine
+inline constexpr std::uint8_t kPartial = 0x10;     ///< some bytes came, not all
+inline constexpr std::uint8_t kPortLost = 0x20;    ///< the device went away
+inline constexpr std::uint8_t kSendFailed = 0x40;  ///< the port refused the frame
+inline constexpr std::uint8_t kSkipped = 0x80;     ///< cycle skipped: woke too late to send
 }  // namespace record_flag
 
 /// One recorded frame (a plain copy, outside the ring).
@@ -45,7 +43,7 @@ struct FrameRecord {
 
   MonoTime time{};                              ///< when it was sent / received
   Direction direction = Direction::Tx;          ///< which way
-  std::uint16_t flags = 0;                      ///< record_flag bits
+  std::uint8_t flags = 0;                       ///< record_flag bits
   std::uint16_t length = 0;                     ///< real frame length in bytes
   std::array<std::uint8_t, kMaxBytes> bytes{};  ///< the first min(length, kMaxBytes) bytes
 
@@ -69,7 +67,7 @@ class FlightRecorder {
   std::size_t capacity() const noexcept { return capacity_; }
 
   /// Writer: appends a record (bytes beyond FrameRecord::kMaxBytes are cut).
-  void record(MonoTime time, Direction direction, std::uint16_t flags,
+  void record(MonoTime time, Direction direction, std::uint8_t flags,
               std::span<const std::uint8_t> bytes) noexcept;
 
   /// Any thread: the records still in the ring, oldest first. A record being overwritten
@@ -84,7 +82,7 @@ class FlightRecorder {
   struct Slot {
     std::atomic<std::uint64_t> stamp{0};
     std::atomic<std::int64_t> time_ns{0};
-    std::atomic<std::uint64_t> meta{0};  // direction | flags << 8 | length << 32
+    std::atomic<std::uint64_t> meta{0};  // direction | flags << 8 | length << 16
     std::array<std::atomic<std::uint64_t>, FrameRecord::kMaxBytes / 8> words{};
   };
 
@@ -94,7 +92,7 @@ class FlightRecorder {
 };
 
 /// Flag names separated by '|', e.g. "reply|bad".
-std::string flags_to_string(std::uint16_t flags);
+std::string flags_to_string(std::uint8_t flags);
 
 /// Writes one line per record: monotonic seconds, direction, hex bytes, flags and, with a
 /// decoder, a decoded column after " | ".

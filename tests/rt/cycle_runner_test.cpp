@@ -22,7 +22,6 @@
 namespace liftd::rt {
 namespace {
 
-using std::chrono::microseconds;
 using std::chrono::milliseconds;
 using testing::EchoEngine;
 using testing::FakeResponder;
@@ -223,7 +222,7 @@ TEST(RtCycle, InjectedFaultsProduceTheExpectedCountsThenHangUpIsALoss) {
   // Judge every cycle from the flight recorder: the reply record after each sent frame is that
   // frame's outcome. Request index i carries sequence number i + 1 (the pty loses nothing).
   struct Outcome {
-    std::uint16_t flags = 0;
+    std::uint8_t flags = 0;
     std::uint16_t length = 0;
     bool seen = false;
   };
@@ -236,7 +235,7 @@ TEST(RtCycle, InjectedFaultsProduceTheExpectedCountsThenHangUpIsALoss) {
     if (seq == 0 || seq > outcome.size()) continue;
     outcome[seq - 1] = Outcome{records[i + 1].flags, records[i + 1].length, true};
   }
-  const auto is = [](const Outcome& o, std::uint16_t flags, std::uint16_t length) {
+  const auto is = [](const Outcome& o, std::uint8_t flags, std::uint16_t length) {
     return o.seen && o.flags == flags && o.length == length;
   };
   constexpr std::uint8_t kGood = record_flag::kReply;
@@ -471,62 +470,6 @@ TEST(RtCycle, OverrunSkipsLateCyclesCountsThemAndReportsTheRun) {
     skipped_records += (r.flags & record_flag::kSkipped) != 0 ? 1 : 0;
   }
   EXPECT_EQ(skipped_records, c.overruns);
-}
-
-// DCP 7.2 "latest start of drive controller send: 11,5625 msec". The responder paces its reply
-// byte by byte like a line; the cycle is told the line runs at 115200 baud (a pty ignores it) so
-// one character is 86.8 us and a reply begun at 12.4 ms still ends by 12.9 ms, well inside the
-// 13.625 ms deadline.
-CycleConfig paced_config(const std::string& path) {
-  CycleConfig c = test_config(path);
-  c.serial.baud = 115200;
-  return c;
-}
-constexpr auto kPacedCharacter = microseconds(87);
-
-TEST(RtCycle, ReplyBegunAfterTheLatestStartIsCountedAndStillUsed) {
-  io::PtyPair pty = make_pty();
-  FakeResponder responder(pty.master_fd(), microseconds(12400), kTestPriority);
-  responder.pace_bytes(kPacedCharacter);
-  ASSERT_EQ(responder.start(), 0);
-  EchoEngine engine;
-  CycleRunner runner(paced_config(pty.slave_path()), engine);
-  ASSERT_EQ(runner.start(), 0);
-  // Replies the cycle saw whole (it was held up) or complete too late (the responder was) are
-  // not judged; the others must be counted, so a few must show up within some hundred cycles.
-  const bool counted =
-      wait_for([&] { return runner.stats().counters.late_start_replies >= 3; }, milliseconds(8000));
-  runner.stop();
-  responder.stop();
-  const CycleCounters c = runner.stats().counters;
-  EXPECT_TRUE(counted) << c.late_start_replies << " late starts in " << c.frames_sent << " frames";
-  // Counted, not thrown away: the reply ended in time, so each one is also a good reply.
-  EXPECT_LE(c.late_start_replies, c.good_replies);
-  std::uint64_t flagged = 0;
-  for (const FrameRecord& r : runner.recorder().copy()) {
-    if ((r.flags & record_flag::kLateStart) == 0) continue;
-    ++flagged;
-    EXPECT_NE(r.flags & record_flag::kReply, 0) << "late-start flag on a reply that was used";
-  }
-  EXPECT_EQ(flagged, c.late_start_replies);
-}
-
-TEST(RtCycle, ReplyBegunInTimeIsNeverCountedLateStart) {
-  // The same pacing, begun at 3 ms. The responder counts the replies it really began later than
-  // 9 ms (it was held up): the cycle may count only those, whatever the machine's load.
-  io::PtyPair pty = make_pty();
-  FakeResponder responder(pty.master_fd(), microseconds(3000), kTestPriority);
-  responder.pace_bytes(kPacedCharacter);
-  responder.count_starts_later_than(microseconds(9000));
-  ASSERT_EQ(responder.start(), 0);
-  EchoEngine engine;
-  CycleRunner runner(paced_config(pty.slave_path()), engine);
-  ASSERT_EQ(runner.start(), 0);
-  ASSERT_TRUE(
-      wait_for([&] { return runner.stats().counters.good_replies >= 200; }, milliseconds(10000)));
-  runner.stop();
-  responder.stop();
-  EXPECT_LE(runner.stats().counters.late_start_replies, responder.late_starts());
 }
 
 TEST(RtCycle, ReplyAfterTheDeadlineCountsAsNoReply) {

@@ -42,29 +42,16 @@ class FakeResponder {
   void stop() noexcept;
   /// Frames answered so far.
   std::uint64_t answered() const noexcept { return answered_.load(std::memory_order_relaxed); }
-  /// Writes each reply one byte at a time, `spacing` apart, as a line would deliver it (call
-  /// before start()). Zero (the default): the whole reply in one write.
-  void pace_bytes(std::chrono::microseconds spacing) noexcept { byte_spacing_ = spacing; }
-  /// Replies whose first byte this responder wrote later than `after` past reading the request
-  /// (counted only when given before start()).
-  void count_starts_later_than(std::chrono::microseconds after) noexcept { late_mark_ = after; }
-  std::uint64_t late_starts() const noexcept {
-    return late_starts_.load(std::memory_order_relaxed);
-  }
 
  private:
   void loop() noexcept;
-  bool write_reply(std::span<const std::uint8_t> reply) noexcept;
 
   int fd_;
   std::chrono::microseconds reply_delay_;
-  std::chrono::microseconds byte_spacing_{0};
-  std::chrono::microseconds late_mark_{std::chrono::microseconds::max()};
   RtThreadOptions options_;
   RtThread thread_;
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> answered_{0};
-  std::atomic<std::uint64_t> late_starts_{0};
 };
 
 }  // namespace liftd::rt::testing

@@ -30,42 +30,6 @@ TEST(RtWakeDecision, SpecSlackIsPeriodMinusReplyDeadline) {
   EXPECT_EQ(kOnTimeBudget, microseconds(500));
 }
 
-TEST(RtReplyStart, CharacterTimeFromTheLineSettings) {
-  io::SerialSettings dcp;  // DCP 7.1: 38400 baud, 8 data bits, no parity, 1 stop bit
-  EXPECT_EQ(character_time(dcp), nanoseconds(260416));  // 10 bits / 38400 Bd
-  io::SerialSettings uss;
-  uss.baud = 9600;
-  uss.parity = io::Parity::Even;  // 11 bits
-  EXPECT_EQ(character_time(uss), nanoseconds(1145833));
-  EXPECT_EQ(CycleConfig{}.reply_latest_start, nanoseconds(11562500));  // DCP 7.2
-}
-
-TEST(RtReplyStart, JudgedOnlyWhenThePartWasWatchedArriving) {
-  // DCP 7.2: latest start 11.5625 ms. At 38400 8N1 a character takes 260.4 us; the estimate
-  // takes the bytes seen plus one character of receive hold before the moment they were seen.
-  constexpr nanoseconds kChar = nanoseconds(260416);
-  constexpr nanoseconds kLatest = nanoseconds(11562500);
-  struct Case {
-    const char* legend;
-    nanoseconds seen;
-    std::size_t bytes;
-    bool late;
-  };
-  const Case cases[] = {
-      {"nothing came", microseconds(14000), 0, false},
-      {"all six at once, however late", microseconds(13500), 6, false},
-      {"first byte at 3 ms", microseconds(3000), 1, false},
-      {"first byte right at the limit plus two characters", kLatest + 2 * kChar, 1, false},
-      {"first byte just beyond that", kLatest + 2 * kChar + nanoseconds(1), 1, true},
-      {"three bytes at 12.3 ms began by 11.26 ms", microseconds(12300), 3, false},
-      {"two bytes at 12.4 ms began after 11.62 ms", microseconds(12400), 2, true},
-      {"five bytes at 13.2 ms began after 11.64 ms", microseconds(13200), 5, true},
-  };
-  for (const Case& c : cases) {
-    EXPECT_EQ(reply_started_late(c.seen, c.bytes, 6, kChar, kLatest), c.late) << c.legend;
-  }
-}
-
 TEST(RtWakeDecision, SendOnTimeSendLateOrSkipByLateness) {
   struct Case {
     nanoseconds lateness;
