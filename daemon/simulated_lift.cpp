@@ -1,5 +1,6 @@
 #include "daemon/simulated_lift.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <stdexcept>
@@ -88,6 +89,10 @@ SimulatedLift::SimulatedLift(const config::Config& config) : io_(io_config(confi
   }
   sim::RunnerOptions options;
   options.fd = pty_->take_master().release();
+  // The simulated drive stands for a separate device that answers on time (DCP 7.2): one step
+  // below the cycle's real-time priority where the system permits it, so a loaded machine
+  // delays neither the master's frames nor the drive's replies.
+  options.priority = std::max(1, config.rt.priority - 1);
   drive_ = std::make_unique<sim::SerialDriveRunner>(drive, options);
   position_ = std::make_unique<Encoder>(*drive_);
 }

@@ -4,6 +4,8 @@
 #include <sys/sysmacros.h>
 
 #include <poll.h>
+#include <pthread.h>
+#include <sched.h>
 #include <sys/eventfd.h>
 #include <time.h>
 #include <unistd.h>
@@ -391,6 +393,13 @@ bool SerialDriveRunner::reopen() noexcept {
 }
 
 void SerialDriveRunner::run() noexcept {
+  if (options_.priority > 0) {
+    sched_param param{};
+    param.sched_priority = options_.priority;
+    const bool realtime = ::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &param) == 0;
+    std::lock_guard lock(mutex_);
+    counters_.realtime = realtime;
+  }
   std::array<std::uint8_t, dcp::kFrameSize> frame{};
   std::size_t have = 0;
   MonoTime last_byte{};

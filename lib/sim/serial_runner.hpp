@@ -51,6 +51,10 @@ struct RunnerOptions {
   std::chrono::milliseconds reconnect_interval{100};
   /// Events kept for drain_events() before the oldest are dropped.
   std::size_t event_capacity = 1024;
+  /// SCHED_FIFO priority of the runner's thread (0 = normal scheduling). The simulated drive
+  /// stands for hardware that answers within DCP 7.2 whatever else the machine runs; where
+  /// real-time scheduling is refused the runner runs with normal scheduling (status says so).
+  int priority = 0;
 };
 
 /// DCP 7.1/7.2: six bytes of 10 bits at 38400 baud take 1.5625 ms on an RS485 wire.
@@ -82,6 +86,7 @@ struct RunnerCounters {
   std::uint64_t device_losses = 0;   ///< hang-ups / lost devices seen
   std::uint64_t reconnects = 0;      ///< successful reopenings after a loss
   std::uint64_t dropped_events = 0;  ///< events dropped because the queue was full
+  bool realtime = false;             ///< the thread runs with SCHED_FIFO (options.priority)
 };
 
 /// A consistent copy of the drive's state for status lines and the API.

@@ -6,6 +6,8 @@
 #include "sim/serial_runner.hpp"
 
 #include <gtest/gtest.h>
+#include <pthread.h>
+#include <sched.h>
 
 #include <algorithm>
 #include <atomic>
@@ -378,6 +380,34 @@ TEST(SerialDriveRunner, AdoptedPtyMasterSurvivesTheSlaveClosingAndReopening) {
   const RunnerStatus s = runner.status();
   EXPECT_GE(s.runner.device_losses, 1u);
   EXPECT_GE(s.runner.reconnects, 1u);
+}
+
+// Whether this process may give a thread SCHED_FIFO (root or CAP_SYS_NICE with an RT limit).
+bool realtime_permitted() {
+  bool permitted = false;
+  std::thread probe([&] {
+    sched_param param{};
+    param.sched_priority = 1;
+    permitted = ::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &param) == 0;
+  });
+  probe.join();
+  return permitted;
+}
+
+TEST(SerialDriveRunner, RunsWithRealTimePriorityWherePermitted) {
+  RunnerOptions o;
+  o.priority = 10;
+  PathRig rig(no_init(), o);
+  ASSERT_TRUE(rig.runner.start());
+  EXPECT_EQ(rig.master.cycles(3, cmd::kIdle), 3);
+  EXPECT_EQ(rig.runner.status().runner.realtime, realtime_permitted())
+      << "SCHED_FIFO where the system permits it, normal scheduling (and still answering) "
+         "where not";
+
+  PathRig plain(no_init());
+  ASSERT_TRUE(plain.runner.start());
+  EXPECT_EQ(plain.master.cycles(3, cmd::kIdle), 3);
+  EXPECT_FALSE(plain.runner.status().runner.realtime) << "priority 0: normal scheduling";
 }
 
 TEST(SerialDriveRunner, FrameLimitEndsTheLoop) {
