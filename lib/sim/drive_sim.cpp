@@ -311,6 +311,7 @@ Reply DriveSim::on_master_frame(std::span<const std::uint8_t, dcp::kFrameSize> b
   } else {
     bad_streak_ = 0;
     ++good_streak_;
+    note_transport_delay(now);
     last_good_ = now;
     process(*frame, now);
     // DCP 7.3: resume after 10 good frames while stationary.
@@ -419,6 +420,22 @@ bool DriveSim::can_start() const noexcept {
   // DCP 9.1.3 / 9.1.5 / 9.1.6: only with S0 = 1, S2 = 0, S3 = 0.
   return phase_ == Phase::Idle && stationary() && (s & sb::kReady) != 0 &&
          (s & (sb::kAdvanceWarning | sb::kGeneralFault)) == 0 && !fast_stop_latched_;
+}
+
+void DriveSim::note_transport_delay(MonoTime now) noexcept {
+  // A frame read later than one cycle (DCP 7.2: 15 ms) after the previous one was held up on
+  // its way (the master's thread, the line, or this drive's own reading): the remaining
+  // distance it carries was measured that much earlier. The largest such delay is kept for the
+  // next 10 frames (DCP 7.3's supervision window), since the frames queued behind a held-up one
+  // are just as old when read.
+  const MonoTime late_by =
+      last_good_ == MonoTime{} ? MonoTime{} : std::max(MonoTime{}, now - last_good_ - kCycle);
+  if (late_by >= transport_delay_ || frames_since_delay_ >= config_.link_timeout_frames) {
+    transport_delay_ = late_by;
+    frames_since_delay_ = 0;
+  } else {
+    ++frames_since_delay_;
+  }
 }
 
 void DriveSim::process(const dcp::MasterFrame& frame, MonoTime now) noexcept {
@@ -764,8 +781,12 @@ void DriveSim::on_remaining_distance(std::uint16_t raw, MonoTime now) noexcept {
   const double t = std::max(seconds(now), motion_start_s_);
   const MotionState st = plan_.at(t);
   // The master measured its position up to a cycle or two before the drive reads the frame
-  // (DCP 7.2: 15 ms cycle): allow that much travel on top of the jitter tolerance.
-  const double lag_tol_m = tol_m + st.v_mps * kPositionLag.count();
+  // (DCP 7.2: 15 ms cycle), longer when the frame was held up on its way: allow that much
+  // travel on top of the jitter tolerance. A plausibility check must judge the master's
+  // target, not the age of the frame carrying it.
+  const double lag_s =
+      kPositionLag.count() + std::chrono::duration<double>(transport_delay_).count();
+  const double lag_tol_m = tol_m + st.v_mps * lag_s;
   const double implied_m = st.s_m + rd_m;
   const double diff_m = implied_m - target_s_m_;
   // While the distance is saturated, and on the first real value after it, any extension

@@ -286,6 +286,8 @@ class DriveSim {
   }
 
  private:
+  /// Keeps how late recent frames arrived (for the remaining-distance plausibility check).
+  void note_transport_delay(MonoTime now) noexcept;
   void process(const dcp::MasterFrame& frame, MonoTime now) noexcept;
   void process_channel(std::uint8_t byte, MonoTime now) noexcept;
   void handle_i_message(std::span<const std::uint8_t> payload, MonoTime now) noexcept;
@@ -334,6 +336,10 @@ class DriveSim {
   MonoTime last_good_{};
   std::uint32_t bad_streak_ = 0;
   std::uint32_t good_streak_ = 0;
+  /// How much later than its 15 ms slot the latest-arriving of the recent good frames came,
+  /// and how many good frames ago that was (see on_master_frame).
+  MonoTime transport_delay_{};
+  std::uint32_t frames_since_delay_ = 0;
   std::uint64_t frame_index_ = 0;
   dcp::DistanceModeTracker tracker_{};
 

@@ -205,6 +205,46 @@ TEST(SimTravel, Dcp4NearerLevelTheCarCanStillReachIsTakenOver) {
   EXPECT_NEAR(m.sim.position_mm(), 9000.0, 1.0);
 }
 
+// Runs a DCP4 travel towards 12 m until the car is at V4, then sends one remaining distance
+// that is `error_mm` short of the truth as measured `held_up` before the frame is read (the
+// frame arriving that much after its 15 ms slot), then travels on to the 12 m target.
+struct HeldUpFrame {
+  std::chrono::milliseconds held_up;
+  double error_mm;
+};
+Harness travel_with_one_odd_frame(HeldUpFrame odd) {
+  Harness m;
+  m.init();
+  m.cycle(cmd::kSpeed, kV4);
+  constexpr double kTarget = 12000.0;
+  for (int i = 0; i < 4000 && m.sim.velocity_mps() < 1.6 - 1e-9; ++i) {
+    m.distance_cycle(cmd::kDecel, kTarget);
+  }
+  m.sim.advance(m.now + 15ms);
+  const double measured_at = m.sim.position_mm();
+  m.now += odd.held_up;
+  m.cycle(cmd::kDecel,
+          static_cast<std::uint16_t>(std::lround(kTarget - measured_at - odd.error_mm)));
+  for (int i = 0; i < 4000; ++i) {
+    const Cycle c = m.distance_cycle(cmd::kDecel, kTarget);
+    if (c.velocity_mps == 0.0 && !has(c.status, sb::kBrakeOpen)) break;
+  }
+  return m;
+}
+
+TEST(SimTravel, Dcp4FrameHeldUpOnItsWayIsNotATargetChange) {
+  // A remaining distance measured 60 ms before the drive reads it is 96 mm too long at 1.6 m/s:
+  // the frame's age, not a new target. Read on time, the same frame moves the target.
+  const Harness late = travel_with_one_odd_frame({60ms, 0.0});
+  EXPECT_EQ(late.sim.counters().extensions, 0U);
+  EXPECT_EQ(late.sim.counters().shortened, 0U);
+  EXPECT_EQ(late.sim.counters().implausible, 0U);
+  EXPECT_NEAR(late.sim.position_mm(), 12000.0, 1.0);
+
+  const Harness on_time = travel_with_one_odd_frame({0ms, 96.0});
+  EXPECT_EQ(on_time.sim.counters().shortened, 1U) << "96 mm nearer, read on time, is a change";
+}
+
 TEST(SimTravel, StopMessageAtSpeedIsAViolationAndAnEmergencyStop) {
   // DCP 3.5.3.2: stop mode 0001 "During deceleration" only; DCP 11.1.1 d: B2 "remains
   // activated until the lift car comes to the level".
