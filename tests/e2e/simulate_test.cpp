@@ -27,30 +27,46 @@ using liftd::testing::ApiClient;
 using liftd::testing::Process;
 using nlohmann::json;
 
+/// Starts `liftd --simulate` with its runtime directory (and so its API socket) in `dir`.
+std::unique_ptr<Process> start_simulated_liftd(const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  return std::make_unique<Process>(
+      std::vector<std::string>{LIFTD_BINARY, "--simulate"},
+      std::vector<std::string>{"XDG_RUNTIME_DIR=" + dir.string(), "PATH=/usr/bin:/bin"},
+      dir.string(), "liftd");
+}
+
+/// True once the daemon on `socket` reports the DCP link up (I0, I1 and I3 went through: well
+/// under a second on a quiet machine), false after 30 s.
+bool wait_for_link_up(const std::string& socket) {
+  for (int i = 0; i < 300; ++i) {
+    ApiClient c(socket);
+    if (c.connected()) {
+      c.next();  // hello
+      json r = c.call({{"cmd", "status"}});
+      if (r.is_object() && r["result"]["link"]["state"] == "up") return true;
+    }
+    std::this_thread::sleep_for(100ms);
+  }
+  return false;
+}
+
 class SimulateTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = std::filesystem::temp_directory_path() / ("liftd-e2e-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir_);
     socket_ = (dir_ / "liftd-sim.sock").string();
-    daemon_ = std::make_unique<Process>(
-        std::vector<std::string>{LIFTD_BINARY, "--simulate"},
-        std::vector<std::string>{"XDG_RUNTIME_DIR=" + dir_.string(), "PATH=/usr/bin:/bin"},
-        dir_.string(), "liftd");
-    // The link is up once I0, I1 and I3 went through (well under a second on a quiet machine).
-    for (int i = 0; i < 300; ++i) {
-      ApiClient c(socket_);
-      if (c.connected()) {
-        c.next();  // hello
-        json r = c.call({{"cmd", "status"}});
-        if (r.is_object() && r["result"]["link"]["state"] == "up") return;
-      }
-      std::this_thread::sleep_for(100ms);
-    }
+    daemon_ = start_simulated_liftd(dir_);
+    link_up_ = wait_for_link_up(socket_);
   }
   static void TearDownTestSuite() {
     daemon_.reset();
     std::filesystem::remove_all(dir_);
+  }
+  // Every test here needs the link: without it they would test a daemon that cannot travel.
+  void SetUp() override {
+    ASSERT_TRUE(link_up_) << "the simulated drive's link never came up in 30 s; daemon log:\n"
+                          << daemon_->err();
   }
   /// Runs liftctl with arguments; returns stdout (exit code in `code`).
   static std::string liftctl(const std::vector<std::string>& args, int* code = nullptr) {
@@ -65,6 +81,7 @@ class SimulateTest : public ::testing::Test {
   static inline std::filesystem::path dir_;
   static inline std::string socket_;
   static inline std::unique_ptr<Process> daemon_;
+  static inline bool link_up_ = false;
 };
 
 TEST_F(SimulateTest, LinkComesUpAndLiftctlShowsIt) {
@@ -175,11 +192,18 @@ TEST_F(SimulateTest, RefusesATravelToAFloorThatDoesNotExist) {
 }
 
 // Last: SIGTERM stops the whole stack cleanly with exit code 0.
-TEST_F(SimulateTest, ZzSigtermStopsCleanly) {
-  daemon_->signal(SIGTERM);
-  const auto code = daemon_->wait(5s);
-  ASSERT_TRUE(code.has_value());
-  EXPECT_EQ(*code, 0) << daemon_->err();
+TEST(SimulateProcess, SigtermAtRestStopsCleanly) {
+  // Its own daemon, so the other tests keep theirs whatever order they run in.
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("liftd-e2e-sigterm-" + std::to_string(::getpid()));
+  std::unique_ptr<Process> daemon = start_simulated_liftd(dir);
+  ASSERT_TRUE(wait_for_link_up((dir / "liftd-sim.sock").string())) << daemon->err();
+  daemon->signal(SIGTERM);
+  const auto code = daemon->wait(5s);
+  ASSERT_TRUE(code.has_value()) << "the car stands: liftd exits at once";
+  EXPECT_EQ(*code, 0) << daemon->err();
+  daemon.reset();
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
