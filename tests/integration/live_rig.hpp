@@ -62,6 +62,9 @@ inline std::unique_ptr<sim::SerialDriveRunner> serve(int master_fd,
   sim::RunnerOptions options;
   options.fd = ::dup(master_fd);
   options.reconnect = false;
+  // The drive stands for hardware that answers on time: real-time scheduling one step below
+  // the master's cycle (cycle_config) where permitted, as in liftd --simulate.
+  options.priority = 19;
   auto runner = std::make_unique<sim::SerialDriveRunner>(config, options);
   if (!runner->start()) throw std::runtime_error("simulator: " + runner->last_error());
   return runner;
