@@ -54,13 +54,18 @@ function(liftd_executable name)
   endif()
 endfunction()
 
-# liftd_test(<name> SOURCES ... [DEPS ...] [LABELS ...]): a GoogleTest binary whose cases are
-# registered with CTest one by one, each carrying every label given (so `ctest -LE slow` works).
+# liftd_test(<name> SOURCES ... [DEPS ...] [LABELS ...] [RUN_SERIAL]): a GoogleTest binary whose
+# cases are registered with CTest one by one, each carrying every label given (so `ctest -LE slow`
+# works); RUN_SERIAL: each case runs with no other test beside it.
 function(liftd_test name)
   if(NOT LIFTD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "RUN_SERIAL" "" "SOURCES;DEPS;LABELS" ${ARGN})
+  set(serial FALSE)
+  if(ARG_RUN_SERIAL)
+    set(serial TRUE)
+  endif()
   add_executable(${name} ${ARG_SOURCES})
   target_compile_options(${name} PRIVATE ${LIFTD_WARNINGS} ${LIFTD_TEST_COMPILE_OPTIONS})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gmock GTest::gtest_main)
@@ -70,7 +75,7 @@ function(liftd_test name)
   # file; the separators between labels are escaped for each of those expansions.
   string(REPLACE ";" "\\\\\\\\\\\\\\;" labels "${ARG_LABELS}")
   gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-                       PROPERTIES LABELS "${labels}" TIMEOUT 300)
+                       PROPERTIES LABELS "${labels}" TIMEOUT 300 RUN_SERIAL ${serial})
 endfunction()
 
 # liftd_fuzzer(<name> SOURCES ... [DEPS ...]): a libFuzzer target, built only with LIFTD_FUZZ,
