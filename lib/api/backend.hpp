@@ -34,6 +34,7 @@ struct FaultInfo {
   std::string code;                             ///< snake_case, stable, e.g. "link_fault"
   std::string text;                             ///< human-readable explanation
   std::chrono::system_clock::time_point since;  ///< when it became active (wall clock)
+  bool operator==(const FaultInfo&) const = default;
 };
 
 /// Real-time scheduling the cycle thread obtained.
@@ -42,6 +43,7 @@ struct RtInfo {
   std::string policy;          ///< "SCHED_FIFO", "SCHED_OTHER", ...
   int priority = 0;            ///< scheduling priority obtained
   bool memory_locked = false;  ///< mlockall() succeeded
+  bool operator==(const RtInfo&) const = default;
 };
 
 /// Everything `status` reports, filled by the backend.
@@ -63,6 +65,7 @@ struct StatusSnapshot {
   std::optional<std::int64_t> last_travel_slip_mm;  ///< travel.last_slip_mm (I9 extended reply)
   std::vector<FaultInfo> faults;                    ///< active faults, oldest first
   RtInfo rt{};                                      ///< rt
+  bool operator==(const StatusSnapshot&) const = default;
 };
 
 /// Counters and timing for `stats`.

@@ -1,6 +1,7 @@
 #include "api/commands.hpp"
 
 #include <algorithm>
+#include <memory>
 #include <string>
 
 #include "common/version.hpp"
@@ -39,6 +40,23 @@ ArgSpec choice_arg(std::string name, bool required, std::vector<std::string> cho
   return spec;
 }
 
+/// The last status answered and its serialised form: a dispatcher polling a lift at rest asks
+/// for the same object again and again, so it is serialised only when it changed.
+class StatusCache {
+ public:
+  std::shared_ptr<const std::string> serialized(StatusSnapshot snapshot) {
+    if (!text_ || !(snapshot == last_)) {
+      text_ = std::make_shared<const std::string>(dump_compact(to_json(snapshot)));
+      last_ = std::move(snapshot);
+    }
+    return text_;
+  }
+
+ private:
+  StatusSnapshot last_;
+  std::shared_ptr<const std::string> text_;
+};
+
 template <typename T>
 T arg_or(const nlohmann::json& request, const char* name, T fallback) {
   const auto it = request.find(name);
@@ -55,7 +73,9 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                   Access::Read,
                   {},
                   "link, drive, car, travel, faults, scheduling",
-                  [b](const Call&, Responder done) { done(Result::ok(to_json(b->status()))); }});
+                  [b, cache = std::make_shared<StatusCache>()](const Call&, Responder done) {
+                    done(Result::ok_serialized(cache->serialized(b->status())));
+                  }});
 
   dispatcher.add({"watch",
                   Access::Read,

@@ -32,6 +32,26 @@ Result Result::ok(nlohmann::json value) {
   return Result(std::move(value));
 }
 
+Result Result::ok_serialized(std::shared_ptr<const std::string> compact_json) {
+  return Result(std::move(compact_json));
+}
+
+const nlohmann::json& Result::value() const {
+  if (const auto* text = std::get_if<Serialized>(&value_)) {
+    if (!parsed_) parsed_ = nlohmann::json::parse(**text);
+    return *parsed_;
+  }
+  return std::get<nlohmann::json>(value_);
+}
+
+void Result::append_compact(std::string& out) const {
+  if (const auto* text = std::get_if<Serialized>(&value_)) {
+    out += **text;
+  } else {
+    out += dump_compact(std::get<nlohmann::json>(value_));
+  }
+}
+
 Result Result::fail(ErrorCode code, std::string message, std::string field) {
   return Result(Error{code, std::move(message), std::move(field)});
 }
@@ -41,12 +61,20 @@ std::string dump_compact(const nlohmann::json& value) {
 }
 
 std::string reply_line(const nlohmann::json& id, const Result& result) {
+  if (result.is_ok()) {
+    // The same bytes as dumping {"id","ok","result"} (keys in that sorted order), without
+    // copying the result into a reply object first: status is the most frequent request.
+    std::string line = "{\"id\":";
+    line += dump_compact(id);
+    line += ",\"ok\":true,\"result\":";
+    result.append_compact(line);
+    line += "}\n";
+    return line;
+  }
   nlohmann::json reply = nlohmann::json::object();
   reply["id"] = id;
-  reply["ok"] = result.is_ok();
-  if (result.is_ok()) {
-    reply["result"] = result.value();
-  } else {
+  reply["ok"] = false;
+  {
     const Error& error = result.error();
     nlohmann::json body = {{"code", to_string(error.code)}, {"message", error.message}};
     if (!error.field.empty()) body["field"] = error.field;
@@ -58,9 +86,12 @@ std::string reply_line(const nlohmann::json& id, const Result& result) {
 }
 
 std::string event_line(std::string_view name, const nlohmann::json& data) {
-  nlohmann::json event = {{"event", name}, {"data", data}};
-  std::string line = dump_compact(event);
-  line.push_back('\n');
+  // The bytes of {"data","event"} dumped (keys in that sorted order), without copying data.
+  std::string line = "{\"data\":";
+  line += dump_compact(data);
+  line += ",\"event\":";
+  line += dump_compact(nlohmann::json(name));
+  line += "}\n";
   return line;
 }
 

@@ -3,6 +3,8 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <variant>
@@ -38,24 +40,32 @@ struct Error {
   std::string field;  ///< empty unless one field is at fault
 };
 
-/// Outcome of a command: a result object or an error.
+/// Outcome of a command: a result object (as a JSON value, or already serialised) or an error.
 class Result {
  public:
   /// A success with `value` as the reply's "result" (an object).
   static Result ok(nlohmann::json value = nlohmann::json::object());
+  /// A success whose "result" is `compact_json`, an object already serialised by dump_compact
+  /// (a command that answers the same object many times serialises it once).
+  static Result ok_serialized(std::shared_ptr<const std::string> compact_json);
   /// A failure.
   static Result fail(ErrorCode code, std::string message, std::string field = {});
 
   /// True for a success.
-  bool is_ok() const noexcept { return std::holds_alternative<nlohmann::json>(value_); }
-  /// The result object; only valid when is_ok().
-  const nlohmann::json& value() const { return std::get<nlohmann::json>(value_); }
+  bool is_ok() const noexcept { return !std::holds_alternative<Error>(value_); }
+  /// The result object; only valid when is_ok() (a serialised result is parsed on first use).
+  const nlohmann::json& value() const;
+  /// Appends the result object, serialised compactly, to `out`; only valid when is_ok().
+  void append_compact(std::string& out) const;
   /// The error; only valid when !is_ok().
   const Error& error() const { return std::get<Error>(value_); }
 
  private:
-  explicit Result(std::variant<nlohmann::json, Error> value) : value_(std::move(value)) {}
-  std::variant<nlohmann::json, Error> value_;
+  using Serialized = std::shared_ptr<const std::string>;
+  explicit Result(std::variant<nlohmann::json, Error, Serialized> value)
+      : value_(std::move(value)) {}
+  std::variant<nlohmann::json, Error, Serialized> value_;
+  mutable std::optional<nlohmann::json> parsed_;  // value() of a serialised result
 };
 
 /// Completion callback of a command. Call it exactly once, on the io_context's thread, possibly

@@ -249,6 +249,32 @@ TEST_F(DispatcherTest, StatusUsesNullForUnknowns) {
   EXPECT_TRUE(r.at("car").at("floor").is_null());
 }
 
+// status serialises an unchanged snapshot once; every change of any field must still show.
+TEST_F(DispatcherTest, StatusShowsEveryChangeBetweenRequests) {
+  const auto position = [this] {
+    return handle(R"({"cmd":"status"})").at("result").at("car").at("position_mm");
+  };
+  EXPECT_EQ(position(), 3000);
+  EXPECT_EQ(position(), 3000);  // served from the cache
+  backend_.status_snapshot.position_mm = 3001;
+  EXPECT_EQ(position(), 3001);
+  backend_.status_snapshot.rt.priority = 7;  // a field deep in the snapshot
+  EXPECT_EQ(handle(R"({"cmd":"status"})").at("result").at("rt").at("priority"), 7);
+  backend_.status_snapshot.faults.push_back(
+      {"link_timeout", "no reply", std::chrono::system_clock::time_point{}});
+  EXPECT_EQ(handle(R"({"cmd":"status"})").at("result").at("faults").size(), 1u);
+  backend_.status_snapshot.faults.back().since += std::chrono::milliseconds(1);
+  EXPECT_EQ(handle(R"({"cmd":"status"})").at("result").at("faults").at(0).at("since"),
+            "1970-01-01T00:00:00.001Z");
+}
+
+TEST(ResultSerialized, ValueParsesTheText) {
+  const Result r = Result::ok_serialized(std::make_shared<const std::string>(R"({"a":[1,2]})"));
+  EXPECT_TRUE(r.is_ok());
+  EXPECT_EQ(r.value(), (json{{"a", {1, 2}}}));
+  EXPECT_EQ(reply_line(5, r), "{\"id\":5,\"ok\":true,\"result\":{\"a\":[1,2]}}\n");
+}
+
 TEST_F(DispatcherTest, TraceReturnsNewestFramesAsHex) {
   for (int i = 0; i < 5; ++i) {
     TraceEntry e;
@@ -349,6 +375,28 @@ TEST(JsonNestingDepth, CountsOutsideStringsOnly) {
   };
   for (const auto& [text, depth] : cases) EXPECT_EQ(json_nesting_depth(text, 32), depth) << text;
   EXPECT_EQ(json_nesting_depth(std::string(100, '['), 32), 33);
+}
+
+// Reply and event lines are written without building a whole reply object; their bytes must be
+// exactly those of the object dumped compactly (keys in sorted order), for every kind of id.
+TEST(ReplyLine, BytesAreThoseOfTheDumpedObject) {
+  const json result = {{"floor", 3}, {"name", "Lobby \u00e9"}, {"list", {1, 2.5, nullptr}}};
+  for (const json& id :
+       {json(nullptr), json(7), json(-1.5), json("a\"b"), json({1, "x"}), json({{"k", true}})}) {
+    SCOPED_TRACE(id.dump());
+    EXPECT_EQ(reply_line(id, Result::ok(result)),
+              json({{"id", id}, {"ok", true}, {"result", result}}).dump() + "\n");
+    EXPECT_EQ(reply_line(id, Result::fail(ErrorCode::BadRequest, "no", "cmd")),
+              json({{"id", id},
+                    {"ok", false},
+                    {"error", {{"code", "bad_request"}, {"message", "no"}, {"field", "cmd"}}}})
+                      .dump() +
+                  "\n");
+  }
+  EXPECT_EQ(event_line("state", result),
+            json({{"event", "state"}, {"data", result}}).dump() + "\n");
+  // Invalid UTF-8 is replaced, never thrown, in both halves.
+  EXPECT_EQ(event_line("x", json("\xff")), "{\"data\":\"\xef\xbf\xbd\",\"event\":\"x\"}\n");
 }
 
 }  // namespace

@@ -3,21 +3,28 @@
 //   api-bench --socket PATH     against a running liftd
 //   api-bench --serve PATH      only serve the fake backend at PATH (for trying liftctl)
 //   --seconds N                 measuring time per client count (default 2)
+//   --baseline PATH             instead: a bare single-threaded epoll line server (no JSON, no
+//                               Asio) answering every line with a fixed reply the size of a
+//                               status reply: the ceiling of one io thread on this machine
 //   --pipeline N                instead: one client writes N requests without waiting and reads
 //                               every reply (backpressure, not disconnection); exit 1 if any is
 //                               missing or out of order
 #include <poll.h>
+#include <sys/epoll.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -32,6 +39,9 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+/// Length of the baseline server's reply line: that of a status reply from liftd --simulate.
+constexpr std::size_t kBaselineReplyBytes = 800;
 
 int connect_to(const std::string& path) {
   const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
@@ -191,6 +201,82 @@ bool pipeline(const std::string& path, long count) {
   return true;
 }
 
+/// The reference for the API figures: the least a single-threaded line server must do per
+/// request on this machine (epoll_wait, recv, send), with nothing of liftd in it. Replies are
+/// `reply_bytes` long so the copy costs the same as a real status reply.
+class BaselineServer {
+ public:
+  BaselineServer(const std::string& path, std::size_t reply_bytes) {
+    reply_ = "{\"id\":1,\"ok\":true,\"result\":\"";
+    reply_.append(reply_bytes > reply_.size() + 3 ? reply_bytes - reply_.size() - 3 : 0, 'x');
+    reply_ += "\"}\n";
+    listener_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+    ::unlink(path.c_str());
+    if (::bind(listener_, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0 ||
+        ::listen(listener_, 64) != 0) {
+      std::perror("api-bench: baseline server");
+      std::exit(1);
+    }
+    epoll_ = ::epoll_create1(EPOLL_CLOEXEC);
+    add(listener_);
+    thread_ = std::thread([this] { run(); });
+  }
+  ~BaselineServer() {
+    stop_.store(true);
+    thread_.join();
+    for (auto& [fd, pending] : clients_) ::close(fd);
+    ::close(epoll_);
+    ::close(listener_);
+  }
+
+ private:
+  void add(int fd) {
+    epoll_event ev{};
+    ev.events = EPOLLIN;
+    ev.data.fd = fd;
+    ::epoll_ctl(epoll_, EPOLL_CTL_ADD, fd, &ev);
+  }
+  void run() {
+    std::array<epoll_event, 64> events{};
+    char chunk[16384];
+    while (!stop_.load()) {
+      const int n = ::epoll_wait(epoll_, events.data(), static_cast<int>(events.size()), 100);
+      for (int i = 0; i < n; ++i) {
+        const int fd = events[static_cast<std::size_t>(i)].data.fd;
+        if (fd == listener_) {
+          const int client = ::accept4(listener_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
+          if (client < 0) continue;
+          add(client);
+          clients_[client];
+          [[maybe_unused]] const ssize_t w = ::send(client, "{}\n", 3, MSG_NOSIGNAL);  // greeting
+          continue;
+        }
+        const ssize_t got = ::recv(fd, chunk, sizeof chunk, 0);
+        if (got <= 0) {
+          ::epoll_ctl(epoll_, EPOLL_CTL_DEL, fd, nullptr);
+          ::close(fd);
+          clients_.erase(fd);
+          continue;
+        }
+        const auto lines = std::count(chunk, chunk + got, '\n');
+        for (long k = 0; k < lines; ++k) {
+          [[maybe_unused]] const ssize_t w = ::send(fd, reply_.data(), reply_.size(), MSG_NOSIGNAL);
+        }
+      }
+    }
+  }
+
+  std::string reply_;
+  int listener_ = -1;
+  int epoll_ = -1;
+  std::map<int, int> clients_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -198,6 +284,7 @@ int main(int argc, char** argv) {
   std::string serve_path;
   double seconds = 2.0;
   long pipeline_count = 0;
+  std::string baseline_path;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--socket" && i + 1 < argc) {
@@ -206,6 +293,8 @@ int main(int argc, char** argv) {
       serve_path = argv[++i];
     } else if (arg == "--seconds" && i + 1 < argc) {
       seconds = std::atof(argv[++i]);
+    } else if (arg == "--baseline" && i + 1 < argc) {
+      baseline_path = argv[++i];
     } else if (arg == "--pipeline" && i + 1 < argc) {
       pipeline_count = std::atol(argv[++i]);
       if (pipeline_count <= 0) {
@@ -214,10 +303,23 @@ int main(int argc, char** argv) {
       }
     } else {
       std::fprintf(stderr,
-                   "usage: api-bench [--socket PATH | --serve PATH] [--seconds N] "
-                   "[--pipeline N]\n");
+                   "usage: api-bench [--socket PATH | --serve PATH | --baseline PATH] "
+                   "[--seconds N] [--pipeline N]\n");
       return 2;
     }
+  }
+
+  if (!baseline_path.empty()) {
+    // As long as a status reply of liftd --simulate at rest (797 bytes measured).
+    const BaselineServer baseline(baseline_path, kBaselineReplyBytes);
+    std::printf("api-bench: bare epoll line server (baseline) on %s, %.1f s per client count\n",
+                baseline_path.c_str(), seconds);
+    std::printf("%7s %12s %10s %10s %10s\n", "clients", "requests/s", "p50 us", "p99 us",
+                "requests");
+    bool ok = true;
+    for (const int clients : {1, 8, 32}) ok = bench(baseline_path, clients, seconds) && ok;
+    ::unlink(baseline_path.c_str());
+    return ok ? 0 : 1;
   }
 
   asio::io_context io;
