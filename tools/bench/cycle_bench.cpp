@@ -160,34 +160,53 @@ class CheckedEcho : public rt::CycleEngine {
   testing::EchoEngine echo_;
 };
 
-// Forwards to the engine under test and measures the cycle thread's CPU time.
+// Forwards to the engine under test and measures the cycle thread's CPU time, and the time spent
+// inside the engine's own calls (the protocol work; the rest of the cycle is serial I/O that
+// every engine shares).
 class TimedEngine final : public rt::CycleEngine {
  public:
   explicit TimedEngine(rt::CycleEngine& inner) : inner_(inner) {}
   std::span<const std::uint8_t> frame_to_send(MonoTime now) noexcept override {
     if (first_cpu_ns_ < 0) first_cpu_ns_ = thread_cpu_ns();
-    return inner_.frame_to_send(now);
+    const MonoTime t0 = mono_now();
+    const auto frame = inner_.frame_to_send(now);
+    inside_ += mono_now() - t0;
+    return frame;
   }
   std::size_t reply_size() const noexcept override { return inner_.reply_size(); }
   bool on_reply(std::span<const std::uint8_t> reply, MonoTime now) noexcept override {
-    return inner_.on_reply(reply, now);
+    const MonoTime t0 = mono_now();
+    const bool good = inner_.on_reply(reply, now);
+    inside_ += mono_now() - t0;
+    return good;
   }
-  void on_no_reply(MonoTime now) noexcept override { inner_.on_no_reply(now); }
+  void on_no_reply(MonoTime now) noexcept override {
+    const MonoTime t0 = mono_now();
+    inner_.on_no_reply(now);
+    inside_ += mono_now() - t0;
+  }
   void on_port_lost(MonoTime now) noexcept override { inner_.on_port_lost(now); }
   void on_port_ready(MonoTime now) noexcept override { inner_.on_port_ready(now); }
   void after_cycle(MonoTime now) noexcept override {
+    const MonoTime t0 = mono_now();
     inner_.after_cycle(now);
+    inside_ += mono_now() - t0;
+    engine_ns_.store(inside_.count(), std::memory_order_relaxed);
     if (first_cpu_ns_ >= 0) {
       cpu_ns_.store(thread_cpu_ns() - first_cpu_ns_, std::memory_order_relaxed);
     }
   }
   /// CPU time the cycle thread used since its first frame.
   std::int64_t cpu_ns() const noexcept { return cpu_ns_.load(std::memory_order_relaxed); }
+  /// Time spent inside the engine's calls (frame, reply, no reply, after the cycle).
+  std::int64_t engine_ns() const noexcept { return engine_ns_.load(std::memory_order_relaxed); }
 
  private:
   rt::CycleEngine& inner_;
   std::int64_t first_cpu_ns_ = -1;
+  std::chrono::nanoseconds inside_{0};
   std::atomic<std::int64_t> cpu_ns_{0};
+  std::atomic<std::int64_t> engine_ns_{0};
 };
 
 // The simulated encoder, read lock-free by the cycle (DCP4 travels need the position).
@@ -272,9 +291,11 @@ struct Reference {
   rt::Histogram<20000> lateness{std::chrono::microseconds(1)};  // same bins as the cycle's
   std::atomic<std::uint64_t> done{0};
   std::atomic<std::int64_t> cpu_ns{0};
+  std::atomic<std::uint64_t> beyond_window{0};  // wake-ups later than the cycle's send window
 };
 
-void reference_loop(Reference& ref, std::chrono::nanoseconds period, std::uint64_t cycles) {
+void reference_loop(Reference& ref, std::chrono::nanoseconds period,
+                    std::chrono::nanoseconds send_window, std::uint64_t cycles) {
   const std::int64_t cpu_start = thread_cpu_ns();
   MonoTime next = mono_now() + period;
   for (std::uint64_t i = 0; i < cycles; ++i) {
@@ -283,7 +304,9 @@ void reference_loop(Reference& ref, std::chrono::nanoseconds period, std::uint64
                       static_cast<long>(ns % 1'000'000'000)};
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
     }
-    ref.lateness.record(mono_now() - next);
+    const auto late = mono_now() - next;
+    ref.lateness.record(late);
+    if (late > send_window) ref.beyond_window.fetch_add(1, std::memory_order_relaxed);
     ref.done.store(i + 1, std::memory_order_relaxed);
     next += period;
   }
@@ -384,8 +407,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "cycle-bench: cannot start the cycle: %s\n", std::strerror(err));
     return 1;
   }
-  if (const int err =
-          ref_thread.start(ref_options, [&] { reference_loop(ref, config.period, o.cycles); });
+  if (const int err = ref_thread.start(
+          ref_options, [&] { reference_loop(ref, config.period, config.send_window, o.cycles); });
       err != 0) {
     std::fprintf(stderr, "cycle-bench: cannot start the reference loop: %s\n", std::strerror(err));
     return 1;
@@ -446,6 +469,15 @@ int main(int argc, char** argv) {
       "process %.1f us (all threads, responder included)\n",
       per_cycle_us(engine.cpu_ns(), s.counters.cycles), per_cycle_us(ref.cpu_ns.load(), o.cycles),
       per_cycle_us(process_cpu, o.cycles));
+  std::printf("engine calls per cycle: %.2f us (the protocol work inside the cycle thread)\n",
+              per_cycle_us(engine.engine_ns(), s.counters.cycles));
+  std::printf(
+      "wake-ups beyond the send window (%lld us): liftd cycle %llu (all skipped: %llu), reference "
+      "loop %llu\n",
+      static_cast<long long>(config.send_window.count() / 1000),
+      static_cast<unsigned long long>(s.counters.overruns),
+      static_cast<unsigned long long>(s.counters.skipped_cycles),
+      static_cast<unsigned long long>(ref.beyond_window.load()));
   const auto& c = s.counters;
   std::printf(
       "counters: cycles %llu, sent %llu (late %llu), good %llu, bad %llu, missing %llu (partial "
