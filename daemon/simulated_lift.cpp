@@ -14,19 +14,20 @@ namespace liftd::daemon {
 /// The drive simulator's car position as the cycle's absolute encoder. A position older than
 /// `kMaxAge` means the simulator stalled: the encoder reports invalid, as a real one would.
 ///
-/// The simulator publishes the position when it handles a frame, so when the cycle reads it for
-/// the next frame it is most of a cycle old: 15 ms at 1.6 m/s is 24 mm, which a DCP3 travel by
-/// position turns into a late deceleration point and an overshoot. A real encoder is read
-/// when asked, so this one carries the position forward at the published speed to `now`.
+/// The simulator publishes the car's motion when it handles a frame, so when the cycle reads it
+/// for the next frame it is most of a cycle old: 15 ms at 1.6 m/s is 24 mm, which a DCP3 travel
+/// by position turns into a late deceleration point and an overshoot. A real encoder is read
+/// when asked, so this one carries the sample forward to `now` (EncoderSample::position_at_mm:
+/// speed and acceleration of one consistent sample, stopping where a braking car stops; a
+/// straight line at the sampled speed ran a car that had stopped at its level on by 20 mm when
+/// the simulator's thread was held up, and the drive refused the distance as implausible).
 class SimulatedLift::Encoder final : public control::PositionSource {
  public:
   explicit Encoder(const sim::SerialDriveRunner& drive) : drive_(drive) {}
   std::optional<std::int64_t> position_mm(MonoTime now) const noexcept override {
-    const MonoTime age = now - drive_.position_at();
-    if (age > kMaxAge) return std::nullopt;
-    const double age_s = age > MonoTime::zero() ? std::chrono::duration<double>(age).count() : 0.0;
-    // m/s * s * 1000 = mm
-    return std::llround(drive_.position_mm() + drive_.velocity_mps() * age_s * 1000.0);
+    const sim::EncoderSample sample = drive_.encoder_sample();
+    if (now - sample.at > kMaxAge) return std::nullopt;
+    return std::llround(sample.position_at_mm(now));
   }
 
  private:

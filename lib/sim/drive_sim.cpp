@@ -183,6 +183,11 @@ double DriveSim::velocity_mps() const noexcept {
   return down_ ? -v : v;
 }
 
+double DriveSim::acceleration_mps2() const noexcept {
+  const double a = state_at(now_).a_mps2;
+  return down_ ? -a : a;
+}
+
 bool DriveSim::stationary() const noexcept {
   const double t = seconds(now_);
   return t >= plan_.settle_time_s() && plan_.final_speed_mps() < kStillMps;

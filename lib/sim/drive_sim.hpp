@@ -211,6 +211,8 @@ class DriveSim {
   double position_mm() const noexcept;
   /// Car speed in m/s, signed (+ up).
   double velocity_mps() const noexcept;
+  /// Car acceleration in m/s^2, signed (+ up).
+  double acceleration_mps2() const noexcept;
   /// True while the car does not move.
   bool stationary() const noexcept;
   /// Moves the car (only while idle), e.g. to start a test at a floor.

@@ -23,6 +23,7 @@
 
 #include "common/mono_time.hpp"
 #include "io/serial_port.hpp"
+#include "rt/snapshot.hpp"
 #include "sim/drive_sim.hpp"
 
 namespace liftd::sim {
@@ -102,6 +103,18 @@ struct RunnerStatus {
   RunnerCounters runner{};                ///< serial-side counters
 };
 
+/// The car's motion as the drive loop last computed it, published as one consistent value.
+struct EncoderSample {
+  double position_mm = 0.0;   ///< car position
+  double velocity_mps = 0.0;  ///< car speed, + up
+  double accel_mps2 = 0.0;    ///< car acceleration, + up
+  MonoTime at{};              ///< when the loop computed it
+  /// The position carried forward to `now` at the sample's speed and acceleration, the way the
+  /// car moves between two of the loop's updates. A car that is slowing down stops where its
+  /// speed reaches zero instead of reversing; `now` before `at` gives the sampled position.
+  double position_at_mm(MonoTime now) const noexcept;
+};
+
 /// One line of text for an event, time relative to `epoch`:
 /// "[     1.234] phase magnetising".
 std::string format_event(const SimEvent& event, MonoTime epoch);
@@ -144,10 +157,11 @@ class SerialDriveRunner {
   double position_mm() const noexcept { return position_mm_.load(std::memory_order_relaxed); }
   /// Car speed in m/s (+ up), updated with the position.
   double velocity_mps() const noexcept { return velocity_mps_.load(std::memory_order_relaxed); }
-  /// Monotonic time of the last position update (a stale value means the loop has stalled).
-  MonoTime position_at() const noexcept {
-    return MonoTime{position_at_ns_.load(std::memory_order_relaxed)};
-  }
+  /// Position, speed, acceleration and time of the last update as one consistent sample (a
+  /// stale time means the loop has stalled). Only one thread may call it (the cycle's, where
+  /// the sample stands for an absolute encoder): it takes the newest sample from a triple
+  /// buffer, so the three values never come from two different updates.
+  EncoderSample encoder_sample() const noexcept { return encoder_.read(); }
 
   // --- status (short lock) ---
   /// A consistent copy of the drive's state and counters.
@@ -201,9 +215,8 @@ class SerialDriveRunner {
 
   std::atomic<double> position_mm_{0.0};
   std::atomic<double> velocity_mps_{0.0};
-  std::atomic<std::int64_t> position_at_ns_{0};
   static_assert(std::atomic<double>::is_always_lock_free, "the encoder must be lock-free");
-  static_assert(std::atomic<std::int64_t>::is_always_lock_free, "the encoder must be lock-free");
+  mutable rt::Snapshot<EncoderSample> encoder_;  // written under mutex_, read by one thread
 
   mutable std::mutex mutex_;  // guards everything below
   DriveSim sim_;

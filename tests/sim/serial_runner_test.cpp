@@ -191,10 +191,10 @@ TEST(SerialDriveRunner, EncoderIsReadableWhileTheCarMovesAndBetweenFrames) {
 
   // No frames for 60 ms (the drive's link timeout is 10 frames, 150 ms): the car model must
   // keep advancing on the runner's idle wake-ups.
-  const MonoTime stamp0 = rig.runner.position_at();
+  const MonoTime stamp0 = rig.runner.encoder_sample().at;
   std::this_thread::sleep_for(60ms);
   EXPECT_GT(rig.runner.position_mm(), moving_at + 5.0) << "0.5 m/s for 60 ms is 30 mm";
-  EXPECT_GT(rig.runner.position_at(), stamp0);
+  EXPECT_GT(rig.runner.encoder_sample().at, stamp0);
 
   // DCP 9.2.1: B1 off with B2 on: crawl; then B2 off: stop; then idle.
   for (int i = 0; i < 300 && rig.runner.velocity_mps() > 0.06; ++i)
@@ -342,8 +342,8 @@ TEST(SerialDriveRunner, PathRunnerKeepsRetryingAfterALoss) {
   EXPECT_TRUE(eventually([&] { return rig.runner.state() == RunnerState::Reconnecting; }));
   EXPECT_TRUE(rig.runner.running());
   // The model still advances while the device is away.
-  const MonoTime stamp = rig.runner.position_at();
-  EXPECT_TRUE(eventually([&] { return rig.runner.position_at() > stamp; }));
+  const MonoTime stamp = rig.runner.encoder_sample().at;
+  EXPECT_TRUE(eventually([&] { return rig.runner.encoder_sample().at > stamp; }));
   const MonoTime t0 = mono_now();
   rig.runner.stop();
   EXPECT_LT(mono_now() - t0, 100ms) << "stop() interrupts the retry pause";
@@ -451,6 +451,32 @@ TEST(SimText, FormatsEventsRelativeToTheEpoch) {
   e.kind = SimEvent::Kind::ChannelMessage;
   e.value = '7';
   EXPECT_EQ(format_event(e, 1500ms), "[     0.000] channel-message I7");
+}
+
+// The simulated encoder between two updates of the drive loop: carried forward at the
+// sample's speed and acceleration; a braking car stops at v = 0 and never runs on or reverses.
+TEST(EncoderSample, CarriesThePositionForwardTheWayTheCarMoves) {
+  struct Case {
+    const char* what;
+    double v_mps, a_mps2;
+    std::chrono::milliseconds age;
+    double expected_mm;
+  };
+  const Case cases[] = {
+      {"at rest", 0.0, 0.0, 50ms, 1000.0},
+      {"constant speed up", 1.6, 0.0, 15ms, 1024.0},               // 1.6 m/s * 15 ms
+      {"constant speed down", -1.0, 0.0, 20ms, 980.0},             // -1 m/s * 20 ms
+      {"accelerating from rest", 0.0, 0.5, 20ms, 1000.1},          // 0.5 * 0.5 * 0.02^2 m
+      {"braking, still moving", 0.3, -0.5, 20ms, 1005.9},          // 0.3*0.02 - 0.25*0.0004
+      {"braking, stopped in between", 0.3, -0.5, 1000ms, 1090.0},  // stops after 0.6 s: 90 mm
+      {"braking down, stopped", -0.3, 0.5, 1000ms, 910.0},
+      {"sample newer than now", 1.6, 0.0, -5ms, 1000.0},
+  };
+  const MonoTime at{std::chrono::seconds(100)};
+  for (const Case& c : cases) {
+    const EncoderSample sample{1000.0, c.v_mps, c.a_mps2, at};
+    EXPECT_NEAR(sample.position_at_mm(at + c.age), c.expected_mm, 1e-6) << c.what;
+  }
 }
 
 }  // namespace
