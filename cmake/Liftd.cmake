@@ -79,17 +79,32 @@ function(liftd_test name)
 endfunction()
 
 # liftd_fuzzer(<name> SOURCES ... [DEPS ...]): a libFuzzer target, built only with LIFTD_FUZZ,
-# run for LIFTD_FUZZ_SECONDS under ctest with the label "fuzz".
+# run for LIFTD_FUZZ_SECONDS under ctest with the label "fuzz". Its committed seed corpus is
+# tests/fuzz/corpus/<name>/ (required: replayed first on every run, so a crash input kept there
+# is a regression test) and its dictionary tests/fuzz/dict/<name>.dict (optional). New inputs go
+# to <build>/fuzz/corpus/<name>/, never into the source tree; tools/fuzz.sh runs campaigns.
 function(liftd_fuzzer name)
   if(NOT LIFTD_FUZZ)
     return()
   endif()
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  set(seeds ${PROJECT_SOURCE_DIR}/tests/fuzz/corpus/${name})
+  set(dict ${PROJECT_SOURCE_DIR}/tests/fuzz/dict/${name}.dict)
+  if(NOT IS_DIRECTORY ${seeds})
+    message(FATAL_ERROR "fuzz target ${name} has no seed corpus: add tests/fuzz/corpus/${name}/ "
+                        "(see tests/fuzz/README.md)")
+  endif()
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS})
   target_link_options(${name} PRIVATE -fsanitize=fuzzer)
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/fuzz)
   add_dependencies(fuzzers ${name})
-  add_test(NAME ${name} COMMAND ${name} -max_total_time=${LIFTD_FUZZ_SECONDS} -seed=1 -print_final_stats=1)
+  set(args -max_total_time=${LIFTD_FUZZ_SECONDS} -seed=1 -print_final_stats=1)
+  if(EXISTS ${dict})
+    list(APPEND args -dict=${dict})
+  endif()
+  set(work ${CMAKE_BINARY_DIR}/fuzz/corpus/${name})
+  file(MAKE_DIRECTORY ${work})
+  add_test(NAME ${name} COMMAND ${name} ${args} ${work} ${seeds})
   set_tests_properties(${name} PROPERTIES LABELS fuzz TIMEOUT 600)
 endfunction()
