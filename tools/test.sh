@@ -6,6 +6,7 @@
 #   tools/test.sh            everything
 #   LIFTD_SKIP_ASAN=1 ...    skip the sanitizer build (quicker local runs)
 #   LIFTD_SKIP_FUZZ=1 ...    skip the fuzz targets
+#   LIFTD_SOAK_SECONDS=N     fault soak length after the default tests (default 120; 0 skips)
 #   LIFTD_JOBS=N, LIFTD_TEST_JOBS=M   build with N jobs (default: cores), run M tests at once
 #                            (default: N)
 set -euo pipefail
@@ -35,6 +36,11 @@ run_preset() {
 }
 
 run_preset default
+soak_seconds=${LIFTD_SOAK_SECONDS:-120}
+if [ "$soak_seconds" != 0 ]; then
+  echo "=== fault soak: $soak_seconds s ==="
+  timed "soak" tools/soak --seconds "$soak_seconds" --seed 1
+fi
 [ "${LIFTD_SKIP_ASAN:-0}" = 1 ] || run_preset asan -LE slow
 if [ "${LIFTD_SKIP_FUZZ:-0}" != 1 ]; then
   echo "=== preset: fuzz ==="
