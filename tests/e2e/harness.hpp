@@ -111,8 +111,10 @@ inline std::vector<std::string> daemon_env() {
 class Lift {
  public:
   /// Starts the daemon with `"sim": {"dcp": dcp}` and `travel` merged into the config; waits
-  /// until the link is up (setup_error() is empty then).
-  Lift(const std::string& name, int dcp, const json& travel = json::object()) {
+  /// until the link is up (setup_error() is empty then). `wrapper` runs the daemon (a program
+  /// and its arguments before liftd's), e.g. a seccomp filter.
+  Lift(const std::string& name, int dcp, const json& travel = json::object(),
+       const std::vector<std::string>& wrapper = {}) {
     std::string leaf = name;  // a parameterised test's name has a '/'
     std::replace(leaf.begin(), leaf.end(), '/', '-');
     dir_ = std::filesystem::temp_directory_path() /
@@ -131,9 +133,10 @@ class Lift {
     if (!travel.empty()) config["travel"] = travel;
     const std::string config_path = (dir_ / "liftd.json").string();
     std::ofstream(config_path) << config.dump(2);
-    daemon_ = std::make_unique<liftd::testing::Process>(
-        std::vector<std::string>{LIFTD_BINARY, "--simulate", "--config", config_path}, daemon_env(),
-        dir_.string(), "liftd");
+    std::vector<std::string> args = wrapper;
+    for (const char* arg : {LIFTD_BINARY, "--simulate", "--config"}) args.emplace_back(arg);
+    args.push_back(config_path);
+    daemon_ = std::make_unique<liftd::testing::Process>(args, daemon_env(), dir_.string(), "liftd");
     // The link is up once I0, I1 and I3 went through (well under a second on a quiet machine;
     // 30 s allows for a loaded one).
     for (int i = 0; i < 300; ++i) {
