@@ -98,31 +98,36 @@ std::string format_utc(std::chrono::system_clock::time_point time) {
   return buf;
 }
 
-// Built key by key: the initializer-list form copies every value once more and costs about
-// twice the time, and status is the request a dispatcher sends most (api-bench).
+// Objects are built key by key: the initializer-list form of nlohmann::json copies every value
+// once more and costs about twice the time, and status is the request a dispatcher sends most
+// (api-bench).
 nlohmann::json to_json(const dcp::Status& s) {
   nlohmann::json j = nlohmann::json::object();
-  j["ready"] = s.ready;
-  j["travel_active"] = s.travel_active;
-  j["advance_warning"] = s.advance_warning;
-  j["general_fault"] = s.general_fault;
-  j["below_levelling"] = s.below_levelling;
-  j["accepted"] = s.accepted;
-  j["brake_open"] = s.brake_open;
-  j["message_error"] = s.message_error;
+  for (const auto& [key, bit] : {std::pair{"ready", s.ready},
+                                 {"travel_active", s.travel_active},
+                                 {"advance_warning", s.advance_warning},
+                                 {"general_fault", s.general_fault},
+                                 {"below_levelling", s.below_levelling},
+                                 {"accepted", s.accepted},
+                                 {"brake_open", s.brake_open},
+                                 {"message_error", s.message_error}}) {
+    j[key] = bit;
+  }
   return j;
 }
 
 nlohmann::json to_json(const dcp::ExtendedStatus& e) {
   nlohmann::json j = nlohmann::json::object();
-  j["below_unlocking_speed"] = e.below_unlocking_speed;
-  j["below_border_speed"] = e.below_border_speed;
-  j["below_overspeed"] = e.below_overspeed;
+  for (const auto& [key, bit] : {std::pair{"below_unlocking_speed", e.below_unlocking_speed},
+                                 {"below_border_speed", e.below_border_speed},
+                                 {"below_overspeed", e.below_overspeed},
+                                 {"emergency_reduced_voltage", e.emergency_reduced_voltage},
+                                 {"emergency_direction_down", e.emergency_direction_down},
+                                 {"motor_temperature_limit", e.motor_temperature_limit},
+                                 {"drive_temperature_limit", e.drive_temperature_limit}}) {
+    j[key] = bit;
+  }
   j["weight_bits"] = e.weight_bits;
-  j["emergency_reduced_voltage"] = e.emergency_reduced_voltage;
-  j["emergency_direction_down"] = e.emergency_direction_down;
-  j["motor_temperature_limit"] = e.motor_temperature_limit;
-  j["drive_temperature_limit"] = e.drive_temperature_limit;
   return j;
 }
 
