@@ -174,9 +174,8 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
       state_interval_(std::chrono::nanoseconds(std::chrono::seconds(1)) /
                       std::max(1, config.api.state_rate_hz)),
       overruns_(rt::CycleConfig{}.period) {
-  if (config.drive.kind != config::DriveKind::dcp) {
-    throw std::invalid_argument("drive.kind \"" +
-                                std::string(config::to_string(config.drive.kind)) +
+  if (config.drive.kind != config::DriveKind::Dcp) {
+    throw std::invalid_argument("drive.kind \"" + std::string(drive::to_string(config.drive.kind)) +
                                 "\" is not available in this build; use \"dcp\"");
   }
   std::string device = config.drive.device;

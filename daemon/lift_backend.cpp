@@ -112,11 +112,14 @@ std::chrono::system_clock::time_point LiftBackend::wall_time(MonoTime at) const 
 api::StatusSnapshot LiftBackend::status() {
   const control::ControllerSnapshot s = controller_.snapshot();
   api::StatusSnapshot out;
+  out.drive_kind = drive::Kind::Dcp;
   out.link = to_api(s.link);
-  if (!s.handshake_problem.empty()) out.handshake_problem = std::string(s.handshake_problem);
-  out.drive_mode = s.protocol;
-  if (s.status_byte) out.drive_status = dcp::Status::from_byte(*s.status_byte);
-  out.extended = s.extended;
+  const DcpStatusFacts facts{s.protocol, s.status_byte, s.extended, s.handshake_problem};
+  if (!(facts == dcp_facts_)) {  // built again only when it changed: status is asked often
+    dcp_facts_ = facts;
+    dcp_details_ = dcp_status_json(facts);
+  }
+  out.details = dcp_details_;
   out.position_mm = s.position_mm;
   if (s.floor) out.floor = static_cast<int>(*s.floor);
   if (s.next_possible_stop) out.next_possible_stop = static_cast<int>(*s.next_possible_stop);
@@ -136,6 +139,8 @@ api::StatusSnapshot LiftBackend::status() {
     out.faults.push_back({std::string(control::fault_code_name(code)),
                           std::string(control::fault_text(code)), wall_time(s.fault_since[i])});
   }
+  out.drive_state = drive::state_of(s.link == dcp::LinkState::Up,
+                                    s.travel_kind != travel::TravelKind::None, !out.faults.empty());
   const rt::RtThreadStatus& rt = runner_.thread_status();
   out.rt.realtime = rt.realtime;
   out.rt.policy = rt.realtime ? "SCHED_FIFO" : "SCHED_OTHER";
@@ -177,13 +182,11 @@ std::vector<api::TraceEntry> LiftBackend::trace(std::size_t max_entries) {
     if (r.direction == rt::Direction::Tx && r.length == dcp::kFrameSize) {
       api::TraceEntry e;
       e.at = r.time;
-      std::copy_n(r.bytes.begin(), dcp::kFrameSize, e.tx.begin());
-      out.push_back(e);
+      e.tx.assign(r.bytes.begin(), r.bytes.begin() + dcp::kFrameSize);
+      out.push_back(std::move(e));
     } else if (r.direction == rt::Direction::Rx && !out.empty() && r.length == dcp::kFrameSize &&
                (r.flags & (rt::record_flag::kReply | rt::record_flag::kBad)) != 0) {
-      dcp::FrameBytes rx{};
-      std::copy_n(r.bytes.begin(), dcp::kFrameSize, rx.begin());
-      out.back().rx = rx;
+      out.back().rx.emplace(r.bytes.begin(), r.bytes.begin() + dcp::kFrameSize);
     }
   }
   if (out.size() > max_entries) {

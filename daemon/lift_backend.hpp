@@ -15,6 +15,7 @@
 #include "api/dispatcher.hpp"
 #include "config/config.hpp"
 #include "control/dcp_controller.hpp"
+#include "daemon/dcp_status.hpp"
 #include "daemon/trace_files.hpp"
 #include "rt/cycle_runner.hpp"
 
@@ -32,6 +33,7 @@ class LiftBackend final : public api::Backend {
               std::string runtime_dir, SimulatedLift* sim);
 
   // ---- api::Backend ----
+  drive::Kind drive_kind() const override { return drive::Kind::Dcp; }
   api::StatusSnapshot status() override;
   api::StatsSnapshot stats() override;
   std::vector<api::TraceEntry> trace(std::size_t max_entries) override;
@@ -89,9 +91,11 @@ class LiftBackend final : public api::Backend {
   control::DcpController& controller_;
   rt::CycleRunner& runner_;
   control::PositionFeed* position_feed_;
-  TraceFiles trace_files_;  ///< flight-recorder files in the runtime directory
-  SimulatedLift* sim_;      ///< the simulated lift (liftd --simulate), else nullptr
-  api::Inputs inputs_{};    ///< merged API input state (partial updates keep the rest)
+  TraceFiles trace_files_;      ///< flight-recorder files in the runtime directory
+  SimulatedLift* sim_;          ///< the simulated lift (liftd --simulate), else nullptr
+  api::Inputs inputs_{};        ///< merged API input state (partial updates keep the rest)
+  DcpStatusFacts dcp_facts_{};  ///< what dcp_details_ was built from
+  nlohmann::json dcp_details_ = dcp_status_json({});  ///< status.dcp
   std::map<std::uint32_t, Pending> pending_;
   std::uint32_t next_tag_ = 0;
   MonoTime mono_at_start_{};

@@ -52,24 +52,12 @@ std::string_view to_string(LinkState state) noexcept {
 
 namespace {
 
-std::string_view mode_name(dcp::Protocol protocol) {
-  switch (protocol) {
-    case dcp::Protocol::ComChan:
-      return "ComChan";
-    case dcp::Protocol::Dcp3:
-      return "DCP3";
-    case dcp::Protocol::Dcp4:
-      return "DCP4";
-  }
-  return "ComChan";
-}
-
 template <typename T>
 nlohmann::json or_null(const std::optional<T>& value) {
   return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
 
-std::string hex_bytes(const dcp::FrameBytes& bytes) {
+std::string hex_bytes(const std::vector<std::uint8_t>& bytes) {
   std::string out;
   char buf[4];
   for (std::size_t i = 0; i < bytes.size(); ++i) {
@@ -101,36 +89,6 @@ std::string format_utc(std::chrono::system_clock::time_point time) {
 // Objects are built key by key: the initializer-list form of nlohmann::json copies every value
 // once more and costs about twice the time, and status is the request a dispatcher sends most
 // (api-bench).
-nlohmann::json to_json(const dcp::Status& s) {
-  nlohmann::json j = nlohmann::json::object();
-  for (const auto& [key, bit] : {std::pair{"ready", s.ready},
-                                 {"travel_active", s.travel_active},
-                                 {"advance_warning", s.advance_warning},
-                                 {"general_fault", s.general_fault},
-                                 {"below_levelling", s.below_levelling},
-                                 {"accepted", s.accepted},
-                                 {"brake_open", s.brake_open},
-                                 {"message_error", s.message_error}}) {
-    j[key] = bit;
-  }
-  return j;
-}
-
-nlohmann::json to_json(const dcp::ExtendedStatus& e) {
-  nlohmann::json j = nlohmann::json::object();
-  for (const auto& [key, bit] : {std::pair{"below_unlocking_speed", e.below_unlocking_speed},
-                                 {"below_border_speed", e.below_border_speed},
-                                 {"below_overspeed", e.below_overspeed},
-                                 {"emergency_reduced_voltage", e.emergency_reduced_voltage},
-                                 {"emergency_direction_down", e.emergency_direction_down},
-                                 {"motor_temperature_limit", e.motor_temperature_limit},
-                                 {"drive_temperature_limit", e.drive_temperature_limit}}) {
-    j[key] = bit;
-  }
-  j["weight_bits"] = e.weight_bits;
-  return j;
-}
-
 nlohmann::json to_json(const StatusSnapshot& s) {
   nlohmann::json faults = nlohmann::json::array();
   for (const auto& f : s.faults) {
@@ -141,13 +99,20 @@ nlohmann::json to_json(const StatusSnapshot& s) {
     faults.push_back(std::move(fault));
   }
   nlohmann::json j = nlohmann::json::object();
+  const std::string kind(drive::to_string(s.drive_kind));
+  nlohmann::json& drive_object = j["drive"];
+  drive_object["kind"] = kind;
+  drive_object["state"] = drive::to_string(s.drive_state);
   nlohmann::json& link = j["link"];
   link["state"] = to_string(s.link);
-  link["handshake_problem"] = or_null(s.handshake_problem);
-  nlohmann::json& drive = j["drive"];
-  drive["mode"] = s.drive_mode ? nlohmann::json(mode_name(*s.drive_mode)) : nlohmann::json(nullptr);
-  drive["status"] = to_json(s.drive_status);
-  drive["extended"] = s.extended ? to_json(*s.extended) : nlohmann::json(nullptr);
+  if (s.drive_kind == drive::Kind::Dcp) {
+    // API 1 had the DCP fields here; API 2 keeps them for DCP lifts (docs/api.md "Changes from
+    // API 1") and has them under "dcp" too. They go in API 3.
+    link["handshake_problem"] = s.details.value("handshake_problem", nlohmann::json(nullptr));
+    for (const char* key : {"mode", "status", "extended"}) {
+      drive_object[key] = s.details.value(key, nlohmann::json(nullptr));
+    }
+  }
   nlohmann::json& car = j["car"];
   car["position_mm"] = or_null(s.position_mm);
   car["floor"] = or_null(s.floor);
@@ -166,6 +131,7 @@ nlohmann::json to_json(const StatusSnapshot& s) {
   rt["policy"] = s.rt.policy;
   rt["priority"] = s.rt.priority;
   rt["memory_locked"] = s.rt.memory_locked;
+  j[kind] = s.details;
   return j;
 }
 

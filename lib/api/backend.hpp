@@ -15,16 +15,16 @@
 
 #include "api/result.hpp"
 #include "common/mono_time.hpp"
-#include "dcp/frame.hpp"
+#include "drive/drive.hpp"
 
 namespace liftd::api {
 
-/// State of the DCP link as reported in status.link.state.
+/// State of the link to the drive as reported in status.link.state (every drive kind).
 enum class LinkState : std::uint8_t {
-  Down,   ///< no replies from the drive
-  Init,   ///< replies arrive, I0 exchange not finished
-  Up,     ///< I0 done, process data flowing
-  Fault,  ///< link supervision tripped (e.g. 10 lost frames); drive enable is off
+  Down,   ///< nothing heard from the drive
+  Init,   ///< the drive answers, its start-up exchange is not finished (DCP: I0)
+  Up,     ///< process data flowing
+  Fault,  ///< link supervision tripped (e.g. 10 lost DCP frames); drive enable is off
 };
 /// "down", "init", "up", "fault".
 std::string_view to_string(LinkState state) noexcept;
@@ -46,15 +46,15 @@ struct RtInfo {
   bool operator==(const RtInfo&) const = default;
 };
 
-/// Everything `status` reports, filled by the backend.
+/// Everything `status` reports, filled by the backend. The drive-neutral fields every drive kind
+/// fills alike; what only one kind has goes into `details`, reported under the kind's name.
 struct StatusSnapshot {
-  LinkState link = LinkState::Down;              ///< link.state
-  std::optional<std::string> handshake_problem;  ///< link.handshake_problem (DCP 5.12.2)
-  std::optional<dcp::Protocol> drive_mode;       ///< drive.mode; nullopt before I0
-  dcp::Status drive_status{};                    ///< drive.status, last good reply
-  std::optional<dcp::ExtendedStatus> extended;   ///< drive.extended; nullopt if never seen
-  std::optional<std::int64_t> position_mm;       ///< car.position_mm; nullopt if unknown
-  std::optional<int> floor;                      ///< car.floor (0 = lowest); nullopt between
+  drive::Kind drive_kind = drive::Kind::Dcp;          ///< drive.kind
+  drive::State drive_state = drive::State::Offline;   ///< drive.state
+  LinkState link = LinkState::Down;                   ///< link.state
+  nlohmann::json details = nlohmann::json::object();  ///< status.<drive.kind>, e.g. status.dcp
+  std::optional<std::int64_t> position_mm;            ///< car.position_mm; nullopt if unknown
+  std::optional<int> floor;                           ///< car.floor (0 = lowest); nullopt between
   std::optional<int> next_possible_stop;  ///< car.next_possible_stop: nearest floor it can stop at
   bool brake_open = false;                ///< car.brake_open: brake output (follows S6)
   bool contactors_on = false;             ///< car.contactors_on: motor contactor output
@@ -91,11 +91,11 @@ struct StatsSnapshot {
   std::uint64_t longest_error_run = 0;  ///< longest run of consecutive bad or missing replies
 };
 
-/// One cycle of the DCP frame trace.
+/// One exchange of the frame trace (DCP: one cycle).
 struct TraceEntry {
-  MonoTime at{};                      ///< when the master frame was sent (monotonic)
-  dcp::FrameBytes tx{};               ///< master frame
-  std::optional<dcp::FrameBytes> rx;  ///< drive reply; nullopt if none arrived in time
+  MonoTime at{};                                ///< when our frame was sent (monotonic)
+  std::vector<std::uint8_t> tx;                 ///< our frame
+  std::optional<std::vector<std::uint8_t>> rx;  ///< the drive's answer; nullopt if none in time
 };
 
 /// Contents of the drive's remote display (DCP 5.7: up to 4 lines of 20 characters).
@@ -215,7 +215,8 @@ struct SimRequest {
   SimChannelFault channel = SimChannelFault::Partial;  ///< ChannelFault: which fault
 };
 
-/// DCP I9 carries a sign and 6 digits of millimetres (DCP 5.12.9): the position range we accept.
+/// The position range we accept (every drive kind): DCP I9 carries a sign and 6 digits of
+/// millimetres (DCP 5.12.9), the narrowest of the position paths.
 inline constexpr std::int64_t kMaxPositionMm = 999'999;
 
 /// The daemon's side of the API. Every method is called on the io_context's thread; every
@@ -223,6 +224,9 @@ inline constexpr std::int64_t kMaxPositionMm = 999'999;
 class Backend {
  public:
   virtual ~Backend() = default;
+  /// The drive kind behind this backend; the dispatcher refuses the commands of capabilities
+  /// the kind lacks (`not_offered`) before they reach the backend.
+  virtual drive::Kind drive_kind() const = 0;
   /// Current state for `status` and the `state` event.
   virtual StatusSnapshot status() = 0;
   /// Link and cycle counters for `stats`.
@@ -282,10 +286,6 @@ nlohmann::json to_json(const DisplaySnapshot& display);
 nlohmann::json to_json(const PowerSetting& power);
 /// JSON of the inputs: every flag by name plus position_mm (null if unknown).
 nlohmann::json to_json(const Inputs& inputs);
-/// JSON of the drive status bits by name.
-nlohmann::json to_json(const dcp::Status& status);
-/// JSON of the extended status bits by name.
-nlohmann::json to_json(const dcp::ExtendedStatus& extended);
 /// "2026-11-22T03:00:00.123Z"
 std::string format_utc(std::chrono::system_clock::time_point time);
 

@@ -68,6 +68,7 @@ T arg_or(const nlohmann::json& request, const char* name, T fallback) {
 void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                           std::function<nlohmann::json()> api_stats) {
   Backend* b = &backend;
+  dispatcher.set_drive_kind(backend.drive_kind());
 
   dispatcher.add({"status",
                   Access::Read,
@@ -75,7 +76,8 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                   "link, drive, car, travel, faults, scheduling",
                   [b, cache = std::make_shared<StatusCache>()](const Call&, Responder done) {
                     done(Result::ok_serialized(cache->serialized(b->status())));
-                  }});
+                  },
+                  kEveryDriveKind});
 
   dispatcher.add({"watch",
                   Access::Read,
@@ -92,7 +94,8 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                     done(Result::ok({{"watching", enable}}));
                     // A new watcher starts from the current state, then sees changes.
                     if (enable) call.session.send_event(event_line("state", to_json(b->status())));
-                  }});
+                  },
+                  kEveryDriveKind});
 
   dispatcher.add({"stats",
                   Access::Read,
@@ -102,7 +105,8 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                     nlohmann::json out = to_json(b->stats());
                     out["api"] = api_stats ? api_stats() : nlohmann::json::object();
                     done(Result::ok(std::move(out)));
-                  }});
+                  },
+                  kEveryDriveKind});
 
   dispatcher.add(
       {"trace",
@@ -136,22 +140,33 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
            result.update(saved.value());
          }
          done(Result::ok(std::move(result)));
-       }});
+       },
+       kEveryDriveKind});
 
-  dispatcher.add(
-      {"display", Access::Read, {}, "the drive's remote display", [b](const Call&, Responder done) {
-         done(Result::ok(to_json(b->display())));
-       }});
+  dispatcher.add({"display",
+                  Access::Read,
+                  {},
+                  "the drive's remote display",
+                  [b](const Call&, Responder done) { done(Result::ok(to_json(b->display()))); },
+                  drive::Capability::Display});
 
-  dispatcher.add(
-      {"config", Access::Read, {}, "the effective configuration", [b](const Call&, Responder done) {
-         done(Result::ok({{"config", b->config()}}));
-       }});
+  dispatcher.add({"config",
+                  Access::Read,
+                  {},
+                  "the effective configuration",
+                  [b](const Call&, Responder done) {
+                    done(Result::ok({{"config", b->config()}}));
+                  },
+                  kEveryDriveKind});
 
-  dispatcher.add(
-      {"version", Access::Read, {}, "daemon and API version", [](const Call&, Responder done) {
-         done(Result::ok({{"version", std::string(kVersion)}, {"api", kApiVersion}}));
-       }});
+  dispatcher.add({"version",
+                  Access::Read,
+                  {},
+                  "daemon and API version",
+                  [](const Call&, Responder done) {
+                    done(Result::ok({{"version", std::string(kVersion)}, {"api", kApiVersion}}));
+                  },
+                  kEveryDriveKind});
 
   // DCP 5.6.3: the remote keypad has buttons "1" to "5".
   dispatcher.add({"key",
@@ -160,13 +175,15 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                   "press a button of the drive's remote keypad",
                   [b](const Call& call, Responder done) {
                     b->key(call.request.at("key").get<int>(), std::move(done));
-                  }});
+                  },
+                  drive::Capability::Keypad});
 
   dispatcher.add({"drive_reset",
                   Access::Control,
                   {},
                   "ask the drive for a fault reset (I2 'R')",
-                  [b](const Call&, Responder done) { b->drive_reset(std::move(done)); }});
+                  [b](const Call&, Responder done) { b->drive_reset(std::move(done)); },
+                  drive::Capability::DriveReset});
 
   // DCP 5.12.6: supply 'N' mains or 'U' emergency; energy saving '0', '1' or '2'.
   dispatcher.add({"power",
@@ -179,7 +196,8 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                     setting.emergency = call.request.at("supply").get<std::string>() == "emergency";
                     setting.saving = arg_or<int>(call.request, "saving", 0);
                     b->power(setting, std::move(done));
-                  }});
+                  },
+                  drive::Capability::Power});
 
   // DCP 5.12.8: three BCD digits of percent of the rated load.
   dispatcher.add({"load",
@@ -188,7 +206,8 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                   "send the car load for the next travel (I8)",
                   [b](const Call& call, Responder done) {
                     b->load(call.request.at("percent").get<int>(), std::move(done));
-                  }});
+                  },
+                  drive::Capability::Load});
 
   ArgSchema input_args;
   for (const auto& flag : kInputFlags) {
@@ -209,7 +228,8 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                       update.position_mm = it->get<std::int64_t>();
                     }
                     b->update_inputs(update, std::move(done));
-                  }});
+                  },
+                  kEveryDriveKind});
 
   add_travel_commands(dispatcher, *b);
   add_sim_command(dispatcher, *b);
@@ -243,22 +263,26 @@ void add_travel_commands(Dispatcher& dispatcher, Backend& backend) {
                   "travel to a floor, or extend a running DCP4 travel",
                   [b](const Call& call, Responder done) {
                     b->travel(travel_args(call.request), std::move(done));
-                  }});
+                  },
+                  kEveryDriveKind});
   dispatcher.add({"stop",
                   Access::Control,
                   {},
                   "controlled stop; clears the calls queue",
-                  [b](const Call&, Responder done) { b->stop(std::move(done)); }});
+                  [b](const Call&, Responder done) { b->stop(std::move(done)); },
+                  kEveryDriveKind});
   dispatcher.add({"fast_stop",
                   Access::Control,
                   {},
                   "fast stop of the running travel (DCP 13)",
-                  [b](const Call&, Responder done) { b->fast_stop(std::move(done)); }});
+                  [b](const Call&, Responder done) { b->fast_stop(std::move(done)); },
+                  drive::Capability::FastStop});
   dispatcher.add({"relevel",
                   Access::Control,
                   {},
                   "relevel to the nearest floor",
-                  [b](const Call&, Responder done) { b->relevel(std::move(done)); }});
+                  [b](const Call&, Responder done) { b->relevel(std::move(done)); },
+                  kEveryDriveKind});
   dispatcher.add({"inspection",
                   Access::Control,
                   {choice_arg("mode", true, {"on", "off"}, "software inspection on or off"),
@@ -269,7 +293,8 @@ void add_travel_commands(Dispatcher& dispatcher, Backend& backend) {
                     b->inspection(call.request.at("mode") == "on",
                                   arg_or<std::string>(call.request, "direction", "none"),
                                   std::move(done));
-                  }});
+                  },
+                  kEveryDriveKind});
   dispatcher.add({"fast_start",
                   Access::Control,
                   {choice_arg("action", true, {"arm", "go", "abort"},
@@ -283,7 +308,8 @@ void add_travel_commands(Dispatcher& dispatcher, Backend& backend) {
                       return;
                     }
                     b->fast_start(action, travel_args(call.request), std::move(done));
-                  }});
+                  },
+                  drive::Capability::FastStart});
   dispatcher.add({"calls",
                   Access::Control,
                   {choice_arg("action", false, {"list", "add", "cancel"},
@@ -299,7 +325,8 @@ void add_travel_commands(Dispatcher& dispatcher, Backend& backend) {
                       return;
                     }
                     b->calls(action, f, std::move(done));
-                  }});
+                  },
+                  kEveryDriveKind});
 }
 
 namespace {
@@ -363,7 +390,8 @@ void add_sim_command(Dispatcher& dispatcher, Backend& backend) {
            }
          }
          b->sim(request, std::move(done));
-       }});
+       },
+       kEveryDriveKind});
 }
 
 }  // namespace liftd::api

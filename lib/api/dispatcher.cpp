@@ -196,6 +196,14 @@ void Dispatcher::handle_line(std::string_view line, const Peer& peer, SessionCon
              std::to_string(peer.uid) + " is not in that group");
     return;
   }
+  if (spec->needs && drive_kind_ && !drive::capabilities_of(*drive_kind_).has(*spec->needs)) {
+    // Before the arguments: no argument could make the command exist on this lift.
+    fail(id, ErrorCode::NotOffered,
+         "\"" + name + "\" is not offered by drive kind \"" +
+             std::string(drive::to_string(*drive_kind_)) + "\" (it has no " +
+             std::string(drive::to_string(*spec->needs)) + " function)");
+    return;
+  }
   if (auto error = validate_args(request, spec->args)) {
     fail(id, error->code, std::move(error->message), std::move(error->field));
     return;

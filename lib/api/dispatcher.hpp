@@ -16,6 +16,7 @@
 
 #include "api/result.hpp"
 #include "api/schema.hpp"
+#include "drive/drive.hpp"
 
 namespace liftd::api {
 
@@ -71,6 +72,9 @@ struct Call {
 /// A command implementation; calls `done` exactly once, now or later.
 using Handler = std::function<void(const Call& call, Responder done)>;
 
+/// CommandSpec::needs of a command every drive kind offers.
+inline constexpr std::optional<drive::Capability> kEveryDriveKind = std::nullopt;
+
 /// One entry of the command table.
 struct CommandSpec {
   std::string name;              ///< "status", "travel", ...
@@ -78,6 +82,8 @@ struct CommandSpec {
   ArgSchema args;                ///< its arguments
   std::string summary;           ///< one line for help
   Handler handler;               ///< what it does
+  /// Offered only by drive kinds with this capability; nullopt: by every kind.
+  std::optional<drive::Capability> needs;
 };
 
 /// Limits applied by the dispatcher.
@@ -105,6 +111,9 @@ class Dispatcher {
   const CommandSpec* find(std::string_view name) const;
   /// Every command name, sorted.
   std::vector<std::string> names() const;
+  /// The lift's drive kind: commands that need a capability the kind lacks are answered with
+  /// `not_offered`. Until it is set every command is offered.
+  void set_drive_kind(drive::Kind kind) { drive_kind_ = kind; }
 
   /// Handles one request line (without its '\n'). `send` is called exactly once with the reply
   /// line, either before this returns or later when an asynchronous handler completes.
@@ -113,6 +122,7 @@ class Dispatcher {
 
  private:
   DispatchLimits limits_;
+  std::optional<drive::Kind> drive_kind_;
   std::map<std::string, CommandSpec, std::less<>> commands_;
 };
 

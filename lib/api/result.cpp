@@ -24,6 +24,8 @@ std::string_view to_string(ErrorCode code) noexcept {
       return "timeout";
     case ErrorCode::Internal:
       return "internal";
+    case ErrorCode::NotOffered:
+      return "not_offered";
   }
   return "internal";
 }

@@ -14,7 +14,7 @@
 namespace liftd::api {
 
 /// Version of the line protocol announced in the greeting; bumped on incompatible changes.
-inline constexpr int kApiVersion = 1;
+inline constexpr int kApiVersion = 2;
 
 /// Error codes of a failed request; to_string gives the snake_case name on the wire.
 enum class ErrorCode : std::uint8_t {
@@ -28,6 +28,7 @@ enum class ErrorCode : std::uint8_t {
   TooLarge,    ///< the request line exceeds the size limit; the connection is closed
   Timeout,     ///< idle or partial-line timeout; the connection is closed
   Internal,    ///< a bug in liftd; the request may or may not have taken effect
+  NotOffered,  ///< the lift's drive kind has no such function (e.g. `key` on a hydraulic lift)
 };
 
 /// "bad_json", "bad_request", ...

@@ -22,7 +22,6 @@ namespace {
 using nlohmann::json;
 
 constexpr std::array<std::string_view, 5> kLogLevelNames{"trace", "debug", "info", "warn", "error"};
-constexpr std::array<std::string_view, 3> kDriveKindNames{"dcp", "uss", "sch001"};
 constexpr std::array<std::string_view, 3> kRs485Names{"auto", "required", "off"};
 constexpr std::array<std::string_view, 3> kPositionSourceNames{"sim", "api", "can"};
 constexpr std::array<std::string_view, 4> kRelevelDoorsNames{"open", "closed", "both", "never"};
@@ -464,7 +463,7 @@ const std::vector<Key>& schema() {
                          "least severe message logged (--log-level overrides it)", &Config::log,
                          &LogConfig::level));
     // drive
-    t.push_back(enum_key("drive.kind", kDriveKindNames,
+    t.push_back(enum_key("drive.kind", drive::kKindNames,
                          "protocol of the drive: DCP over RS485, Siemens USS, or SCH001 over CAN "
                          "(\"uss\" and \"sch001\" are refused: not implemented in this version)",
                          &Config::drive, &DriveConfig::kind));
@@ -762,7 +761,7 @@ void apply_key(const Key& key, const json& value, Config& config, Problems& prob
 // Values the schema names for later versions but this build cannot run: refused here, so that
 // --check-config and the daemon agree (a later implementation only removes the refusal).
 void check_implemented(const Config& config, Problems& problems) {
-  if (config.drive.kind != DriveKind::dcp) {
+  if (config.drive.kind != DriveKind::Dcp) {
     problems.push_back({"drive.kind", json_quoted(to_string(config.drive.kind)) +
                                           " is not implemented in this version: use \"dcp\""});
   }
@@ -1164,9 +1163,6 @@ std::vector<std::string> key_paths() {
 
 std::string_view to_string(LogLevel value) {
   return enum_name(value, kLogLevelNames);
-}
-std::string_view to_string(DriveKind value) {
-  return enum_name(value, kDriveKindNames);
 }
 std::string_view to_string(Rs485Mode value) {
   return enum_name(value, kRs485Names);

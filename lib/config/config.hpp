@@ -13,12 +13,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include "drive/drive.hpp"
+
 namespace liftd::config {
 
 /// Log verbosity, lowest first.
 enum class LogLevel : std::uint8_t { trace, debug, info, warn, error };
-/// Which kind of drive the daemon talks to.
-enum class DriveKind : std::uint8_t { dcp, uss, sch001 };
+/// Which kind of drive the daemon talks to (one vocabulary with the API: lib/drive).
+using DriveKind = drive::Kind;
 /// How the serial port's kernel RS485 mode is used.
 enum class Rs485Mode : std::uint8_t {
   automatic,  ///< "auto": use it where the port supports it, warn where not
@@ -37,7 +39,7 @@ struct LogConfig {
 
 /// `drive.*`
 struct DriveConfig {
-  DriveKind kind = DriveKind::dcp;         ///< drive.kind
+  DriveKind kind = DriveKind::Dcp;         ///< drive.kind
   std::string device = "/dev/ttyS1";       ///< drive.device
   Rs485Mode rs485 = Rs485Mode::automatic;  ///< drive.rs485
 };
@@ -198,7 +200,6 @@ std::vector<std::string> key_paths();
 /// The name of an enum value as written in the JSON file.
 std::string_view to_string(LogLevel value);
 /// The name of an enum value as written in the JSON file.
-std::string_view to_string(DriveKind value);
 /// The name of an enum value as written in the JSON file.
 std::string_view to_string(Rs485Mode value);
 /// The name of an enum value as written in the JSON file.

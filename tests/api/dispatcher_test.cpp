@@ -214,21 +214,21 @@ TEST_F(DispatcherTest, InputsKeepOmittedFields) {
 }
 
 TEST_F(DispatcherTest, StatusNamesEveryField) {
-  backend_.status_snapshot.drive_status = dcp::Status::from_byte(0x45);  // S0 S2 S6
+  backend_.status_snapshot.details["status"]["advance_warning"] = true;
   backend_.status_snapshot.faults.push_back(
       {"link_timeout", "no reply for 150 ms", std::chrono::system_clock::time_point{}});
   const json r = handle(R"({"cmd":"status"})").at("result");
+  EXPECT_EQ(r.at("drive").at("kind"), "dcp");
+  EXPECT_EQ(r.at("drive").at("state"), "ready");
   EXPECT_EQ(r.at("link").at("state"), "up");
+  // The drive kind's own object, under its name.
+  EXPECT_EQ(r.at("dcp"), backend_.status_snapshot.details);
+  // API 1 fields kept for DCP lifts: the same values as in "dcp".
   EXPECT_EQ(r.at("drive").at("mode"), "DCP4");
-  EXPECT_EQ(r.at("drive").at("status"), (json{{"ready", true},
-                                              {"travel_active", false},
-                                              {"advance_warning", true},
-                                              {"general_fault", false},
-                                              {"below_levelling", false},
-                                              {"accepted", false},
-                                              {"brake_open", true},
-                                              {"message_error", false}}));
-  EXPECT_EQ(r.at("drive").at("extended").at("below_unlocking_speed"), false);
+  EXPECT_EQ(r.at("drive").at("status"), r.at("dcp").at("status"));
+  EXPECT_EQ(r.at("drive").at("status").at("advance_warning"), true);
+  EXPECT_EQ(r.at("drive").at("extended"), r.at("dcp").at("extended"));
+  EXPECT_TRUE(r.at("link").at("handshake_problem").is_null());
   EXPECT_EQ(r.at("car"), (json{{"position_mm", 3000},
                                {"floor", 1},
                                {"next_possible_stop", nullptr},
@@ -243,6 +243,8 @@ TEST_F(DispatcherTest, StatusUsesNullForUnknowns) {
   backend_.status_snapshot = StatusSnapshot{};
   const json r = handle(R"({"cmd":"status"})").at("result");
   EXPECT_EQ(r.at("link").at("state"), "down");
+  EXPECT_EQ(r.at("drive").at("state"), "offline");
+  EXPECT_TRUE(r.at("link").at("handshake_problem").is_null());
   EXPECT_TRUE(r.at("drive").at("mode").is_null());
   EXPECT_TRUE(r.at("drive").at("extended").is_null());
   EXPECT_TRUE(r.at("car").at("position_mm").is_null());
@@ -280,7 +282,7 @@ TEST_F(DispatcherTest, TraceReturnsNewestFramesAsHex) {
     TraceEntry e;
     e.at = std::chrono::milliseconds(15 * i);
     e.tx = {0x01, 0x00, 0x00, 0x00, 0x00, 0x01};
-    if (i != 4) e.rx = dcp::FrameBytes{0x21, 0x7F, 0xFF, 0x00, 0x00, 0xA1};
+    if (i != 4) e.rx = std::vector<std::uint8_t>{0x21, 0x7F, 0xFF, 0x00, 0x00, 0xA1};
     backend_.trace_entries.push_back(e);
   }
   const json frames = handle(R"({"cmd":"trace","count":2})").at("result").at("frames");
@@ -301,16 +303,24 @@ TEST_F(DispatcherTest, WatchTogglesTheSessionAndSendsCurrentState) {
 }
 
 TEST_F(DispatcherTest, HandlerExceptionBecomesInternal) {
-  dispatcher_.add({"explode", Access::Read, {}, "throws", [](const Call&, Responder) {
-                     throw std::runtime_error("boom");
-                   }});
+  dispatcher_.add({"explode",
+                   Access::Read,
+                   {},
+                   "throws",
+                   [](const Call&, Responder) { throw std::runtime_error("boom"); },
+                   kEveryDriveKind});
   const json reply = handle(R"({"cmd":"explode","id":9})");
   EXPECT_EQ(code_of(reply), "internal");
   EXPECT_EQ(reply.at("id"), 9);
 }
 
 TEST_F(DispatcherTest, DroppedResponderBecomesInternal) {
-  dispatcher_.add({"forget", Access::Read, {}, "never answers", [](const Call&, Responder) {}});
+  dispatcher_.add({"forget",
+                   Access::Read,
+                   {},
+                   "never answers",
+                   [](const Call&, Responder) {},
+                   kEveryDriveKind});
   EXPECT_EQ(code_of(handle(R"({"cmd":"forget"})")), "internal");
 }
 
@@ -350,15 +360,20 @@ TEST_F(DispatcherTest, AddingACommandIsOneEntry) {
   floor.required = true;
   floor.min = 0;
   floor.max = 63;
-  dispatcher_.add(
-      {"goto", Access::Control, {floor}, "travel to a floor", [](const Call& call, Responder done) {
-         done(Result::ok({{"floor", call.request.at("floor")}}));
-       }});
+  dispatcher_.add({"goto",
+                   Access::Control,
+                   {floor},
+                   "travel to a floor",
+                   [](const Call& call, Responder done) {
+                     done(Result::ok({{"floor", call.request.at("floor")}}));
+                   },
+                   kEveryDriveKind});
   EXPECT_EQ(handle(R"({"cmd":"goto","floor":4})").at("result").at("floor"), 4);
   EXPECT_EQ(code_of(handle(R"({"cmd":"goto","floor":64})")), "bad_request");
   EXPECT_EQ(code_of(handle(R"({"cmd":"goto","floor":4})", AccessSet{true, false, false})),
             "forbidden");
-  EXPECT_THROW(dispatcher_.add({"goto", Access::Read, {}, "", [](const Call&, Responder) {}}),
+  EXPECT_THROW(dispatcher_.add(
+                   {"goto", Access::Read, {}, "", [](const Call&, Responder) {}, kEveryDriveKind}),
                std::invalid_argument);
 }
 
@@ -400,4 +415,57 @@ TEST(ReplyLine, BytesAreThoseOfTheDumpedObject) {
 }
 
 }  // namespace
+// A lift whose drive kind lacks a capability: its commands are refused before their arguments
+// are looked at, the common commands still reach the backend, and status carries the kind's
+// own object and none of the API 1 DCP fields.
+class OtherDriveKindTest : public DispatcherTest {
+ protected:
+  OtherDriveKindTest() {
+    backend_.status_snapshot.drive_kind = drive::Kind::Sch001;
+    backend_.status_snapshot.details = {{"card", "ok"}};
+    dispatcher_ = Dispatcher{};
+    add_builtin_commands(dispatcher_, backend_);
+  }
+};
+
+TEST_F(OtherDriveKindTest, DriveSpecificCommandsAreNotOffered) {
+  struct Case {
+    const char* request;
+    const char* capability;
+  };
+  for (const Case& c : {Case{R"({"cmd":"key","key":1})", "keypad"},
+                        Case{R"({"cmd":"key","key":99})", "keypad"},  // before the range check
+                        Case{R"({"cmd":"display"})", "display"},
+                        Case{R"({"cmd":"power","supply":"mains"})", "power"},
+                        Case{R"({"cmd":"load","percent":50})", "load"},
+                        Case{R"({"cmd":"drive_reset"})", "drive_reset"},
+                        Case{R"({"cmd":"fast_start","action":"go"})", "fast_start"},
+                        Case{R"({"cmd":"fast_stop"})", "fast_stop"}}) {
+    const json reply = handle(c.request);
+    EXPECT_EQ(code_of(reply), "not_offered") << c.request;
+    const std::string name = json::parse(c.request).at("cmd");
+    EXPECT_EQ(reply.at("error").at("message"),
+              "\"" + name + "\" is not offered by drive kind \"sch001\" (it has no " +
+                  c.capability + " function)");
+  }
+  EXPECT_TRUE(backend_.calls.empty()) << "a refused command reached the backend";
+}
+
+TEST_F(OtherDriveKindTest, CommonCommandsStillRun) {
+  // The fake has no travel control: the backend's own refusal proves the request reached it.
+  for (const char* request :
+       {R"({"cmd":"travel","floor":2})", R"({"cmd":"stop"})", R"({"cmd":"relevel"})",
+        R"({"cmd":"calls"})", R"({"cmd":"inspection","mode":"on"})"}) {
+    EXPECT_EQ(handle(request).at("error").at("message"),
+              "this daemon has no travel control for its drive")
+        << request;
+  }
+  EXPECT_TRUE(handle(R"({"cmd":"inputs","safety_chain":true})").at("ok").get<bool>());
+  const json r = handle(R"({"cmd":"status"})").at("result");
+  EXPECT_EQ(r.at("drive"), (json{{"kind", "sch001"}, {"state", "ready"}}));
+  EXPECT_EQ(r.at("sch001"), (json{{"card", "ok"}}));
+  EXPECT_FALSE(r.contains("dcp"));
+  EXPECT_FALSE(r.at("link").contains("handshake_problem"));
+}
+
 }  // namespace liftd::api

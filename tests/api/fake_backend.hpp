@@ -15,10 +15,12 @@ namespace liftd::api::testing {
 class FakeBackend : public Backend {
  public:
   FakeBackend() {
+    status_snapshot.drive_state = drive::State::Ready;
     status_snapshot.link = LinkState::Up;
-    status_snapshot.drive_mode = dcp::Protocol::Dcp4;
-    status_snapshot.drive_status.ready = true;
-    status_snapshot.extended = dcp::ExtendedStatus{};
+    status_snapshot.details = {{"mode", "DCP4"},
+                               {"status", ready_status()},
+                               {"extended", quiet_extended_status()},
+                               {"handshake_problem", nullptr}};
     status_snapshot.position_mm = 3000;
     status_snapshot.floor = 1;
     status_snapshot.rt = RtInfo{true, "SCHED_FIFO", 80, true};
@@ -26,6 +28,29 @@ class FakeBackend : public Backend {
     display_snapshot.lines = {"Speed    0.00 m/s", "Menu 1", "", ""};
   }
 
+  /// The S0..S7 object of a DCP drive that is ready (S0 only).
+  static nlohmann::json ready_status() {
+    nlohmann::json j = nlohmann::json::object();
+    for (const char* bit : {"ready", "travel_active", "advance_warning", "general_fault",
+                            "below_levelling", "accepted", "brake_open", "message_error"}) {
+      j[bit] = false;
+    }
+    j["ready"] = true;
+    return j;
+  }
+  /// A DCP extended status with every bit 0.
+  static nlohmann::json quiet_extended_status() {
+    nlohmann::json j = nlohmann::json::object();
+    for (const char* bit : {"below_unlocking_speed", "below_border_speed", "below_overspeed",
+                            "emergency_reduced_voltage", "emergency_direction_down",
+                            "motor_temperature_limit", "drive_temperature_limit"}) {
+      j[bit] = false;
+    }
+    j["weight_bits"] = 0;
+    return j;
+  }
+
+  drive::Kind drive_kind() const override { return status_snapshot.drive_kind; }
   StatusSnapshot status() override { return status_snapshot; }
   StatsSnapshot stats() override { return stats_snapshot; }
   std::vector<TraceEntry> trace(std::size_t max_entries) override {

@@ -38,6 +38,8 @@ TEST_F(Liftctl, StatusPrintsASummary) {
   const RunResult r = run(liftctl("status"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("link:     up"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("drive:    dcp, ready"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("dcp:      DCP4, status: ready"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("car:      floor 1, position 3000 mm"), std::string::npos) << r.output;
 }
 
@@ -45,14 +47,14 @@ TEST_F(Liftctl, JsonPrintsTheRawResult) {
   start_server();
   const RunResult r = run(liftctl("--json status"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_EQ(nlohmann::json::parse(r.output).at("drive").at("mode"), "DCP4");
+  EXPECT_EQ(nlohmann::json::parse(r.output).at("dcp").at("mode"), "DCP4");
 }
 
 TEST_F(Liftctl, SocketComesFromTheEnvironment) {
   start_server();
   const RunResult r = run("LIFTD_SOCKET=" + socket_path() + " " + LIFTCTL_PATH + " version");
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("api: 1"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("api: 2"), std::string::npos) << r.output;
 }
 
 TEST_F(Liftctl, ControlCommandsReachTheBackend) {
@@ -86,7 +88,7 @@ TEST_F(Liftctl, WatchPrintsPlainLinesWhenNotATerminal) {
   start_server();
   // stdout is a pipe here: one plain line per event; SIGINT after a second ends it.
   const RunResult r = run("timeout -s INT 1 " + liftctl("watch"));
-  EXPECT_NE(r.output.find("state link=up mode=DCP4"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("state link=up drive=ready mode=DCP4"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("\x1b["), std::string::npos) << "no terminal escapes into a pipe";
 }
 

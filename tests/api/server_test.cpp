@@ -24,7 +24,7 @@ TEST_F(ApiServer, GreetsWithVersionAndAccess) {
   ASSERT_TRUE(hello);
   EXPECT_EQ(hello->at("event"), "hello");
   EXPECT_EQ(hello->at("data").at("version"), std::string(kVersion));
-  EXPECT_EQ(hello->at("data").at("api"), 1);
+  EXPECT_EQ(hello->at("data").at("api"), 2);
   EXPECT_EQ(hello->at("data").at("access"), json::array({"read", "control", "inputs"}));
   EXPECT_EQ(hello->at("data").at("max_line_bytes"), 65536);
 }
@@ -60,9 +60,12 @@ TEST_F(ApiServer, ReportsErrorCodesOverTheSocket) {
     EXPECT_EQ(client->call({{"cmd", "drive_reset"}}).at("error").at("code"), to_string(code));
   }
   on_io([this] {
-    server_->dispatcher().add({"crash", Access::Read, {}, "", [](const Call&, Responder) {
-                                 throw std::logic_error("x");
-                               }});
+    server_->dispatcher().add({"crash",
+                               Access::Read,
+                               {},
+                               "",
+                               [](const Call&, Responder) { throw std::logic_error("x"); },
+                               kEveryDriveKind});
   });
   EXPECT_EQ(client->call({{"cmd", "crash"}}).at("error").at("code"), "internal");
   // forbidden: see access_test.cpp (needs another uid); too_large and timeout below.

@@ -148,7 +148,7 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
             "\"sim\" with --simulate)\n");
   const Config& c = r.config;
   EXPECT_EQ(c.log.level, LogLevel::debug);
-  EXPECT_EQ(c.drive.kind, DriveKind::uss);
+  EXPECT_EQ(c.drive.kind, DriveKind::Uss);
   EXPECT_EQ(c.drive.device, "/dev/ttyUSB0");
   EXPECT_EQ(c.drive.rs485, Rs485Mode::required);
   EXPECT_EQ(c.dcp.manufacturer, "QX");

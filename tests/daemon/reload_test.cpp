@@ -48,7 +48,7 @@ TEST(ReloadPlan, ClassifiesEveryKindOfKey) {
        {}},
       {"drive kind and device",
        [](config::Config& c) {
-         c.drive.kind = config::DriveKind::uss;
+         c.drive.kind = config::DriveKind::Uss;
          c.drive.device = "/dev/ttyUSB0";
        },
        {},

@@ -92,7 +92,10 @@ TEST_F(SimulateTest, LinkComesUpAndLiftctlShowsIt) {
   const json status = c.call({{"cmd", "status"}});
   ASSERT_TRUE(status["ok"].get<bool>()) << status.dump();
   EXPECT_EQ(status["result"]["link"]["state"], "up") << daemon_->err();
-  EXPECT_EQ(status["result"]["drive"]["mode"], "DCP4");
+  EXPECT_EQ(status["result"]["drive"]["kind"], "dcp");
+  EXPECT_EQ(status["result"]["drive"]["state"], "ready") << status.dump();
+  EXPECT_EQ(status["result"]["dcp"]["mode"], "DCP4");
+  EXPECT_EQ(status["result"]["drive"]["mode"], "DCP4");  // the API 1 place, kept for DCP
   EXPECT_EQ(status["result"]["car"]["floor"], 0);
   EXPECT_TRUE(status["result"]["faults"].empty()) << status.dump();
   int code = -1;

@@ -100,7 +100,7 @@ void dispatcher(const std::string& socket, std::atomic<bool>& stop, std::atomic<
     if (status.is_object() && status["ok"] == true &&
         status["result"]["travel"]["state"] == "idle" &&
         status["result"]["link"]["state"] == "up" &&
-        !status["result"]["drive"]["status"]["travel_active"].get<bool>()) {
+        !status["result"]["dcp"]["status"]["travel_active"].get<bool>()) {
       const json r = client.call({{"cmd", "travel"}, {"floor", floor}});
       if (r.is_object() && r["ok"] == true) {
         ++travels;

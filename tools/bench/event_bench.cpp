@@ -134,7 +134,7 @@ int main(int argc, char** argv) {
       const json line = w.next(200ms);
       const MonoTime at = mono_now();
       if (!line.is_object() || line.value("event", "") != "state") continue;
-      const std::uint8_t b = status_byte(line["data"]["drive"]["status"]);
+      const std::uint8_t b = status_byte(line["data"]["dcp"]["status"]);
       if (b == last) continue;
       last = b;
       const std::lock_guard lock(seen_mutex);
@@ -150,7 +150,7 @@ int main(int argc, char** argv) {
     const bool idle = status.is_object() && status["ok"] == true &&
                       status["result"]["travel"]["state"] == "idle" &&
                       status["result"]["link"]["state"] == "up" &&
-                      !status["result"]["drive"]["status"]["travel_active"].get<bool>();
+                      !status["result"]["dcp"]["status"]["travel_active"].get<bool>();
     if (!idle) {
       std::this_thread::sleep_for(50ms);
       continue;
@@ -172,7 +172,7 @@ int main(int argc, char** argv) {
     for (int i = 0; i < 600; ++i) {
       const json s = control.call({{"cmd", "status"}});
       if (s.is_object() && s["result"]["travel"]["state"] == "idle" &&
-          !s["result"]["drive"]["status"]["travel_active"].get<bool>()) {
+          !s["result"]["dcp"]["status"]["travel_active"].get<bool>()) {
         break;
       }
       std::this_thread::sleep_for(50ms);

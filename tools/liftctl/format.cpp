@@ -57,6 +57,12 @@ void flatten(const json& value, const std::string& prefix, std::ostringstream& o
   out << (prefix.empty() ? "value" : prefix) << ": " << text(value) << '\n';
 }
 
+/// The DCP object of a status: "dcp" since API 2, the "drive" object of API 1 before.
+const json& dcp_of(const json& s) {
+  const json& dcp = at(s, "dcp");
+  return dcp.is_object() ? dcp : at(s, "drive");
+}
+
 }  // namespace
 
 std::string format_status(const json& s) {
@@ -66,10 +72,16 @@ std::string format_status(const json& s) {
   const json& travel = at(s, "travel");
   const json& rt = at(s, "rt");
   out << "link:     " << text(at(at(s, "link"), "state")) << '\n';
-  out << "drive:    " << text(at(drive, "mode")) << ", status: " << true_flags(at(drive, "status"))
-      << '\n';
-  if (!at(drive, "extended").is_null()) {
-    out << "extended: " << true_flags(at(drive, "extended")) << '\n';
+  if (drive.contains("kind")) {  // API 2
+    out << "drive:    " << text(at(drive, "kind")) << ", " << text(at(drive, "state")) << '\n';
+  }
+  const json& dcp = dcp_of(s);
+  if (at(drive, "kind").is_null() || at(drive, "kind") == "dcp") {
+    out << "dcp:      " << text(at(dcp, "mode")) << ", status: " << true_flags(at(dcp, "status"))
+        << '\n';
+    if (!at(dcp, "extended").is_null()) {
+      out << "extended: " << true_flags(at(dcp, "extended")) << '\n';
+    }
   }
   out << "car:      floor " << text(at(car, "floor")) << ", position "
       << (at(car, "position_mm").is_null() ? "unknown" : text(at(car, "position_mm")) + " mm");
@@ -114,9 +126,11 @@ std::string format_state_line(const json& s) {
   std::ostringstream out;
   const json& car = at(s, "car");
   const json& faults = at(s, "faults");
-  out << "link=" << text(at(at(s, "link"), "state")) << " mode=" << text(at(at(s, "drive"), "mode"))
-      << " status=" << true_flags(at(at(s, "drive"), "status"))
-      << " floor=" << text(at(car, "floor")) << " position_mm=" << text(at(car, "position_mm"))
+  out << "link=" << text(at(at(s, "link"), "state"));
+  if (!at(at(s, "drive"), "state").is_null()) out << " drive=" << text(at(at(s, "drive"), "state"));
+  out << " mode=" << text(at(dcp_of(s), "mode"))
+      << " status=" << true_flags(at(dcp_of(s), "status")) << " floor=" << text(at(car, "floor"))
+      << " position_mm=" << text(at(car, "position_mm"))
       << " travel=" << text(at(at(s, "travel"), "state"));
   const json& calls = at(at(s, "travel"), "calls");
   if (calls.is_array() && !calls.empty()) {

@@ -1,0 +1,88 @@
+// What every drive kind shares with the lift core and the API: which kind of drive the lift
+// has, the drive state a dispatcher reads, and which drive-specific commands the kind offers.
+// Knows no protocol: lib/dcp (and later lib/sch001, lib/uss) map their own states onto these.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string_view>
+
+namespace liftd::drive {
+
+/// The drive kinds liftd knows (config `drive.kind`).
+enum class Kind : std::uint8_t {
+  Dcp,     ///< a lift drive speaking DCP3/DCP4 over RS485
+  Sch001,  ///< a hydraulic power unit with the SCH001 card on CAN
+  Uss,     ///< a drive speaking Siemens USS over RS485
+};
+/// Wire names of Kind, in enum order (config `drive.kind`, status `drive.kind`).
+inline constexpr std::array<std::string_view, 3> kKindNames = {"dcp", "sch001", "uss"};
+/// "dcp", "sch001", "uss".
+std::string_view to_string(Kind kind) noexcept;
+/// The kind of a wire name, nullopt for an unknown one.
+std::optional<Kind> parse_kind(std::string_view name) noexcept;
+
+/// The drive as a dispatcher sees it, whatever the kind (status `drive.state`).
+enum class State : std::uint8_t {
+  Offline,     ///< no working link to the drive yet (or any more): nothing can move
+  Ready,       ///< link up, no active fault, no travel: a travel may start
+  Travelling,  ///< a travel (of any kind) is running
+  Fault,       ///< link up, but an active fault forbids new travels
+};
+/// "offline", "ready", "travelling", "fault".
+std::string_view to_string(State state) noexcept;
+
+/// The drive state from the facts every kind has. A running travel counts before a fault (a
+/// fault ends a travel within the cycle, and a warning that only forbids new travels lets the
+/// running one finish); a link that is not up counts before everything.
+constexpr State state_of(bool link_up, bool travelling, bool any_fault) noexcept {
+  if (!link_up) return State::Offline;
+  if (travelling) return State::Travelling;
+  return any_fault ? State::Fault : State::Ready;
+}
+
+/// Commands that only some drive kinds have. The common ones (travel, stop, relevel,
+/// inspection, calls, inputs) every kind offers.
+enum class Capability : std::uint8_t {
+  Keypad,      ///< `key`: the drive's remote keypad (DCP 5.8)
+  Display,     ///< `display`: the drive's remote display (DCP 5.7)
+  Power,       ///< `power`: mains / emergency power mode (DCP I6)
+  Load,        ///< `load`: car load for the next travel (DCP I8)
+  DriveReset,  ///< `drive_reset`: fault reset asked of the drive (DCP I2 'R')
+  FastStart,   ///< `fast_start`: start while the doors close (DCP 12)
+  FastStop,    ///< `fast_stop`: fast stop of a travel (DCP 13)
+  kCount,
+};
+/// "keypad", "display", ...
+std::string_view to_string(Capability capability) noexcept;
+
+/// A set of capabilities.
+class Capabilities {
+ public:
+  constexpr Capabilities() noexcept = default;
+  /// Every capability there is.
+  static constexpr Capabilities all() noexcept {
+    Capabilities c;
+    c.bits_ = (1U << static_cast<unsigned>(Capability::kCount)) - 1U;
+    return c;
+  }
+  constexpr Capabilities& add(Capability capability) noexcept {
+    bits_ |= 1U << static_cast<unsigned>(capability);
+    return *this;
+  }
+  constexpr bool has(Capability capability) const noexcept {
+    return (bits_ & (1U << static_cast<unsigned>(capability))) != 0;
+  }
+  constexpr bool operator==(const Capabilities&) const noexcept = default;
+
+ private:
+  std::uint32_t bits_ = 0;
+};
+
+/// What a drive kind offers beyond the common commands.
+/// DCP: all of them. SCH001: none (the card's CAN frames carry travel signals and floors only,
+/// and its status frame has no keypad, display, supply or load). USS: none yet.
+Capabilities capabilities_of(Kind kind) noexcept;
+
+}  // namespace liftd::drive
