@@ -1,5 +1,5 @@
 // A fixed-capacity FIFO for the real-time side: no allocation after construction, no locks.
-// Single-threaded: the owner pushes and pops from the same thread (the cycle thread).
+// Single-threaded: the owner pushes and pops from the same thread (a real-time thread).
 #pragma once
 
 #include <array>
@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <optional>
 
-namespace liftd::dcp {
+namespace liftd {
 
 /// FIFO of at most N elements in fixed storage. A push into a full queue fails and is counted.
 template <typename T, std::size_t N>
@@ -55,4 +55,4 @@ class FixedQueue {
   std::uint64_t dropped_ = 0;
 };
 
-}  // namespace liftd::dcp
+}  // namespace liftd

@@ -41,23 +41,6 @@ std::string_view abort_text(AbortCause cause) noexcept {
 
 }  // namespace
 
-// ---- PositionFeed ----
-
-void PositionFeed::set(std::int64_t position_mm, MonoTime at) noexcept {
-  position_mm_.store(position_mm, std::memory_order_relaxed);
-  at_ns_.store(at.count(), std::memory_order_release);
-}
-
-void PositionFeed::invalidate() noexcept {
-  at_ns_.store(-1, std::memory_order_release);
-}
-
-std::optional<std::int64_t> PositionFeed::position_mm(MonoTime now) const noexcept {
-  const std::int64_t at = at_ns_.load(std::memory_order_acquire);
-  if (at < 0 || now - MonoTime(at) > max_age_) return std::nullopt;
-  return position_mm_.load(std::memory_order_relaxed);
-}
-
 // ---- names ----
 
 std::string_view fault_code_name(FaultCode code) noexcept {

@@ -21,6 +21,7 @@
 #include "dcp/master_link.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
+#include "lift/position_source.hpp"
 #include "rt/cycle_runner.hpp"
 #include "rt/snapshot.hpp"
 #include "rt/spsc_queue.hpp"
@@ -28,31 +29,9 @@
 
 namespace liftd::control {
 
-/// Where the cycle reads the car's absolute position. Called on the cycle thread: must not
-/// block, lock or allocate.
-class PositionSource {
- public:
-  virtual ~PositionSource() = default;
-  /// The position now, or nullopt when the source is invalid or stale.
-  virtual std::optional<std::int64_t> position_mm(MonoTime now) const noexcept = 0;
-};
-
-/// A position fed from another thread (API inputs, CAN encoder): one writer, the cycle reads.
-/// A value older than `max_age` counts as lost.
-class PositionFeed final : public PositionSource {
- public:
-  explicit PositionFeed(MonoTime max_age) noexcept : max_age_(max_age) {}
-  /// Writer side: a new reading taken at `at`.
-  void set(std::int64_t position_mm, MonoTime at) noexcept;
-  /// Writer side: the source says its value is invalid.
-  void invalidate() noexcept;
-  std::optional<std::int64_t> position_mm(MonoTime now) const noexcept override;
-
- private:
-  MonoTime max_age_;
-  std::atomic<std::int64_t> position_mm_{0};
-  std::atomic<std::int64_t> at_ns_{-1};  // -1: invalid
-};
+/// The position source of every drive kind (lib/lift/position_source.hpp).
+using lift::PositionFeed;
+using lift::PositionSource;
 
 /// Everything the controller needs, fixed at construction.
 struct ControllerConfig {

@@ -17,10 +17,10 @@
 #include <string_view>
 #include <variant>
 
+#include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
 #include "dcp/channel.hpp"
 #include "dcp/display.hpp"
-#include "dcp/fixed_queue.hpp"
 #include "dcp/frame.hpp"
 #include "dcp/messages.hpp"
 
@@ -313,7 +313,7 @@ class MasterLink {
   ChannelParser parser_;
   ChannelTransmitter transmitter_;
   Outstanding outstanding_;
-  FixedQueue<Pending, kRequestQueueSize> requests_;
+  liftd::FixedQueue<Pending, kRequestQueueSize> requests_;
   DisplayModel display_;
 
   // handshake results
@@ -331,9 +331,9 @@ class MasterLink {
 
   DriveSnapshot drive_;
   LinkCounters counters_;
-  FixedQueue<Completion, kCompletionQueueSize> completions_;
-  FixedQueue<LinkEvent, kEventQueueSize> events_;
-  FixedQueue<DriveErrorEvent, kDriveErrorQueueSize> drive_errors_;
+  liftd::FixedQueue<Completion, kCompletionQueueSize> completions_;
+  liftd::FixedQueue<LinkEvent, kEventQueueSize> events_;
+  liftd::FixedQueue<DriveErrorEvent, kDriveErrorQueueSize> drive_errors_;
 };
 
 }  // namespace liftd::dcp
