@@ -1,0 +1,289 @@
+#include "can/socket.hpp"
+
+#include <linux/can.h>
+#include <linux/can/error.h>
+#include <linux/can/raw.h>
+#include <net/if.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+namespace liftd::can {
+namespace {
+
+constexpr std::string_view kUnixPrefix = "unix:";
+
+SocketError error_of(int code, std::string what) {
+  return {code, std::move(what)};
+}
+
+bool fill_unix_address(const std::string& path, sockaddr_un& address) {
+  address = {};
+  address.sun_family = AF_UNIX;
+  if (path.empty() || path.size() >= sizeof address.sun_path) return false;
+  std::memcpy(address.sun_path, path.c_str(), path.size() + 1);
+  return true;
+}
+
+}  // namespace
+
+std::string ErrorReport::describe() const {
+  std::string out;
+  const auto add = [&out](bool set, const char* text) {
+    if (set) out += (out.empty() ? "" : ", ") + std::string(text);
+  };
+  add(bus_off, "bus-off");
+  add(error_passive, "error passive");
+  add(no_ack, "no ACK (no other node on the bus?)");
+  add(tx_timeout, "transmit timeout");
+  add(error_warning, "error warning level");
+  add(rx_overflow, "receive overflow");
+  add(tx_overflow, "transmit overflow");
+  add(lost_arbitration, "lost arbitration");
+  add(protocol_violation, "protocol violation");
+  add(transceiver, "transceiver problem");
+  add(restarted, "controller restarted");
+  add(back_to_active, "back to error active");
+  if (controller_problem && !rx_overflow && !tx_overflow && !error_warning && !error_passive &&
+      !back_to_active) {
+    add(true, "controller problem");
+  }
+  return out.empty() ? "error frame without a known cause" : out;
+}
+
+ErrorReport decode_error_frame(std::uint32_t error_class,
+                               std::span<const std::uint8_t, kMaxData> data) noexcept {
+  ErrorReport r;
+  r.tx_timeout = (error_class & CAN_ERR_TX_TIMEOUT) != 0;
+  r.lost_arbitration = (error_class & CAN_ERR_LOSTARB) != 0;
+  r.controller_problem = (error_class & CAN_ERR_CRTL) != 0;
+  if (r.controller_problem) {  // details in data[1]
+    const std::uint8_t c = data[1];
+    r.rx_overflow = (c & CAN_ERR_CRTL_RX_OVERFLOW) != 0;
+    r.tx_overflow = (c & CAN_ERR_CRTL_TX_OVERFLOW) != 0;
+    r.error_warning = (c & (CAN_ERR_CRTL_RX_WARNING | CAN_ERR_CRTL_TX_WARNING)) != 0;
+    r.error_passive = (c & (CAN_ERR_CRTL_RX_PASSIVE | CAN_ERR_CRTL_TX_PASSIVE)) != 0;
+    r.back_to_active = (c & CAN_ERR_CRTL_ACTIVE) != 0;
+  }
+  r.protocol_violation = (error_class & CAN_ERR_PROT) != 0;
+  r.transceiver = (error_class & CAN_ERR_TRX) != 0;
+  r.no_ack = (error_class & CAN_ERR_ACK) != 0;
+  r.bus_off = (error_class & CAN_ERR_BUSOFF) != 0;
+  r.restarted = (error_class & CAN_ERR_RESTARTED) != 0;
+  if ((error_class & CAN_ERR_CNT) != 0) {  // counters in data[6] (tx) and data[7] (rx)
+    r.tx_errors = data[6];
+    r.rx_errors = data[7];
+  }
+  return r;
+}
+
+std::pair<std::uint32_t, std::array<std::uint8_t, kMaxData>> encode_error_frame(
+    const ErrorReport& r) noexcept {
+  std::uint32_t id = CAN_ERR_FLAG;
+  std::array<std::uint8_t, kMaxData> data{};
+  if (r.tx_timeout) id |= CAN_ERR_TX_TIMEOUT;
+  if (r.lost_arbitration) id |= CAN_ERR_LOSTARB;
+  std::uint8_t crtl = 0;
+  if (r.rx_overflow) crtl |= CAN_ERR_CRTL_RX_OVERFLOW;
+  if (r.tx_overflow) crtl |= CAN_ERR_CRTL_TX_OVERFLOW;
+  if (r.error_warning) crtl |= CAN_ERR_CRTL_TX_WARNING;
+  if (r.error_passive) crtl |= CAN_ERR_CRTL_TX_PASSIVE;
+  if (r.back_to_active) crtl |= CAN_ERR_CRTL_ACTIVE;
+  if (r.controller_problem || crtl != 0) {
+    id |= CAN_ERR_CRTL;
+    data[1] = crtl;
+  }
+  if (r.protocol_violation) id |= CAN_ERR_PROT;
+  if (r.transceiver) id |= CAN_ERR_TRX;
+  if (r.no_ack) id |= CAN_ERR_ACK;
+  if (r.bus_off) id |= CAN_ERR_BUSOFF;
+  if (r.restarted) id |= CAN_ERR_RESTARTED;
+  if (r.tx_errors != 0 || r.rx_errors != 0) {
+    id |= CAN_ERR_CNT;
+    data[6] = r.tx_errors;
+    data[7] = r.rx_errors;
+  }
+  return {id, data};
+}
+
+io::Expected<CanSocket, SocketError> CanSocket::open(std::string_view endpoint,
+                                                     std::vector<std::uint32_t> ids) {
+  if (endpoint.substr(0, kUnixPrefix.size()) == kUnixPrefix) {
+    const std::string path(endpoint.substr(kUnixPrefix.size()));
+    sockaddr_un address{};
+    if (!fill_unix_address(path, address)) {
+      return error_of(ENAMETOOLONG, "unix socket path \"" + path + "\" is empty or too long");
+    }
+    const int fd = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (fd < 0) return error_of(errno, "socket(AF_UNIX, SOCK_SEQPACKET)");
+    // NOLINTNEXTLINE(cppcoreguidelines-pro-type-reinterpret-cast): the sockets API
+    if (::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0) {
+      const int code = errno;
+      ::close(fd);
+      return error_of(code, "connect to " + path);
+    }
+    return CanSocket(fd, std::move(ids));
+  }
+  const std::string name(endpoint);
+  if (name.empty() || name.size() >= IFNAMSIZ) {
+    return error_of(ENODEV, "CAN interface name \"" + name + "\" is empty or too long");
+  }
+  const int fd = ::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
+  if (fd < 0) return error_of(errno, "socket(PF_CAN, SOCK_RAW, CAN_RAW)");
+  const auto fail = [fd](std::string what) {
+    const int code = errno;
+    ::close(fd);
+    return error_of(code, std::move(what));
+  };
+  const unsigned index = ::if_nametoindex(name.c_str());
+  if (index == 0) return fail("no network interface \"" + name + "\"");
+  // Kernel receive filters: exactly the identifiers we read, 11-bit data frames only.
+  std::vector<can_filter> filters;
+  for (const std::uint32_t id : ids) {
+    filters.push_back({id, CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG});
+  }
+  if (!filters.empty() &&
+      ::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filters.data(),
+                   static_cast<socklen_t>(filters.size() * sizeof(can_filter))) != 0) {
+    return fail("setsockopt(CAN_RAW_FILTER)");
+  }
+  // Error frames: everything but CAN_ERR_BUSERROR, which may flood a broken bus.
+  const can_err_mask_t errors = CAN_ERR_TX_TIMEOUT | CAN_ERR_LOSTARB | CAN_ERR_CRTL | CAN_ERR_PROT |
+                                CAN_ERR_TRX | CAN_ERR_ACK | CAN_ERR_BUSOFF | CAN_ERR_RESTARTED |
+                                CAN_ERR_CNT;
+  if (::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &errors, sizeof errors) != 0) {
+    return fail("setsockopt(CAN_RAW_ERR_FILTER)");
+  }
+  sockaddr_can address{};
+  address.can_family = AF_CAN;
+  address.can_ifindex = static_cast<int>(index);
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-reinterpret-cast): the sockets API
+  if (::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0) {
+    return fail("bind to CAN interface " + name);
+  }
+  return CanSocket(fd, std::move(ids));
+}
+
+io::Expected<std::pair<CanSocket, CanSocket>, SocketError> CanSocket::pair() {
+  int fds[2];
+  if (::socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0, fds) != 0) {
+    return error_of(errno, "socketpair(AF_UNIX, SOCK_SEQPACKET)");
+  }
+  return std::pair<CanSocket, CanSocket>(CanSocket(fds[0], {}), CanSocket(fds[1], {}));
+}
+
+CanSocket CanSocket::adopt(int fd, std::vector<std::uint32_t> ids) {
+  return CanSocket(fd, std::move(ids));
+}
+
+CanSocket::CanSocket(CanSocket&& other) noexcept
+    : fd_(std::exchange(other.fd_, -1)), ids_(std::move(other.ids_)), drops_(other.drops_) {}
+
+CanSocket& CanSocket::operator=(CanSocket&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = std::exchange(other.fd_, -1);
+    ids_ = std::move(other.ids_);
+    drops_ = other.drops_;
+  }
+  return *this;
+}
+
+CanSocket::~CanSocket() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool CanSocket::wanted(std::uint32_t id) const noexcept {
+  return ids_.empty() || std::find(ids_.begin(), ids_.end(), id) != ids_.end();
+}
+
+Received CanSocket::read() noexcept {
+  Received out;
+  can_frame record{};
+  const ssize_t n = ::recv(fd_, &record, sizeof record, MSG_DONTWAIT | MSG_TRUNC);
+  if (n < 0) {
+    if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return out;
+    out.kind = Received::Kind::Failed;
+    out.errno_value = errno;
+    return out;
+  }
+  if (n == 0) {
+    out.kind = Received::Kind::Closed;
+    return out;
+  }
+  // MSG_TRUNC: n is the packet's real size, so a longer record (CAN FD, garbage) is seen.
+  if (static_cast<std::size_t>(n) != sizeof record || record.len > kMaxData) {
+    ++drops_.malformed;
+    return out;
+  }
+  std::array<std::uint8_t, kMaxData> data{};
+  std::copy_n(record.data, kMaxData, data.begin());
+  if ((record.can_id & CAN_ERR_FLAG) != 0) {
+    out.kind = Received::Kind::Error;
+    out.error = decode_error_frame(record.can_id & CAN_ERR_MASK, data);
+    return out;
+  }
+  if ((record.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG)) != 0) {
+    ++drops_.extended;
+    return out;
+  }
+  const std::uint32_t id = record.can_id & CAN_SFF_MASK;
+  if (!wanted(id)) {
+    ++drops_.filtered;
+    return out;
+  }
+  out.kind = Received::Kind::Frame;
+  out.frame = make_frame(id, std::span<const std::uint8_t>(data.data(), record.len));
+  return out;
+}
+
+int CanSocket::send_record(std::uint32_t can_id, std::span<const std::uint8_t> data) noexcept {
+  can_frame record{};
+  record.can_id = can_id;
+  record.len = static_cast<std::uint8_t>(std::min(data.size(), kMaxData));
+  std::copy_n(data.begin(), record.len, record.data);
+  const ssize_t n = ::send(fd_, &record, sizeof record, MSG_DONTWAIT | MSG_NOSIGNAL);
+  if (n < 0) return errno;
+  return n == static_cast<ssize_t>(sizeof record) ? 0 : EIO;
+}
+
+int CanSocket::write(const Frame& frame) noexcept {
+  if (frame.id > kMaxStandardId || frame.length > kMaxData) return EINVAL;
+  return send_record(frame.id, frame.bytes());
+}
+
+int CanSocket::write_error(const ErrorReport& report) noexcept {
+  const auto [id, data] = encode_error_frame(report);
+  return send_record(id, data);
+}
+
+io::Expected<int, SocketError> listen_unix(const std::string& path) {
+  sockaddr_un address{};
+  if (!fill_unix_address(path, address)) {
+    return error_of(ENAMETOOLONG, "unix socket path \"" + path + "\" is empty or too long");
+  }
+  const int fd = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (fd < 0) return error_of(errno, "socket(AF_UNIX, SOCK_SEQPACKET)");
+  ::unlink(path.c_str());  // a stale socket file from an earlier run
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-reinterpret-cast): the sockets API
+  if (::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0 ||
+      ::listen(fd, 1) != 0) {
+    const int code = errno;
+    ::close(fd);
+    return error_of(code, "listen on " + path);
+  }
+  return fd;
+}
+
+bool kernel_has_can() noexcept {
+  const int fd = ::socket(PF_CAN, SOCK_RAW | SOCK_CLOEXEC, CAN_RAW);
+  if (fd < 0) return false;
+  ::close(fd);
+  return true;
+}
+
+}  // namespace liftd::can
