@@ -97,6 +97,7 @@ if [ "$coverage" = 1 ]; then
     [dcp_messages_fuzz]="lib/dcp/messages.cpp lib/dcp/charset.cpp lib/dcp/display.cpp"
     [integration_trace_fuzz]="lib/dcp/trace.cpp"
     [sim_drive_fuzz]="lib/sim/drive_sim.cpp"
+    [sch001_link_fuzz]="lib/sch001/protocol.cpp lib/sch001/card_link.cpp"
     [travel_controller_fuzz]="lib/travel/controller.cpp lib/travel/dcp3_travel.cpp lib/travel/dcp4_travel.cpp lib/travel/gate.cpp"
   )
   llvm_bin=/usr/lib/llvm-14/bin

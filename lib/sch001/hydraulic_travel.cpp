@@ -1,0 +1,289 @@
+#include "sch001/hydraulic_travel.hpp"
+
+#include <chrono>
+
+namespace liftd::sch001 {
+namespace {
+
+using std::chrono::milliseconds;
+
+std::int64_t distance_to(std::int64_t position_mm, std::int64_t level_mm,
+                         lift::Direction direction) noexcept {
+  return direction == lift::Direction::Up ? level_mm - position_mm : position_mm - level_mm;
+}
+
+}  // namespace
+
+std::string_view to_string(TravelKind kind) noexcept {
+  switch (kind) {
+    case TravelKind::None:
+      return "idle";
+    case TravelKind::Travel:
+      return "travel";
+    case TravelKind::Relevel:
+      return "relevel";
+    case TravelKind::Inspection:
+      return "inspection";
+  }
+  return "idle";
+}
+
+std::string_view to_string(Phase phase) noexcept {
+  switch (phase) {
+    case Phase::Idle:
+      return "idle";
+    case Phase::MotorStart:
+      return "motor_start";
+    case Phase::Fast:
+      return "fast";
+    case Phase::Slow:
+      return "slow";
+  }
+  return "idle";
+}
+
+std::string_view to_string(Cause cause) noexcept {
+  switch (cause) {
+    case Cause::None:
+      return "none";
+    case Cause::Stopped:
+      return "stopped";
+    case Cause::SafetyChain:
+      return "safety_chain";
+    case Cause::DoorsUnlocked:
+      return "doors_unlocked";
+    case Cause::InputsLost:
+      return "inputs_lost";
+    case Cause::PositionLost:
+      return "position_lost";
+    case Cause::CardError:
+      return "card_error";
+    case Cause::CardNotReady:
+      return "card_not_ready";
+    case Cause::CardSilent:
+      return "card_silent";
+    case Cause::BusFault:
+      return "bus_fault";
+    case Cause::TravelTimeout:
+      return "travel_timeout";
+    case Cause::Shutdown:
+      return "shutdown";
+  }
+  return "none";
+}
+
+Cause HydraulicTravel::forbidding(TravelKind kind, const TickInput& in) const noexcept {
+  if (!in.bus_ok) return Cause::BusFault;
+  if (in.card_silent) return Cause::CardSilent;
+  if (in.card_error) return Cause::CardError;
+  if (!in.card_allows_travel) return Cause::CardNotReady;  // no status yet, or RDY = 0 (3e)
+  if (!in.inputs.valid) return Cause::InputsLost;
+  if (!in.inputs.safety_chain_closed) return Cause::SafetyChain;
+  switch (kind) {
+    case TravelKind::Travel:
+      if (!in.inputs.doors_locked) return Cause::DoorsUnlocked;
+      if (!in.position_mm) return Cause::PositionLost;
+      break;
+    case TravelKind::Relevel:
+      if (!in.inputs.doors_locked && !(config_.relevel_doors_open && in.inputs.door_zone_bridge)) {
+        return Cause::DoorsUnlocked;
+      }
+      if (!in.position_mm) return Cause::PositionLost;
+      break;
+    case TravelKind::Inspection:  // the safety chain holds the door contacts on inspection
+    case TravelKind::None:
+      break;
+  }
+  return Cause::None;
+}
+
+Cause HydraulicTravel::begin(TravelKind kind, const lift::FloorTable& floors, std::size_t floor,
+                             const TickInput& in) noexcept {
+  if (const Cause why = forbidding(kind, in); why != Cause::None) return why;
+  const std::int64_t level = floors.level_mm(floor);
+  kind_ = kind;
+  target_ = floor;
+  direction_ = level >= *in.position_mm ? lift::Direction::Up : lift::Direction::Down;
+  started_at_ = in.now;
+  const bool up = direction_ == lift::Direction::Up;
+  motor_on_ = up;  // up by the pump, down by the valve alone
+  motor_on_at_ = in.now;
+  phase_ = up ? Phase::MotorStart : (kind == TravelKind::Relevel ? Phase::Slow : Phase::Fast);
+  push({TravelEvent::Type::Started, kind_, direction_, target_, Cause::None, in.now});
+  return Cause::None;
+}
+
+Cause HydraulicTravel::start_travel(const lift::FloorTable& floors, std::size_t floor, Speed speed,
+                                    const TickInput& in) noexcept {
+  // Speeds the unit lacks fall back to the next lower one it has.
+  if (speed == Speed::V4 && !config_.has_v4) speed = Speed::V3;
+  if (speed == Speed::V3 && !config_.has_v3) speed = Speed::Fast;
+  speed_ = speed;
+  return begin(TravelKind::Travel, floors, floor, in);
+}
+
+Cause HydraulicTravel::start_relevel(const lift::FloorTable& floors, std::size_t floor,
+                                     const TickInput& in) noexcept {
+  speed_ = Speed::Fast;
+  return begin(TravelKind::Relevel, floors, floor, in);
+}
+
+Cause HydraulicTravel::inspect(lift::Direction direction, const TickInput& in) noexcept {
+  if (direction == lift::Direction::None) {
+    if (kind_ == TravelKind::Inspection) end(TravelEvent::Type::Finished, Cause::None, in.now);
+    return Cause::None;
+  }
+  if (kind_ == TravelKind::Inspection && direction == direction_) return Cause::None;
+  if (kind_ == TravelKind::Inspection) end(TravelEvent::Type::Finished, Cause::None, in.now);
+  if (const Cause why = forbidding(TravelKind::Inspection, in); why != Cause::None) return why;
+  kind_ = TravelKind::Inspection;
+  direction_ = direction;
+  started_at_ = in.now;
+  motor_on_ = direction == lift::Direction::Up;
+  motor_on_at_ = in.now;
+  phase_ = motor_on_ ? Phase::MotorStart : Phase::Slow;
+  push({TravelEvent::Type::Started, kind_, direction_, current_floor_, Cause::None, in.now});
+  return Cause::None;
+}
+
+std::optional<std::size_t> HydraulicTravel::stop(const lift::FloorTable& floors,
+                                                 const TickInput& in) noexcept {
+  switch (kind_) {
+    case TravelKind::None:
+      return std::nullopt;
+    case TravelKind::Inspection:
+      end(TravelEvent::Type::Finished, Cause::None, in.now);
+      return std::nullopt;
+    case TravelKind::Relevel:
+      return target_;  // a few millimetres at the slow speed: let it land
+    case TravelKind::Travel:
+      break;
+  }
+  if (phase_ == Phase::MotorStart || !in.position_mm) {
+    // Not moving yet (or blind): nothing to land, drop everything now.
+    end(TravelEvent::Type::Aborted, Cause::Stopped, in.now);
+    return std::nullopt;
+  }
+  if (phase_ == Phase::Fast) {
+    // The first floor ahead still beyond this speed's slowdown distance.
+    const auto n = static_cast<std::ptrdiff_t>(floors.size());
+    const bool up = direction_ == lift::Direction::Up;
+    for (std::ptrdiff_t i = up ? 0 : n - 1; up ? i < n : i >= 0; i += up ? 1 : -1) {
+      const auto floor = static_cast<std::size_t>(i);
+      const std::int64_t d = distance_to(*in.position_mm, floors.level_mm(floor), direction_);
+      if (d >= static_cast<std::int64_t>(slowdown_mm())) {
+        if (up ? floor < target_ : floor > target_) target_ = floor;
+        break;
+      }
+    }
+  }
+  return target_;
+}
+
+void HydraulicTravel::abort(Cause cause, MonoTime now) noexcept {
+  if (kind_ != TravelKind::None) end(TravelEvent::Type::Aborted, cause, now);
+}
+
+std::uint32_t HydraulicTravel::slowdown_mm() const noexcept {
+  if (direction_ == lift::Direction::Down) return config_.slowdown_down_mm;
+  switch (speed_) {
+    case Speed::V4:
+      return config_.slowdown_v4_mm;
+    case Speed::V3:
+      return config_.slowdown_v3_mm;
+    case Speed::Fast:
+      break;
+  }
+  return config_.slowdown_up_mm;
+}
+
+CommandBits HydraulicTravel::signals() const noexcept {
+  CommandBits b;
+  if (kind_ == TravelKind::None || phase_ == Phase::Idle || phase_ == Phase::MotorStart) return b;
+  const bool up = direction_ == lift::Direction::Up;
+  b.up = up;
+  b.dw = !up;
+  b.sfy = motor_on_;  // set once the motor runs, i.e. after the star-delta start (1.4)
+  if (kind_ == TravelKind::Inspection) {
+    b.msp = true;  // inspection speed (1.4: MSP, "Instandhaltung")
+    return b;
+  }
+  if (phase_ != Phase::Fast) return b;  // slow approach: direction (and SFY) alone
+  if (up) {
+    b.hsp = true;
+    b.sp1 = speed_ == Speed::V3;  // V3 = HSP + SP1
+    b.sp2 = speed_ == Speed::V4;  // V4 = HSP + SP2
+  } else if (config_.fast_down == FastDown::Sp3) {
+    b.sp3 = true;  // card P453 = 1
+  } else {
+    b.hsp = true;  // card P435 = 0
+  }
+  return b;
+}
+
+TickOutput HydraulicTravel::tick(const lift::FloorTable& floors, const TickInput& in) noexcept {
+  if (kind_ != TravelKind::None) {
+    if (const Cause why = forbidding(kind_, in); why != Cause::None) {
+      end(TravelEvent::Type::Aborted, why, in.now);
+    } else if (in.now - started_at_ > milliseconds(config_.max_travel_ms)) {
+      end(TravelEvent::Type::Aborted, Cause::TravelTimeout, in.now);
+    }
+  }
+  if (phase_ == Phase::MotorStart && in.now - motor_on_at_ >= milliseconds(config_.star_delta_ms)) {
+    phase_ = kind_ == TravelKind::Travel ? Phase::Fast : Phase::Slow;
+  }
+  if ((kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel) &&
+      phase_ != Phase::MotorStart && in.position_mm) {
+    const std::int64_t remaining =
+        distance_to(*in.position_mm, floors.level_mm(target_), direction_);
+    if (phase_ == Phase::Fast &&
+        (remaining <= static_cast<std::int64_t>(slowdown_mm()) || in.inputs.dcp3_decel_point)) {
+      phase_ = Phase::Slow;
+    }
+    if (phase_ == Phase::Slow &&
+        (remaining <= static_cast<std::int64_t>(config_.stop_tolerance_mm) ||
+         in.inputs.dcp3_at_level)) {
+      finish(in.now);
+    }
+  }
+  if (kind_ == TravelKind::Inspection && in.position_mm && floors.size() > 0) {
+    // The inspection run stops at the terminal levels (the limit switches' job in the shaft).
+    const bool at_top =
+        direction_ == lift::Direction::Up && *in.position_mm >= floors.level_mm(floors.size() - 1);
+    const bool at_bottom =
+        direction_ == lift::Direction::Down && *in.position_mm <= floors.level_mm(0);
+    if (at_top || at_bottom) end(TravelEvent::Type::Finished, Cause::None, in.now);
+  }
+  TickOutput out;
+  out.bits = signals();
+  out.motor_on = motor_on_;
+  out.current_floor = current_floor_;
+  out.destination_floor =
+      kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel ? target_ : current_floor_;
+  return out;
+}
+
+void HydraulicTravel::finish(MonoTime now) noexcept {
+  current_floor_ = target_;  // 3c: the current floor is updated at each stop
+  end(TravelEvent::Type::Finished, Cause::None, now);
+}
+
+void HydraulicTravel::end(TravelEvent::Type type, Cause cause, MonoTime now) noexcept {
+  const std::size_t floor = type == TravelEvent::Type::Finished && kind_ != TravelKind::Inspection
+                                ? target_
+                                : current_floor_;
+  push({type, kind_, direction_, floor, cause, now});
+  kind_ = TravelKind::None;
+  phase_ = Phase::Idle;
+  direction_ = lift::Direction::None;
+  motor_on_ = false;  // every motor off: SFY drops with it (1.4)
+}
+
+bool HydraulicTravel::poll_event(TravelEvent& out) noexcept {
+  const auto event = events_.pop();
+  if (!event) return false;
+  out = *event;
+  return true;
+}
+
+}  // namespace liftd::sch001

@@ -1,0 +1,185 @@
+// Travel sequencing of a hydraulic lift driven through the SCH001 card, sans-I/O: which of the
+// card's signals (UP DW HSP MSP SFY SP1 SP2 SP3, card document 1.4 and 3c) are on at each moment
+// of a travel, a relevelling or an inspection run, given the car position, the machine's inputs
+// and whether the card allows travel commands. Called every few milliseconds by the SCH001
+// controller; no allocation, lock or system call.
+//
+// From the card's document: the meaning of every signal (1.4), SFY only while all motors are on
+// and cleared when all are off (1.4), no travel command with ERR or without RDY (3d, 3e).
+// From common hydraulic practice (docs/sch001.md): up by the pump (motor started star-delta
+// before the valves open), down by the valve alone (motor off), fast speed until a slowdown
+// distance before the level, then the slow (levelling) speed to the level, where every signal
+// drops and the valve's own soft stop lands the car; relevelling by the slow speed when the car
+// sinks out of the level zone (oil leakage, cooling), with the doors open where allowed; a
+// motor run-time limiter ending a travel that takes too long.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string_view>
+
+#include "common/fixed_queue.hpp"
+#include "common/mono_time.hpp"
+#include "lift/floors.hpp"
+#include "lift/inputs.hpp"
+#include "sch001/protocol.hpp"
+
+namespace liftd::sch001 {
+
+/// Which signal makes the fast speed down: HSP when card P435 = 0, SP3 when card P453 = 1.
+enum class FastDown : std::uint8_t { Hsp, Sp3 };
+
+/// The hydraulic installation as the sequencing needs it (config `sch001.*`).
+struct HydraulicConfig {
+  bool has_v3 = false;                   ///< the unit has speed V3 (HSP + SP1)
+  bool has_v4 = false;                   ///< the unit has speed V4 (HSP + SP2)
+  FastDown fast_down = FastDown::Hsp;    ///< mirrors card P435 / P453
+  std::uint32_t star_delta_ms = 1500;    ///< motor contactors on until SFY (star-delta start)
+  std::uint32_t slowdown_up_mm = 500;    ///< fast speed up ends this far below the level
+  std::uint32_t slowdown_down_mm = 700;  ///< fast speed down ends this far above the level
+  std::uint32_t slowdown_v3_mm = 1000;   ///< V3 up ends this far below the level
+  std::uint32_t slowdown_v4_mm = 1500;   ///< V4 up ends this far below the level
+  std::uint32_t stop_tolerance_mm = 3;   ///< the slow approach stops within this of the level
+  std::uint32_t relevel_start_mm = 10;   ///< relevelling starts when the car is this far off
+  std::uint32_t max_travel_ms = 45000;   ///< motor run-time limiter: a travel longer than this ends
+  bool relevel_doors_open = true;        ///< relevel with the doors open (door zone bridged)
+};
+
+/// The speed a travel asks for (config and API names V1 fast, V3, V4).
+enum class Speed : std::uint8_t { Fast, V3, V4 };
+
+/// What runs.
+enum class TravelKind : std::uint8_t { None, Travel, Relevel, Inspection };
+/// "idle", "travel", "relevel", "inspection".
+std::string_view to_string(TravelKind kind) noexcept;
+
+/// Where a travel is.
+enum class Phase : std::uint8_t {
+  Idle,
+  MotorStart,  ///< up: motor contactors on, waiting for the star-delta start before SFY
+  Fast,        ///< at the travel's speed
+  Slow,        ///< slow approach after the slowdown point
+};
+/// "idle", "motor_start", "fast", "slow".
+std::string_view to_string(Phase phase) noexcept;
+
+/// Why a travel ended early or was refused.
+enum class Cause : std::uint8_t {
+  None,
+  Stopped,        ///< the `stop` command with no floor left to stop at
+  SafetyChain,    ///< the safety chain opened
+  DoorsUnlocked,  ///< the doors unlocked during a travel
+  InputsLost,     ///< the input provider went silent
+  PositionLost,   ///< the car position is unknown
+  CardError,      ///< the card reports ERR (3d)
+  CardNotReady,   ///< the card dropped RDY (3e)
+  CardSilent,     ///< nothing from the card for 10 s (3f)
+  BusFault,       ///< CAN bus-off, error passive, or the socket failed
+  TravelTimeout,  ///< the motor run-time limit passed
+  Shutdown,       ///< the service is stopping and the deadline passed
+};
+/// snake_case, for events ("safety_chain", ...).
+std::string_view to_string(Cause cause) noexcept;
+
+/// The facts of one tick.
+struct TickInput {
+  MonoTime now{};
+  std::optional<std::int64_t> position_mm;  ///< nullopt: unknown
+  lift::Inputs inputs{};
+  bool card_allows_travel = false;  ///< CardLink::travel_allowed()
+  bool card_error = false;          ///< the card's ERR
+  bool card_silent = false;         ///< the card timed out
+  bool bus_ok = true;               ///< the CAN endpoint works
+};
+
+/// What goes out after a tick.
+struct TickOutput {
+  CommandBits bits;       ///< the card's signals
+  bool motor_on = false;  ///< motor contactor output (up travels and up relevelling)
+  std::size_t current_floor = 0;
+  std::size_t destination_floor = 0;
+};
+
+/// Something that happened, drained by the controller.
+struct TravelEvent {
+  enum class Type : std::uint8_t { Started, Finished, Aborted };
+  Type type = Type::Started;
+  TravelKind kind = TravelKind::None;
+  lift::Direction direction = lift::Direction::None;
+  std::size_t floor = 0;  ///< target (started) or where it ended (finished)
+  Cause cause = Cause::None;
+  MonoTime at{};
+};
+
+/// The sequencer. Floors are the installation's; the car's current floor is the last one it
+/// stopped at (3c: "updated each time the stop contact is reached").
+class HydraulicTravel {
+ public:
+  explicit HydraulicTravel(const HydraulicConfig& config) noexcept : config_(config) {}
+
+  /// Starts a travel to `floor` at `speed` (V3/V4 fall back to fast where the unit lacks them).
+  /// Cause::None when it started; else why not (conditions of `in`).
+  Cause start_travel(const lift::FloorTable& floors, std::size_t floor, Speed speed,
+                     const TickInput& in) noexcept;
+  /// Starts relevelling to `floor` (slow speed, doors may be open where allowed).
+  Cause start_relevel(const lift::FloorTable& floors, std::size_t floor,
+                      const TickInput& in) noexcept;
+  /// Inspection: hold-to-run `direction` (None: stand still). The run ends when released.
+  Cause inspect(lift::Direction direction, const TickInput& in) noexcept;
+  /// Stop at the next floor ahead the car can still reach by the slow approach; a car already
+  /// slowing keeps its floor; with no floor ahead reachable, every signal drops now.
+  /// Returns the floor the car will stop at (nullopt: stopped at once between floors).
+  std::optional<std::size_t> stop(const lift::FloorTable& floors, const TickInput& in) noexcept;
+  /// Ends whatever runs at once, with `cause` (reported once).
+  void abort(Cause cause, MonoTime now) noexcept;
+
+  /// One step: checks the conditions, moves through the phases, returns the signals.
+  TickOutput tick(const lift::FloorTable& floors, const TickInput& in) noexcept;
+
+  /// The condition of `in` that forbids moving now, for a run of `kind`, or None.
+  Cause forbidding(TravelKind kind, const TickInput& in) const noexcept;
+
+  TravelKind kind() const noexcept { return kind_; }
+  Phase phase() const noexcept { return phase_; }
+  lift::Direction direction() const noexcept { return direction_; }
+  std::optional<std::size_t> target() const noexcept {
+    return kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel
+               ? std::optional<std::size_t>(target_)
+               : std::nullopt;
+  }
+  /// The floor the car last stopped at.
+  std::size_t current_floor() const noexcept { return current_floor_; }
+  /// Tells the sequencer where the car stands at start (the floor nearest the position).
+  void set_current_floor(std::size_t floor) noexcept { current_floor_ = floor; }
+  const HydraulicConfig& config() const noexcept { return config_; }
+
+  /// The next event, if any.
+  bool poll_event(TravelEvent& out) noexcept;
+  /// Events lost because the queue was full.
+  std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
+
+ private:
+  Cause begin(TravelKind kind, const lift::FloorTable& floors, std::size_t floor,
+              const TickInput& in) noexcept;
+  void finish(MonoTime now) noexcept;
+  void end(TravelEvent::Type type, Cause cause, MonoTime now) noexcept;
+  void push(const TravelEvent& event) noexcept { events_.push(event); }
+  std::uint32_t slowdown_mm() const noexcept;
+  CommandBits signals() const noexcept;
+
+  HydraulicConfig config_;
+  TravelKind kind_ = TravelKind::None;
+  Phase phase_ = Phase::Idle;
+  lift::Direction direction_ = lift::Direction::None;
+  Speed speed_ = Speed::Fast;
+  std::size_t target_ = 0;
+  std::size_t current_floor_ = 0;
+  MonoTime started_at_{};
+  MonoTime motor_on_at_{};
+  bool motor_on_ = false;
+
+  FixedQueue<TravelEvent, 16> events_;
+};
+
+}  // namespace liftd::sch001

@@ -1,0 +1,270 @@
+// The hydraulic travel sequencing with a fake clock and a scripted car: the signals of every
+// phase as bytes of our 0x68 answer (card document 3c: SP3 SP2 SP1 SFY MSP HSP DW UP), the
+// faults that end a travel at once and are reported once, and what may start.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <vector>
+
+#include "sch001/hydraulic_travel.hpp"
+
+namespace liftd::sch001 {
+namespace {
+
+using std::chrono::milliseconds;
+
+// Command bytes (3c).
+constexpr std::uint8_t kUp = 0x01, kDw = 0x02, kHsp = 0x04, kMsp = 0x08, kSfy = 0x10, kSp1 = 0x20,
+                       kSp2 = 0x40, kSp3 = 0x80;
+
+class HydraulicTest : public ::testing::Test {
+ protected:
+  HydraulicTest() {
+    const std::vector<std::int64_t> levels = {0, 3000, 6000, 9000};
+    floors_.assign(levels);
+    in_.inputs.valid = in_.inputs.safety_chain_closed = true;
+    in_.inputs.doors_closed = in_.inputs.doors_locked = true;
+    in_.card_allows_travel = true;
+    in_.position_mm = 0;
+  }
+  /// One tick at `t_ms` with the car at `position_mm`; returns the command byte and checks the
+  /// rules that hold in every state.
+  std::uint8_t tick(int t_ms, std::optional<std::int64_t> position_mm) {
+    in_.now = milliseconds(t_ms);
+    in_.position_mm = position_mm;
+    const TickOutput out = travel_.tick(floors_, in_);
+    const std::uint8_t byte = out.bits.to_byte();
+    // 1.4: SFY only while the motor runs; the motor runs for the pump, i.e. going up.
+    if (out.bits.sfy) {
+      EXPECT_TRUE(out.motor_on && out.bits.up) << "t=" << t_ms;
+    }
+    EXPECT_FALSE(out.bits.up && out.bits.dw) << "t=" << t_ms;
+    if (out.bits.sp1 || out.bits.sp2) {
+      EXPECT_TRUE(out.bits.hsp) << "t=" << t_ms;  // 1.4
+    }
+    return byte;
+  }
+  std::vector<TravelEvent> events() {
+    std::vector<TravelEvent> out;
+    TravelEvent e;
+    while (travel_.poll_event(e)) out.push_back(e);
+    return out;
+  }
+
+  HydraulicConfig config_;
+  HydraulicTravel travel_{config_};
+  lift::FloorTable floors_;
+  TickInput in_;
+};
+
+TEST_F(HydraulicTest, UpTravelStartsTheMotorThenFastThenSlowThenStopsAtTheLevel) {
+  ASSERT_EQ(travel_.start_travel(floors_, 2, Speed::Fast, in_), Cause::None);
+  EXPECT_EQ(tick(0, 0), 0) << "star-delta start: no signal before the motor runs";
+  EXPECT_EQ(tick(1499, 0), 0);
+  EXPECT_EQ(tick(1500, 0), kUp | kHsp | kSfy);
+  EXPECT_EQ(tick(3000, 5499), kUp | kHsp | kSfy);
+  EXPECT_EQ(tick(3100, 5500), kUp | kSfy) << "slowdown 500 mm before the level";
+  EXPECT_EQ(tick(4000, 5996), kUp | kSfy);
+  EXPECT_EQ(tick(4100, 5997), 0) << "within the 3 mm stop tolerance";
+  EXPECT_EQ(travel_.kind(), TravelKind::None);
+  EXPECT_EQ(travel_.current_floor(), 2U);
+  const auto ev = events();
+  ASSERT_EQ(ev.size(), 2U);
+  EXPECT_EQ(ev[0].type, TravelEvent::Type::Started);
+  EXPECT_EQ(ev[1].type, TravelEvent::Type::Finished);
+  EXPECT_EQ(ev[1].floor, 2U);
+  EXPECT_EQ(tick(5000, 5998), 0);
+}
+
+TEST_F(HydraulicTest, DownTravelByTheValveAloneWithTheConfiguredFastSignal) {
+  struct Case {
+    FastDown fast_down;
+    std::uint8_t fast;
+  };
+  for (const Case& c : {Case{FastDown::Hsp, kDw | kHsp}, Case{FastDown::Sp3, kDw | kSp3}}) {
+    config_.fast_down = c.fast_down;
+    travel_ = HydraulicTravel(config_);
+    travel_.set_current_floor(3);
+    in_.now = MonoTime{};
+    in_.position_mm = 9000;
+    ASSERT_EQ(travel_.start_travel(floors_, 0, Speed::Fast, in_), Cause::None);
+    EXPECT_EQ(tick(0, 9000), c.fast) << "no motor start going down";
+    EXPECT_EQ(tick(5000, 701), c.fast);
+    EXPECT_EQ(tick(5100, 700), kDw) << "slowdown 700 mm above the level";
+    EXPECT_EQ(tick(6000, 3), 0);
+    EXPECT_EQ(travel_.current_floor(), 0U);
+  }
+}
+
+TEST_F(HydraulicTest, FasterSpeedsWhereTheUnitHasThem) {
+  struct Case {
+    bool v3, v4;
+    Speed asked;
+    std::uint8_t fast;
+    std::int64_t slow_at;  // the position where the slowdown starts (target 9000)
+  };
+  for (const Case& c : {Case{true, true, Speed::V4, kUp | kHsp | kSfy | kSp2, 7500},
+                        Case{true, true, Speed::V3, kUp | kHsp | kSfy | kSp1, 8000},
+                        Case{true, false, Speed::V4, kUp | kHsp | kSfy | kSp1, 8000},
+                        Case{false, false, Speed::V4, kUp | kHsp | kSfy, 8500},
+                        Case{false, false, Speed::V3, kUp | kHsp | kSfy, 8500}}) {
+    config_.has_v3 = c.v3;
+    config_.has_v4 = c.v4;
+    travel_ = HydraulicTravel(config_);
+    in_.now = MonoTime{};
+    in_.position_mm = 0;
+    ASSERT_EQ(travel_.start_travel(floors_, 3, c.asked, in_), Cause::None);
+    tick(0, 0);
+    EXPECT_EQ(tick(2000, c.slow_at - 1), c.fast);
+    EXPECT_EQ(tick(2100, c.slow_at), kUp | kSfy);
+    travel_.abort(Cause::Stopped, milliseconds(2200));
+  }
+}
+
+TEST_F(HydraulicTest, EveryFaultEndsTheTravelAtOnceReportedOnce) {
+  struct Case {
+    const char* name;
+    void (*inject)(TickInput&);
+    Cause cause;
+  };
+  const std::vector<Case> cases = {
+      {"RDY drops", [](TickInput& i) { i.card_allows_travel = false; }, Cause::CardNotReady},
+      {"ERR",
+       [](TickInput& i) {
+         i.card_error = true;
+         i.card_allows_travel = false;
+       },
+       Cause::CardError},
+      {"card silent",
+       [](TickInput& i) {
+         i.card_silent = true;
+         i.card_allows_travel = false;
+       },
+       Cause::CardSilent},
+      {"bus-off", [](TickInput& i) { i.bus_ok = false; }, Cause::BusFault},
+      {"safety chain", [](TickInput& i) { i.inputs.safety_chain_closed = false; },
+       Cause::SafetyChain},
+      {"doors", [](TickInput& i) { i.inputs.doors_locked = false; }, Cause::DoorsUnlocked},
+      {"inputs lost", [](TickInput& i) { i.inputs.valid = false; }, Cause::InputsLost},
+  };
+  for (const Case& c : cases) {
+    travel_ = HydraulicTravel(config_);
+    in_ = TickInput{};
+    in_.inputs.valid = in_.inputs.safety_chain_closed = true;
+    in_.inputs.doors_closed = in_.inputs.doors_locked = true;
+    in_.card_allows_travel = true;
+    in_.position_mm = 0;
+    ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), Cause::None) << c.name;
+    tick(0, 0);
+    ASSERT_EQ(tick(2000, 1000), kUp | kHsp | kSfy) << c.name;
+    c.inject(in_);
+    EXPECT_EQ(tick(2015, 1010), 0) << c.name << ": a travel bit after the fault";
+    const TickInput healthy = [&] {
+      TickInput i;
+      i.inputs.valid = i.inputs.safety_chain_closed = i.inputs.doors_locked = true;
+      i.card_allows_travel = true;
+      return i;
+    }();
+    in_ = healthy;
+    EXPECT_EQ(tick(2030, 1020), 0) << c.name << ": the travel resumed by itself";
+    const auto ev = events();
+    ASSERT_EQ(ev.size(), 2U) << c.name;
+    EXPECT_EQ(ev[1].type, TravelEvent::Type::Aborted) << c.name;
+    EXPECT_EQ(ev[1].cause, c.cause) << c.name << ": " << to_string(ev[1].cause);
+  }
+}
+
+TEST_F(HydraulicTest, PositionLostAndTheRunTimeLimiterEndTravels) {
+  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), Cause::None);
+  tick(0, 0);
+  EXPECT_EQ(tick(2000, std::nullopt), 0);
+  EXPECT_EQ(events().back().cause, Cause::PositionLost);
+  config_.max_travel_ms = 10000;
+  travel_ = HydraulicTravel(config_);
+  in_.now = MonoTime{};
+  in_.position_mm = 0;
+  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), Cause::None);
+  EXPECT_EQ(tick(10000, 100), kUp | kHsp | kSfy);
+  EXPECT_EQ(tick(10001, 100), 0) << "the car hardly moved in 10 s: pump or valve fault";
+  EXPECT_EQ(events().back().cause, Cause::TravelTimeout);
+}
+
+TEST_F(HydraulicTest, NothingStartsWhileAConditionForbidsIt) {
+  in_.card_allows_travel = false;
+  EXPECT_EQ(travel_.start_travel(floors_, 1, Speed::Fast, in_), Cause::CardNotReady);
+  in_.card_allows_travel = true;
+  in_.inputs.doors_locked = false;
+  EXPECT_EQ(travel_.start_travel(floors_, 1, Speed::Fast, in_), Cause::DoorsUnlocked);
+  in_.position_mm.reset();
+  in_.inputs.doors_locked = true;
+  EXPECT_EQ(travel_.start_travel(floors_, 1, Speed::Fast, in_), Cause::PositionLost);
+  EXPECT_TRUE(events().empty());
+  EXPECT_EQ(tick(0, std::nullopt), 0);
+}
+
+TEST_F(HydraulicTest, RelevellingAtTheSlowSpeedWithDoorsOpenWhereAllowed) {
+  travel_.set_current_floor(1);
+  in_.inputs.doors_locked = in_.inputs.doors_closed = false;
+  in_.inputs.door_zone_bridge = true;
+  in_.position_mm = 2985;  // sank 15 mm
+  ASSERT_EQ(travel_.start_relevel(floors_, 1, in_), Cause::None);
+  EXPECT_EQ(tick(0, 2985), 0);
+  EXPECT_EQ(tick(1500, 2985), kUp | kSfy) << "up by the pump at the slow speed only";
+  EXPECT_EQ(tick(3000, 2998), 0);
+  EXPECT_EQ(travel_.current_floor(), 1U);
+  // Above the level: down by the valve at the slow speed.
+  in_.position_mm = 3020;
+  ASSERT_EQ(travel_.start_relevel(floors_, 1, in_), Cause::None);
+  EXPECT_EQ(tick(4000, 3020), kDw);
+  // Without the bridge, or with relevelling at open doors not allowed: refused.
+  travel_.abort(Cause::Stopped, milliseconds(4100));
+  in_.inputs.door_zone_bridge = false;
+  EXPECT_EQ(travel_.start_relevel(floors_, 1, in_), Cause::DoorsUnlocked);
+  config_.relevel_doors_open = false;
+  travel_ = HydraulicTravel(config_);
+  in_.inputs.door_zone_bridge = true;
+  EXPECT_EQ(travel_.start_relevel(floors_, 1, in_), Cause::DoorsUnlocked);
+}
+
+TEST_F(HydraulicTest, InspectionRunsWhileHeldAndStopsAtTheTerminalLevels) {
+  ASSERT_EQ(travel_.inspect(lift::Direction::Up, in_), Cause::None);
+  EXPECT_EQ(tick(0, 0), 0);
+  EXPECT_EQ(tick(1500, 10), kUp | kSfy | kMsp);
+  EXPECT_EQ(tick(9000, 8999), kUp | kSfy | kMsp);
+  EXPECT_EQ(tick(9100, 9000), 0) << "the top level ends an inspection run up";
+  ASSERT_EQ(travel_.inspect(lift::Direction::Down, in_), Cause::None);
+  EXPECT_EQ(tick(9200, 9000), kDw | kMsp);
+  ASSERT_EQ(travel_.inspect(lift::Direction::None, in_), Cause::None);
+  EXPECT_EQ(tick(9300, 8990), 0) << "released";
+}
+
+TEST_F(HydraulicTest, StopLandsAtTheNextReachableFloor) {
+  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), Cause::None);
+  tick(0, 0);
+  tick(1500, 0);
+  ASSERT_EQ(tick(2000, 2000), kUp | kHsp | kSfy);
+  // Floor 1 (3000) is 1000 mm ahead, beyond the 500 mm slowdown: the car stops there.
+  EXPECT_EQ(travel_.stop(floors_, in_), std::optional<std::size_t>(1));
+  EXPECT_EQ(tick(2100, 2600), kUp | kSfy);
+  EXPECT_EQ(tick(2200, 2998), 0);
+  EXPECT_EQ(travel_.current_floor(), 1U);
+  // Before the motor runs there is nothing to land: everything drops.
+  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), Cause::None);
+  EXPECT_EQ(travel_.stop(floors_, in_), std::nullopt);
+  EXPECT_EQ(events().back().cause, Cause::Stopped);
+}
+
+TEST_F(HydraulicTest, ShaftSignalsSlowAndStopWhereTheyAreMet) {
+  ASSERT_EQ(travel_.start_travel(floors_, 1, Speed::Fast, in_), Cause::None);
+  tick(0, 0);
+  EXPECT_EQ(tick(1500, 100), kUp | kHsp | kSfy);
+  in_.inputs.dcp3_decel_point = true;
+  EXPECT_EQ(tick(1600, 1000), kUp | kSfy);
+  in_.inputs.dcp3_decel_point = false;
+  in_.inputs.dcp3_at_level = true;
+  EXPECT_EQ(tick(1700, 2900), 0);
+  EXPECT_EQ(travel_.current_floor(), 1U);
+}
+
+}  // namespace
+}  // namespace liftd::sch001
