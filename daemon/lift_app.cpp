@@ -14,6 +14,7 @@
 #include "api/commands.hpp"
 #include "common/mono_time.hpp"
 #include "common/version.hpp"
+#include "daemon/lift_common.hpp"
 #include "daemon/simulated_lift.hpp"
 #include "dcp/charset.hpp"
 #include "dcp/messages.hpp"
@@ -39,15 +40,6 @@ constexpr auto kShutdownGrace = std::chrono::milliseconds(500);
 
 dcp::Code2 code2(const std::string& s) {
   return {s.at(0), s.at(1)};
-}
-
-// "state changed" -> "state_changed": journal field values are snake_case words.
-std::string snake(std::string_view text) {
-  std::string out(text);
-  for (char& c : out) {
-    if (c == ' ' || c == '/' || c == '-') c = '_';
-  }
-  return out;
 }
 
 control::ControllerConfig controller_config(const config::Config& c) {
@@ -111,25 +103,6 @@ rt::CycleConfig cycle_config(const config::Config& c, const std::string& device)
   return out;
 }
 
-std::string default_runtime_dir(const config::Config& c) {
-  if (const char* dir = std::getenv("RUNTIME_DIRECTORY")) return dir;  // systemd RuntimeDirectory
-  return std::filesystem::path(c.api.socket).parent_path().string();
-}
-
-// The API socket systemd passed (socket activation, FileDescriptorName=api), or -1: then the
-// server creates it as without systemd. Other passed descriptors are closed.
-int take_listen_fd(const std::string& socket_path) {
-  const std::vector<service::ListenFd> fds = service::listen_fds_from_environment();
-  if (fds.empty()) return -1;
-  const int fd = service::pick_listen_fd(fds, "api");
-  service::close_unused_listen_fds(fds, fd);
-  if (fd < 0) return -1;
-  log::event(log::Level::info, "api", "socket_passed", {{"socket", socket_path}},
-             "using the API socket systemd passed (socket activation); connections wait in its "
-             "queue while liftd restarts");
-  return fd;
-}
-
 log::Level level_for(const control::ControllerEvent& event) {
   if (event.kind == control::ControllerEvent::Kind::Link &&
       event.link.kind == dcp::LinkEventKind::HandshakeProblem) {
@@ -174,10 +147,6 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
       state_interval_(std::chrono::nanoseconds(std::chrono::seconds(1)) /
                       std::max(1, config.api.state_rate_hz)),
       overruns_(rt::CycleConfig{}.period) {
-  if (config.drive.kind != config::DriveKind::Dcp) {
-    throw std::invalid_argument("drive.kind \"" + std::string(drive::to_string(config.drive.kind)) +
-                                "\" is not available in this build; use \"dcp\"");
-  }
   std::string device = config.drive.device;
   if (simulate_) {
     sim_ = std::make_unique<SimulatedLift>(config);
@@ -206,26 +175,8 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
       config.position.source == config::PositionSource::api ? position_feed_.get() : nullptr,
       runtime_dir_, sim_.get());
 
-  api::ServerConfig server;
-  server.socket_path = socket_path_;
-  server.socket_group = config.api.socket_group;
-  server.read_group = config.api.read_group;
-  server.control_group = config.api.control_group;
-  server.inputs_group = config.api.inputs_group;
-  server.max_clients = static_cast<std::size_t>(config.api.max_clients);
-  server.idle_timeout = std::chrono::seconds(config.api.idle_timeout_s);
-  server.listen_fd = take_listen_fd(socket_path_);
-  server.max_clients_per_uid = static_cast<std::size_t>(config.api.max_clients_per_uid);
-  server.reserved_clients = static_cast<std::size_t>(config.api.reserved_clients);
-  server.stalled_reader_timeout = std::chrono::seconds(config.api.stalled_reader_timeout_s);
-  server_ = std::make_unique<api::Server>(
-      daemon.io(), *backend_, server, [](api::LogLevel level, std::string_view text) {
-        const log::Level l = level == api::LogLevel::Error  ? log::Level::error
-                             : level == api::LogLevel::Warn ? log::Level::warn
-                             : level == api::LogLevel::Info ? log::Level::info
-                                                            : log::Level::debug;
-        log::write(l, "api", std::string(text));
-      });
+  server_ = std::make_unique<api::Server>(daemon.io(), *backend_, api_server_config(config),
+                                          api_log_sink());
 
   if (sim_) {
     daemon.add_component({"sim", [this] { return sim_->start(); }, [this] { sim_->stop(); }});
@@ -538,15 +489,7 @@ void LiftApp::publish_state_if_changed(MonoTime now) {
 }
 
 std::string LiftApp::apply_config(const config::Config& next) {
-  api::ServerConfig server;
-  server.read_group = next.api.read_group;
-  server.control_group = next.api.control_group;
-  server.inputs_group = next.api.inputs_group;
-  server.max_clients = static_cast<std::size_t>(next.api.max_clients);
-  server.idle_timeout = std::chrono::seconds(next.api.idle_timeout_s);
-  server.max_clients_per_uid = static_cast<std::size_t>(next.api.max_clients_per_uid);
-  server.reserved_clients = static_cast<std::size_t>(next.api.reserved_clients);
-  server.stalled_reader_timeout = std::chrono::seconds(next.api.stalled_reader_timeout_s);
+  const api::ServerConfig server = api_reload_config(next);
   try {
     server_->reconfigure(server);
   } catch (const std::exception& e) {

@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include "daemon/drives.hpp"
 
 #include "api/server.hpp"
 #include "config/config.hpp"
@@ -30,17 +31,17 @@ class SimulatedLift;
 config::Config simulation_defaults();
 
 /// Everything between the configuration and the running components.
-class LiftApp {
+class LiftApp final : public LiftRunner {
  public:
   /// Builds the parts (throws std::invalid_argument / std::runtime_error with a clear message
   /// on a configuration the parts refuse) and registers them with `daemon`.
   LiftApp(Daemon& daemon, const config::Config& config, bool simulate);
-  ~LiftApp();
+  ~LiftApp() override;
   LiftApp(const LiftApp&) = delete;
   LiftApp& operator=(const LiftApp&) = delete;
 
   /// The API socket path in use.
-  const std::string& socket_path() const { return socket_path_; }
+  const std::string& socket_path() const override { return socket_path_; }
   /// The real-time cycle (statistics for benchmarks and diagnostics).
   const rt::CycleRunner& cycle() const { return *runner_; }
 

@@ -6,6 +6,7 @@
 #include <ctime>
 
 #include "common/mono_time.hpp"
+#include "daemon/lift_common.hpp"
 #include "daemon/simulated_lift.hpp"
 #include "dcp/charset.hpp"
 #include "dcp/trace.hpp"
@@ -43,27 +44,6 @@ std::optional<std::string> direction_name(lift::Direction d) {
   if (d == lift::Direction::Up) return "up";
   if (d == lift::Direction::Down) return "down";
   return std::nullopt;
-}
-
-lift::Inputs to_lift(const api::Inputs& in) {
-  lift::Inputs out;
-  out.valid = true;
-  out.safety_chain_closed = in.safety_chain;
-  out.doors_closed = in.doors_closed;
-  out.doors_locked = in.doors_locked;
-  out.inspection = in.inspection;
-  out.recall = in.recall;
-  out.button_up = in.button_up;
-  out.button_down = in.button_down;
-  out.end_zone_top = in.end_zone_top;
-  out.end_zone_bottom = in.end_zone_bottom;
-  out.door_zone_bridge = in.zone_door;
-  // DCP3 shaft signals: the deceleration point of any speed in the direction of travel, and the
-  // level zone (the sequencer only looks at them during a DCP3 travel).
-  out.dcp3_decel_point = in.decel_v4_up || in.decel_v4_down || in.decel_v3_up || in.decel_v3_down ||
-                         in.decel_v2_up || in.decel_v2_down || in.decel_v1_up || in.decel_v1_down;
-  out.dcp3_at_level = in.zone_level;
-  return out;
 }
 
 std::string utf8_row(const std::array<std::uint8_t, dcp::kDisplayColumns>& row) {

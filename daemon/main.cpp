@@ -14,6 +14,7 @@
 #include "config/config.hpp"
 #include "daemon/cli.hpp"
 #include "daemon/daemon.hpp"
+#include "daemon/drives.hpp"
 #include "daemon/lift_app.hpp"
 #include "log/log.hpp"
 #include "rt/rt_thread.hpp"
@@ -147,10 +148,10 @@ int run_daemon(const CommandLine& cl) {
         },
         path);
   }
-  std::unique_ptr<liftd::daemon::LiftApp> app;
+  std::unique_ptr<liftd::daemon::LiftRunner> app;
   try {
     // The daemon's copy: a reload updates it in place, and the parts read the keys it applies.
-    app = std::make_unique<liftd::daemon::LiftApp>(daemon, daemon.config(), cl.simulate);
+    app = liftd::daemon::make_lift(daemon, daemon.config(), cl.simulate);
   } catch (const std::exception& error) {
     log::event(log::Level::error, "daemon", "setup_failed", {}, error.what());
     log::flush();

@@ -204,6 +204,18 @@ api::Result SimulatedLift::apply(const api::SimRequest& request, MonoTime now) {
       obstructed_ = request.on;
       io_.set_door_obstructed(request.on, now);
       break;
+    case SimAction::OilTemperature:
+    case SimAction::Pressure:
+    case SimAction::Overpressure:
+    case SimAction::CardSilence:
+    case SimAction::BusOff:
+    case SimAction::ColdOil:
+    case SimAction::Sink:
+      return api::Result::fail(
+          api::ErrorCode::BadRequest,
+          "\"" + std::string(api::kSimActions[static_cast<std::size_t>(request.action)]) +
+              "\" is for the simulated SCH001 card (drive.kind \"sch001\"); this lift is DCP",
+          "action");
   }
   io_.advance(now);
   log::event(

@@ -176,12 +176,22 @@ enum class SimAction : std::uint8_t {
   ObstructDoors,     ///< holds the doors open (on) or releases them (off)
   ChannelFault,      ///< a fault on the drive's communication channel only (DCP 5)
   RefuseTarget,      ///< the drive refuses the next target change with S5 (DCP 4.1)
+  // The simulated SCH001 card and hydraulic unit (drive.kind "sch001"); general_fault is its
+  // ERR and not_ready its RDY = 0 there.
+  OilTemperature,  ///< the card's T1 relay on/off (oil temperature)
+  Pressure,        ///< the card's P1 relay on/off (minimum/maximum pressure)
+  Overpressure,    ///< the card's P2 relay on/off (overpressure)
+  CardSilence,     ///< the card stops sending (on) or sends again (off)
+  BusOff,          ///< one CAN bus-off error frame reaches the controller
+  ColdOil,         ///< cold oil: every speed of the unit is lower (on/off)
+  Sink,            ///< the car at rest sinks 2 mm/s (leaking valve, cooling oil) on/off
 };
 /// Wire names of SimAction, in enum order.
-inline constexpr std::array<std::string_view, 13> kSimActions = {
-    "general_fault",  "advance_warning",   "not_ready",     "reply_fault", "clear_reply_faults",
-    "drift",          "safety_chain_open", "door_reversal", "open_doors",  "close_doors",
-    "obstruct_doors", "channel_fault",     "refuse_target"};
+inline constexpr std::array<std::string_view, 20> kSimActions = {
+    "general_fault",  "advance_warning",   "not_ready",     "reply_fault",     "clear_reply_faults",
+    "drift",          "safety_chain_open", "door_reversal", "open_doors",      "close_doors",
+    "obstruct_doors", "channel_fault",     "refuse_target", "oil_temperature", "pressure",
+    "overpressure",   "card_silence",      "bus_off",       "cold_oil",        "sink"};
 
 /// A fault on the simulated drive's communication channel (DCP 5), the real-time bytes intact.
 enum class SimChannelFault : std::uint8_t {

@@ -24,6 +24,7 @@ using nlohmann::json;
 constexpr std::array<std::string_view, 5> kLogLevelNames{"trace", "debug", "info", "warn", "error"};
 constexpr std::array<std::string_view, 3> kRs485Names{"auto", "required", "off"};
 constexpr std::array<std::string_view, 3> kPositionSourceNames{"sim", "api", "can"};
+constexpr std::array<std::string_view, 2> kFastDownNames{"hsp", "sp3"};
 constexpr std::array<std::string_view, 4> kRelevelDoorsNames{"open", "closed", "both", "never"};
 constexpr std::array<std::string_view, 5> kDataInfoTypeNames{"0", "1", "2", "3", "4"};
 
@@ -184,6 +185,24 @@ std::string control_rule(const std::string& text) {
 std::string absolute_path_rule(const std::string& text) {
   if (text.empty() || text.front() != '/') return "must be an absolute path (start with /)";
   return control_rule(text);
+}
+
+// A SocketCAN interface name (at most 15 bytes, IFNAMSIZ) or "unix:" and an absolute path.
+std::string can_endpoint_rule(const std::string& text) {
+  if (text.rfind("unix:", 0) == 0) {
+    const std::string path = text.substr(5);
+    if (path.size() > 107) return "unix: socket path longer than 107 bytes";
+    return absolute_path_rule(path);
+  }
+  if (text.size() > 15) return "interface name longer than 15 bytes";
+  const auto ok = [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '-' || c == '.';
+  };
+  if (!std::all_of(text.begin(), text.end(), ok)) {
+    return "is neither an interface name (letters, digits, _ - .) nor unix:PATH";
+  }
+  return {};
 }
 
 std::string group_name_rule(const std::string& text) {
@@ -463,10 +482,11 @@ const std::vector<Key>& schema() {
                          "least severe message logged (--log-level overrides it)", &Config::log,
                          &LogConfig::level));
     // drive
-    t.push_back(enum_key("drive.kind", drive::kKindNames,
-                         "protocol of the drive: DCP over RS485, Siemens USS, or SCH001 over CAN "
-                         "(\"uss\" and \"sch001\" are refused: not implemented in this version)",
-                         &Config::drive, &DriveConfig::kind));
+    t.push_back(
+        enum_key("drive.kind", drive::kKindNames,
+                 "protocol of the drive: DCP over RS485, SCH001 hydraulic card over CAN, or "
+                 "Siemens USS (\"uss\" is refused: not implemented in this version)",
+                 &Config::drive, &DriveConfig::kind));
     t.push_back(string_key("drive.device", 1, 4096, "absolute path", absolute_path_rule,
                            "serial port of the drive link", &Config::drive, &DriveConfig::device));
     t.push_back(enum_key("drive.rs485", kRs485Names,
@@ -644,6 +664,56 @@ const std::vector<Key>& schema() {
       k.get = [](const Config& c) { return json(c.travel.dcp3_decel_distance_mm); };
       t.push_back(std::move(k));
     }
+    // can, sch001
+    t.push_back(string_key("can.interface", 1, 112,
+                           "interface name (at most 15 bytes) or unix:PATH", can_endpoint_rule,
+                           "CAN endpoint of the SCH001 card: a SocketCAN interface at 125 kbit/s "
+                           "(card document 3a), or unix:PATH where a card simulator listens",
+                           &Config::can, &CanConfig::interface));
+    // 0x7A0 + 95 = 0x7FF: the card's 96 identifiers stay within 11 bits (card document 1.6).
+    t.push_back(int_key("sch001.base", 0, 0x7A0,
+                        "card parameter P479: base of the card's 96 CAN identifiers; 0 = 0x550 "
+                        "(card document 2.1)",
+                        &Config::sch001, &Sch001Config::base));
+    t.push_back(int_key("sch001.controller_node", 2, 95,
+                        "card parameter P480: our node is base + this (49: 0x581; card document "
+                        "1.6, 2.2)",
+                        &Config::sch001, &Sch001Config::controller_node));
+    t.push_back(bool_key("sch001.single_unit",
+                         "one power unit: the card's AVV and PNP2 are valid (card document 3b)",
+                         &Config::sch001, &Sch001Config::single_unit));
+    t.push_back(enum_key("sch001.fast_down", kFastDownNames,
+                         "the fast speed down: hsp when card P435 = 0, sp3 when card P453 = 1",
+                         &Config::sch001, &Sch001Config::fast_down));
+    t.push_back(bool_key("sch001.has_v3", "the unit has speed V3 (HSP + SP1)", &Config::sch001,
+                         &Sch001Config::has_v3));
+    t.push_back(bool_key("sch001.has_v4", "the unit has speed V4 (HSP + SP2)", &Config::sch001,
+                         &Sch001Config::has_v4));
+    t.push_back(int_key("sch001.star_delta_ms", 0, 10000,
+                        "motor start (star-delta) before SFY and the up signals", &Config::sch001,
+                        &Sch001Config::star_delta_ms));
+    t.push_back(int_key("sch001.slowdown_up_mm", 10, 5000,
+                        "fast speed up ends this far below the level", &Config::sch001,
+                        &Sch001Config::slowdown_up_mm));
+    t.push_back(int_key("sch001.slowdown_down_mm", 10, 5000,
+                        "fast speed down ends this far above the level", &Config::sch001,
+                        &Sch001Config::slowdown_down_mm));
+    t.push_back(int_key("sch001.slowdown_v3_mm", 10, 5000, "V3 up ends this far below the level",
+                        &Config::sch001, &Sch001Config::slowdown_v3_mm));
+    t.push_back(int_key("sch001.slowdown_v4_mm", 10, 5000, "V4 up ends this far below the level",
+                        &Config::sch001, &Sch001Config::slowdown_v4_mm));
+    t.push_back(int_key("sch001.stop_tolerance_mm", 1, 50,
+                        "the slow approach drops every signal within this of the level",
+                        &Config::sch001, &Sch001Config::stop_tolerance_mm));
+    t.push_back(int_key("sch001.relevel_start_mm", 2, 100,
+                        "relevel when the car at rest is further than this from its level",
+                        &Config::sch001, &Sch001Config::relevel_start_mm));
+    t.push_back(int_key("sch001.max_travel_ms", 5000, 300000,
+                        "motor run-time limiter: a travel longer than this ends", &Config::sch001,
+                        &Sch001Config::max_travel_ms));
+    t.push_back(bool_key("sch001.auto_relevel",
+                         "relevel by itself when the car at rest sinks out of the level zone",
+                         &Config::sch001, &Sch001Config::auto_relevel));
     t.push_back(int_key("sim.dcp", 3, 4, "DCP version the simulated drive speaks (--simulate)",
                         &Config::sim, &SimConfig::dcp));
     return t;
@@ -761,9 +831,10 @@ void apply_key(const Key& key, const json& value, Config& config, Problems& prob
 // Values the schema names for later versions but this build cannot run: refused here, so that
 // --check-config and the daemon agree (a later implementation only removes the refusal).
 void check_implemented(const Config& config, Problems& problems) {
-  if (config.drive.kind != DriveKind::Dcp) {
+  if (config.drive.kind == DriveKind::Uss) {
     problems.push_back({"drive.kind", json_quoted(to_string(config.drive.kind)) +
-                                          " is not implemented in this version: use \"dcp\""});
+                                          " is not implemented in this version: use \"dcp\" or "
+                                          "\"sch001\""});
   }
   if (config.position.source == PositionSource::can) {
     problems.push_back(
@@ -773,6 +844,10 @@ void check_implemented(const Config& config, Problems& problems) {
 }
 
 void check_cross_keys(const Config& config, const json& document, Problems& problems) {
+  // The SCH001 frame carries floor numbers in one byte (card document 3c).
+  if (config.drive.kind == DriveKind::Sch001 && config.floors.size() > 255) {
+    problems.push_back({"floors", "an SCH001 lift has at most 255 floors (one byte, 3c)"});
+  }
   // Reserving every slot would leave none for read-only clients.
   if (config.api.reserved_clients >= config.api.max_clients) {
     problems.push_back({"api.reserved_clients", std::to_string(config.api.reserved_clients) +
@@ -1120,11 +1195,26 @@ nlohmann::json to_json(const Config& config) {
 
 std::string summary(const Config& config) {
   std::ostringstream out;
-  out << "drive:    " << to_string(config.drive.kind) << " on " << config.drive.device << " (rs485 "
-      << to_string(config.drive.rs485) << ")\n";
-  out << "dcp:      maker " << config.dcp.manufacturer << ", language " << config.dcp.language
-      << ", data-information-type " << config.dcp.data_info_type << ", link fault after "
-      << config.dcp.link_fault_frames << " frames\n";
+  if (config.drive.kind == DriveKind::Sch001) {
+    // Card document 1.6 and 2: base P479 (0 = 0x550), our node base + P480.
+    const int base = config.sch001.base == 0 ? 0x550 : config.sch001.base;
+    char ids[64];
+    std::snprintf(ids, sizeof ids, "card receives on 0x%03X, sends to 0x%03X", base + 1,
+                  base + config.sch001.controller_node);
+    out << "drive:    sch001 on CAN " << config.can.interface << " (" << ids << ")\n";
+    out << "sch001:   " << (config.sch001.single_unit ? "single unit" : "several units")
+        << ", fast down by " << (config.sch001.fast_down == FastDown::sp3 ? "SP3" : "HSP")
+        << (config.sch001.has_v4   ? ", V3 and V4"
+            : config.sch001.has_v3 ? ", V3"
+                                   : "")
+        << ", star-delta " << config.sch001.star_delta_ms << " ms\n";
+  } else {
+    out << "drive:    " << to_string(config.drive.kind) << " on " << config.drive.device
+        << " (rs485 " << to_string(config.drive.rs485) << ")\n";
+    out << "dcp:      maker " << config.dcp.manufacturer << ", language " << config.dcp.language
+        << ", data-information-type " << config.dcp.data_info_type << ", link fault after "
+        << config.dcp.link_fault_frames << " frames\n";
+  }
   out << "floors:   " << config.floors.size();
   if (!config.floors.empty()) {
     out << ", " << json_quoted(config.floors.front().name) << " at "

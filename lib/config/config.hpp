@@ -118,6 +118,34 @@ struct TravelConfig {
   std::map<std::string, int> dcp3_decel_distance_mm = {{"V3", 1200}, {"V4", 2500}};
 };
 
+/// `can.*`
+struct CanConfig {
+  /// can.interface: a SocketCAN interface ("can0") or "unix:PATH" where a card simulator listens.
+  std::string interface = "can0";
+};
+
+/// Which signal is the SCH001 unit's fast speed down (card parameters P435 / P453).
+enum class FastDown : std::uint8_t { hsp, sp3 };
+
+/// `sch001.*`: the SCH001 card and the hydraulic unit behind it.
+struct Sch001Config {
+  int base = 0;                        ///< sch001.base: card parameter P479 (0 = 0x550)
+  int controller_node = 49;            ///< sch001.controller_node: card parameter P480
+  bool single_unit = true;             ///< sch001.single_unit: one power unit (AVV, PNP2 valid)
+  FastDown fast_down = FastDown::hsp;  ///< sch001.fast_down
+  bool has_v3 = false;                 ///< sch001.has_v3
+  bool has_v4 = false;                 ///< sch001.has_v4
+  int star_delta_ms = 1500;            ///< sch001.star_delta_ms
+  int slowdown_up_mm = 500;            ///< sch001.slowdown_up_mm
+  int slowdown_down_mm = 700;          ///< sch001.slowdown_down_mm
+  int slowdown_v3_mm = 1000;           ///< sch001.slowdown_v3_mm
+  int slowdown_v4_mm = 1500;           ///< sch001.slowdown_v4_mm
+  int stop_tolerance_mm = 3;           ///< sch001.stop_tolerance_mm
+  int relevel_start_mm = 10;           ///< sch001.relevel_start_mm
+  int max_travel_ms = 45000;           ///< sch001.max_travel_ms
+  bool auto_relevel = true;            ///< sch001.auto_relevel
+};
+
 /// `sim.*`
 struct SimConfig {
   int dcp = 4;  ///< sim.dcp: the simulated drive speaks DCP3 or DCP4
@@ -135,6 +163,8 @@ struct Config {
   std::vector<Floor> floors = default_floors();  ///< floors
   PositionConfig position;                       ///< position.*
   TravelConfig travel;                           ///< travel.*
+  CanConfig can;                                 ///< can.*
+  Sch001Config sch001;                           ///< sch001.*
   SimConfig sim;                                 ///< sim.*
 };
 

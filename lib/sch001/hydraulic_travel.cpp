@@ -19,7 +19,7 @@ std::string_view to_string(TravelKind kind) noexcept {
     case TravelKind::None:
       return "idle";
     case TravelKind::Travel:
-      return "travel";
+      return "hydraulic";
     case TravelKind::Relevel:
       return "relevel";
     case TravelKind::Inspection:
@@ -47,19 +47,19 @@ std::string_view to_string(Cause cause) noexcept {
     case Cause::None:
       return "none";
     case Cause::Stopped:
-      return "stopped";
+      return "stop_requested";
     case Cause::SafetyChain:
-      return "safety_chain";
+      return "safety_chain_open";
     case Cause::DoorsUnlocked:
-      return "doors_unlocked";
+      return "doors_not_locked";
     case Cause::InputsLost:
       return "inputs_lost";
     case Cause::PositionLost:
       return "position_lost";
     case Cause::CardError:
-      return "card_error";
+      return "drive_fault";
     case Cause::CardNotReady:
-      return "card_not_ready";
+      return "drive_not_ready";
     case Cause::CardSilent:
       return "card_silent";
     case Cause::BusFault:
@@ -67,7 +67,7 @@ std::string_view to_string(Cause cause) noexcept {
     case Cause::TravelTimeout:
       return "travel_timeout";
     case Cause::Shutdown:
-      return "shutdown";
+      return "shutting_down";
   }
   return "none";
 }

@@ -51,7 +51,7 @@ enum class Speed : std::uint8_t { Fast, V3, V4 };
 
 /// What runs.
 enum class TravelKind : std::uint8_t { None, Travel, Relevel, Inspection };
-/// "idle", "travel", "relevel", "inspection".
+/// "idle", "hydraulic", "relevel", "inspection" (status travel.state, travel events).
 std::string_view to_string(TravelKind kind) noexcept;
 
 /// Where a travel is.
@@ -79,7 +79,8 @@ enum class Cause : std::uint8_t {
   TravelTimeout,  ///< the motor run-time limit passed
   Shutdown,       ///< the service is stopping and the deadline passed
 };
-/// snake_case, for events ("safety_chain", ...).
+/// The API's abort cause names, shared with the DCP travels where the meaning is the same
+/// ("safety_chain_open", "drive_fault" for ERR, "drive_not_ready" for RDY = 0, ...).
 std::string_view to_string(Cause cause) noexcept;
 
 /// The facts of one tick.

@@ -229,11 +229,17 @@ const std::vector<std::string> kAbortCauses = {
     "drive_fault",         "safety_chain_open",  "doors_not_locked",   "position_lost",
     "inputs_lost",         "door_reversal",      "fast_start_timeout", "stop_requested",
     "drive_did_not_start", "drive_did_not_stop", "mode_changed",       "stopped_off_level",
-    "level_not_reached",   "target_refused",     "shutting_down"};
+    "level_not_reached",   "target_refused",     "shutting_down",      "card_silent",
+    "bus_fault",           "travel_timeout"};
 
 TEST(ApiDocs, AbortCausesMatchTheTravelLibrary) {
-  EXPECT_EQ(returned_names("lib/travel/types.cpp", "to_string(AbortCause cause)", {"none"}),
-            as_set(kAbortCauses));
+  // The DCP travels' causes and the hydraulic travels' (which reuse the names where the
+  // meaning is the same).
+  std::set<std::string> causes =
+      returned_names("lib/travel/types.cpp", "to_string(AbortCause cause)", {"none"});
+  causes.merge(
+      returned_names("lib/sch001/hydraulic_travel.cpp", "to_string(Cause cause)", {"none"}));
+  EXPECT_EQ(causes, as_set(kAbortCauses));
   expect_table_rows(kAbortCauses, "abort cause");
   const auto schema = read_schema();
   const auto& travel = schema.at("$defs").at("event_travel").at("properties");
@@ -255,12 +261,16 @@ TEST(ApiDocs, TravelEventTypesMatchTheTravelLibrary) {
 }
 
 // Travel kinds as status.travel.state and the travel event's kind ("none" only in events).
-const std::vector<std::string> kTravelKinds = {"distance",   "relevel_distance", "speed",  "crawl",
-                                               "inspection", "recall",           "relevel"};
+const std::vector<std::string> kTravelKinds = {"distance", "relevel_distance", "speed",
+                                               "crawl",    "inspection",       "recall",
+                                               "relevel",  "hydraulic"};
 
 TEST(ApiDocs, TravelKindsMatchTheTravelLibrary) {
-  EXPECT_EQ(returned_names("lib/travel/types.cpp", "to_string(TravelKind kind)", {"none"}),
-            as_set(kTravelKinds));
+  std::set<std::string> named =
+      returned_names("lib/travel/types.cpp", "to_string(TravelKind kind)", {"none"});
+  named.merge(
+      returned_names("lib/sch001/hydraulic_travel.cpp", "to_string(TravelKind kind)", {"idle"}));
+  EXPECT_EQ(named, as_set(kTravelKinds));
   expect_table_rows(kTravelKinds, "travel kind");
   const auto schema = read_schema();
   const auto& defs = schema.at("$defs");

@@ -79,6 +79,22 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/travel/dcp3_stop_lead_mm", 0},
       {"/travel/dcp3_speed_count", 2},
       {"/travel/dcp3_decel_distance_mm", {{"V4", 2500}, {"V3", 1200}}},
+      {"/can/interface", "can0"},
+      {"/sch001/base", 0},
+      {"/sch001/controller_node", 49},
+      {"/sch001/single_unit", true},
+      {"/sch001/fast_down", "hsp"},
+      {"/sch001/has_v3", false},
+      {"/sch001/has_v4", false},
+      {"/sch001/star_delta_ms", 1500},
+      {"/sch001/slowdown_up_mm", 500},
+      {"/sch001/slowdown_down_mm", 700},
+      {"/sch001/slowdown_v3_mm", 1000},
+      {"/sch001/slowdown_v4_mm", 1500},
+      {"/sch001/stop_tolerance_mm", 3},
+      {"/sch001/relevel_start_mm", 10},
+      {"/sch001/max_travel_ms", 45000},
+      {"/sch001/auto_relevel", true},
       {"/sim/dcp", 4},
   };
   const LoadResult result = parse("{}", "test");
@@ -143,7 +159,7 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
   const LoadResult r = parse(text, "test");
   // The values reach the struct; the two this version cannot run are refused (and nothing else).
   ASSERT_EQ(all_problems(r),
-            "drive.kind: \"uss\" is not implemented in this version: use \"dcp\"\n"
+            "drive.kind: \"uss\" is not implemented in this version: use \"dcp\" or \"sch001\"\n"
             "position.source: \"can\" is not implemented in this version: use \"api\" (or "
             "\"sim\" with --simulate)\n");
   const Config& c = r.config;
@@ -354,9 +370,16 @@ TEST(ConfigFile, UnreadableFileNamesThePathAndTheErrnoText) {
 TEST(ConfigProblems, WhatTheDaemonCannotRunIsRefused) {
   const std::vector<BadCase> cases = {
       {"USS drive: not implemented yet", R"({"drive": {"kind": "uss"}})", "drive.kind",
-       "\"uss\" is not implemented in this version: use \"dcp\""},
-      {"SCH001 drive: not implemented yet", R"({"drive": {"kind": "sch001"}})", "drive.kind",
-       "\"sch001\" is not implemented in this version: use \"dcp\""},
+       "\"uss\" is not implemented in this version: use \"dcp\" or \"sch001\""},
+      {"CAN endpoint that is neither an interface nor unix:PATH",
+       R"({"can": {"interface": "can 0"}})", "can.interface",
+       "is neither an interface name (letters, digits, _ - .) nor unix:PATH"},
+      {"unix: endpoint with a relative path", R"({"can": {"interface": "unix:card.sock"}})",
+       "can.interface", "must be an absolute path"},
+      {"SCH001 controller node 0 (the card would ignore us)",
+       R"({"sch001": {"controller_node": 0}})", "sch001.controller_node", "2..95"},
+      {"SCH001 base whose identifiers leave 11 bits", R"({"sch001": {"base": 1953}})",
+       "sch001.base", "0..1952"},
       {"CAN position: not implemented yet", R"({"position": {"source": "can"}})", "position.source",
        "\"can\" is not implemented in this version"},
       {"NUL inside the socket path (bound at the text before it)",

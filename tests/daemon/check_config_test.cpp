@@ -151,8 +151,6 @@ TEST(CheckConfigAgreesWithTheDaemon, EverythingTheDaemonRefusesIsRefusedWithTwo)
   const std::vector<RefusedCase> cases = {
       {"USS drive", R"({"drive": {"kind": "uss"}})", "",
        "drive.kind: \"uss\" is not implemented in this version: use \"dcp\""},
-      {"SCH001 drive", R"({"drive": {"kind": "sch001"}})", "",
-       "drive.kind: \"sch001\" is not implemented in this version"},
       {"CAN position", R"({"position": {"source": "can"}})", "",
        "position.source: \"can\" is not implemented in this version"},
       {"CPU that is not there", R"({"rt": {"cpu": 1023}})", "",

@@ -112,9 +112,10 @@ class Lift {
  public:
   /// Starts the daemon with `"sim": {"dcp": dcp}` and `travel` merged into the config; waits
   /// until the link is up (setup_error() is empty then). `wrapper` runs the daemon (a program
-  /// and its arguments before liftd's), e.g. a seccomp filter.
+  /// and its arguments before liftd's), e.g. a seccomp filter; `extra` is merged into the
+  /// config last (another drive kind, its floors).
   Lift(const std::string& name, int dcp, const json& travel = json::object(),
-       const std::vector<std::string>& wrapper = {}) {
+       const std::vector<std::string>& wrapper = {}, const json& extra = json::object()) {
     std::string leaf = name;  // a parameterised test's name has a '/'
     std::replace(leaf.begin(), leaf.end(), '/', '-');
     dir_ = std::filesystem::temp_directory_path() /
@@ -131,6 +132,7 @@ class Lift {
                      {"inputs_group", ""}}},
                    {"sim", {{"dcp", dcp}}}};
     if (!travel.empty()) config["travel"] = travel;
+    config.merge_patch(extra);
     const std::string config_path = (dir_ / "liftd.json").string();
     std::ofstream(config_path) << config.dump(2);
     std::vector<std::string> args = wrapper;

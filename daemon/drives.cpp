@@ -1,0 +1,23 @@
+#include "daemon/drives.hpp"
+
+#include <stdexcept>
+
+#include "daemon/hydraulic_lift.hpp"
+#include "daemon/lift_app.hpp"
+
+namespace liftd::daemon {
+
+std::unique_ptr<LiftRunner> make_lift(Daemon& daemon, const config::Config& config, bool simulate) {
+  switch (config.drive.kind) {
+    case drive::Kind::Dcp:
+      return std::make_unique<LiftApp>(daemon, config, simulate);
+    case drive::Kind::Sch001:
+      return std::make_unique<HydraulicLift>(daemon, config, simulate);
+    case drive::Kind::Uss:
+      break;
+  }
+  throw std::invalid_argument("drive.kind \"" + std::string(drive::to_string(config.drive.kind)) +
+                              "\" is not available in this build; use \"dcp\" or \"sch001\"");
+}
+
+}  // namespace liftd::daemon

@@ -1,0 +1,861 @@
+#include "daemon/hydraulic_lift.hpp"
+
+#include <poll.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+#include "api/commands.hpp"
+#include "daemon/lift_common.hpp"
+#include "log/log.hpp"
+
+namespace liftd::daemon {
+namespace {
+
+using namespace std::chrono_literals;
+using api::Result;
+
+constexpr auto kPollPeriod = 10ms;        // io thread: replies, events, watch stream
+constexpr auto kSimInputsPeriod = 100ms;  // the simulated I/O board reports this often
+constexpr auto kReplyGrace = 3s;  // the CAN thread answers within a tick; this catches a stall
+constexpr auto kShutdownDeadline = 20s;   // as the DCP lift: landing from full speed takes seconds
+constexpr auto kShutdownGrace = 300ms;    // after a forced end: three answers without a signal
+constexpr auto kRejectLogInterval = 10s;  // rejected card frames are journalled at most this often
+constexpr double kSinkMmPerS = 2.0;       // `sim sink`: a leaking valve or cooling oil
+
+sch001::ControllerConfig controller_config(const config::Config& c) {
+  sch001::ControllerConfig out;
+  std::string why;
+  const auto ids = sch001::ids_for(static_cast<std::uint32_t>(c.sch001.base),
+                                   static_cast<std::uint32_t>(c.sch001.controller_node), &why);
+  if (!ids) throw std::invalid_argument("sch001: " + why);
+  out.link.ids = *ids;
+  out.link.single_unit = c.sch001.single_unit;
+  sch001::HydraulicConfig& h = out.hydraulic;
+  h.has_v3 = c.sch001.has_v3;
+  h.has_v4 = c.sch001.has_v4;
+  h.fast_down =
+      c.sch001.fast_down == config::FastDown::sp3 ? sch001::FastDown::Sp3 : sch001::FastDown::Hsp;
+  h.star_delta_ms = static_cast<std::uint32_t>(c.sch001.star_delta_ms);
+  h.slowdown_up_mm = static_cast<std::uint32_t>(c.sch001.slowdown_up_mm);
+  h.slowdown_down_mm = static_cast<std::uint32_t>(c.sch001.slowdown_down_mm);
+  h.slowdown_v3_mm = static_cast<std::uint32_t>(c.sch001.slowdown_v3_mm);
+  h.slowdown_v4_mm = static_cast<std::uint32_t>(c.sch001.slowdown_v4_mm);
+  h.stop_tolerance_mm = static_cast<std::uint32_t>(c.sch001.stop_tolerance_mm);
+  h.relevel_start_mm = static_cast<std::uint32_t>(c.sch001.relevel_start_mm);
+  h.max_travel_ms = static_cast<std::uint32_t>(c.sch001.max_travel_ms);
+  h.relevel_doors_open = c.travel.relevel_with_doors == config::RelevelDoors::open ||
+                         c.travel.relevel_with_doors == config::RelevelDoors::both;
+  out.auto_relevel =
+      c.sch001.auto_relevel && c.travel.relevel_with_doors != config::RelevelDoors::never;
+  out.lift.level_tolerance_mm = static_cast<std::uint32_t>(c.travel.level_tolerance_mm);
+  for (const auto& f : c.floors) out.floors_mm.push_back(f.level_mm);
+  out.inputs_timeout = std::chrono::milliseconds(c.inputs.timeout_ms);
+  out.inspection_hold = std::chrono::milliseconds(c.travel.inspection_hold_ms);
+  return out;
+}
+
+std::optional<std::string> direction_name(lift::Direction d) {
+  switch (d) {
+    case lift::Direction::Up:
+      return "up";
+    case lift::Direction::Down:
+      return "down";
+    case lift::Direction::None:
+      break;
+  }
+  return std::nullopt;
+}
+
+nlohmann::json card_json(const sch001::CardStatus& s, bool single_unit) {
+  nlohmann::json j = nlohmann::json::object();
+  j["err"] = s.err;
+  j["rdy"] = s.rdy;
+  j["t1"] = s.t1;
+  j["p1"] = s.p1;
+  j["p2"] = s.p2;
+  j["pnp1"] = s.pnp1;
+  // 3b: valid in a single-unit system only.
+  j["avv"] = single_unit ? nlohmann::json(s.avv) : nlohmann::json(nullptr);
+  j["pnp2"] = single_unit ? nlohmann::json(s.pnp2) : nlohmann::json(nullptr);
+  return j;
+}
+
+nlohmann::json bits_json(const sch001::CommandBits& b) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [key, bit] : {std::pair{"up", b.up},
+                                 {"dw", b.dw},
+                                 {"hsp", b.hsp},
+                                 {"msp", b.msp},
+                                 {"sfy", b.sfy},
+                                 {"sp1", b.sp1},
+                                 {"sp2", b.sp2},
+                                 {"sp3", b.sp3}}) {
+    j[key] = bit;
+  }
+  return j;
+}
+
+/// "ERR T1" for the journal: the relays that are on, by name; "none" when none.
+std::string card_text(const sch001::CardStatus& s, bool single_unit) {
+  std::string out;
+  const auto add = [&out](bool on, const char* name) {
+    if (on) out += (out.empty() ? "" : " ") + std::string(name);
+  };
+  add(s.err, "ERR");
+  add(s.rdy, "RDY");
+  add(s.t1, "T1");
+  add(s.p1, "P1");
+  add(s.p2, "P2");
+  add(s.pnp1, "PNP1");
+  if (single_unit) {
+    add(s.avv, "AVV");
+    add(s.pnp2, "PNP2");
+  }
+  return out.empty() ? "none" : out;
+}
+
+}  // namespace
+
+// ---- the simulated card ----
+
+namespace {
+
+sim::CardSimConfig card_sim_config(const config::Config& c) {
+  sim::CardSimConfig out;
+  out.ids = *sch001::ids_for(static_cast<std::uint32_t>(c.sch001.base),
+                             static_cast<std::uint32_t>(c.sch001.controller_node));
+  out.fast_down_sp3 = c.sch001.fast_down == config::FastDown::sp3;
+  if (!c.floors.empty()) {
+    out.start_mm = static_cast<double>(c.floors.front().level_mm);
+    out.bottom_mm = static_cast<double>(c.floors.front().level_mm) - 200.0;
+    out.top_mm = static_cast<double>(c.floors.back().level_mm) + 300.0;
+  }
+  return out;
+}
+
+sim::SimIoConfig card_io_config(const config::Config& c) {
+  sim::SimIoConfig out;
+  if (!c.floors.empty()) {
+    out.shaft_bottom_mm = static_cast<double>(c.floors.front().level_mm);
+    out.shaft_top_mm = static_cast<double>(c.floors.back().level_mm);
+  }
+  return out;
+}
+
+}  // namespace
+
+SimulatedCard::SimulatedCard(const config::Config& config, can::CanSocket card_end)
+    : socket_(std::move(card_end)),
+      card_(card_sim_config(config), mono_now()),
+      io_(card_io_config(config), mono_now()) {
+  encoder_.mm_.store(std::llround(card_.state().position_mm), std::memory_order_relaxed);
+}
+
+SimulatedCard::~SimulatedCard() {
+  stop();
+}
+
+bool SimulatedCard::start() {
+  stop_.store(false);
+  thread_ = std::thread([this] { loop(); });
+  log::event(log::Level::info, "sim", "sim_started", {{"device", "socketpair"}},
+             "simulated SCH001 card answering on a CAN socketpair");
+  return true;
+}
+
+void SimulatedCard::stop() {
+  if (!thread_.joinable()) return;
+  stop_.store(true);
+  thread_.join();
+  log_violations();
+  std::lock_guard<std::mutex> lock(mutex_);
+  log::event(log::Level::info, "sim", "sim_stopped",
+             {{"position_mm", std::to_string(std::llround(card_.state().position_mm))},
+              {"violations", std::to_string(card_.state().violations)}},
+             "simulated SCH001 card stopped: position " +
+                 std::to_string(std::llround(card_.state().position_mm)) + " mm, " +
+                 std::to_string(card_.state().violations) +
+                 " violation(s) of the card document seen");
+}
+
+void SimulatedCard::loop() {
+  while (!stop_.load()) {
+    pollfd p{socket_.fd(), POLLIN, 0};
+    (void)::poll(&p, 1, 5);
+    const MonoTime now = mono_now();
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (int i = 0; i < 16; ++i) {
+      const can::Received r = socket_.read();
+      if (r.kind == can::Received::Kind::Frame) {
+        card_.on_frame(r.frame, now);
+      } else {
+        break;
+      }
+    }
+    if (bus_off_) {
+      can::ErrorReport report;
+      report.bus_off = true;
+      (void)socket_.write_error(report);
+      bus_off_ = false;
+    }
+    if (const auto frame = card_.poll(now)) (void)socket_.write(*frame);
+    const auto& s = card_.state();
+    encoder_.mm_.store(std::llround(s.position_mm), std::memory_order_relaxed);
+    io_.set_car(s.velocity_mps != 0.0, s.position_mm, now);
+  }
+}
+
+lift::Inputs SimulatedCard::inputs(MonoTime now) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return io_.inputs(now);
+}
+
+void SimulatedCard::log_violations() {
+  std::vector<sim::CardViolation> found;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    found = card_.take_violations();
+  }
+  for (const auto& v : found) {
+    log::event(log::Level::error, "sim", "sim_violation", {{"rule", v.rule}},
+               "simulated SCH001 card: the controller broke the card document: " + v.rule);
+  }
+}
+
+api::Result SimulatedCard::apply(const api::SimRequest& request, MonoTime now) {
+  using api::SimAction;
+  std::lock_guard<std::mutex> lock(mutex_);
+  switch (request.action) {
+    case SimAction::GeneralFault:
+      card_.set_err(request.on);
+      break;
+    case SimAction::NotReady:
+      card_.set_rdy(!request.on);
+      break;
+    case SimAction::OilTemperature:
+      card_.set_t1(request.on);
+      break;
+    case SimAction::Pressure:
+      card_.set_p1(request.on);
+      break;
+    case SimAction::Overpressure:
+      card_.set_p2(request.on);
+      break;
+    case SimAction::CardSilence:
+      card_.set_silent(request.on);
+      break;
+    case SimAction::BusOff:
+      bus_off_ = true;
+      break;
+    case SimAction::ColdOil:
+      card_.set_cold_oil(request.on);
+      break;
+    case SimAction::Sink:
+      card_.set_sink(request.on ? kSinkMmPerS : 0.0);
+      break;
+    case SimAction::Drift:
+      if (card_.state().velocity_mps != 0.0) {
+        return Result::fail(api::ErrorCode::Busy, "the car is moving: drift only at rest");
+      }
+      card_.drift(request.drift_mm);
+      break;
+    case SimAction::SafetyChainOpen:
+      chain_open_ = request.on;
+      io_.set_safety_chain_open(request.on);
+      break;
+    case SimAction::DoorReversal:
+      io_.inject_door_reversal(now);
+      break;
+    case SimAction::OpenDoors:
+      io_.open_doors(now);
+      break;
+    case SimAction::CloseDoors:
+      io_.close_doors(now);
+      break;
+    case SimAction::ObstructDoors:
+      obstructed_ = request.on;
+      io_.set_door_obstructed(request.on, now);
+      break;
+    case SimAction::AdvanceWarning:
+    case SimAction::ReplyFault:
+    case SimAction::ClearReplyFaults:
+    case SimAction::ChannelFault:
+    case SimAction::RefuseTarget:
+      return Result::fail(
+          api::ErrorCode::BadRequest,
+          "\"" + std::string(api::kSimActions[static_cast<std::size_t>(request.action)]) +
+              "\" is for the simulated DCP drive; this lift is SCH001 (hydraulic)",
+          "action");
+  }
+  io_.advance(now);
+  log::event(
+      log::Level::info, "sim", "sim_injected",
+      {{"action", std::string(api::kSimActions[static_cast<std::size_t>(request.action)])}},
+      "simulated lift: " + std::string(api::kSimActions[static_cast<std::size_t>(request.action)]));
+  const auto& s = card_.state();
+  return Result::ok({{"card", card_json(s.status, true)},
+                     {"silent", s.silent},
+                     {"cold_oil", s.cold_oil},
+                     {"sink_mm_per_s", s.sink_mm_per_s},
+                     {"safety_chain_open", chain_open_},
+                     {"doors", sim::to_string(io_.door_state())},
+                     {"door_obstructed", obstructed_},
+                     {"position_mm", std::llround(s.position_mm)},
+                     {"violations", s.violations}});
+}
+
+nlohmann::json SimulatedCard::state_json() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto& s = card_.state();
+  return {{"card", card_json(s.status, true)},
+          {"silent", s.silent},
+          {"cold_oil", s.cold_oil},
+          {"sink_mm_per_s", s.sink_mm_per_s},
+          {"safety_chain_open", chain_open_},
+          {"doors", sim::to_string(io_.door_state())},
+          {"door_obstructed", obstructed_},
+          {"position_mm", std::llround(s.position_mm)},
+          {"violations", s.violations}};
+}
+
+// ---- the backend ----
+
+Sch001Backend::Sch001Backend(const config::Config& config, sch001::Sch001Controller& controller,
+                             rt::CanRunner& runner, lift::PositionFeed* position_feed,
+                             SimulatedCard* sim)
+    : config_(config),
+      controller_(controller),
+      runner_(runner),
+      position_feed_(position_feed),
+      sim_(sim),
+      mono_at_start_(mono_now()),
+      wall_at_start_(std::chrono::system_clock::now()) {}
+
+std::chrono::system_clock::time_point Sch001Backend::wall_time(MonoTime at) const {
+  return wall_at_start_ +
+         std::chrono::duration_cast<std::chrono::system_clock::duration>(at - mono_at_start_);
+}
+
+void Sch001Backend::not_offered(api::Responder& done) {
+  done(Result::fail(api::ErrorCode::NotOffered, "not offered by drive kind \"sch001\""));
+}
+
+api::StatusSnapshot Sch001Backend::status() {
+  const sch001::ControllerSnapshot s = controller_.snapshot();
+  api::StatusSnapshot out;
+  out.drive_kind = drive::Kind::Sch001;
+  if (!s.endpoint_up || s.silent) {
+    out.link = s.heard || s.silent ? api::LinkState::Fault : api::LinkState::Down;
+  } else {
+    out.link = s.heard ? api::LinkState::Up : api::LinkState::Init;
+  }
+  for (std::size_t i = 0; i < s.faults.size(); ++i) {
+    if (!s.faults[i]) continue;
+    const auto code = static_cast<sch001::FaultCode>(i);
+    out.faults.push_back({std::string(sch001::fault_code_name(code)),
+                          std::string(sch001::fault_text(code)), wall_time(s.fault_since[i])});
+  }
+  out.drive_state = drive::state_of(out.link == api::LinkState::Up,
+                                    s.travel_kind != sch001::TravelKind::None, !out.faults.empty());
+  nlohmann::json d = nlohmann::json::object();
+  d["card"] = s.card ? card_json(*s.card, s.single_unit) : nlohmann::json(nullptr);
+  d["timeout_enabled"] = s.timeout_enabled;
+  d["commands"] = bits_json(s.bits_sent);
+  d["current_floor"] = s.current_floor_sent;
+  d["destination_floor"] = s.destination_floor_sent;
+  d["motor_on"] = s.motor_on;
+  d["phase"] = std::string(sch001::to_string(s.phase));
+  out.details = std::move(d);
+  out.position_mm = s.position_mm;
+  if (s.floor) out.floor = static_cast<int>(*s.floor);
+  if (s.travel_kind == sch001::TravelKind::None && s.floor) out.next_possible_stop = out.floor;
+  out.contactors_on = s.motor_on;
+  out.travel_state = std::string(sch001::to_string(s.travel_kind));
+  out.travel_direction = direction_name(s.direction);
+  if (s.target_floor) out.target_floor = static_cast<int>(*s.target_floor);
+  for (std::size_t i = 0; i < s.call_count; ++i) out.calls.push_back(s.calls[i]);
+  const rt::RtThreadStatus& rt = runner_.thread_status();
+  out.rt.realtime = rt.realtime;
+  out.rt.policy = rt.realtime ? "SCHED_FIFO" : "SCHED_OTHER";
+  out.rt.priority = rt.realtime ? config_.rt.priority : 0;
+  out.rt.memory_locked = rt.memory_locked;
+  return out;
+}
+
+api::StatsSnapshot Sch001Backend::stats() {
+  // The DCP-shaped counters of API 2's stats, filled with their CAN meaning (docs/api.md).
+  const sch001::ControllerSnapshot s = controller_.snapshot();
+  const rt::CanRunnerCounters c = runner_.counters();
+  api::StatsSnapshot out;
+  out.frames_sent = c.frames_sent;
+  out.replies_good = s.counters.status_frames + s.counters.timeout_commands;
+  out.decode_errors = s.counters.wrong_length + s.counters.unknown_first_byte + s.counters.own_id;
+  out.link_losses = s.counters.timeouts;
+  out.channel_resets = c.reopens;
+  out.checksum_errors = c.error_frames;
+  out.cycles = s.steps;
+  return out;
+}
+
+std::vector<api::TraceEntry> Sch001Backend::trace(std::size_t max_entries) {
+  // Each of our frames with the card's frame it answered: identifier (2 bytes) and data.
+  const std::vector<rt::FrameRecord> records = runner_.recorder().copy();
+  std::vector<api::TraceEntry> out;
+  const rt::FrameRecord* card_frame = nullptr;
+  for (const rt::FrameRecord& r : records) {
+    if (r.direction == rt::Direction::Rx) {
+      card_frame = &r;
+    } else if (r.direction == rt::Direction::Tx) {
+      api::TraceEntry e;
+      e.at = r.time;
+      e.tx.assign(r.data().begin(), r.data().end());
+      if (card_frame != nullptr) e.rx.emplace(card_frame->data().begin(), card_frame->data().end());
+      out.push_back(std::move(e));
+      card_frame = nullptr;
+    }
+  }
+  if (out.size() > max_entries) {
+    out.erase(out.begin(), out.end() - static_cast<std::ptrdiff_t>(max_entries));
+  }
+  return out;
+}
+
+nlohmann::json Sch001Backend::config() {
+  return config::to_json(config_);
+}
+
+void Sch001Backend::send(sch001::CommandBody body, api::Responder done) {
+  std::uint32_t tag = ++next_tag_;
+  if (tag == 0) tag = next_tag_ = 1;
+  if (!controller_.post(sch001::ControllerCommand{tag, std::move(body)})) {
+    done(Result::fail(api::ErrorCode::Busy, "the CAN thread's command queue is full; try again"));
+    return;
+  }
+  pending_[tag] = Pending{std::move(done), mono_now() + kReplyGrace};
+}
+
+void Sch001Backend::poll(MonoTime now) {
+  sch001::CommandReply r;
+  while (controller_.poll_reply(r)) {
+    auto it = pending_.find(r.tag);
+    if (it == pending_.end()) continue;
+    Pending p = std::move(it->second);
+    pending_.erase(it);
+    if (r.code == sch001::ReplyCode::Ok) {
+      nlohmann::json result = nlohmann::json::object();
+      if (!r.detail.empty()) result["detail"] = std::string(r.detail);
+      if (r.floor) result["floor"] = *r.floor;
+      p.done(Result::ok(std::move(result)));
+      continue;
+    }
+    const api::ErrorCode code = r.code == sch001::ReplyCode::Busy ? api::ErrorCode::Busy
+                                : r.code == sch001::ReplyCode::BadRequest
+                                    ? api::ErrorCode::BadRequest
+                                : r.code == sch001::ReplyCode::Fault ? api::ErrorCode::Fault
+                                                                     : api::ErrorCode::NotReady;
+    p.done(Result::fail(code, std::string(r.detail)));
+  }
+  for (auto it = pending_.begin(); it != pending_.end();) {
+    if (now > it->second.deadline) {
+      it->second.done(
+          Result::fail(api::ErrorCode::Internal, "the CAN thread did not answer; see the journal"));
+      it = pending_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+void Sch001Backend::update_inputs(const api::InputUpdate& update, api::Responder done) {
+  if (update.position_mm && config_.position.source != config::PositionSource::api) {
+    done(Result::fail(api::ErrorCode::BadRequest,
+                      "position_mm is only accepted when position.source is \"api\"",
+                      "position_mm"));
+    return;
+  }
+  update.apply_to(inputs_);
+  if (update.position_mm && position_feed_ != nullptr) {
+    position_feed_->set(*update.position_mm, mono_now());
+  }
+  send_inputs(to_lift(inputs_));
+  done(Result::ok(api::to_json(inputs_)));
+}
+
+void Sch001Backend::send_inputs(const lift::Inputs& inputs) {
+  (void)controller_.post(sch001::ControllerCommand{0, sch001::InputsCommand{inputs}});
+}
+
+bool Sch001Backend::send_shutdown(bool force) {
+  return controller_.post(sch001::ControllerCommand{0, sch001::ShutdownCommand{force}});
+}
+
+void Sch001Backend::travel(const api::TravelArgs& args, api::Responder done) {
+  sch001::TravelCommand cmd;
+  cmd.floor = static_cast<std::size_t>(args.floor);
+  // V4 and V3 where the unit has them (else the next lower), any other name the fast speed.
+  cmd.speed = !args.speed || *args.speed == "V4" ? sch001::Speed::V4
+              : *args.speed == "V3"              ? sch001::Speed::V3
+                                                 : sch001::Speed::Fast;
+  send(cmd, std::move(done));
+}
+
+void Sch001Backend::stop(api::Responder done) {
+  send(sch001::StopCommand{}, std::move(done));
+}
+
+void Sch001Backend::relevel(api::Responder done) {
+  send(sch001::RelevelCommand{}, std::move(done));
+}
+
+void Sch001Backend::inspection(bool on, const std::string& direction, api::Responder done) {
+  sch001::InspectionCommand cmd;
+  cmd.on = on;
+  cmd.direction = direction == "up"     ? lift::Direction::Up
+                  : direction == "down" ? lift::Direction::Down
+                                        : lift::Direction::None;
+  send(cmd, std::move(done));
+}
+
+void Sch001Backend::calls(const std::string& action, std::optional<int> floor,
+                          api::Responder done) {
+  if (action == "list") {
+    const auto s = controller_.snapshot();
+    nlohmann::json list = nlohmann::json::array();
+    for (std::size_t i = 0; i < s.call_count; ++i) list.push_back(s.calls[i]);
+    done(Result::ok({{"calls", list}}));
+    return;
+  }
+  sch001::CallCommand cmd;
+  cmd.add = action == "add";
+  cmd.floor = static_cast<std::size_t>(floor.value_or(0));
+  send(cmd, std::move(done));
+}
+
+void Sch001Backend::sim(const api::SimRequest& request, api::Responder done) {
+  if (sim_ == nullptr) {
+    api::Backend::sim(request, std::move(done));
+    return;
+  }
+  done(sim_->apply(request, mono_now()));
+}
+
+// ---- the lift ----
+
+HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool simulate)
+    : daemon_(daemon),
+      config_(config),
+      simulate_(simulate),
+      socket_path_(config.api.socket),
+      poll_timer_(daemon.io()),
+      state_interval_(std::chrono::nanoseconds(std::chrono::seconds(1)) /
+                      std::max(1, config.api.state_rate_hz)) {
+  if (config.position.source == config::PositionSource::can) {
+    throw std::invalid_argument(
+        "position.source \"can\" is not available in this build; use \"api\"");
+  }
+  rt::CanRunnerConfig rc;
+  rc.endpoint = config.can.interface;
+  const sch001::ControllerConfig cc = controller_config(config);
+  rc.ids = {cc.link.ids.from_card};
+  rc.rt.priority = config.rt.priority;
+  rc.rt.cpu = config.rt.cpu;
+  rc.rt.lock_memory = config.rt.lock_memory;
+  std::optional<can::CanSocket> controller_end;
+  const lift::PositionSource* position = nullptr;
+  if (simulate_) {
+    auto pair = can::CanSocket::pair();
+    if (!pair) {
+      throw std::runtime_error("simulated SCH001 card: " + pair.error().what + ": " +
+                               std::strerror(pair.error().code));
+    }
+    controller_end.emplace(std::move(pair.value().first));
+    sim_ = std::make_unique<SimulatedCard>(config, std::move(pair.value().second));
+    position = &sim_->position();
+    rc.endpoint = "socketpair";
+  } else {
+    position_feed_ =
+        std::make_unique<lift::PositionFeed>(std::chrono::milliseconds(config.inputs.timeout_ms));
+    position = position_feed_.get();
+  }
+  controller_ = std::make_unique<sch001::Sch001Controller>(cc, *position, mono_now());
+  runner_ = std::make_unique<rt::CanRunner>(rc, *controller_);
+  if (controller_end) runner_->adopt(std::move(*controller_end));
+  backend_ = std::make_unique<Sch001Backend>(
+      config, *controller_, *runner_,
+      config.position.source == config::PositionSource::api ? position_feed_.get() : nullptr,
+      sim_.get());
+  server_ = std::make_unique<api::Server>(daemon.io(), *backend_, api_server_config(config),
+                                          api_log_sink());
+  if (sim_) {
+    daemon.add_component({"sim", [this] { return sim_->start(); }, [this] { sim_->stop(); }});
+  }
+  daemon.add_component({"sch001", [this] { return start_runner(); }, [this] { stop_runner(); },
+                        [this](std::function<void()> done) { wind_down(std::move(done)); }});
+  daemon.add_component({"api", [this] { return start_api(); }, [this] { stop_api(); }});
+  daemon.set_progress_probe([this] {
+    const std::uint64_t p = runner_->progress();
+    const bool advanced = p != last_progress_;
+    last_progress_ = p;
+    return advanced;
+  });
+  daemon.set_config_applier([this](const config::Config& next) {
+    try {
+      server_->reconfigure(api_reload_config(next));
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  });
+  daemon.set_running_status(simulate_ ? "simulated hydraulic lift running; API on " + socket_path_
+                                      : "SCH001 card link starting on " + config.can.interface);
+}
+
+HydraulicLift::~HydraulicLift() {
+  stop_api();
+  stop_runner();
+  if (sim_) sim_->stop();
+}
+
+bool HydraulicLift::start_runner() {
+  const int error = runner_->start();
+  if (error != 0) {
+    log::event(log::Level::error, "sch001", "can_start_failed", {{"errno", std::to_string(error)}},
+               std::string("cannot start the CAN thread: ") + std::strerror(error));
+    return false;
+  }
+  if (config_.rt.require_realtime && !runner_->thread_status().realtime) {
+    log::event(log::Level::error, "rt", "realtime_refused", {},
+               "rt.require_realtime is true but the CAN thread runs without real time: " +
+                   runner_->thread_status().describe());
+    runner_->stop();
+    return false;
+  }
+  if (const std::string line = runner_->thread_status().describe(); !line.empty()) {
+    log::event(log::Level::warn, "rt", "rt_degraded", {}, line);
+  }
+  log::event(log::Level::info, "sch001", "can_started", {{"interface", runner_->config().endpoint}},
+             "SCH001 card link running on " + runner_->config().endpoint);
+  running_ = true;
+  schedule_poll();
+  return true;
+}
+
+void HydraulicLift::stop_runner() {
+  if (!running_) return;
+  running_ = false;
+  poll_timer_.cancel();
+  runner_->stop();
+  poll();  // the last events
+}
+
+bool HydraulicLift::start_api() {
+  try {
+    server_->start();
+  } catch (const std::exception& e) {
+    log::event(log::Level::error, "api", "api_start_failed", {}, e.what());
+    return false;
+  }
+  return true;
+}
+
+void HydraulicLift::stop_api() {
+  if (server_) server_->stop();
+}
+
+void HydraulicLift::schedule_poll() {
+  poll_timer_.expires_after(kPollPeriod);
+  poll_timer_.async_wait([this](const std::error_code& ec) {
+    if (ec || !running_) return;
+    poll();
+    schedule_poll();
+  });
+}
+
+void HydraulicLift::poll() {
+  const MonoTime now = mono_now();
+  if (sim_ && now - last_sim_inputs_ >= kSimInputsPeriod) {
+    backend_->send_inputs(sim_->inputs(now));
+    last_sim_inputs_ = now;
+    sim_->log_violations();
+  }
+  backend_->poll(now);
+  sch001::ControllerEvent event;
+  while (controller_->poll_event(event)) handle_event(event);
+  // Rejected card frames: counted always, journalled at most every 10 s with what came.
+  const sch001::ControllerSnapshot s = controller_->snapshot();
+  const auto rejected = [](const sch001::CardLinkCounters& c) {
+    return c.wrong_length + c.unknown_first_byte + c.own_id;
+  };
+  if (rejected(s.counters) != rejected(logged_counters_) &&
+      now - last_reject_log_ >= kRejectLogInterval) {
+    const auto& c = s.counters;
+    const auto& l = logged_counters_;
+    log::event(log::Level::warn, "sch001", "card_frames_rejected",
+               {{"wrong_length", std::to_string(c.wrong_length - l.wrong_length)},
+                {"unknown_first_byte", std::to_string(c.unknown_first_byte - l.unknown_first_byte)},
+                {"own_id", std::to_string(c.own_id - l.own_id)}},
+               "frames not acted on since the last report: " +
+                   std::to_string(c.wrong_length - l.wrong_length) + " of the wrong length, " +
+                   std::to_string(c.unknown_first_byte - l.unknown_first_byte) +
+                   " with an unknown first byte, " + std::to_string(c.own_id - l.own_id) +
+                   " on our own identifier (another node sends on it)");
+    logged_counters_ = s.counters;
+    last_reject_log_ = now;
+  }
+  publish_state(now);
+  check_wind_down(now);
+}
+
+void HydraulicLift::publish_state(MonoTime now) {
+  api::StatusSnapshot s = backend_->status();
+  if (last_state_ && s == *last_state_) return;
+  // Position alone changes often while moving: rate-limited; anything else goes out at once.
+  api::StatusSnapshot without_position = s;
+  if (last_state_) without_position.position_mm = last_state_->position_mm;
+  const bool discrete = !last_state_ || !(without_position == *last_state_);
+  if (!discrete && now - last_state_publish_ < state_interval_) return;
+  server_->publish("state", api::to_json(s));
+  last_state_ = std::move(s);
+  last_state_publish_ = now;
+}
+
+void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
+  using Kind = sch001::ControllerEvent::Kind;
+  switch (event.kind) {
+    case Kind::Link: {
+      const char* state = event.link == sch001::LinkChange::Silent ? "fault" : "up";
+      const std::string text =
+          event.link == sch001::LinkChange::FirstHeard ? "first frame from the SCH001 card"
+          : event.link == sch001::LinkChange::Silent
+              ? "no frame from the SCH001 card for 10 s (card document 3f): no travel command"
+              : "the SCH001 card is heard again";
+      log::event(event.link == sch001::LinkChange::Silent ? log::Level::warn : log::Level::info,
+                 "sch001", "link_state_changed", {{"state", state}}, text);
+      daemon_.report_status(std::string("SCH001 card link ") + state);
+      server_->publish("link", {{"kind", "state changed"}, {"state", state}, {"detail", text}});
+      break;
+    }
+    case Kind::Card: {
+      const sch001::ControllerSnapshot s = controller_->snapshot();
+      const std::string on = card_text(event.card, s.single_unit);
+      log::event(
+          event.card.err || !event.card.rdy || event.card.t1 || event.card.p1 || event.card.p2
+              ? log::Level::warn
+              : log::Level::info,
+          "sch001", "card_status", {{"relays", on}},
+          "SCH001 card status: " + on +
+              " (ERR fault, RDY ready, T1 oil temperature, P1 "
+              "minimum/maximum pressure, P2 overpressure)");
+      break;
+    }
+    case Kind::Travel: {
+      const sch001::TravelEvent& t = event.travel;
+      const char* type = t.type == sch001::TravelEvent::Type::Started    ? "started"
+                         : t.type == sch001::TravelEvent::Type::Finished ? "finished"
+                                                                         : "aborted";
+      const std::string kind(sch001::to_string(t.kind));
+      std::string text = std::string("travel ") + type + " (" + kind + ")";
+      log::Fields fields{{"kind", kind}};
+      if (t.type == sch001::TravelEvent::Type::Aborted) {
+        text += ": " + std::string(sch001::to_string(t.cause));
+        fields.push_back({"cause", std::string(sch001::to_string(t.cause))});
+      }
+      const sch001::ControllerSnapshot s = controller_->snapshot();
+      if (s.position_mm) text += " at " + std::to_string(*s.position_mm) + " mm";
+      log::event(t.type == sch001::TravelEvent::Type::Aborted ? log::Level::warn : log::Level::info,
+                 "travel", std::string("travel_") + type, fields, text);
+      const auto floors = controller_->floors_mm();
+      server_->publish(
+          "travel", {{"event", type},
+                     {"kind", kind},
+                     {"cause", t.cause == sch001::Cause::None
+                                   ? nlohmann::json(nullptr)
+                                   : nlohmann::json(std::string(sch001::to_string(t.cause)))},
+                     {"target_mm", t.floor < floors.size() ? floors[t.floor] : 0},
+                     {"position_mm",
+                      s.position_mm ? nlohmann::json(*s.position_mm) : nlohmann::json(nullptr)}});
+      break;
+    }
+    case Kind::BusError:
+      log::event(event.bus_error.is_fault() ? log::Level::error : log::Level::warn, "sch001",
+                 "can_error", {{"error", event.bus_error.describe()}},
+                 "CAN error frame: " + event.bus_error.describe());
+      break;
+    case Kind::Endpoint:
+      if (event.endpoint_up) {
+        log::event(log::Level::info, "sch001", "can_open",
+                   {{"interface", runner_->config().endpoint}},
+                   "CAN endpoint " + runner_->config().endpoint + " open");
+      } else {
+        log::event(log::Level::error, "sch001", "can_lost", {{"error", runner_->last_error()}},
+                   "CAN endpoint " + runner_->config().endpoint +
+                       " failed: " + runner_->last_error() + "; no travel command; reopening");
+      }
+      break;
+    case Kind::FaultRaised:
+    case Kind::FaultCleared: {
+      const bool active = event.kind == Kind::FaultRaised;
+      const std::string code(sch001::fault_code_name(event.fault));
+      const std::string text(sch001::fault_text(event.fault));
+      log::event(active ? log::Level::warn : log::Level::info, "safety",
+                 active ? "fault_raised" : "fault_cleared", {{"code", code}},
+                 std::string(active ? "fault: " : "fault cleared: ") + text);
+      server_->publish("fault", {{"code", code}, {"text", text}, {"active", active}});
+      break;
+    }
+    case Kind::CallServed:
+      log::event(log::Level::info, "travel", "call_served",
+                 {{"floor", std::to_string(event.floor)}},
+                 "call served: floor " + std::to_string(event.floor));
+      server_->publish("call_served", {{"floor", event.floor}});
+      break;
+  }
+}
+
+void HydraulicLift::wind_down(std::function<void()> done) {
+  if (!running_) {
+    done();
+    return;
+  }
+  // As the DCP lift (issue 13): a service stop lands a moving car at the next floor it can
+  // reach, then exits with every signal off.
+  wind_down_done_ = std::move(done);
+  wind_down_deadline_ = mono_now() + kShutdownDeadline;
+  wind_down_forced_ = false;
+  if (controller_->snapshot().travel_kind != sch001::TravelKind::None) {
+    log::event(log::Level::info, "travel", "shutdown_stopping_travel", {},
+               "stopping: bringing the car to rest at the next possible floor before exit");
+    daemon_.report_status("stopping: bringing the car to rest before exit");
+  }
+  (void)backend_->send_shutdown(false);
+}
+
+void HydraulicLift::check_wind_down(MonoTime now) {
+  if (!wind_down_done_) return;
+  const sch001::ControllerSnapshot s = controller_->snapshot();
+  if (!s.shutting_down && !wind_down_forced_) (void)backend_->send_shutdown(false);
+  if (!s.quiesced && now < wind_down_deadline_) return;
+  if (!s.quiesced && !wind_down_forced_) {
+    wind_down_forced_ = true;
+    wind_down_deadline_ = now + kShutdownGrace;
+    (void)backend_->send_shutdown(true);
+    log::event(log::Level::error, "travel", "shutdown_forced", {},
+               "stopping: the car did not come to rest in time; every travel signal dropped");
+    return;
+  }
+  const std::string where =
+      s.floor ? "at floor " + std::to_string(*s.floor)
+              : (s.position_mm ? "at " + std::to_string(*s.position_mm) + " mm" : "");
+  log::event(log::Level::info, "travel", "shutdown_at_rest",
+             {{"floor", s.floor ? std::to_string(*s.floor) : "none"}},
+             "stopping: car at rest " + where + ", no travel signal");
+  daemon_.report_status("stopping: car at rest " + where);
+  auto done = std::move(wind_down_done_);
+  wind_down_done_ = nullptr;
+  done();
+}
+
+}  // namespace liftd::daemon

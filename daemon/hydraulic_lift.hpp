@@ -1,0 +1,167 @@
+// The daemon's hydraulic lift (drive.kind "sch001"): the SCH001 controller on its CAN runner, the
+// API backend over it, and with --simulate the simulated card, hydraulic car and I/O board on the
+// other end of a socketpair. The DCP lift is lift_app.*; drives.* picks one by drive.kind.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include <asio.hpp>
+
+#include "api/backend.hpp"
+#include "api/server.hpp"
+#include "can/socket.hpp"
+#include "config/config.hpp"
+#include "daemon/daemon.hpp"
+#include "daemon/drives.hpp"
+#include "lift/position_source.hpp"
+#include "rt/can_runner.hpp"
+#include "sch001/controller.hpp"
+#include "sim/sch001_card_sim.hpp"
+#include "sim/sim_io.hpp"
+
+namespace liftd::daemon {
+
+/// The simulated card and hydraulic car (liftd --simulate, drive.kind "sch001") on its own
+/// thread, speaking CAN frames over one end of a socketpair; the simulated I/O board.
+class SimulatedCard {
+ public:
+  SimulatedCard(const config::Config& config, can::CanSocket card_end);
+  ~SimulatedCard();
+  SimulatedCard(const SimulatedCard&) = delete;
+  SimulatedCard& operator=(const SimulatedCard&) = delete;
+
+  bool start();
+  void stop();
+  /// The simulated encoder on the car (lock-free).
+  const lift::PositionSource& position() const { return encoder_; }
+  /// The simulated I/O board's inputs now (io thread).
+  lift::Inputs inputs(MonoTime now);
+  /// A `sim` request; the result is state_json() after it.
+  api::Result apply(const api::SimRequest& request, MonoTime now);
+  nlohmann::json state_json() const;
+  /// Logs what the card saw the controller do against its document (io thread).
+  void log_violations();
+
+ private:
+  class Encoder final : public lift::PositionSource {
+   public:
+    std::optional<std::int64_t> position_mm(MonoTime) const noexcept override {
+      return mm_.load(std::memory_order_relaxed);
+    }
+    std::atomic<std::int64_t> mm_{0};
+  };
+  void loop();
+
+  can::CanSocket socket_;
+  mutable std::mutex mutex_;  ///< guards card_, io_ and bus_off_ (the simulator's thread and io)
+  sim::Sch001CardSim card_;
+  sim::SimulatedIo io_;
+  Encoder encoder_;
+  bool chain_open_ = false;
+  bool obstructed_ = false;
+  bool bus_off_ = false;  ///< inject one bus-off error frame (then back to normal)
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+/// api::Backend over the SCH001 controller.
+class Sch001Backend final : public api::Backend {
+ public:
+  Sch001Backend(const config::Config& config, sch001::Sch001Controller& controller,
+                rt::CanRunner& runner, lift::PositionFeed* position_feed, SimulatedCard* sim);
+
+  drive::Kind drive_kind() const override { return drive::Kind::Sch001; }
+  api::StatusSnapshot status() override;
+  api::StatsSnapshot stats() override;
+  std::vector<api::TraceEntry> trace(std::size_t max_entries) override;
+  api::DisplaySnapshot display() override { return {}; }
+  nlohmann::json config() override;
+  // Not offered by this drive kind: the dispatcher refuses them before they get here.
+  void key(int, api::Responder done) override { not_offered(done); }
+  void drive_reset(api::Responder done) override { not_offered(done); }
+  void power(api::PowerSetting, api::Responder done) override { not_offered(done); }
+  void load(int, api::Responder done) override { not_offered(done); }
+  void update_inputs(const api::InputUpdate& update, api::Responder done) override;
+  void travel(const api::TravelArgs& args, api::Responder done) override;
+  void stop(api::Responder done) override;
+  void relevel(api::Responder done) override;
+  void inspection(bool on, const std::string& direction, api::Responder done) override;
+  void calls(const std::string& action, std::optional<int> floor, api::Responder done) override;
+  void sim(const api::SimRequest& request, api::Responder done) override;
+
+  /// Io thread: replies to their clients, requests the CAN thread never answered time out.
+  void poll(MonoTime now);
+  void send_inputs(const lift::Inputs& inputs);
+  bool send_shutdown(bool force);
+  std::chrono::system_clock::time_point wall_time(MonoTime at) const;
+
+ private:
+  using Completion = std::function<api::Result(const sch001::CommandReply&)>;
+  struct Pending {
+    api::Responder done;
+    MonoTime deadline{};
+  };
+  static void not_offered(api::Responder& done);
+  void send(sch001::CommandBody body, api::Responder done);
+
+  const config::Config& config_;
+  sch001::Sch001Controller& controller_;
+  rt::CanRunner& runner_;
+  lift::PositionFeed* position_feed_;
+  SimulatedCard* sim_;
+  api::Inputs inputs_{};
+  std::map<std::uint32_t, Pending> pending_;
+  std::uint32_t next_tag_ = 0;
+  MonoTime mono_at_start_{};
+  std::chrono::system_clock::time_point wall_at_start_{};
+};
+
+/// The hydraulic lift as one piece, registered with the daemon.
+class HydraulicLift final : public LiftRunner {
+ public:
+  HydraulicLift(Daemon& daemon, const config::Config& config, bool simulate);
+  ~HydraulicLift() override;
+  const std::string& socket_path() const override { return socket_path_; }
+
+ private:
+  bool start_runner();
+  void stop_runner();
+  bool start_api();
+  void stop_api();
+  void schedule_poll();
+  void poll();
+  void handle_event(const sch001::ControllerEvent& event);
+  void publish_state(MonoTime now);
+  void wind_down(std::function<void()> done);
+  void check_wind_down(MonoTime now);
+
+  Daemon& daemon_;
+  const config::Config& config_;
+  bool simulate_;
+  std::string socket_path_;
+  std::unique_ptr<SimulatedCard> sim_;
+  std::unique_ptr<lift::PositionFeed> position_feed_;
+  std::unique_ptr<sch001::Sch001Controller> controller_;
+  std::unique_ptr<rt::CanRunner> runner_;
+  std::unique_ptr<Sch001Backend> backend_;
+  std::unique_ptr<api::Server> server_;
+  asio::steady_timer poll_timer_;
+  bool running_ = false;
+  std::uint64_t last_progress_ = 0;
+  std::optional<api::StatusSnapshot> last_state_;
+  MonoTime last_state_publish_{};
+  MonoTime last_sim_inputs_{};
+  std::chrono::nanoseconds state_interval_;
+  sch001::CardLinkCounters logged_counters_{};
+  MonoTime last_reject_log_{};
+  std::function<void()> wind_down_done_;
+  MonoTime wind_down_deadline_{};
+  bool wind_down_forced_ = false;
+};
+
+}  // namespace liftd::daemon

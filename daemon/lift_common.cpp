@@ -1,0 +1,94 @@
+#include "daemon/lift_common.hpp"
+
+#include <cstdlib>
+#include <filesystem>
+#include <vector>
+
+#include "log/log.hpp"
+#include "service/notify.hpp"
+
+namespace liftd::daemon {
+namespace {
+
+// The API socket systemd passed (socket activation, FileDescriptorName=api), or -1: then the
+// server creates it as without systemd. Other passed descriptors are closed.
+int take_listen_fd(const std::string& socket_path) {
+  const std::vector<service::ListenFd> fds = service::listen_fds_from_environment();
+  if (fds.empty()) return -1;
+  const int fd = service::pick_listen_fd(fds, "api");
+  service::close_unused_listen_fds(fds, fd);
+  if (fd < 0) return -1;
+  log::event(log::Level::info, "api", "socket_passed", {{"socket", socket_path}},
+             "using the API socket systemd passed (socket activation); connections wait in its "
+             "queue while liftd restarts");
+  return fd;
+}
+
+}  // namespace
+
+std::string default_runtime_dir(const config::Config& c) {
+  if (const char* dir = std::getenv("RUNTIME_DIRECTORY")) return dir;  // systemd RuntimeDirectory
+  return std::filesystem::path(c.api.socket).parent_path().string();
+}
+
+api::ServerConfig api_reload_config(const config::Config& c) {
+  api::ServerConfig server;
+  server.read_group = c.api.read_group;
+  server.control_group = c.api.control_group;
+  server.inputs_group = c.api.inputs_group;
+  server.max_clients = static_cast<std::size_t>(c.api.max_clients);
+  server.idle_timeout = std::chrono::seconds(c.api.idle_timeout_s);
+  server.max_clients_per_uid = static_cast<std::size_t>(c.api.max_clients_per_uid);
+  server.reserved_clients = static_cast<std::size_t>(c.api.reserved_clients);
+  server.stalled_reader_timeout = std::chrono::seconds(c.api.stalled_reader_timeout_s);
+  return server;
+}
+
+api::ServerConfig api_server_config(const config::Config& c) {
+  api::ServerConfig server = api_reload_config(c);
+  server.socket_path = c.api.socket;
+  server.socket_group = c.api.socket_group;
+  server.listen_fd = take_listen_fd(c.api.socket);
+  return server;
+}
+
+api::LogFn api_log_sink() {
+  return [](api::LogLevel level, std::string_view text) {
+    const log::Level l = level == api::LogLevel::Error  ? log::Level::error
+                         : level == api::LogLevel::Warn ? log::Level::warn
+                         : level == api::LogLevel::Info ? log::Level::info
+                                                        : log::Level::debug;
+    log::write(l, "api", std::string(text));
+  };
+}
+
+lift::Inputs to_lift(const api::Inputs& in) {
+  lift::Inputs out;
+  out.valid = true;
+  out.safety_chain_closed = in.safety_chain;
+  out.doors_closed = in.doors_closed;
+  out.doors_locked = in.doors_locked;
+  out.inspection = in.inspection;
+  out.recall = in.recall;
+  out.button_up = in.button_up;
+  out.button_down = in.button_down;
+  out.end_zone_top = in.end_zone_top;
+  out.end_zone_bottom = in.end_zone_bottom;
+  out.door_zone_bridge = in.zone_door;
+  // DCP3 shaft signals: the deceleration point of any speed in the direction of travel, and the
+  // level zone (the sequencer only looks at them during a DCP3 travel).
+  out.dcp3_decel_point = in.decel_v4_up || in.decel_v4_down || in.decel_v3_up || in.decel_v3_down ||
+                         in.decel_v2_up || in.decel_v2_down || in.decel_v1_up || in.decel_v1_down;
+  out.dcp3_at_level = in.zone_level;
+  return out;
+}
+
+std::string snake(std::string_view text) {
+  std::string out(text);
+  for (char& c : out) {
+    if (c == ' ' || c == '/' || c == '-') c = '_';
+  }
+  return out;
+}
+
+}  // namespace liftd::daemon

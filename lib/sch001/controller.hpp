@@ -1,0 +1,236 @@
+// The SCH001 side of one hydraulic lift: the card link (card_link.hpp), the hydraulic travel
+// sequencing (hydraulic_travel.hpp) and the drive-neutral lift model (lib/lift) joined into one
+// engine that the CAN runner (lib/rt/can_runner.hpp) feeds with frames, bus errors and ticks.
+// Talks to the non-real-time side only through lock-free structures: commands in, replies and
+// events out (SPSC queues), state out (triple buffer).
+//
+// Threads: the CAN runner's thread calls the rt::CanEngine methods; ONE other thread (the
+// daemon's io thread) calls post(), poll_reply(), poll_event() and snapshot().
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "can/socket.hpp"
+#include "common/mono_time.hpp"
+#include "lift/inputs.hpp"
+#include "lift/lift_model.hpp"
+#include "lift/position_source.hpp"
+#include "rt/can_runner.hpp"
+#include "rt/snapshot.hpp"
+#include "rt/spsc_queue.hpp"
+#include "sch001/card_link.hpp"
+#include "sch001/hydraulic_travel.hpp"
+
+namespace liftd::sch001 {
+
+/// Everything the controller needs, fixed at construction.
+struct ControllerConfig {
+  CardLinkConfig link;
+  HydraulicConfig hydraulic;
+  lift::LiftConfig lift;                ///< level tolerance: status car.floor
+  std::vector<std::int64_t> floors_mm;  ///< strictly increasing levels (config `floors`)
+  MonoTime inputs_timeout = std::chrono::milliseconds(500);   ///< config inputs.timeout_ms
+  MonoTime inspection_hold = std::chrono::milliseconds(500);  ///< config travel.inspection_hold_ms
+  bool auto_relevel = true;  ///< relevel by itself when the car at rest leaves the level zone
+};
+
+// ---- commands (io thread -> CAN thread) ----
+struct TravelCommand {
+  std::size_t floor = 0;
+  Speed speed = Speed::V4;  ///< the fastest the unit has unless the client limits it
+};
+struct StopCommand {};
+struct RelevelCommand {};
+struct InspectionCommand {
+  bool on = false;
+  lift::Direction direction = lift::Direction::None;
+};
+struct CallCommand {
+  bool add = true;
+  std::size_t floor = 0;
+};
+struct InputsCommand {
+  lift::Inputs inputs;
+};
+/// The service is stopping: no new travel, the running one lands as `stop` does; `force`
+/// drops every signal at once.
+struct ShutdownCommand {
+  bool force = false;
+};
+using CommandBody = std::variant<TravelCommand, StopCommand, RelevelCommand, InspectionCommand,
+                                 CallCommand, InputsCommand, ShutdownCommand>;
+/// A command with the caller's tag (the frame's command bits are `Command` in protocol.hpp).
+struct ControllerCommand {
+  std::uint32_t tag = 0;  ///< echoed in the reply; 0 = no reply wanted
+  CommandBody body;
+};
+
+// ---- replies and events (CAN thread -> io thread) ----
+enum class ReplyCode : std::uint8_t { Ok, NotReady, Busy, BadRequest, Fault };
+struct CommandReply {
+  std::uint32_t tag = 0;
+  ReplyCode code = ReplyCode::Ok;
+  std::string_view detail;           ///< a static string
+  std::optional<std::size_t> floor;  ///< stop: where the car will stop
+};
+
+/// Faults; each reported once when it starts and once when it ends. The API names are those of
+/// the DCP lift where the meaning is the same.
+enum class FaultCode : std::uint8_t {
+  LinkFault,     ///< the card is silent (3f) or the CAN bus/socket failed
+  DriveFault,    ///< the card reports ERR (3d)
+  SafetyChain,   ///< safety chain open
+  InputsLost,    ///< input provider silent
+  PositionLost,  ///< position source invalid
+  kCount,
+};
+std::string_view fault_code_name(FaultCode code) noexcept;
+std::string_view fault_text(FaultCode code) noexcept;
+
+struct ControllerEvent {
+  enum class Kind : std::uint8_t {
+    Link,          ///< `link`: first heard, silent, recovered
+    Card,          ///< the card's status byte changed (`card`)
+    Travel,        ///< `travel`
+    BusError,      ///< `bus_error`: an error frame or a failed endpoint
+    Endpoint,      ///< `endpoint_up`: the CAN endpoint opened or failed
+    FaultRaised,   ///< `fault`
+    FaultCleared,  ///< `fault`
+    CallServed,    ///< `floor`
+  };
+  Kind kind = Kind::Link;
+  MonoTime at{};
+  LinkChange link = LinkChange::None;
+  CardStatus card{};
+  TravelEvent travel{};
+  can::ErrorReport bus_error{};
+  bool endpoint_up = false;
+  FaultCode fault = FaultCode::LinkFault;
+  std::size_t floor = 0;
+};
+
+inline constexpr std::size_t kMaxSnapshotCalls = 64;
+
+/// The state published after every step.
+struct ControllerSnapshot {
+  MonoTime at{};
+  std::uint64_t steps = 0;
+  bool endpoint_up = false;  ///< the CAN endpoint is open and working
+  bool heard = false;        ///< the card was heard since start
+  bool silent = false;       ///< the card timed out (3f)
+  bool timeout_enabled = true;
+  std::optional<CardStatus> card;
+  bool single_unit = true;
+  CardLinkCounters counters{};
+  std::uint64_t bus_errors = 0;
+  can::ErrorReport last_bus_error{};
+  CommandBits bits_sent{};  ///< the command byte of the last answer
+  std::uint8_t current_floor_sent = 0;
+  std::uint8_t destination_floor_sent = 0;
+  bool motor_on = false;
+  std::optional<std::int64_t> position_mm;
+  std::optional<std::size_t> floor;
+  TravelKind travel_kind = TravelKind::None;
+  Phase phase = Phase::Idle;
+  lift::Direction direction = lift::Direction::None;
+  std::optional<std::size_t> target_floor;
+  lift::Inputs inputs{};
+  std::array<std::uint8_t, kMaxSnapshotCalls> calls{};
+  std::size_t call_count = 0;
+  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults{};
+  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
+  bool shutting_down = false;
+  bool quiesced = false;  ///< shutting down, no travel, no signal in the last answer
+};
+
+inline constexpr std::size_t kCommandQueueSize = 64;
+inline constexpr std::size_t kReplyQueueSize = 64;
+inline constexpr std::size_t kEventQueueSize = 256;
+
+class Sch001Controller final : public rt::CanEngine {
+ public:
+  /// Throws std::invalid_argument on a bad floor table.
+  Sch001Controller(const ControllerConfig& config, const lift::PositionSource& position,
+                   MonoTime start);
+
+  // ---- io thread ----
+  bool post(const ControllerCommand& command) noexcept { return commands_.try_push(command); }
+  bool poll_reply(CommandReply& out) noexcept { return replies_.try_pop(out); }
+  bool poll_event(ControllerEvent& out) noexcept { return events_.try_pop(out); }
+  ControllerSnapshot snapshot() noexcept { return snapshot_.read(); }
+  std::uint64_t dropped_events() const noexcept {
+    return dropped_events_.load(std::memory_order_relaxed);
+  }
+  std::span<const std::int64_t> floors_mm() const noexcept { return config_.floors_mm; }
+
+  // ---- rt::CanEngine (CAN thread) ----
+  std::optional<can::Frame> on_frame(const can::Frame& frame, MonoTime now) noexcept override;
+  void on_bus_error(const can::ErrorReport& report, MonoTime now) noexcept override;
+  void on_endpoint(bool up, MonoTime now) noexcept override;
+  void on_tick(MonoTime now) noexcept override;
+
+  /// Direct access for single-threaded tests.
+  const CardLink& link() const noexcept { return link_; }
+  const HydraulicTravel& travel() const noexcept { return travel_; }
+
+ private:
+  void step(MonoTime now) noexcept;
+  void handle(const ControllerCommand& command, TickInput& in) noexcept;
+  void reply(std::uint32_t tag, ReplyCode code, std::string_view detail = {},
+             std::optional<std::size_t> floor = std::nullopt) noexcept;
+  void push_event(const ControllerEvent& event) noexcept;
+  TickInput build_input(MonoTime now) noexcept;
+  void update_faults(const TickInput& in, MonoTime now) noexcept;
+  void set_fault(FaultCode code, bool active, MonoTime now) noexcept;
+  void drain_travel(MonoTime now) noexcept;
+  void serve_calls(TickInput& in) noexcept;
+  void maybe_relevel(TickInput& in) noexcept;
+  void publish(MonoTime now) noexcept;
+  static ReplyCode code_for(Cause cause) noexcept;
+  static std::string_view text_for(Cause cause) noexcept;
+
+  ControllerConfig config_;
+  const lift::PositionSource& position_;
+  CardLink link_;
+  HydraulicTravel travel_;
+  lift::LiftModel lift_;
+
+  rt::SpscQueue<ControllerCommand, kCommandQueueSize> commands_;
+  rt::SpscQueue<CommandReply, kReplyQueueSize> replies_;
+  rt::SpscQueue<ControllerEvent, kEventQueueSize> events_;
+  rt::Snapshot<ControllerSnapshot> snapshot_;
+  std::atomic<std::uint64_t> dropped_events_{0};
+
+  // CAN-thread state.
+  bool endpoint_up_ = false;
+  lift::Inputs provider_inputs_{};
+  MonoTime inputs_at_{};
+  bool inputs_seen_ = false;
+  bool api_inspection_ = false;
+  lift::Direction api_direction_ = lift::Direction::None;
+  MonoTime api_hold_until_{};
+  std::uint32_t travel_tag_ = 0;
+  bool shutting_down_ = false;
+  bool place_known_ = false;  ///< the sequencer was told the floor the car stands at
+  bool bus_fault_ = false;    ///< an error frame said bus-off, error passive, no ACK, ...
+  CommandBits bits_sent_{};   ///< of the last answer
+  std::uint8_t current_sent_ = 0;
+  std::uint8_t destination_sent_ = 0;
+  MonoTime start_at_{};
+  TickOutput last_output_{};
+  std::uint64_t bus_errors_ = 0;
+  can::ErrorReport last_bus_error_{};
+  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults_{};
+  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since_{};
+  std::uint64_t steps_ = 0;
+};
+
+}  // namespace liftd::sch001
