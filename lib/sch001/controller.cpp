@@ -118,6 +118,7 @@ void Sch001Controller::on_bus_error(const can::ErrorReport& report, MonoTime now
 
 void Sch001Controller::on_endpoint(bool up, MonoTime now) noexcept {
   endpoint_up_ = up;
+  endpoint_failed_ = !up;
   if (up) bus_fault_ = false;
   ControllerEvent e;
   e.kind = ControllerEvent::Kind::Endpoint;
@@ -402,7 +403,9 @@ void Sch001Controller::maybe_relevel(TickInput& in) noexcept {
 
 void Sch001Controller::update_faults(const TickInput& in, MonoTime now) noexcept {
   const bool started = now - start_at_ > start_grace(config_);
-  set_fault(FaultCode::LinkFault, in.card_silent || bus_fault_ || (started && !endpoint_up_), now);
+  // A failed endpoint is a fault at once; one that has not opened yet after the start grace.
+  set_fault(FaultCode::LinkFault,
+            in.card_silent || bus_fault_ || endpoint_failed_ || (started && !endpoint_up_), now);
   set_fault(FaultCode::DriveFault, in.card_error && !in.card_silent, now);
   set_fault(FaultCode::InputsLost, started && !in.inputs.valid, now);
   set_fault(FaultCode::SafetyChain, in.inputs.valid && !in.inputs.safety_chain_closed, now);

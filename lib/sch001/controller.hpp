@@ -211,6 +211,7 @@ class Sch001Controller final : public rt::CanEngine {
 
   // CAN-thread state.
   bool endpoint_up_ = false;
+  bool endpoint_failed_ = false;  ///< the endpoint failed and has not reopened
   lift::Inputs provider_inputs_{};
   MonoTime inputs_at_{};
   bool inputs_seen_ = false;

@@ -192,5 +192,68 @@ TEST_F(HydraulicTest, BusOffMidTravelEndsIt) {
   expect_ended_by("bus_fault");
 }
 
+// The card simulator as a process of its own on a Unix socket (can.interface "unix:PATH"), the
+// way a real card sits on the bus: liftd without --simulate connects, loses the card when its
+// process ends, reopens with backoff and recovers when it is back, without a restart.
+TEST(HydraulicSeparateSimulator, LinkComesUpFallsAndRecoversWithoutRestart) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("liftd-e2e-" + std::to_string(::getpid()) + "-hyd-separate");
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string card_socket = (dir / "card.sock").string();
+  const std::string api_socket = (dir / "api.sock").string();
+  const auto start_sim = [&] {
+    auto sim = std::make_unique<liftd::testing::Process>(
+        std::vector<std::string>{SCH001_SIM_BINARY, "--socket", card_socket}, daemon_env(),
+        dir.string(), "sim");
+    for (int i = 0; i < 100 && !std::filesystem::exists(card_socket); ++i) {
+      std::this_thread::sleep_for(20ms);
+    }
+    return sim;
+  };
+  auto sim = start_sim();
+  json config = kHydraulic;
+  config["can"] = {{"interface", "unix:" + card_socket}};
+  config["api"] = {{"socket", api_socket},
+                   {"socket_group", ""},
+                   {"read_group", ""},
+                   {"control_group", ""},
+                   {"inputs_group", ""}};
+  config["rt"] = {{"require_realtime", false}, {"lock_memory", false}};
+  const std::string config_path = (dir / "liftd.json").string();
+  std::ofstream(config_path) << config.dump(2);
+  liftd::testing::Process daemon({LIFTD_BINARY, "--config", config_path}, daemon_env(),
+                                 dir.string(), "liftd");
+  const auto wait_link = [&](const std::string& state) {
+    for (int i = 0; i < 150; ++i) {
+      Client c(api_socket);
+      if (c.connected()) {
+        const json s = c.call({{"cmd", "status"}});
+        if (s.is_object() && s["result"]["link"]["state"] == state) return s["result"];
+      }
+      std::this_thread::sleep_for(100ms);
+    }
+    return json(nullptr);
+  };
+  const json up = wait_link("up");
+  ASSERT_TRUE(up.is_object()) << daemon.err() << sim->out();
+  EXPECT_EQ(up["sch001"]["card"]["rdy"], true);
+  sim->signal(SIGTERM);
+  ASSERT_TRUE(sim->wait(5s).has_value());
+  const json lost = wait_link("fault");
+  ASSERT_TRUE(lost.is_object()) << daemon.err();
+  EXPECT_TRUE(std::any_of(lost["faults"].begin(), lost["faults"].end(),
+                          [](const json& f) { return f["code"] == "link_fault"; }))
+      << lost.dump() << daemon.err();
+  sim = start_sim();
+  const json again = wait_link("up");
+  ASSERT_TRUE(again.is_object()) << daemon.err();
+  EXPECT_NE(daemon.err().find("reopening"), std::string::npos) << daemon.err();
+  daemon.signal(SIGTERM);
+  EXPECT_EQ(daemon.wait(10s), std::optional<int>(0)) << daemon.err();
+  std::error_code ignored;
+  std::filesystem::remove_all(dir, ignored);
+}
+
 }  // namespace
 }  // namespace liftd::e2e

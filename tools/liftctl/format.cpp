@@ -75,6 +75,14 @@ std::string format_status(const json& s) {
   if (drive.contains("kind")) {  // API 2
     out << "drive:    " << text(at(drive, "kind")) << ", " << text(at(drive, "state")) << '\n';
   }
+  if (at(drive, "kind") == "sch001") {
+    const json& card = at(at(s, "sch001"), "card");
+    out << "card:     "
+        << (card.is_object() ? "relays on: " + true_flags(card) : std::string("not heard yet"))
+        << ", timeout " << (at(at(s, "sch001"), "timeout_enabled") == false ? "off" : "on") << '\n';
+    out << "signals:  " << true_flags(at(at(s, "sch001"), "commands")) << " (phase "
+        << text(at(at(s, "sch001"), "phase")) << ")\n";
+  }
   const json& dcp = dcp_of(s);
   if (at(drive, "kind").is_null() || at(drive, "kind") == "dcp") {
     out << "dcp:      " << text(at(dcp, "mode")) << ", status: " << true_flags(at(dcp, "status"))
