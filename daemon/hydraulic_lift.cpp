@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "api/commands.hpp"
+#include "can/interface_info.hpp"
 #include "daemon/lift_common.hpp"
 #include "log/log.hpp"
 
@@ -552,10 +553,6 @@ HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool 
       poll_timer_(daemon.io()),
       state_interval_(std::chrono::nanoseconds(std::chrono::seconds(1)) /
                       std::max(1, config.api.state_rate_hz)) {
-  if (config.position.source == config::PositionSource::can) {
-    throw std::invalid_argument(
-        "position.source \"can\" is not available in this build; use \"api\"");
-  }
   rt::CanRunnerConfig rc;
   rc.endpoint = config.can.interface;
   const sch001::ControllerConfig cc = controller_config(config);
@@ -575,13 +572,24 @@ HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool 
     sim_ = std::make_unique<SimulatedCard>(config, std::move(pair.value().second));
     position = &sim_->position();
     rc.endpoint = "socketpair";
+  } else if (config.position.source == config::PositionSource::can) {
+    // The encoder on the card's bus: its frames are read by the same runner.
+    encoder_ = std::make_unique<can::CanEncoder>(
+        encoder_format(config), std::chrono::milliseconds(config.position.can_timeout_ms));
+    rc.ids.push_back(encoder_->format().id);
+    position = encoder_.get();
   } else {
     position_feed_ =
         std::make_unique<lift::PositionFeed>(std::chrono::milliseconds(config.inputs.timeout_ms));
     position = position_feed_.get();
   }
   controller_ = std::make_unique<sch001::Sch001Controller>(cc, *position, mono_now());
-  runner_ = std::make_unique<rt::CanRunner>(rc, *controller_);
+  rt::CanEngine* engine = controller_.get();
+  if (encoder_) {
+    tap_ = std::make_unique<rt::EncoderTap>(*encoder_, controller_.get());
+    engine = tap_.get();
+  }
+  runner_ = std::make_unique<rt::CanRunner>(rc, *engine);
   if (controller_end) runner_->adopt(std::move(*controller_end));
   backend_ = std::make_unique<Sch001Backend>(
       config, *controller_, *runner_,
@@ -619,7 +627,37 @@ HydraulicLift::~HydraulicLift() {
   if (sim_) sim_->stop();
 }
 
+void HydraulicLift::check_interface() const {
+  const std::string& name = config_.can.interface;
+  if (simulate_ || name.rfind("unix:", 0) == 0) return;
+  const can::InterfaceInfo info = can::query_interface(name);
+  if (!info.found) {
+    log::event(log::Level::warn, "sch001", "can_interface_missing", {{"interface", name}},
+               "CAN interface " + name + " does not exist (yet); liftd keeps trying to open it");
+    return;
+  }
+  if (!info.up) {
+    log::event(log::Level::warn, "sch001", "can_interface_down", {{"interface", name}},
+               "CAN interface " + name +
+                   " is down: bring it up at 125 kbit/s (systemd-networkd [CAN] BitRate=125000, "
+                   "docs/sch001.md)");
+  }
+  // Card document 3a: 125 kbit/s.
+  if (info.bitrate && *info.bitrate != 125000) {
+    log::event(log::Level::warn, "sch001", "can_bitrate",
+               {{"bitrate", std::to_string(*info.bitrate)}},
+               "CAN interface " + name + " runs at " + std::to_string(*info.bitrate) +
+                   " bit/s; the SCH001 card talks at 125000 (card document 3a)");
+  } else if (!info.bitrate) {
+    log::event(log::Level::info, "sch001", "can_bitrate_unknown", {{"interface", name}},
+               "the bitrate of " + name + " could not be read" +
+                   (info.error.empty() ? std::string() : " (" + info.error + ")") +
+                   "; the SCH001 card needs 125 kbit/s");
+  }
+}
+
 bool HydraulicLift::start_runner() {
+  check_interface();
   const int error = runner_->start();
   if (error != 0) {
     log::event(log::Level::error, "sch001", "can_start_failed", {{"errno", std::to_string(error)}},

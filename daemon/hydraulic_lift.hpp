@@ -20,6 +20,7 @@
 #include "daemon/drives.hpp"
 #include "lift/position_source.hpp"
 #include "rt/can_runner.hpp"
+#include "rt/encoder_tap.hpp"
 #include "sch001/controller.hpp"
 #include "sim/sch001_card_sim.hpp"
 #include "sim/sim_io.hpp"
@@ -129,6 +130,8 @@ class HydraulicLift final : public LiftRunner {
   const std::string& socket_path() const override { return socket_path_; }
 
  private:
+  /// Warns when the CAN interface is missing, down or not at 125 kbit/s (card document 3a).
+  void check_interface() const;
   bool start_runner();
   void stop_runner();
   bool start_api();
@@ -146,7 +149,9 @@ class HydraulicLift final : public LiftRunner {
   std::string socket_path_;
   std::unique_ptr<SimulatedCard> sim_;
   std::unique_ptr<lift::PositionFeed> position_feed_;
+  std::unique_ptr<can::CanEncoder> encoder_;  ///< position.source "can"
   std::unique_ptr<sch001::Sch001Controller> controller_;
+  std::unique_ptr<rt::EncoderTap> tap_;  ///< encoder frames to the encoder, the rest on
   std::unique_ptr<rt::CanRunner> runner_;
   std::unique_ptr<Sch001Backend> backend_;
   std::unique_ptr<api::Server> server_;

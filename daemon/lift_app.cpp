@@ -157,8 +157,18 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
         std::chrono::milliseconds(config.inputs.timeout_ms));
     position_ = position_feed_.get();
     if (config.position.source == config::PositionSource::can) {
-      throw std::invalid_argument(
-          "position.source \"can\" is not available in this build; use \"api\"");
+      // An absolute encoder on CAN: a CAN runner of its own feeds it (lib/rt/encoder_tap.hpp).
+      encoder_ = std::make_unique<can::CanEncoder>(
+          encoder_format(config), std::chrono::milliseconds(config.position.can_timeout_ms));
+      encoder_tap_ = std::make_unique<rt::EncoderTap>(*encoder_, nullptr);
+      rt::CanRunnerConfig rc;
+      rc.endpoint = config.can.interface;
+      rc.ids = {encoder_->format().id};
+      rc.rt.priority = std::max(1, config.rt.priority - 1);  // below the DCP cycle
+      rc.rt.cpu = config.rt.cpu;
+      rc.rt.lock_memory = config.rt.lock_memory;
+      encoder_runner_ = std::make_unique<rt::CanRunner>(rc, *encoder_tap_);
+      position_ = encoder_.get();
     }
   }
   controller_ = std::make_unique<control::DcpController>(controller_config(config), *position_);
@@ -180,6 +190,19 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
 
   if (sim_) {
     daemon.add_component({"sim", [this] { return sim_->start(); }, [this] { sim_->stop(); }});
+  }
+  if (encoder_runner_) {
+    daemon.add_component({"can_encoder",
+                          [this] {
+                            if (const int error = encoder_runner_->start(); error != 0) {
+                              log::event(log::Level::error, "position", "can_start_failed", {},
+                                         std::string("cannot start the CAN encoder thread: ") +
+                                             std::strerror(error));
+                              return false;
+                            }
+                            return true;
+                          },
+                          [this] { encoder_runner_->stop(); }});
   }
   daemon.add_component({"dcp", [this] { return start_cycle(); }, [this] { stop_cycle(); },
                         [this](std::function<void()> done) { wind_down(std::move(done)); }});

@@ -10,7 +10,10 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include "can/encoder.hpp"
 #include "daemon/drives.hpp"
+#include "rt/can_runner.hpp"
+#include "rt/encoder_tap.hpp"
 
 #include "api/server.hpp"
 #include "config/config.hpp"
@@ -70,6 +73,9 @@ class LiftApp final : public LiftRunner {
   std::unique_ptr<SimulatedLift> sim_;
   std::unique_ptr<control::PositionFeed> position_feed_;
   const control::PositionSource* position_ = nullptr;
+  std::unique_ptr<can::CanEncoder> encoder_;       ///< position.source "can"
+  std::unique_ptr<rt::EncoderTap> encoder_tap_;    ///< its frames to it
+  std::unique_ptr<rt::CanRunner> encoder_runner_;  ///< reads its bus
   std::unique_ptr<control::DcpController> controller_;
   std::unique_ptr<rt::CycleRunner> runner_;
   std::unique_ptr<LiftBackend> backend_;

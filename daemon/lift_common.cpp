@@ -83,6 +83,18 @@ lift::Inputs to_lift(const api::Inputs& in) {
   return out;
 }
 
+can::EncoderFormat encoder_format(const config::Config& c) {
+  can::EncoderFormat f;
+  f.id = static_cast<std::uint32_t>(c.position.can_id);
+  f.offset = static_cast<std::uint8_t>(c.position.can_offset);
+  f.length = static_cast<std::uint8_t>(c.position.can_length);
+  f.big_endian = c.position.can_big_endian;
+  f.is_signed = c.position.can_signed;
+  f.um_per_count = c.position.can_um_per_count;
+  f.offset_mm = c.position.can_offset_mm;
+  return f;
+}
+
 std::string snake(std::string_view text) {
   std::string out(text);
   for (char& c : out) {

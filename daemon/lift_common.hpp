@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "api/server.hpp"
+#include "can/encoder.hpp"
 #include "config/config.hpp"
 #include "lift/inputs.hpp"
 
@@ -20,6 +21,8 @@ api::ServerConfig api_server_config(const config::Config& config);
 api::ServerConfig api_reload_config(const config::Config& config);
 /// Where the API server's log lines go (the journal, component "api").
 api::LogFn api_log_sink();
+/// The CAN encoder's frame format from position.can_* (position.source "can").
+can::EncoderFormat encoder_format(const config::Config& config);
 /// The sequencers' inputs from the API's inputs (every drive kind reads the same machine).
 lift::Inputs to_lift(const api::Inputs& inputs);
 /// "state changed" -> "state_changed": journal field values are snake_case words.

@@ -25,6 +25,7 @@ constexpr std::array<std::string_view, 5> kLogLevelNames{"trace", "debug", "info
 constexpr std::array<std::string_view, 3> kRs485Names{"auto", "required", "off"};
 constexpr std::array<std::string_view, 3> kPositionSourceNames{"sim", "api", "can"};
 constexpr std::array<std::string_view, 2> kFastDownNames{"hsp", "sp3"};
+constexpr std::array<std::string_view, 2> kByteOrderNames{"little", "big"};
 constexpr std::array<std::string_view, 4> kRelevelDoorsNames{"open", "closed", "both", "never"};
 constexpr std::array<std::string_view, 5> kDataInfoTypeNames{"0", "1", "2", "3", "4"};
 
@@ -618,9 +619,37 @@ const std::vector<Key>& schema() {
       t.push_back(std::move(k));
     }
     t.push_back(enum_key("position.source", kPositionSourceNames,
-                         "where the car's absolute position comes from (--simulate forces sim; "
-                         "\"can\" is refused: not implemented in this version)",
+                         "where the car's absolute position comes from: sim (--simulate forces "
+                         "it), api (the inputs command), can (an absolute encoder on "
+                         "can.interface, position.can_*)",
                          &Config::position, &PositionConfig::source));
+    t.push_back(int_key("position.can_id", 0, 0x7FF, "11-bit identifier of the encoder's frame",
+                        &Config::position, &PositionConfig::can_id));
+    t.push_back(int_key("position.can_offset", 0, 6, "first data byte of the position value",
+                        &Config::position, &PositionConfig::can_offset));
+    t.push_back(int_key("position.can_length", 2, 4, "bytes of the position value",
+                        &Config::position, &PositionConfig::can_length));
+    {
+      Key k;
+      k.path = "position.can_byte_order";
+      k.type = Type::choice;
+      for (auto name : kByteOrderNames) k.choices.emplace_back(name);
+      k.description = "byte order of the position value";
+      k.set = [](Config& c, const json& v) { c.position.can_big_endian = v == "big"; };
+      k.get = [](const Config& c) { return json(c.position.can_big_endian ? "big" : "little"); };
+      t.push_back(std::move(k));
+    }
+    t.push_back(bool_key("position.can_signed", "the position value is two's complement",
+                         &Config::position, &PositionConfig::can_signed));
+    t.push_back(int_key("position.can_um_per_count", -1000000, 1000000,
+                        "scale: micrometres per count (negative: the encoder counts downwards), "
+                        "not 0",
+                        &Config::position, &PositionConfig::can_um_per_count));
+    t.push_back(int_key("position.can_offset_mm", -999999, 999999, "car position (mm) at count 0",
+                        &Config::position, &PositionConfig::can_offset_mm));
+    t.push_back(int_key("position.can_timeout_ms", 10, 1000,
+                        "an encoder value older than this counts as lost (any travel ends)",
+                        &Config::position, &PositionConfig::can_timeout_ms));
     // travel
     t.push_back(int_key("travel.level_tolerance_mm", 1, 50,
                         "the car counts as level within this distance of the floor",
@@ -836,14 +865,18 @@ void check_implemented(const Config& config, Problems& problems) {
                                           " is not implemented in this version: use \"dcp\" or "
                                           "\"sch001\""});
   }
-  if (config.position.source == PositionSource::can) {
-    problems.push_back(
-        {"position.source",
-         "\"can\" is not implemented in this version: use \"api\" (or \"sim\" with --simulate)"});
-  }
 }
 
 void check_cross_keys(const Config& config, const json& document, Problems& problems) {
+  if (config.position.can_offset + config.position.can_length > 8) {
+    problems.push_back({"position.can_offset",
+                        std::to_string(config.position.can_offset) + " + position.can_length " +
+                            std::to_string(config.position.can_length) +
+                            " must stay within the 8 data bytes of a CAN frame"});
+  }
+  if (config.position.can_um_per_count == 0) {
+    problems.push_back({"position.can_um_per_count", "0 is no scale: use micrometres per count"});
+  }
   // The SCH001 frame carries floor numbers in one byte (card document 3c).
   if (config.drive.kind == DriveKind::Sch001 && config.floors.size() > 255) {
     problems.push_back({"floors", "an SCH001 lift has at most 255 floors (one byte, 3c)"});

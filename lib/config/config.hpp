@@ -101,6 +101,15 @@ std::vector<Floor> default_floors();
 /// `position.*`
 struct PositionConfig {
   PositionSource source = PositionSource::api;  ///< position.source
+  // position.source "can": the absolute encoder's frame on can.interface.
+  int can_id = 0x190;           ///< position.can_id: 11-bit identifier
+  int can_offset = 0;           ///< position.can_offset: first data byte of the value
+  int can_length = 4;           ///< position.can_length: 2..4 bytes
+  bool can_big_endian = false;  ///< position.can_byte_order "big" (else "little")
+  bool can_signed = false;      ///< position.can_signed
+  int can_um_per_count = 1000;  ///< position.can_um_per_count: scale
+  int can_offset_mm = 0;        ///< position.can_offset_mm: position at count 0
+  int can_timeout_ms = 100;     ///< position.can_timeout_ms: older values count as lost
 };
 
 /// `travel.*`

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <vector>
 
+#include "can/interface_info.hpp"
 #include "can/socket.hpp"
 
 namespace liftd::can {
@@ -213,6 +214,23 @@ TEST(CanRealSocket, WithoutAfCanOpeningSaysSo) {
   ASSERT_FALSE(s);
   EXPECT_EQ(s.error().code, EAFNOSUPPORT);
   EXPECT_EQ(s.error().what, "socket(PF_CAN, SOCK_RAW, CAN_RAW)");
+}
+
+}  // namespace
+}  // namespace liftd::can
+
+namespace liftd::can {
+namespace {
+
+// rtnetlink answers for any interface; "lo" is on every Linux machine (no CAN bitrate).
+TEST(CanInterfaceInfo, ReadsStateFromTheKernel) {
+  const InterfaceInfo lo = query_interface("lo");
+  ASSERT_TRUE(lo.found);
+  EXPECT_TRUE(lo.up) << lo.error;
+  EXPECT_FALSE(lo.bitrate.has_value());
+  const InterfaceInfo missing = query_interface("nosuchcan9");
+  EXPECT_FALSE(missing.found);
+  EXPECT_EQ(missing.error, "no network interface \"nosuchcan9\"");
 }
 
 }  // namespace

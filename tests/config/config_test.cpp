@@ -69,6 +69,14 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/api/state_rate_hz", 10},
       {"/inputs/timeout_ms", 500},
       {"/position/source", "api"},
+      {"/position/can_id", 400},
+      {"/position/can_offset", 0},
+      {"/position/can_length", 4},
+      {"/position/can_byte_order", "little"},
+      {"/position/can_signed", false},
+      {"/position/can_um_per_count", 1000},
+      {"/position/can_offset_mm", 0},
+      {"/position/can_timeout_ms", 100},
       {"/travel/level_tolerance_mm", 5},
       {"/travel/relevel_threshold_mm", 15},
       {"/travel/relevel_with_doors", "both"},
@@ -157,11 +165,9 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
     "sim": {"dcp": 3}
   })";
   const LoadResult r = parse(text, "test");
-  // The values reach the struct; the two this version cannot run are refused (and nothing else).
+  // The values reach the struct; the one this version cannot run is refused (and nothing else).
   ASSERT_EQ(all_problems(r),
-            "drive.kind: \"uss\" is not implemented in this version: use \"dcp\" or \"sch001\"\n"
-            "position.source: \"can\" is not implemented in this version: use \"api\" (or "
-            "\"sim\" with --simulate)\n");
+            "drive.kind: \"uss\" is not implemented in this version: use \"dcp\" or \"sch001\"\n");
   const Config& c = r.config;
   EXPECT_EQ(c.log.level, LogLevel::debug);
   EXPECT_EQ(c.drive.kind, DriveKind::Uss);
@@ -380,8 +386,11 @@ TEST(ConfigProblems, WhatTheDaemonCannotRunIsRefused) {
        R"({"sch001": {"controller_node": 0}})", "sch001.controller_node", "2..95"},
       {"SCH001 base whose identifiers leave 11 bits", R"({"sch001": {"base": 1953}})",
        "sch001.base", "0..1952"},
-      {"CAN position: not implemented yet", R"({"position": {"source": "can"}})", "position.source",
-       "\"can\" is not implemented in this version"},
+      {"CAN encoder value beyond the 8 data bytes",
+       R"({"position": {"can_offset": 6, "can_length": 4}})", "position.can_offset",
+       "6 + position.can_length 4 must stay within the 8 data bytes of a CAN frame"},
+      {"CAN encoder without a scale", R"({"position": {"can_um_per_count": 0}})",
+       "position.can_um_per_count", "0 is no scale"},
       {"NUL inside the socket path (bound at the text before it)",
        R"({"api": {"socket": "/run/liftd/api.sock\u0000.evil"}})", "api.socket",
        "contains a control character (byte 0x00 at offset 19): not allowed"},

@@ -151,8 +151,6 @@ TEST(CheckConfigAgreesWithTheDaemon, EverythingTheDaemonRefusesIsRefusedWithTwo)
   const std::vector<RefusedCase> cases = {
       {"USS drive", R"({"drive": {"kind": "uss"}})", "",
        "drive.kind: \"uss\" is not implemented in this version: use \"dcp\""},
-      {"CAN position", R"({"position": {"source": "can"}})", "",
-       "position.source: \"can\" is not implemented in this version"},
       {"CPU that is not there", R"({"rt": {"cpu": 1023}})", "",
        "rt.cpu: 1023 is not a CPU this machine lets liftd run on"},
       {"NUL inside the socket path", R"({"api": {"socket": "/tmp/liftd.sock\u0000x"}})", "",

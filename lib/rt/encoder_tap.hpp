@@ -1,0 +1,37 @@
+// A CAN position encoder on the bus a CAN runner reads: its frames go to the encoder
+// (can/encoder.hpp), everything else to the drive's engine, if the bus has one (the SCH001 card
+// and the encoder may share a bus; a DCP lift runs a runner for the encoder alone).
+#pragma once
+
+#include <optional>
+
+#include "can/encoder.hpp"
+#include "rt/can_runner.hpp"
+
+namespace liftd::rt {
+
+class EncoderTap final : public CanEngine {
+ public:
+  /// `inner` may be nullptr (a bus with the encoder only).
+  EncoderTap(can::CanEncoder& encoder, CanEngine* inner) noexcept
+      : encoder_(encoder), inner_(inner) {}
+  std::optional<can::Frame> on_frame(const can::Frame& frame, MonoTime now) noexcept override {
+    if (encoder_.on_frame(frame, now)) return std::nullopt;
+    return inner_ != nullptr ? inner_->on_frame(frame, now) : std::nullopt;
+  }
+  void on_bus_error(const can::ErrorReport& report, MonoTime now) noexcept override {
+    if (inner_ != nullptr) inner_->on_bus_error(report, now);
+  }
+  void on_endpoint(bool up, MonoTime now) noexcept override {
+    if (inner_ != nullptr) inner_->on_endpoint(up, now);
+  }
+  void on_tick(MonoTime now) noexcept override {
+    if (inner_ != nullptr) inner_->on_tick(now);
+  }
+
+ private:
+  can::CanEncoder& encoder_;
+  CanEngine* inner_;
+};
+
+}  // namespace liftd::rt
