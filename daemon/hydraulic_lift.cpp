@@ -770,8 +770,10 @@ void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
           : event.link == sch001::LinkChange::Silent
               ? "no frame from the SCH001 card for 10 s (card document 3f): no travel command"
               : "the SCH001 card is heard again";
-      log::event(event.link == sch001::LinkChange::Silent ? log::Level::warn : log::Level::info,
-                 "sch001", "link_state_changed", {{"state", state}}, text);
+      // A silent card is one of the card faults the journal catalog explains (card_fault).
+      const bool silent = event.link == sch001::LinkChange::Silent;
+      log::event(silent ? log::Level::warn : log::Level::info, "sch001",
+                 silent ? "card_fault" : "link_state_changed", {{"state", state}}, text);
       daemon_.report_status(std::string("SCH001 card link ") + state);
       server_->publish("link", {{"kind", "state changed"}, {"state", state}, {"detail", text}});
       break;
@@ -779,14 +781,14 @@ void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
     case Kind::Card: {
       const sch001::ControllerSnapshot s = controller_->snapshot();
       const std::string on = card_text(event.card, s.single_unit);
-      log::event(
-          event.card.err || !event.card.rdy || event.card.t1 || event.card.p1 || event.card.p2
-              ? log::Level::warn
-              : log::Level::info,
-          "sch001", "card_status", {{"relays", on}},
-          "SCH001 card status: " + on +
-              " (ERR fault, RDY ready, T1 oil temperature, P1 "
-              "minimum/maximum pressure, P2 overpressure)");
+      // ERR or RDY = 0 forbid every travel signal (3d, 3e): the catalog's card_fault.
+      const bool fault = event.card.err || !event.card.rdy;
+      log::event(fault || event.card.t1 || event.card.p1 || event.card.p2 ? log::Level::warn
+                                                                          : log::Level::info,
+                 "sch001", fault ? "card_fault" : "card_status", {{"relays", on}},
+                 "SCH001 card status: " + on +
+                     " (ERR fault, RDY ready, T1 oil temperature, P1 minimum/maximum pressure, "
+                     "P2 overpressure)");
       break;
     }
     case Kind::Travel: {

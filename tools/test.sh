@@ -6,7 +6,7 @@
 #   tools/test.sh            everything
 #   LIFTD_SKIP_ASAN=1 ...    skip the sanitizer build (quicker local runs)
 #   LIFTD_SKIP_FUZZ=1 ...    skip the fuzz targets
-#   LIFTD_SOAK_SECONDS=N     fault soak length after the default tests (default 120; 0 skips)
+#   LIFTD_SOAK_SECONDS=N     fault soak length after the default tests (default 60; 0 skips)
 #   LIFTD_JOBS=N, LIFTD_TEST_JOBS=M   build with N jobs (default: cores), run M tests at once
 #                            (default: N)
 set -euo pipefail
@@ -36,7 +36,7 @@ run_preset() {
 }
 
 run_preset default
-soak_seconds=${LIFTD_SOAK_SECONDS:-120}
+soak_seconds=${LIFTD_SOAK_SECONDS:-60}
 if [ "$soak_seconds" != 0 ]; then
   echo "=== fault soak: $soak_seconds s ==="
   timed "soak" tools/soak --seconds "$soak_seconds" --seed 1

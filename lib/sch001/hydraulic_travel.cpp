@@ -2,6 +2,8 @@
 
 #include <chrono>
 
+#include "lift/gate.hpp"
+
 namespace liftd::sch001 {
 namespace {
 
@@ -77,21 +79,22 @@ Cause HydraulicTravel::forbidding(TravelKind kind, const TickInput& in) const no
   if (in.card_silent) return Cause::CardSilent;
   if (in.card_error) return Cause::CardError;
   if (!in.card_allows_travel) return Cause::CardNotReady;  // no status yet, or RDY = 0 (3e)
-  if (!in.inputs.valid) return Cause::InputsLost;
-  if (!in.inputs.safety_chain_closed) return Cause::SafetyChain;
-  switch (kind) {
-    case TravelKind::Travel:
-      if (!in.inputs.doors_locked) return Cause::DoorsUnlocked;
-      if (!in.position_mm) return Cause::PositionLost;
-      break;
-    case TravelKind::Relevel:
-      if (!in.inputs.doors_locked && !(config_.relevel_doors_open && in.inputs.door_zone_bridge)) {
-        return Cause::DoorsUnlocked;
-      }
-      if (!in.position_mm) return Cause::PositionLost;
-      break;
-    case TravelKind::Inspection:  // the safety chain holds the door contacts on inspection
-    case TravelKind::None:
+  // The machine's rules, common to every drive kind (lib/lift/gate.hpp). Inspection: the
+  // safety chain holds the door contacts.
+  lift::MachineNeeds needs;
+  needs.doors_locked = kind == TravelKind::Travel || kind == TravelKind::Relevel;
+  needs.door_bridge_allowed = kind == TravelKind::Relevel && config_.relevel_doors_open;
+  needs.position = needs.doors_locked;
+  switch (lift::machine_refusal(in.inputs, in.position_mm.has_value(), needs)) {
+    case lift::MachineRefusal::InputsLost:
+      return Cause::InputsLost;
+    case lift::MachineRefusal::SafetyChainOpen:
+      return Cause::SafetyChain;
+    case lift::MachineRefusal::DoorsNotLocked:
+      return Cause::DoorsUnlocked;
+    case lift::MachineRefusal::PositionLost:
+      return Cause::PositionLost;
+    case lift::MachineRefusal::None:
       break;
   }
   return Cause::None;

@@ -5,10 +5,10 @@
 namespace liftd::sch001 {
 namespace {
 
-constexpr bool bit(std::uint8_t byte, int n) noexcept {
-  return ((byte >> n) & 1U) != 0;
+constexpr bool bit(std::uint8_t byte, unsigned n) noexcept {
+  return ((static_cast<unsigned>(byte) >> n) & 1U) != 0;
 }
-constexpr std::uint8_t set(bool value, int n) noexcept {
+constexpr std::uint8_t set(bool value, unsigned n) noexcept {
   return static_cast<std::uint8_t>(value ? 1U << n : 0U);
 }
 

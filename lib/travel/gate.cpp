@@ -1,5 +1,7 @@
 #include "travel/gate.hpp"
 
+#include "lift/gate.hpp"
+
 namespace liftd::travel {
 
 namespace cb = dcp::command_bit;
@@ -10,16 +12,24 @@ constexpr std::uint8_t kMotionBits = cb::kDriveEnable | cb::kTravel | cb::kStopS
 
 AbortCause CommandGate::forbidding(const CycleInput& in, const GateProfile& profile,
                                    bool starting) noexcept {
-  if (!in.link_up) return AbortCause::LinkDown;            // DCP 7.3 / protocol notes 1
-  if (!in.handshake_done) return AbortCause::NoHandshake;  // DCP 5.12.2: no travel without I0
-  if (!in.inputs.valid) return AbortCause::InputsLost;
-  if (in.status.general_fault) return AbortCause::DriveFault;              // DCP 9.1.6
-  if (!in.inputs.safety_chain_closed) return AbortCause::SafetyChainOpen;  // DCP 9.1.1
-  if (profile.doors_locked_required && !in.inputs.doors_locked &&
-      !(profile.door_bridge_allowed && in.inputs.door_zone_bridge)) {
-    return AbortCause::DoorsNotLocked;
+  if (!in.link_up) return AbortCause::LinkDown;                // DCP 7.3 / protocol notes 1
+  if (!in.handshake_done) return AbortCause::NoHandshake;      // DCP 5.12.2: no travel without I0
+  if (in.status.general_fault) return AbortCause::DriveFault;  // DCP 9.1.6
+  // The machine's rules, common to every drive kind (DCP 9.1.1: the safety chain).
+  switch (lift::machine_refusal(
+      in.inputs, in.position_mm.has_value(),
+      {profile.doors_locked_required, profile.door_bridge_allowed, profile.position_required})) {
+    case lift::MachineRefusal::InputsLost:
+      return AbortCause::InputsLost;
+    case lift::MachineRefusal::SafetyChainOpen:
+      return AbortCause::SafetyChainOpen;
+    case lift::MachineRefusal::DoorsNotLocked:
+      return AbortCause::DoorsNotLocked;
+    case lift::MachineRefusal::PositionLost:
+      return AbortCause::PositionLost;
+    case lift::MachineRefusal::None:
+      break;
   }
-  if (profile.position_required && !in.position_mm) return AbortCause::PositionLost;
   if (starting && !in.status.ready) return AbortCause::DriveNotReady;            // DCP 9.1.3
   if (starting && in.status.advance_warning) return AbortCause::AdvanceWarning;  // DCP 9.1.5
   return AbortCause::None;

@@ -9,16 +9,16 @@
 namespace liftd::e2e {
 namespace {
 
-// Three floors 1500 mm apart and short slowdowns keep each travel to a few seconds.
+// Three floors 1200 mm apart and short slowdowns keep each travel to a few seconds.
 const json kHydraulic = {
     {"drive", {{"kind", "sch001"}}},
     {"floors", json::array({{{"name", "0"}, {"level_mm", 0}},
-                            {{"name", "1"}, {"level_mm", 1500}},
-                            {{"name", "2"}, {"level_mm", 3000}}})},
+                            {{"name", "1"}, {"level_mm", 1200}},
+                            {{"name", "2"}, {"level_mm", 2400}}})},
     {"sch001", {{"star_delta_ms", 500}, {"slowdown_up_mm", 300}, {"slowdown_down_mm", 350}}}};
 
 double level(int floor) {
-  return 1500.0 * floor;
+  return 1200.0 * floor;
 }
 
 /// The command byte (3c: SP3 SP2 SP1 SFY MSP HSP DW UP) of a traced answer "05 51 68 CC F D".
