@@ -17,9 +17,9 @@
 
 #include "api/server.hpp"
 #include "config/config.hpp"
-#include "control/dcp_controller.hpp"
 #include "daemon/daemon.hpp"
 #include "daemon/lift_backend.hpp"
+#include "dcp/control/dcp_controller.hpp"
 #include "io/pty.hpp"
 #include "rt/cycle_runner.hpp"
 #include "rt/overrun_journal.hpp"

@@ -14,9 +14,9 @@
 #include "api/backend.hpp"
 #include "api/dispatcher.hpp"
 #include "config/config.hpp"
-#include "control/dcp_controller.hpp"
 #include "daemon/dcp_status.hpp"
 #include "daemon/trace_files.hpp"
+#include "dcp/control/dcp_controller.hpp"
 #include "rt/cycle_runner.hpp"
 
 namespace liftd::daemon {

@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "dcp/travel/types.hpp"
 #include "log/log.hpp"
-#include "travel/types.hpp"
 
 namespace liftd::daemon {
 

@@ -9,7 +9,7 @@
 #include "api/backend.hpp"
 #include "api/result.hpp"
 #include "config/config.hpp"
-#include "control/dcp_controller.hpp"
+#include "dcp/control/dcp_controller.hpp"
 #include "io/pty.hpp"
 #include "lift/inputs.hpp"
 #include "sim/serial_runner.hpp"

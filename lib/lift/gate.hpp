@@ -1,5 +1,5 @@
 // The command gate's rules that belong to the machine, not to the drive: every drive kind's
-// gate asks them in the same order after its own link and drive checks (DCP: lib/travel/gate,
+// gate asks them in the same order after its own link and drive checks (DCP: lib/dcp/travel/gate,
 // SCH001: lib/sch001/hydraulic_travel). No travel signal while the inputs are stale, the safety
 // chain is open, the doors are not locked (or, where a relevelling allows it, bridged in the door
 // zone), or a travel that needs the position lacks it.

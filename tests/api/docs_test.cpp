@@ -212,8 +212,8 @@ const std::vector<std::string> kFaultCodes = {"link_fault",  "drive_fault",   "s
                                               "inputs_lost", "position_lost", "advance_warning"};
 
 TEST(ApiDocs, FaultCodesMatchTheController) {
-  EXPECT_EQ(returned_names("lib/control/dcp_controller.cpp", "std::string_view fault_code_name(",
-                           {"internal"}),
+  EXPECT_EQ(returned_names("lib/dcp/control/dcp_controller.cpp",
+                           "std::string_view fault_code_name(", {"internal"}),
             as_set(kFaultCodes));
   expect_table_rows(kFaultCodes, "fault code");
   const auto schema = read_schema();
@@ -236,7 +236,7 @@ TEST(ApiDocs, AbortCausesMatchTheTravelLibrary) {
   // The DCP travels' causes and the hydraulic travels' (which reuse the names where the
   // meaning is the same).
   std::set<std::string> causes =
-      returned_names("lib/travel/types.cpp", "to_string(AbortCause cause)", {"none"});
+      returned_names("lib/dcp/travel/types.cpp", "to_string(AbortCause cause)", {"none"});
   causes.merge(
       returned_names("lib/sch001/hydraulic_travel.cpp", "to_string(Cause cause)", {"none"}));
   EXPECT_EQ(causes, as_set(kAbortCauses));
@@ -252,7 +252,7 @@ const std::vector<std::string> kTravelEvents = {
     "target_refused", "fast_start_armed", "drive_fault", "drive_fault_cleared"};
 
 TEST(ApiDocs, TravelEventTypesMatchTheTravelLibrary) {
-  EXPECT_EQ(returned_names("lib/travel/types.cpp", "to_string(Event::Type type)", {}),
+  EXPECT_EQ(returned_names("lib/dcp/travel/types.cpp", "to_string(Event::Type type)", {}),
             as_set(kTravelEvents));
   expect_table_rows(kTravelEvents, "travel event");
   const auto schema = read_schema();
@@ -267,7 +267,7 @@ const std::vector<std::string> kTravelKinds = {"distance", "relevel_distance", "
 
 TEST(ApiDocs, TravelKindsMatchTheTravelLibrary) {
   std::set<std::string> named =
-      returned_names("lib/travel/types.cpp", "to_string(TravelKind kind)", {"none"});
+      returned_names("lib/dcp/travel/types.cpp", "to_string(TravelKind kind)", {"none"});
   named.merge(
       returned_names("lib/sch001/hydraulic_travel.cpp", "to_string(TravelKind kind)", {"idle"}));
   EXPECT_EQ(named, as_set(kTravelKinds));

@@ -7,7 +7,7 @@
 #include <functional>
 #include <vector>
 
-#include "control/dcp_controller.hpp"
+#include "dcp/control/dcp_controller.hpp"
 #include "sim/drive_sim.hpp"
 
 namespace liftd::control::testing {

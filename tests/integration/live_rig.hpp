@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "control/controller_rig.hpp"
-#include "control/dcp_controller.hpp"
+#include "dcp/control/dcp_controller.hpp"
 #include "io/pty.hpp"
 #include "rt/cycle_runner.hpp"
 #include "sim/serial_runner.hpp"

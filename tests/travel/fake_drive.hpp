@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "dcp/frame.hpp"
-#include "travel/controller.hpp"
+#include "dcp/travel/controller.hpp"
 
 namespace liftd::travel::test {
 

@@ -20,7 +20,7 @@
 
 #include <unistd.h>
 
-#include "control/dcp_controller.hpp"
+#include "dcp/control/dcp_controller.hpp"
 #include "dcp/trace.hpp"
 #include "echo_engine.hpp"
 #include "fake_responder.hpp"

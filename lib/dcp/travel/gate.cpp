@@ -1,4 +1,4 @@
-#include "travel/gate.hpp"
+#include "dcp/travel/gate.hpp"
 
 #include "lift/gate.hpp"
 

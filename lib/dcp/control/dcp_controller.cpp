@@ -1,8 +1,8 @@
-#include "control/dcp_controller.hpp"
+#include "dcp/control/dcp_controller.hpp"
 
 #include <stdexcept>
 
-#include "travel/gate.hpp"
+#include "dcp/travel/gate.hpp"
 
 namespace liftd::control {
 namespace {

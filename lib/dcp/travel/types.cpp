@@ -1,4 +1,4 @@
-#include "travel/types.hpp"
+#include "dcp/travel/types.hpp"
 
 namespace liftd::travel {
 

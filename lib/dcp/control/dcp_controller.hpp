@@ -19,13 +19,13 @@
 
 #include "common/mono_time.hpp"
 #include "dcp/master_link.hpp"
+#include "dcp/travel/controller.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/position_source.hpp"
 #include "rt/cycle_runner.hpp"
 #include "rt/snapshot.hpp"
 #include "rt/spsc_queue.hpp"
-#include "travel/controller.hpp"
 
 namespace liftd::control {
 

@@ -3,7 +3,7 @@
 
 #include <cstdint>
 
-#include "travel/types.hpp"
+#include "dcp/travel/types.hpp"
 
 namespace liftd::travel {
 

@@ -4,8 +4,8 @@
 #include <cstdint>
 #include <optional>
 
-#include "travel/gate.hpp"
-#include "travel/types.hpp"
+#include "dcp/travel/gate.hpp"
+#include "dcp/travel/types.hpp"
 
 namespace liftd::travel {
 

@@ -5,7 +5,7 @@
 
 #include <cstdint>
 
-#include "travel/step_context.hpp"
+#include "dcp/travel/step_context.hpp"
 
 namespace liftd::travel {
 

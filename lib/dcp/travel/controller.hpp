@@ -6,12 +6,12 @@
 #include <cstdint>
 #include <optional>
 
-#include "travel/dcp3_travel.hpp"
-#include "travel/dcp4_travel.hpp"
-#include "travel/gate.hpp"
-#include "travel/inspection_travel.hpp"
-#include "travel/relevel_travel.hpp"
-#include "travel/step_context.hpp"
+#include "dcp/travel/dcp3_travel.hpp"
+#include "dcp/travel/dcp4_travel.hpp"
+#include "dcp/travel/gate.hpp"
+#include "dcp/travel/inspection_travel.hpp"
+#include "dcp/travel/relevel_travel.hpp"
+#include "dcp/travel/step_context.hpp"
 
 namespace liftd::travel {
 

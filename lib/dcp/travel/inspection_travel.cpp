@@ -1,4 +1,4 @@
-#include "travel/inspection_travel.hpp"
+#include "dcp/travel/inspection_travel.hpp"
 
 namespace liftd::travel {
 

@@ -1,4 +1,4 @@
-#include "travel/dcp3_travel.hpp"
+#include "dcp/travel/dcp3_travel.hpp"
 
 namespace liftd::travel {
 

@@ -1,4 +1,4 @@
-#include "travel/relevel_travel.hpp"
+#include "dcp/travel/relevel_travel.hpp"
 
 namespace liftd::travel {
 

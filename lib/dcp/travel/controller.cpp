@@ -1,4 +1,4 @@
-#include "travel/controller.hpp"
+#include "dcp/travel/controller.hpp"
 
 namespace liftd::travel {
 

@@ -1,4 +1,4 @@
-#include "travel/dcp4_travel.hpp"
+#include "dcp/travel/dcp4_travel.hpp"
 
 namespace liftd::travel {
 
