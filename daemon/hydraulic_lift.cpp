@@ -296,20 +296,15 @@ api::Result SimulatedCard::apply(const api::SimRequest& request, MonoTime now) {
       log::Level::info, "sim", "sim_injected",
       {{"action", std::string(api::kSimActions[static_cast<std::size_t>(request.action)])}},
       "simulated lift: " + std::string(api::kSimActions[static_cast<std::size_t>(request.action)]));
-  const auto& s = card_.state();
-  return Result::ok({{"card", card_json(s.status, true)},
-                     {"silent", s.silent},
-                     {"cold_oil", s.cold_oil},
-                     {"sink_mm_per_s", s.sink_mm_per_s},
-                     {"safety_chain_open", chain_open_},
-                     {"doors", sim::to_string(io_.door_state())},
-                     {"door_obstructed", obstructed_},
-                     {"position_mm", std::llround(s.position_mm)},
-                     {"violations", s.violations}});
+  return Result::ok(state_json_locked());
 }
 
 nlohmann::json SimulatedCard::state_json() const {
   std::lock_guard<std::mutex> lock(mutex_);
+  return state_json_locked();
+}
+
+nlohmann::json SimulatedCard::state_json_locked() const {
   const auto& s = card_.state();
   return {{"card", card_json(s.status, true)},
           {"silent", s.silent},
@@ -471,15 +466,9 @@ void Sch001Backend::poll(MonoTime now) {
 }
 
 void Sch001Backend::update_inputs(const api::InputUpdate& update, api::Responder done) {
-  if (update.position_mm && config_.position.source != config::PositionSource::api) {
-    done(Result::fail(api::ErrorCode::BadRequest,
-                      "position_mm is only accepted when position.source is \"api\"",
-                      "position_mm"));
+  if (auto refused = merge_inputs(config_, update, inputs_, position_feed_)) {
+    done(std::move(*refused));
     return;
-  }
-  update.apply_to(inputs_);
-  if (update.position_mm && position_feed_ != nullptr) {
-    position_feed_->set(*update.position_mm, mono_now());
   }
   send_inputs(to_lift(inputs_));
   done(Result::ok(api::to_json(inputs_)));

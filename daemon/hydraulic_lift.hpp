@@ -57,6 +57,7 @@ class SimulatedCard {
     std::atomic<std::int64_t> mm_{0};
   };
   void loop();
+  nlohmann::json state_json_locked() const;  ///< state_json() with mutex_ held
 
   can::CanSocket socket_;
   mutable std::mutex mutex_;  ///< guards card_, io_ and bus_off_ (the simulator's thread and io)

@@ -323,15 +323,9 @@ void LiftBackend::load(int percent, api::Responder done) {
 }
 
 void LiftBackend::update_inputs(const api::InputUpdate& update, api::Responder done) {
-  if (update.position_mm && config_.position.source != config::PositionSource::api) {
-    done(Result::fail(api::ErrorCode::BadRequest,
-                      "position_mm is only accepted when position.source is \"api\"",
-                      "position_mm"));
+  if (auto refused = merge_inputs(config_, update, inputs_, position_feed_)) {
+    done(std::move(*refused));
     return;
-  }
-  update.apply_to(inputs_);
-  if (update.position_mm && position_feed_ != nullptr) {
-    position_feed_->set(*update.position_mm, mono_now());
   }
   send_inputs(to_lift(inputs_));
   done(Result::ok(api::to_json(inputs_)));

@@ -83,6 +83,19 @@ lift::Inputs to_lift(const api::Inputs& in) {
   return out;
 }
 
+std::optional<api::Result> merge_inputs(const config::Config& config,
+                                        const api::InputUpdate& update, api::Inputs& merged,
+                                        lift::PositionFeed* feed) {
+  if (update.position_mm && config.position.source != config::PositionSource::api) {
+    return api::Result::fail(api::ErrorCode::BadRequest,
+                             "position_mm is only accepted when position.source is \"api\"",
+                             "position_mm");
+  }
+  update.apply_to(merged);
+  if (update.position_mm && feed != nullptr) feed->set(*update.position_mm, mono_now());
+  return std::nullopt;
+}
+
 can::EncoderFormat encoder_format(const config::Config& c) {
   can::EncoderFormat f;
   f.id = static_cast<std::uint32_t>(c.position.can_id);

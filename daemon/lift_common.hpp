@@ -3,6 +3,7 @@
 // API server, and applying a reloaded configuration to the server.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -10,6 +11,7 @@
 #include "can/encoder.hpp"
 #include "config/config.hpp"
 #include "lift/inputs.hpp"
+#include "lift/position_source.hpp"
 
 namespace liftd::daemon {
 
@@ -23,6 +25,12 @@ api::ServerConfig api_reload_config(const config::Config& config);
 api::LogFn api_log_sink();
 /// The CAN encoder's frame format from position.can_* (position.source "can").
 can::EncoderFormat encoder_format(const config::Config& config);
+/// Merges an `inputs` update into `merged` (partial updates keep the rest) and hands its position
+/// to `feed` (position.source "api"; nullptr otherwise). A refusal, changing nothing, when the
+/// update carries a position the configured source does not take.
+std::optional<api::Result> merge_inputs(const config::Config& config,
+                                        const api::InputUpdate& update, api::Inputs& merged,
+                                        lift::PositionFeed* feed);
 /// The sequencers' inputs from the API's inputs (every drive kind reads the same machine).
 lift::Inputs to_lift(const api::Inputs& inputs);
 /// "state changed" -> "state_changed": journal field values are snake_case words.
