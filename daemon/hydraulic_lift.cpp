@@ -26,7 +26,9 @@ constexpr auto kShutdownGrace = 300ms;    // after a forced end: three answers w
 constexpr auto kRejectLogInterval = 10s;  // rejected card frames are journalled at most this often
 constexpr double kSinkMmPerS = 2.0;       // `sim sink`: a leaking valve or cooling oil
 
-sch001::ControllerConfig controller_config(const config::Config& c) {
+}  // namespace
+
+sch001::ControllerConfig sch001_controller_config(const config::Config& c) {
   sch001::ControllerConfig out;
   std::string why;
   const auto ids = sch001::ids_for(static_cast<std::uint32_t>(c.sch001.base),
@@ -57,6 +59,8 @@ sch001::ControllerConfig controller_config(const config::Config& c) {
   out.inspection_hold = std::chrono::milliseconds(c.travel.inspection_hold_ms);
   return out;
 }
+
+namespace {
 
 std::optional<std::string> direction_name(lift::Direction d) {
   switch (d) {
@@ -325,8 +329,8 @@ Sch001Backend::Sch001Backend(const config::Config& config, sch001::Sch001Control
     : config_(config),
       controller_(controller),
       runner_(runner),
-      position_feed_(position_feed),
       sim_(sim),
+      inputs_(config, position_feed, sim != nullptr),
       mono_at_start_(mono_now()),
       wall_at_start_(std::chrono::system_clock::now()) {}
 
@@ -393,6 +397,7 @@ api::StatsSnapshot Sch001Backend::stats() {
   out.channel_resets = c.reopens;
   out.checksum_errors = c.error_frames;
   out.cycles = s.steps;
+  out.dropped_events = controller_.dropped_events();
   return out;
 }
 
@@ -466,12 +471,17 @@ void Sch001Backend::poll(MonoTime now) {
 }
 
 void Sch001Backend::update_inputs(const api::InputUpdate& update, api::Responder done) {
-  if (auto refused = merge_inputs(config_, update, inputs_, position_feed_)) {
+  if (auto refused = inputs_.update(update)) {
     done(std::move(*refused));
     return;
   }
-  send_inputs(to_lift(inputs_));
-  done(Result::ok(api::to_json(inputs_)));
+  if (const auto now = inputs_.current()) send_inputs(*now);
+  done(Result::ok(api::to_json(inputs_.from_api())));
+}
+
+void Sch001Backend::simulated_inputs(const lift::Inputs& sample) {
+  inputs_.simulated_sample(sample);
+  if (const auto now = inputs_.current()) send_inputs(*now);
 }
 
 void Sch001Backend::send_inputs(const lift::Inputs& inputs) {
@@ -544,7 +554,7 @@ HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool 
                       std::max(1, config.api.state_rate_hz)) {
   rt::CanRunnerConfig rc;
   rc.endpoint = config.can.interface;
-  const sch001::ControllerConfig cc = controller_config(config);
+  const sch001::ControllerConfig cc = sch001_controller_config(config);
   rc.ids = {cc.link.ids.from_card};
   rc.rt.priority = config.rt.priority;
   rc.rt.cpu = config.rt.cpu;
@@ -704,7 +714,7 @@ void HydraulicLift::schedule_poll() {
 void HydraulicLift::poll() {
   const MonoTime now = mono_now();
   if (sim_ && now - last_sim_inputs_ >= kSimInputsPeriod) {
-    backend_->send_inputs(sim_->inputs(now));
+    backend_->simulated_inputs(sim_->inputs(now));
     last_sim_inputs_ = now;
     sim_->log_violations();
   }

@@ -18,6 +18,7 @@
 #include "config/config.hpp"
 #include "daemon/daemon.hpp"
 #include "daemon/drives.hpp"
+#include "daemon/lift_common.hpp"
 #include "lift/position_source.hpp"
 #include "rt/can_runner.hpp"
 #include "rt/encoder_tap.hpp"
@@ -26,6 +27,10 @@
 #include "sim/sim_io.hpp"
 
 namespace liftd::daemon {
+
+/// The SCH001 controller's settings from the configuration; throws std::invalid_argument when
+/// the card identifiers do not fit (config validation refuses that first).
+sch001::ControllerConfig sch001_controller_config(const config::Config& config);
 
 /// The simulated card and hydraulic car (liftd --simulate, drive.kind "sch001") on its own
 /// thread, speaking CAN frames over one end of a socketpair; the simulated I/O board.
@@ -98,7 +103,9 @@ class Sch001Backend final : public api::Backend {
 
   /// Io thread: replies to their clients, requests the CAN thread never answered time out.
   void poll(MonoTime now);
-  void send_inputs(const lift::Inputs& inputs);
+  /// A sample of the simulated machine's inputs (--simulate), sent on with the API's shaft
+  /// signals (MachineInputs).
+  void simulated_inputs(const lift::Inputs& sample);
   bool send_shutdown(bool force);
   std::chrono::system_clock::time_point wall_time(MonoTime at) const;
 
@@ -110,13 +117,13 @@ class Sch001Backend final : public api::Backend {
   };
   static void not_offered(api::Responder& done);
   void send(sch001::CommandBody body, api::Responder done);
+  void send_inputs(const lift::Inputs& inputs);
 
   const config::Config& config_;
   sch001::Sch001Controller& controller_;
   rt::CanRunner& runner_;
-  lift::PositionFeed* position_feed_;
   SimulatedCard* sim_;
-  api::Inputs inputs_{};
+  MachineInputs inputs_;  ///< the API's and the simulated machine's inputs
   std::map<std::uint32_t, Pending> pending_;
   std::uint32_t next_tag_ = 0;
   MonoTime mono_at_start_{};

@@ -42,7 +42,9 @@ dcp::Code2 code2(const std::string& s) {
   return {s.at(0), s.at(1)};
 }
 
-control::ControllerConfig controller_config(const config::Config& c) {
+}  // namespace
+
+control::ControllerConfig dcp_controller_config(const config::Config& c) {
   control::ControllerConfig out;
   out.link.data_info_type = *dcp::data_info_type_from_char(c.dcp.data_info_type);
   out.link.extended_position = c.dcp.extended_position;
@@ -66,12 +68,9 @@ control::ControllerConfig controller_config(const config::Config& c) {
   out.travel.relevel_electric_stop = c.travel.relevel_electric_stop;
   out.travel.dcp3_speed_count = c.travel.dcp3_speed_count;
   out.travel.dcp3_stop_lead_mm = static_cast<std::uint32_t>(c.travel.dcp3_stop_lead_mm);
-  // DCP3 travels need the deceleration points: with an absolute position we compute them from
-  // the configured SVx, otherwise the shaft signals give them.
-  out.travel.dcp3_reference =
-      c.position.source == config::PositionSource::api && c.travel.dcp3_decel_distance_mm.empty()
-          ? travel::Dcp3Reference::ShaftSignals
-          : travel::Dcp3Reference::Position;
+  out.travel.dcp3_reference = c.travel.dcp3_reference == config::Dcp3Reference::shaft_signals
+                                  ? travel::Dcp3Reference::ShaftSignals
+                                  : travel::Dcp3Reference::Position;
   for (const auto& [name, mm] : c.travel.dcp3_decel_distance_mm) {
     if (auto speed = dcp::speed_from_string(name)) {
       out.travel.dcp3_decel_distance_mm[travel::speed_index(*speed)] =
@@ -84,6 +83,8 @@ control::ControllerConfig controller_config(const config::Config& c) {
   out.inspection_hold = std::chrono::milliseconds(c.travel.inspection_hold_ms);
   return out;
 }
+
+namespace {
 
 rt::CycleConfig cycle_config(const config::Config& c, const std::string& device) {
   rt::CycleConfig out;
@@ -131,8 +132,6 @@ config::Config simulation_defaults() {
   cfg.api.inputs_group.clear();
   cfg.rt.lock_memory = false;       // an ordinary user may not lock memory; say nothing about it
   cfg.rt.require_realtime = false;  // nor get SCHED_FIFO: the simulation runs anyway, warned
-  // The simulator's crawl (V0) stop takes about 8 mm: DCP3 travels withdraw B2 that early.
-  cfg.travel.dcp3_stop_lead_mm = 8;
   return cfg;
 }
 
@@ -171,7 +170,7 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
       position_ = encoder_.get();
     }
   }
-  controller_ = std::make_unique<control::DcpController>(controller_config(config), *position_);
+  controller_ = std::make_unique<control::DcpController>(dcp_controller_config(config), *position_);
   runner_ = std::make_unique<rt::CycleRunner>(cycle_config(config, device), *controller_);
   cycle_wake_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
   if (cycle_wake_fd_ < 0) {
@@ -353,7 +352,7 @@ void LiftApp::poll() {
   const MonoTime now = mono_now();
   if (sim_ && now - last_sim_inputs_ >= kSimInputsPeriod) {
     last_sim_inputs_ = now;
-    backend_->send_inputs(sim_->inputs(now));
+    backend_->simulated_inputs(sim_->inputs(now));
     sim_->log_events();
   }
   if (now - last_clock_ >= 1s) {  // DCP 5.12.5: I3 after I0 and at day change

@@ -26,6 +26,10 @@
 
 namespace liftd::daemon {
 
+/// The DCP controller's settings from the configuration (what a default Config gives is what a
+/// default ControllerConfig holds: config/defaults.hpp).
+control::ControllerConfig dcp_controller_config(const config::Config& config);
+
 class SimulatedLift;
 
 /// The configuration of `liftd --simulate` without a config file: the defaults, the API socket in

@@ -76,9 +76,9 @@ LiftBackend::LiftBackend(const config::Config& config, control::DcpController& c
     : config_(config),
       controller_(controller),
       runner_(runner),
-      position_feed_(position_feed),
       trace_files_(std::move(runtime_dir), static_cast<std::size_t>(config.rt.trace_files_kept)),
       sim_(sim),
+      inputs_(config, position_feed, sim != nullptr),
       mono_at_start_(mono_now()),
       wall_at_start_(std::chrono::system_clock::now()) {}
 
@@ -152,6 +152,7 @@ api::StatsSnapshot LiftBackend::stats() {
   out.decode_errors = link.decode_errors;
   out.request_timeouts = link.request_timeouts;
   out.longest_error_run = link.longest_error_run;
+  out.dropped_events = controller_.dropped_events();
   return out;
 }
 
@@ -323,12 +324,17 @@ void LiftBackend::load(int percent, api::Responder done) {
 }
 
 void LiftBackend::update_inputs(const api::InputUpdate& update, api::Responder done) {
-  if (auto refused = merge_inputs(config_, update, inputs_, position_feed_)) {
+  if (auto refused = inputs_.update(update)) {
     done(std::move(*refused));
     return;
   }
-  send_inputs(to_lift(inputs_));
-  done(Result::ok(api::to_json(inputs_)));
+  if (const auto now = inputs_.current()) send_inputs(*now);
+  done(Result::ok(api::to_json(inputs_.from_api())));
+}
+
+void LiftBackend::simulated_inputs(const lift::Inputs& sample) {
+  inputs_.simulated_sample(sample);
+  if (const auto now = inputs_.current()) send_inputs(*now);
 }
 
 void LiftBackend::send_inputs(const lift::Inputs& inputs) {

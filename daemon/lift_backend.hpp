@@ -15,6 +15,7 @@
 #include "api/dispatcher.hpp"
 #include "config/config.hpp"
 #include "daemon/dcp_status.hpp"
+#include "daemon/lift_common.hpp"
 #include "daemon/trace_files.hpp"
 #include "dcp/control/dcp_controller.hpp"
 #include "rt/cycle_runner.hpp"
@@ -60,8 +61,9 @@ class LiftBackend final : public api::Backend {
   /// Io thread, every few ms: hands controller replies to their waiting clients and times out
   /// requests the cycle never answered (it stopped).
   void poll(MonoTime now);
-  /// Sends a full input set to the cycle (the simulated I/O board uses this).
-  void send_inputs(const lift::Inputs& inputs);
+  /// A sample of the simulated machine's inputs (--simulate): goes to the cycle with the API's
+  /// shaft signals (MachineInputs).
+  void simulated_inputs(const lift::Inputs& sample);
   /// Service stop: no new travel, the running one stops at the next possible floor; `force`
   /// withdraws drive enable at once. False when the command queue was full (send again).
   bool send_shutdown(bool force);
@@ -86,14 +88,14 @@ class LiftBackend final : public api::Backend {
   /// Posts a command; the responder gets `complete(reply)` or an error.
   void send(control::CommandBody body, api::Responder done, Completion complete);
   void send_ok(control::CommandBody body, api::Responder done);
+  void send_inputs(const lift::Inputs& inputs);
 
   const config::Config& config_;
   control::DcpController& controller_;
   rt::CycleRunner& runner_;
-  control::PositionFeed* position_feed_;
   TraceFiles trace_files_;      ///< flight-recorder files in the runtime directory
   SimulatedLift* sim_;          ///< the simulated lift (liftd --simulate), else nullptr
-  api::Inputs inputs_{};        ///< merged API input state (partial updates keep the rest)
+  MachineInputs inputs_;        ///< the API's and the simulated machine's inputs
   DcpStatusFacts dcp_facts_{};  ///< what dcp_details_ was built from
   nlohmann::json dcp_details_ = dcp_status_json({});  ///< status.dcp
   std::map<std::uint32_t, Pending> pending_;

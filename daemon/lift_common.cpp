@@ -75,25 +75,44 @@ lift::Inputs to_lift(const api::Inputs& in) {
   out.end_zone_top = in.end_zone_top;
   out.end_zone_bottom = in.end_zone_bottom;
   out.door_zone_bridge = in.zone_door;
-  // DCP3 shaft signals: the deceleration point of any speed in the direction of travel, and the
-  // level zone (the sequencer only looks at them during a DCP3 travel).
-  out.dcp3_decel_point = in.decel_v4_up || in.decel_v4_down || in.decel_v3_up || in.decel_v3_down ||
-                         in.decel_v2_up || in.decel_v2_down || in.decel_v1_up || in.decel_v1_down;
-  out.dcp3_at_level = in.zone_level;
+  out.door_reversal = in.door_reversal;
+  // Shaft signals: the level zone, the relevelling zones and every speed's deceleration points
+  // by direction (a travel at Vn looks only at Vn's point for its direction).
+  out.level_zone = in.zone_level;
+  out.relevel_up = in.relevel_up;
+  out.relevel_down = in.relevel_down;
+  out.decel_up = {in.decel_v1_up, in.decel_v2_up, in.decel_v3_up, in.decel_v4_up,
+                  in.decel_v5_up, in.decel_v6_up, in.decel_v7_up};
+  out.decel_down = {in.decel_v1_down, in.decel_v2_down, in.decel_v3_down, in.decel_v4_down,
+                    in.decel_v5_down, in.decel_v6_down, in.decel_v7_down};
   return out;
 }
 
-std::optional<api::Result> merge_inputs(const config::Config& config,
-                                        const api::InputUpdate& update, api::Inputs& merged,
-                                        lift::PositionFeed* feed) {
-  if (update.position_mm && config.position.source != config::PositionSource::api) {
+std::optional<api::Result> MachineInputs::update(const api::InputUpdate& update) {
+  if (update.position_mm && config_.position.source != config::PositionSource::api) {
     return api::Result::fail(api::ErrorCode::BadRequest,
                              "position_mm is only accepted when position.source is \"api\"",
                              "position_mm");
   }
-  update.apply_to(merged);
-  if (update.position_mm && feed != nullptr) feed->set(*update.position_mm, mono_now());
+  update.apply_to(api_);
+  if (update.position_mm && feed_ != nullptr) feed_->set(*update.position_mm, mono_now());
   return std::nullopt;
+}
+
+std::optional<lift::Inputs> MachineInputs::current() const {
+  if (!simulated_) return to_lift(api_);
+  if (!sample_) return std::nullopt;
+  const lift::Inputs api = to_lift(api_);
+  lift::Inputs out = *sample_;
+  out.door_reversal = out.door_reversal || api.door_reversal;
+  out.level_zone = api.level_zone;
+  out.relevel_up = api.relevel_up;
+  out.relevel_down = api.relevel_down;
+  out.end_zone_top = out.end_zone_top || api.end_zone_top;
+  out.end_zone_bottom = out.end_zone_bottom || api.end_zone_bottom;
+  out.decel_up = api.decel_up;
+  out.decel_down = api.decel_down;
+  return out;
 }
 
 can::EncoderFormat encoder_format(const config::Config& c) {

@@ -25,12 +25,34 @@ api::ServerConfig api_reload_config(const config::Config& config);
 api::LogFn api_log_sink();
 /// The CAN encoder's frame format from position.can_* (position.source "can").
 can::EncoderFormat encoder_format(const config::Config& config);
-/// Merges an `inputs` update into `merged` (partial updates keep the rest) and hands its position
-/// to `feed` (position.source "api"; nullptr otherwise). A refusal, changing nothing, when the
-/// update carries a position the configured source does not take.
-std::optional<api::Result> merge_inputs(const config::Config& config,
-                                        const api::InputUpdate& update, api::Inputs& merged,
-                                        lift::PositionFeed* feed);
+/// The machine inputs a backend hands its cycle. On a real lift they are the API's `inputs`
+/// (the I/O board's daemon), merged update by update. Under --simulate the simulated machine
+/// supplies them, and the API adds what that machine does not model: the shaft signals (level and
+/// relevelling zones, every speed's deceleration points), and an end zone or a door reversal from
+/// either side. Never a mix in which an API default such as "safety chain open" overrides the
+/// simulated machine.
+class MachineInputs {
+ public:
+  /// `feed` takes the API's position (position.source "api"; nullptr otherwise).
+  MachineInputs(const config::Config& config, lift::PositionFeed* feed, bool simulated)
+      : config_(config), feed_(feed), simulated_(simulated) {}
+  /// Takes an `inputs` update (partial updates keep the rest); a refusal, changing nothing, when
+  /// it carries a position the configured source does not take.
+  std::optional<api::Result> update(const api::InputUpdate& update);
+  /// A new sample from the simulated machine (--simulate).
+  void simulated_sample(const lift::Inputs& sample) { sample_ = sample; }
+  /// What the cycle should see now; nullopt under --simulate before the machine's first sample.
+  std::optional<lift::Inputs> current() const;
+  /// The API's inputs as merged so far (the `inputs` command's result).
+  const api::Inputs& from_api() const noexcept { return api_; }
+
+ private:
+  const config::Config& config_;
+  lift::PositionFeed* feed_;
+  bool simulated_;
+  api::Inputs api_{};
+  std::optional<lift::Inputs> sample_;
+};
 /// The sequencers' inputs from the API's inputs (every drive kind reads the same machine).
 lift::Inputs to_lift(const api::Inputs& inputs);
 /// "state changed" -> "state_changed": journal field values are snake_case words.

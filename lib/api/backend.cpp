@@ -5,10 +5,11 @@
 
 namespace liftd::api {
 
-const std::array<InputFlag, 21> kInputFlags = {{
+const std::array<InputFlag, 28> kInputFlags = {{
     {"safety_chain", &Inputs::safety_chain, "safety chain closed"},
     {"doors_closed", &Inputs::doors_closed, "all doors closed"},
     {"doors_locked", &Inputs::doors_locked, "all doors locked"},
+    {"door_reversal", &Inputs::door_reversal, "doors reopening (light curtain, door-open button)"},
     {"inspection", &Inputs::inspection, "inspection switch on"},
     {"recall", &Inputs::recall, "recall (test control) switch on"},
     {"button_up", &Inputs::button_up, "inspection/recall up button pressed"},
@@ -27,6 +28,12 @@ const std::array<InputFlag, 21> kInputFlags = {{
     {"decel_v2_down", &Inputs::decel_v2_down, "DCP3 deceleration point V2, down"},
     {"decel_v1_up", &Inputs::decel_v1_up, "DCP3 deceleration point V1, up"},
     {"decel_v1_down", &Inputs::decel_v1_down, "DCP3 deceleration point V1, down"},
+    {"decel_v7_up", &Inputs::decel_v7_up, "DCP3 deceleration point V7, up"},
+    {"decel_v7_down", &Inputs::decel_v7_down, "DCP3 deceleration point V7, down"},
+    {"decel_v6_up", &Inputs::decel_v6_up, "DCP3 deceleration point V6, up"},
+    {"decel_v6_down", &Inputs::decel_v6_down, "DCP3 deceleration point V6, down"},
+    {"decel_v5_up", &Inputs::decel_v5_up, "DCP3 deceleration point V5, up"},
+    {"decel_v5_down", &Inputs::decel_v5_down, "DCP3 deceleration point V5, down"},
 }};
 
 void InputUpdate::apply_to(Inputs& inputs) const {
@@ -156,7 +163,8 @@ nlohmann::json to_json(const StatsSnapshot& s) {
             {"max_lateness_us", s.max_lateness_us},
             {"lateness_p99_us", s.lateness_p99_us},
             {"reply_p99_us", s.reply_p99_us},
-            {"max_work_us", s.max_work_us}}}};
+            {"max_work_us", s.max_work_us},
+            {"dropped_events", s.dropped_events}}}};
 }
 
 nlohmann::json to_json(const TraceEntry& e) {

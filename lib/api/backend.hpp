@@ -89,6 +89,7 @@ struct StatsSnapshot {
   std::uint64_t decode_errors = 0;      ///< channel payloads that did not decode
   std::uint64_t request_timeouts = 0;   ///< I-messages the drive did not answer
   std::uint64_t longest_error_run = 0;  ///< longest run of consecutive bad or missing replies
+  std::uint64_t dropped_events = 0;     ///< cycle events lost: a queue towards the io thread full
 };
 
 /// One exchange of the frame trace (DCP: one cycle).
@@ -116,6 +117,7 @@ struct Inputs {
   bool safety_chain = false;                ///< safety chain closed
   bool doors_closed = false;                ///< all doors closed
   bool doors_locked = false;                ///< all doors locked
+  bool door_reversal = false;               ///< doors reopening (light curtain, door-open button)
   bool inspection = false;                  ///< inspection switch on
   bool recall = false;                      ///< recall (test control) switch on
   bool button_up = false;                   ///< inspection/recall up button pressed
@@ -134,12 +136,18 @@ struct Inputs {
   bool decel_v2_down = false;               ///< DCP3 deceleration point for V2, travelling down
   bool decel_v1_up = false;                 ///< DCP3 deceleration point for V1, travelling up
   bool decel_v1_down = false;               ///< DCP3 deceleration point for V1, travelling down
+  bool decel_v7_up = false;                 ///< DCP3 deceleration point for V7, travelling up
+  bool decel_v7_down = false;               ///< DCP3 deceleration point for V7, travelling down
+  bool decel_v6_up = false;                 ///< DCP3 deceleration point for V6, travelling up
+  bool decel_v6_down = false;               ///< DCP3 deceleration point for V6, travelling down
+  bool decel_v5_up = false;                 ///< DCP3 deceleration point for V5, travelling up
+  bool decel_v5_down = false;               ///< DCP3 deceleration point for V5, travelling down
   std::optional<std::int64_t> position_mm;  ///< absolute car position; nullopt = unknown
 };
 
 /// A partial update of Inputs: fields left empty keep their value.
 struct InputUpdate {
-  std::array<std::optional<bool>, 21> flags{};  ///< indexed like kInputFlags
+  std::array<std::optional<bool>, 28> flags{};  ///< indexed like kInputFlags
   std::optional<std::int64_t> position_mm;      ///< new position, if given
   /// Writes the given fields into `inputs`.
   void apply_to(Inputs& inputs) const;
@@ -152,7 +160,7 @@ struct InputFlag {
   std::string_view description;  ///< one line for docs and help
 };
 /// Every boolean input, in wire-name order of the docs.
-extern const std::array<InputFlag, 21> kInputFlags;
+extern const std::array<InputFlag, 28> kInputFlags;
 
 /// Arguments of `travel` and `fast_start` "arm".
 struct TravelArgs {

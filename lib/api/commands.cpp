@@ -5,6 +5,7 @@
 #include <string>
 
 #include "common/version.hpp"
+#include "drive/drive.hpp"
 
 namespace liftd::api {
 namespace {
@@ -249,7 +250,8 @@ TravelArgs travel_args(const nlohmann::json& request) {
 
 void add_travel_commands(Dispatcher& dispatcher, Backend& backend) {
   Backend* b = &backend;
-  const std::vector<std::string> speeds = {"V4", "V3", "V2", "V1", "V7", "V6", "V5"};
+  const std::vector<std::string> speeds(drive::kTravelSpeedNames.begin(),
+                                        drive::kTravelSpeedNames.end());
   const ArgSpec speed = choice_arg(
       "speed", false, speeds, "speed limit (DCP4: V4 or V3; DCP3: a speed of the installation)");
   // Floors are limited to 64 by the configuration; the backend checks the installed count.

@@ -27,10 +27,11 @@ constexpr std::array<std::string_view, 3> kPositionSourceNames{"sim", "api", "ca
 constexpr std::array<std::string_view, 2> kFastDownNames{"hsp", "sp3"};
 constexpr std::array<std::string_view, 2> kByteOrderNames{"little", "big"};
 constexpr std::array<std::string_view, 4> kRelevelDoorsNames{"open", "closed", "both", "never"};
+constexpr std::array<std::string_view, 2> kDcp3ReferenceNames{"position", "shaft_signals"};
 constexpr std::array<std::string_view, 5> kDataInfoTypeNames{"0", "1", "2", "3", "4"};
 
 // DCP 3.5.3.7: the DCP3 travelling speeds in the order an installation adds them.
-constexpr std::array<std::string_view, 7> kDcp3SpeedOrder{"V4", "V3", "V2", "V1", "V7", "V6", "V5"};
+constexpr const auto& kDcp3SpeedOrder = drive::kTravelSpeedNames;
 // Every DCP speed name (DCP 3.5.3.7), to tell "not a speed" from "not used with this count".
 constexpr std::array<std::string_view, 11> kAllSpeedNames{"V0", "VN", "VF", "V1", "VI", "V2",
                                                           "V3", "V4", "V5", "V6", "V7"};
@@ -681,6 +682,12 @@ const std::vector<Key>& schema() {
     t.push_back(int_key("travel.dcp3_speed_count", 1, 7,
                         "travelling speeds of a DCP3 installation (DCP 3.5.3.7)", &Config::travel,
                         &TravelConfig::dcp3_speed_count));
+    t.push_back(enum_key("travel.dcp3_reference", kDcp3ReferenceNames,
+                         "where a DCP3 travel finds its deceleration point (B1 off) and its level "
+                         "(B2 off): position = the car position against "
+                         "travel.dcp3_decel_distance_mm and the floor; shaft_signals = the "
+                         "decel_vN_up/down of its speed and direction and zone_level (inputs)",
+                         &Config::travel, &TravelConfig::dcp3_reference));
     {
       Key k;
       k.path = "travel.dcp3_decel_distance_mm";
@@ -1295,6 +1302,9 @@ std::string_view to_string(PositionSource value) {
 }
 std::string_view to_string(RelevelDoors value) {
   return enum_name(value, kRelevelDoorsNames);
+}
+std::string_view to_string(Dcp3Reference value) {
+  return enum_name(value, kDcp3ReferenceNames);
 }
 
 std::optional<LogLevel> parse_log_level(std::string_view name) {

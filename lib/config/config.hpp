@@ -1,5 +1,5 @@
 // liftd configuration: the typed settings, loaded from JSON and validated against one schema
-// table (config/schema.cpp). Exceptions are used only while loading; the result is plain data.
+// table (schema() in config.cpp). Exceptions are used only while loading; the result is plain data.
 #pragma once
 
 #include <cstddef>
@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "config/defaults.hpp"
 #include "drive/drive.hpp"
 
 namespace liftd::config {
@@ -31,6 +32,8 @@ enum class Rs485Mode : std::uint8_t {
 enum class PositionSource : std::uint8_t { sim, api, can };
 /// With which door state relevelling is allowed.
 enum class RelevelDoors : std::uint8_t { open, closed, both, never };
+/// Where a DCP3 travel learns its deceleration point and its level.
+enum class Dcp3Reference : std::uint8_t { position, shaft_signals };
 
 /// `log.*`
 struct LogConfig {
@@ -48,12 +51,12 @@ struct DriveConfig {
 struct DcpConfig {
   /// dcp.manufacturer, sent in I0 (DCP 5.12.2.3); "LD" is in no company's row of that table.
   std::string manufacturer = "LD";
-  std::string language = "EN";    ///< dcp.language, sent in I0
-  char data_info_type = '0';      ///< dcp.data_info_type, set with I1 (DCP 4.2)
-  bool extended_position = true;  ///< dcp.extended_position: ask for the extended I9
-  int link_fault_frames = 10;     ///< dcp.link_fault_frames (DCP 7.3: 10 frames)
-  int link_recover_frames = 10;   ///< dcp.link_recover_frames (DCP 7.3: 10 frames)
-  int request_timeout_ms = 2000;  ///< dcp.request_timeout_ms for an I-message reply
+  std::string language = "EN";  ///< dcp.language, sent in I0
+  char data_info_type = '0';    ///< dcp.data_info_type, set with I1 (DCP 4.2)
+  bool extended_position = defaults::kExtendedPosition;    ///< dcp.extended_position
+  int link_fault_frames = defaults::kLinkFaultFrames;      ///< dcp.link_fault_frames (DCP 7.3)
+  int link_recover_frames = defaults::kLinkRecoverFrames;  ///< dcp.link_recover_frames (DCP 7.3)
+  int request_timeout_ms = defaults::kRequestTimeoutMs;    ///< dcp.request_timeout_ms
 };
 
 /// `rt.*`
@@ -84,7 +87,7 @@ struct ApiConfig {
 
 /// `inputs.*`
 struct InputsConfig {
-  int timeout_ms = 500;  ///< inputs.timeout_ms
+  int timeout_ms = defaults::kInputsTimeoutMs;  ///< inputs.timeout_ms
 };
 
 /// One entry of `floors`.
@@ -114,17 +117,19 @@ struct PositionConfig {
 
 /// `travel.*`
 struct TravelConfig {
-  int level_tolerance_mm = 5;                            ///< travel.level_tolerance_mm
-  int relevel_threshold_mm = 15;                         ///< travel.relevel_threshold_mm
-  RelevelDoors relevel_with_doors = RelevelDoors::both;  ///< travel.relevel_with_doors
-  bool relevel_electric_stop = false;                    ///< travel.relevel_electric_stop
-  bool use_start_parameters = true;                      ///< travel.use_start_parameters (I7)
-  int fast_start_timeout_ms = 3000;                      ///< travel.fast_start_timeout_ms
-  int inspection_hold_ms = 500;                          ///< travel.inspection_hold_ms
-  int dcp3_stop_lead_mm = 0;                             ///< travel.dcp3_stop_lead_mm
-  int dcp3_speed_count = 2;                              ///< travel.dcp3_speed_count
+  int level_tolerance_mm = defaults::kLevelToleranceMm;         ///< travel.level_tolerance_mm
+  int relevel_threshold_mm = defaults::kRelevelThresholdMm;     ///< travel.relevel_threshold_mm
+  RelevelDoors relevel_with_doors = RelevelDoors::both;         ///< travel.relevel_with_doors
+  bool relevel_electric_stop = defaults::kRelevelElectricStop;  ///< travel.relevel_electric_stop
+  bool use_start_parameters = defaults::kUseStartParameters;    ///< travel.use_start_parameters
+  int fast_start_timeout_ms = defaults::kFastStartTimeoutMs;    ///< travel.fast_start_timeout_ms
+  int inspection_hold_ms = defaults::kInspectionHoldMs;         ///< travel.inspection_hold_ms
+  int dcp3_stop_lead_mm = defaults::kDcp3StopLeadMm;            ///< travel.dcp3_stop_lead_mm
+  int dcp3_speed_count = defaults::kDcp3SpeedCount;             ///< travel.dcp3_speed_count
+  Dcp3Reference dcp3_reference = Dcp3Reference::position;       ///< travel.dcp3_reference
   /// travel.dcp3_decel_distance_mm: speed name ("V4", "V3", ...) -> deceleration distance.
-  std::map<std::string, int> dcp3_decel_distance_mm = {{"V3", 1200}, {"V4", 2500}};
+  std::map<std::string, int> dcp3_decel_distance_mm = {{"V3", defaults::kDcp3DecelV3Mm},
+                                                       {"V4", defaults::kDcp3DecelV4Mm}};
 };
 
 /// `can.*`
@@ -144,15 +149,15 @@ struct Sch001Config {
   FastDown fast_down = FastDown::hsp;  ///< sch001.fast_down
   bool has_v3 = false;                 ///< sch001.has_v3
   bool has_v4 = false;                 ///< sch001.has_v4
-  int star_delta_ms = 1500;            ///< sch001.star_delta_ms
-  int slowdown_up_mm = 500;            ///< sch001.slowdown_up_mm
-  int slowdown_down_mm = 700;          ///< sch001.slowdown_down_mm
-  int slowdown_v3_mm = 1000;           ///< sch001.slowdown_v3_mm
-  int slowdown_v4_mm = 1500;           ///< sch001.slowdown_v4_mm
-  int stop_tolerance_mm = 3;           ///< sch001.stop_tolerance_mm
-  int relevel_start_mm = 10;           ///< sch001.relevel_start_mm
-  int max_travel_ms = 45000;           ///< sch001.max_travel_ms
-  bool auto_relevel = true;            ///< sch001.auto_relevel
+  int star_delta_ms = defaults::kStarDeltaMs;           ///< sch001.star_delta_ms
+  int slowdown_up_mm = defaults::kSlowdownUpMm;         ///< sch001.slowdown_up_mm
+  int slowdown_down_mm = defaults::kSlowdownDownMm;     ///< sch001.slowdown_down_mm
+  int slowdown_v3_mm = defaults::kSlowdownV3Mm;         ///< sch001.slowdown_v3_mm
+  int slowdown_v4_mm = defaults::kSlowdownV4Mm;         ///< sch001.slowdown_v4_mm
+  int stop_tolerance_mm = defaults::kStopToleranceMm;   ///< sch001.stop_tolerance_mm
+  int relevel_start_mm = defaults::kRelevelStartMm;     ///< sch001.relevel_start_mm
+  int max_travel_ms = defaults::kMaxTravelMs;           ///< sch001.max_travel_ms
+  bool auto_relevel = defaults::kHydraulicAutoRelevel;  ///< sch001.auto_relevel
 };
 
 /// `sim.*`
@@ -245,6 +250,7 @@ std::string_view to_string(Rs485Mode value);
 std::string_view to_string(PositionSource value);
 /// The name of an enum value as written in the JSON file.
 std::string_view to_string(RelevelDoors value);
+std::string_view to_string(Dcp3Reference value);
 
 /// Parses a log level name ("trace".."error").
 std::optional<LogLevel> parse_log_level(std::string_view name);

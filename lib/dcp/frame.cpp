@@ -1,5 +1,7 @@
 #include "dcp/frame.hpp"
 
+#include "drive/drive.hpp"
+
 namespace liftd::dcp {
 namespace {
 
@@ -24,9 +26,21 @@ constexpr std::array<SpeedName, 11> kSpeedNames = {{{Speed::V0, "V0"},
                                                     {Speed::V6, "V6"},
                                                     {Speed::V7, "V7"}}};
 
-// DCP 3.5.3.7: the travelling speeds by the installation's speed count, fastest first.
-constexpr std::array<Speed, 7> kDcp3SpeedOrder = {Speed::V4, Speed::V3, Speed::V2, Speed::V1,
-                                                  Speed::V7, Speed::V6, Speed::V5};
+constexpr Speed speed_named(std::string_view name) {
+  for (const auto& entry : kSpeedNames) {
+    if (entry.name == name) return entry.speed;
+  }
+  return Speed::V0;
+}
+
+// DCP 3.5.3.7: the travelling speeds by the installation's speed count, fastest first, in the
+// one order every drive kind and the configuration share (drive::kTravelSpeedNames).
+constexpr std::array<Speed, drive::kTravelSpeedNames.size()> kDcp3SpeedOrder = [] {
+  std::array<Speed, drive::kTravelSpeedNames.size()> out{};
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = speed_named(drive::kTravelSpeedNames[i]);
+  return out;
+}();
+static_assert(kDcp3SpeedOrder[0] == Speed::V4 && kDcp3SpeedOrder[6] == Speed::V5);
 
 // Low nibbles B3..B0 of the command byte (DCP 3.5.1 / 3.5.2 tables).
 constexpr std::uint8_t kNibbleIdle = 0x0;

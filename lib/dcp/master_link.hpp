@@ -19,6 +19,7 @@
 
 #include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
+#include "config/defaults.hpp"
 #include "dcp/channel.hpp"
 #include "dcp/display.hpp"
 #include "dcp/frame.hpp"
@@ -42,11 +43,11 @@ struct MasterLinkConfig {
   /// I1 data-information-type (DCP 5.12.3); decides the width of our remaining distance.
   DataInfoType data_info_type = DataInfoType::Alternating;
   /// I1 protocol type '1': ask for the extended I9 reply with the measured travel distance.
-  bool extended_position = false;
+  bool extended_position = defaults::kExtendedPosition;
   /// DCP 7.3: consecutive bad or missing replies that make a link fault.
-  int fault_after_bad_frames = 10;
+  int fault_after_bad_frames = defaults::kLinkFaultFrames;
   /// DCP 7.3: consecutive good replies, drive stationary (S1 = 0), that end a link fault.
-  int recover_after_good_frames = 10;
+  int recover_after_good_frames = defaults::kLinkRecoverFrames;
   /// I0: our maker code (DCP 5.12.2.3). liftd has no registered code: set the installer's own.
   Code2 maker{'L', 'D'};
   /// I0: our software version, four digits (12.34 = 1234).
@@ -56,7 +57,7 @@ struct MasterLinkConfig {
   /// I0: display language, ISO 639 upper case.
   Code2 language{'E', 'N'};
   /// How long we wait for the drive's reply to an I-message, counted from our ETX.
-  MonoTime request_timeout = std::chrono::milliseconds(1000);
+  MonoTime request_timeout = std::chrono::milliseconds(defaults::kRequestTimeoutMs);
   /// DCP 5.12.4.2: after its 'R' reply the drive waits 200 ms, in which we may cancel.
   MonoTime reset_cancel_window = std::chrono::milliseconds(200);
   /// DCP 5.12.4.2: re-run I0/I1 about 5 s after a trip/fault reset.

@@ -23,6 +23,12 @@ std::string_view to_string(Kind kind) noexcept;
 /// The kind of a wire name, nullopt for an unknown one.
 std::optional<Kind> parse_kind(std::string_view name) noexcept;
 
+/// The travelling speeds a travel may ask for, by name, fastest first. It is the order in which
+/// a DCP3 installation adds speeds (DCP 3.5.3.7: one speed V4, two V4 V3, ... seven V4 V3 V2 V1
+/// V7 V6 V5); DCP4 drives have V4 and V3, the hydraulic unit V4, V3 and V1 (its fast speed).
+inline constexpr std::array<std::string_view, 7> kTravelSpeedNames = {"V4", "V3", "V2", "V1",
+                                                                      "V7", "V6", "V5"};
+
 /// The drive as a dispatcher sees it, whatever the kind (status `drive.state`).
 enum class State : std::uint8_t {
   Offline,     ///< no working link to the drive yet (or any more): nothing can move

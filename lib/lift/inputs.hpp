@@ -1,7 +1,9 @@
-// Signals from the machine that the travel logic looks at once per cycle (system.md "Inputs from
-// the machine"). Plain data: the input provider fills it, the sequencers only read it.
+// Signals from the machine that the travel logic looks at once per cycle (docs/architecture.md
+// "Machine inputs"). Plain data: the input provider fills it, the sequencers only read it.
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 
 namespace liftd::lift {
@@ -27,8 +29,28 @@ struct Inputs {
   bool button_down = false;          ///< inspection / recall "down" button pressed
   bool end_zone_top = false;         ///< car inside the top end zone (inspection limited to V0)
   bool end_zone_bottom = false;      ///< car inside the bottom end zone
-  bool dcp3_decel_point = false;     ///< shaft signal: fixed deceleration point of the target met
-  bool dcp3_at_level = false;        ///< shaft signal: car level with the target floor
+  bool level_zone = false;           ///< shaft signal: car inside the stopping zone of a level
+  bool relevel_up = false;  ///< shaft signal: car below its level beyond the relevelling tolerance
+  bool relevel_down =
+      false;  ///< shaft signal: car above its level beyond the relevelling tolerance
+  /// Shaft signals: the fixed deceleration point of speed Vn met (index n - 1 for V1..V7), one
+  /// set for a car travelling up and one for down. A travel at Vn looks at its own point only.
+  std::array<bool, 7> decel_up{};
+  std::array<bool, 7> decel_down{};
+
+  /// The deceleration point of speed V`speed_number` (1..7) for `direction`; false for any
+  /// other speed or no direction.
+  bool decel_point(int speed_number, Direction direction) const noexcept {
+    if (speed_number < 1 || speed_number > static_cast<int>(decel_up.size())) return false;
+    const auto i = static_cast<std::size_t>(speed_number - 1);
+    if (direction == Direction::Up) return decel_up[i];
+    if (direction == Direction::Down) return decel_down[i];
+    return false;
+  }
+  /// The relevelling signal that asks for `direction` (relevel_up for Up, relevel_down for Down).
+  bool relevel_towards(Direction direction) const noexcept {
+    return direction == Direction::Up ? relevel_up : direction == Direction::Down && relevel_down;
+  }
   bool operator==(const Inputs&) const = default;
 };
 

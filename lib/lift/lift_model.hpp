@@ -6,6 +6,7 @@
 #include <optional>
 #include <span>
 
+#include "config/defaults.hpp"
 #include "lift/calls.hpp"
 #include "lift/floors.hpp"
 #include "lift/inputs.hpp"
@@ -15,7 +16,7 @@ namespace liftd::lift {
 /// Tunables of the lift model.
 struct LiftConfig {
   /// The car is "at" a floor while within this distance of its level.
-  std::uint32_t level_tolerance_mm = 5;
+  std::uint32_t level_tolerance_mm = defaults::kLevelToleranceMm;
   /// Added to the drive's deceleration distance before a floor counts as still reachable.
   std::uint32_t stop_margin_mm = 100;
 };

@@ -19,24 +19,6 @@ constexpr std::int64_t kRelevelZoneMm = 150;
 
 }  // namespace
 
-std::string_view fault_code_name(FaultCode code) noexcept {
-  switch (code) {
-    case FaultCode::LinkFault:
-      return "link_fault";
-    case FaultCode::DriveFault:
-      return "drive_fault";
-    case FaultCode::SafetyChain:
-      return "safety_chain_open";
-    case FaultCode::InputsLost:
-      return "inputs_lost";
-    case FaultCode::PositionLost:
-      return "position_lost";
-    case FaultCode::kCount:
-      break;
-  }
-  return "internal";
-}
-
 std::string_view fault_text(FaultCode code) noexcept {
   switch (code) {
     case FaultCode::LinkFault:
@@ -50,6 +32,7 @@ std::string_view fault_text(FaultCode code) noexcept {
       return "no input update from the I/O provider within inputs.timeout_ms";
     case FaultCode::PositionLost:
       return "the car position is unknown or stale: no travel possible";
+    case FaultCode::AdvanceWarning:  // the card has no advance warning
     case FaultCode::kCount:
       break;
   }
@@ -363,6 +346,7 @@ void Sch001Controller::drain_travel(MonoTime now) noexcept {
       }
     }
   }
+  travel_dropped_.store(travel_.dropped_events(), std::memory_order_relaxed);
 }
 
 void Sch001Controller::serve_calls(TickInput& in) noexcept {

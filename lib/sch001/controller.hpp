@@ -20,6 +20,8 @@
 
 #include "can/socket.hpp"
 #include "common/mono_time.hpp"
+#include "config/defaults.hpp"
+#include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/position_source.hpp"
@@ -37,9 +39,11 @@ struct ControllerConfig {
   HydraulicConfig hydraulic;
   lift::LiftConfig lift;                ///< level tolerance: status car.floor
   std::vector<std::int64_t> floors_mm;  ///< strictly increasing levels (config `floors`)
-  MonoTime inputs_timeout = std::chrono::milliseconds(500);   ///< config inputs.timeout_ms
-  MonoTime inspection_hold = std::chrono::milliseconds(500);  ///< config travel.inspection_hold_ms
-  bool auto_relevel = true;  ///< relevel by itself when the car at rest leaves the level zone
+  MonoTime inputs_timeout = std::chrono::milliseconds(defaults::kInputsTimeoutMs);  ///< inputs.*
+  /// travel.inspection_hold_ms
+  MonoTime inspection_hold = std::chrono::milliseconds(defaults::kInspectionHoldMs);
+  /// Relevel by itself when the car at rest leaves the level zone.
+  bool auto_relevel = defaults::kHydraulicAutoRelevel;
 };
 
 // ---- commands (io thread -> CAN thread) ----
@@ -84,15 +88,9 @@ struct CommandReply {
 
 /// Faults; each reported once when it starts and once when it ends. The API names are those of
 /// the DCP lift where the meaning is the same.
-enum class FaultCode : std::uint8_t {
-  LinkFault,     ///< the card is silent (3f) or the CAN bus/socket failed
-  DriveFault,    ///< the card reports ERR (3d)
-  SafetyChain,   ///< safety chain open
-  InputsLost,    ///< input provider silent
-  PositionLost,  ///< position source invalid
-  kCount,
-};
-std::string_view fault_code_name(FaultCode code) noexcept;
+using lift::fault_code_name;
+using lift::FaultCode;
+/// One line of explanation for a technician, in the card's terms.
 std::string_view fault_text(FaultCode code) noexcept;
 
 struct ControllerEvent {
@@ -166,8 +164,11 @@ class Sch001Controller final : public rt::CanEngine {
   bool poll_reply(CommandReply& out) noexcept { return replies_.try_pop(out); }
   bool poll_event(ControllerEvent& out) noexcept { return events_.try_pop(out); }
   ControllerSnapshot snapshot() noexcept { return snapshot_.read(); }
+  /// Events lost because a queue was full: the controller's to the io thread or the travel's own
+  /// (stats cycle.dropped_events).
   std::uint64_t dropped_events() const noexcept {
-    return dropped_events_.load(std::memory_order_relaxed);
+    return dropped_events_.load(std::memory_order_relaxed) +
+           travel_dropped_.load(std::memory_order_relaxed);
   }
   std::span<const std::int64_t> floors_mm() const noexcept { return config_.floors_mm; }
 
@@ -208,6 +209,7 @@ class Sch001Controller final : public rt::CanEngine {
   rt::SpscQueue<ControllerEvent, kEventQueueSize> events_;
   rt::Snapshot<ControllerSnapshot> snapshot_;
   std::atomic<std::uint64_t> dropped_events_{0};
+  std::atomic<std::uint64_t> travel_dropped_{0};  ///< the travel's own count, copied each step
 
   // CAN-thread state.
   bool endpoint_up_ = false;

@@ -14,6 +14,19 @@ std::int64_t distance_to(std::int64_t position_mm, std::int64_t level_mm,
   return direction == lift::Direction::Up ? level_mm - position_mm : position_mm - level_mm;
 }
 
+/// The shaft's deceleration point that belongs to a speed: its API name V1 (fast), V3 or V4.
+int speed_number(Speed speed) noexcept {
+  switch (speed) {
+    case Speed::V3:
+      return 3;
+    case Speed::V4:
+      return 4;
+    case Speed::Fast:
+      break;
+  }
+  return 1;
+}
+
 }  // namespace
 
 std::string_view to_string(TravelKind kind) noexcept {
@@ -239,13 +252,13 @@ TickOutput HydraulicTravel::tick(const lift::FloorTable& floors, const TickInput
       phase_ != Phase::MotorStart && in.position_mm) {
     const std::int64_t remaining =
         distance_to(*in.position_mm, floors.level_mm(target_), direction_);
-    if (phase_ == Phase::Fast &&
-        (remaining <= static_cast<std::int64_t>(slowdown_mm()) || in.inputs.dcp3_decel_point)) {
+    if (phase_ == Phase::Fast && (remaining <= static_cast<std::int64_t>(slowdown_mm()) ||
+                                  in.inputs.decel_point(speed_number(speed_), direction_))) {
       phase_ = Phase::Slow;
     }
     if (phase_ == Phase::Slow &&
         (remaining <= static_cast<std::int64_t>(config_.stop_tolerance_mm) ||
-         in.inputs.dcp3_at_level)) {
+         in.inputs.level_zone)) {
       finish(in.now);
     }
   }

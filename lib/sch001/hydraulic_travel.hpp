@@ -21,6 +21,7 @@
 
 #include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
+#include "config/defaults.hpp"
 #include "lift/floors.hpp"
 #include "lift/inputs.hpp"
 #include "sch001/protocol.hpp"
@@ -32,18 +33,23 @@ enum class FastDown : std::uint8_t { Hsp, Sp3 };
 
 /// The hydraulic installation as the sequencing needs it (config `sch001.*`).
 struct HydraulicConfig {
-  bool has_v3 = false;                   ///< the unit has speed V3 (HSP + SP1)
-  bool has_v4 = false;                   ///< the unit has speed V4 (HSP + SP2)
-  FastDown fast_down = FastDown::Hsp;    ///< mirrors card P435 / P453
-  std::uint32_t star_delta_ms = 1500;    ///< motor contactors on until SFY (star-delta start)
-  std::uint32_t slowdown_up_mm = 500;    ///< fast speed up ends this far below the level
-  std::uint32_t slowdown_down_mm = 700;  ///< fast speed down ends this far above the level
-  std::uint32_t slowdown_v3_mm = 1000;   ///< V3 up ends this far below the level
-  std::uint32_t slowdown_v4_mm = 1500;   ///< V4 up ends this far below the level
-  std::uint32_t stop_tolerance_mm = 3;   ///< the slow approach stops within this of the level
-  std::uint32_t relevel_start_mm = 10;   ///< relevelling starts when the car is this far off
-  std::uint32_t max_travel_ms = 45000;   ///< motor run-time limiter: a travel longer than this ends
-  bool relevel_doors_open = true;        ///< relevel with the doors open (door zone bridged)
+  bool has_v3 = false;                 ///< the unit has speed V3 (HSP + SP1)
+  bool has_v4 = false;                 ///< the unit has speed V4 (HSP + SP2)
+  FastDown fast_down = FastDown::Hsp;  ///< mirrors card P435 / P453
+  /// Motor contactors on until SFY (star-delta start).
+  std::uint32_t star_delta_ms = defaults::kStarDeltaMs;
+  /// Fast speed up ends this far below the level, down this far above it.
+  std::uint32_t slowdown_up_mm = defaults::kSlowdownUpMm;
+  std::uint32_t slowdown_down_mm = defaults::kSlowdownDownMm;
+  std::uint32_t slowdown_v3_mm = defaults::kSlowdownV3Mm;  ///< V3 up ends this far below
+  std::uint32_t slowdown_v4_mm = defaults::kSlowdownV4Mm;  ///< V4 up ends this far below
+  /// The slow approach stops within this of the level.
+  std::uint32_t stop_tolerance_mm = defaults::kStopToleranceMm;
+  /// Relevelling starts when the car is this far off.
+  std::uint32_t relevel_start_mm = defaults::kRelevelStartMm;
+  /// Motor run-time limiter: a travel longer than this ends.
+  std::uint32_t max_travel_ms = defaults::kMaxTravelMs;
+  bool relevel_doors_open = true;  ///< relevel with the doors open (door zone bridged)
 };
 
 /// The speed a travel asks for (config and API names V1 fast, V3, V4).

@@ -1,6 +1,7 @@
-// The machine's inputs as a simulated lift provides them (system.md "Inputs from the machine"):
-// safety chain, a simple door model, inspection/recall switches and buttons, end zones and the
-// DCP3 shaft signals. Pure: time comes in as an argument, no thread, clock or I/O.
+// The machine's inputs as a simulated lift provides them (docs/architecture.md "Machine inputs"):
+// safety chain, a simple door model, inspection/recall switches and buttons and end zones
+// (not the shaft signals: the API adds those). Pure: time comes in as an argument, no thread,
+// clock or I/O.
 //
 // Door model: the doors move between closed (0) and fully open (1) at a configurable speed.
 // Closed means fully closed; the landing doors lock `lock_ms` after they closed and unlock as
@@ -92,11 +93,6 @@ class SimulatedIo {
   }
   /// Door contacts bridged in the door zone (relevelling with open doors).
   void set_door_zone_bridge(bool on) noexcept { inputs_.door_zone_bridge = on; }
-  /// DCP3 shaft signals: fixed deceleration point met, car level with the target.
-  void set_dcp3_signals(bool decel_point, bool at_level) noexcept {
-    inputs_.dcp3_decel_point = decel_point;
-    inputs_.dcp3_at_level = at_level;
-  }
   /// The input provider alive (true) or failed (inputs().valid = false).
   void set_valid(bool valid) noexcept { inputs_.valid = valid; }
 

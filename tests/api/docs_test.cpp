@@ -212,9 +212,9 @@ const std::vector<std::string> kFaultCodes = {"link_fault",  "drive_fault",   "s
                                               "inputs_lost", "position_lost", "advance_warning"};
 
 TEST(ApiDocs, FaultCodesMatchTheController) {
-  EXPECT_EQ(returned_names("lib/dcp/control/dcp_controller.cpp",
-                           "std::string_view fault_code_name(", {"internal"}),
-            as_set(kFaultCodes));
+  EXPECT_EQ(
+      returned_names("lib/lift/faults.cpp", "std::string_view fault_code_name(", {"internal"}),
+      as_set(kFaultCodes));
   expect_table_rows(kFaultCodes, "fault code");
   const auto schema = read_schema();
   const auto& defs = schema.at("$defs");

@@ -45,8 +45,8 @@ inline std::uint32_t sim_sv_mm(const sim::DriveConfig& drive, dcp::Speed speed) 
 
 /// DCP3 with position reference: B2 is withdrawn this far before the level so the drive's stop
 /// from crawl (V0 = 0.05 m/s on a 2.1 m/s^3 jerk-limited ramp: 2 * sqrt(0.05 / 2.1) = 0.31 s,
-/// 0.05 * 0.31 / 2 = 7.7 mm) ends on it, less the 3 mm level tolerance the travel adds itself.
-inline constexpr std::uint32_t kDcp3StopLeadMm = 5;
+/// 0.05 * 0.31 / 2 = 7.7 mm) ends on it.
+inline constexpr std::uint32_t kDcp3StopLeadMm = 8;
 
 /// DCP 10.1.1: the drive reaches crawl at the end of its SVx; the deceleration point is placed
 /// this much earlier so the car crawls into the level instead of arriving still braking.

@@ -19,8 +19,8 @@ namespace cb = dcp::command_bit;
 
 // DCP 11.1.2: a distance travel ends at the level without crawl; our acceptance is 2 mm.
 constexpr double kDcp4LandingMm = 2.0;
-// DCP3 by position (rig config): B2 is withdrawn 3 mm (level tolerance) + 5 mm (stop lead) =
-// 8 mm before the level, and the simulator stops from crawl V0 = 0.05 m/s on its jerk-limited
+// DCP3 by position (rig config): B2 is withdrawn 8 mm (the stop lead) before the level, and
+// the simulator stops from crawl V0 = 0.05 m/s on its jerk-limited
 // ramp in about 7.7 mm (2 * sqrt(0.05 / 2.1) = 0.31 s at half the crawl speed). The decision is
 // taken once per cycle, and a cycle at crawl is 0.75 mm, so the car stops within about 1 mm of
 // the level; 2 mm bounds it. Without the lead it overshoots by 4 to 5 mm.
@@ -414,7 +414,9 @@ TEST(Relevel, Dcp4AutoRelevelsAfterDrift) {
 }
 
 TEST(Relevel, Dcp3RelevelCommand) {
-  Rig rig(dcp::Protocol::Dcp3);
+  ControllerConfig config = testing::default_config(dcp::Protocol::Dcp3);
+  config.travel.relevel_electric_stop = true;  // DCP 9.2.3.2, checked below
+  Rig rig(config, testing::sim_config(dcp::Protocol::Dcp3));
   ASSERT_TRUE(rig.warm_up());
   ASSERT_TRUE(travel_to(rig, 1));
   rig.run(500ms);
@@ -436,8 +438,9 @@ TEST(Relevel, Dcp3RelevelCommand) {
   EXPECT_TRUE(find_nibble(rig, 0x1, *relevel_at));
   EXPECT_EQ(rig.travel_events(travel::Event::Type::Finished).back().kind,
             travel::TravelKind::Relevel);
-  // VN = 0.03 m/s stopping on the deceleration ramp: within a few mm (same bound as crawl).
-  EXPECT_NEAR(rig.sim.position_mm(), 3000.0, kDcp3LandingMm);
+  // The relevelling ends once the car is level (travel.level_tolerance_mm); VN = 0.03 m/s then
+  // stops within a fraction of a mm on the deceleration ramp.
+  EXPECT_NEAR(rig.sim.position_mm(), 3000.0, config.travel.level_tolerance_mm + 1.0);
 }
 
 // ---- inspection ----
@@ -567,11 +570,12 @@ TEST_P(FastStart, HoldEndsAfterItsTimeLimit) {
   ASSERT_EQ(rig.command(TravelCommand{2, std::nullopt, std::nullopt, true}).code, ReplyCode::Ok);
   ASSERT_TRUE(rig.run_until([&] { return rig.controller.snapshot().fast_start_armed; }, 3s));
   const MonoTime armed = rig.now;
-  // DCP 12.1.2: time limited on our side too (TravelConfig::fast_start_timeout_ms = 8000,
+  // DCP 12.1.2: time limited on our side too (travel.fast_start_timeout_ms, 3000 by default:
   // shorter than the simulated drive's 10 s, so ours is the one that acts).
+  const auto limit = std::chrono::milliseconds(travel::TravelConfig{}.fast_start_timeout_ms);
   ASSERT_TRUE(rig.run_until([&] { return !rig.controller.snapshot().fast_start_armed; }, 12s));
-  EXPECT_GE(rig.now - armed, 7900ms) << c.legend;
-  EXPECT_LE(rig.now - armed, 8500ms) << c.legend;
+  EXPECT_GE(rig.now - armed, limit - 100ms) << c.legend;
+  EXPECT_LE(rig.now - armed, limit + 500ms) << c.legend;
   ASSERT_TRUE(rig.run_until([&] { return rig.idle(); }, 5s));
   const auto aborted = rig.travel_events(travel::Event::Type::Aborted);
   ASSERT_EQ(aborted.size(), 1U);

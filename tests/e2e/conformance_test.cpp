@@ -188,7 +188,10 @@ TEST(DriveNotReady, DuringATravelTheTravelFinishesAndNoNewOneStarts) {
   EXPECT_EQ(refused["error"]["code"], "not_ready") << refused.dump();
   EXPECT_EQ(refused["error"]["message"], "drive not ready (S0 = 0)") << refused.dump();
   ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "not_ready"}, {"on", false}})));
-  lift.api().drain(300ms);
+  // Wait for the drive's S0 to come back (a condition, not a fixed time).
+  for (int i = 0; i < 50 && lift.status()["drive"]["status"]["ready"] != true; ++i) {
+    lift.api().drain(50ms);
+  }
   ASSERT_TRUE(is_ok(lift.call({{"cmd", "travel"}, {"floor", 0}})));
   EXPECT_EQ(lift.wait_travel_end()["data"]["event"], "finished");
 }

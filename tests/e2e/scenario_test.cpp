@@ -5,7 +5,9 @@
 // drive enable (B0) off on the wire once the car stands.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
 #include <ostream>
 #include <string>
 #include <thread>
@@ -244,6 +246,25 @@ TEST(FastStart, DoorReversalWhileArmedAbortsIt) {
   EXPECT_NEAR(status["car"]["position_mm"].get<double>(), 0.0, 1.0) << "the car never left";
 }
 
+TEST(FastStart, ADoorReversalFromTheInputsApiEndsItAsDcp12_2Says) {
+  // The I/O board's daemon reports the reversal through `inputs` (not the simulated doors).
+  START_LIFT(lift, 4, kFastStartTravel);
+  open_doors(lift);
+  ASSERT_TRUE(is_ok(lift.call({{"cmd", "fast_start"}, {"action", "arm"}, {"floor", 2}})));
+  ASSERT_FALSE(lift.wait_travel("fast_start_armed").is_null()) << lift.log();
+  ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "close_doors"}})));
+  lift.api().drain(800ms);
+  const json reply = lift.call({{"cmd", "inputs"}, {"door_reversal", true}});
+  ASSERT_TRUE(is_ok(reply)) << reply.dump();
+  EXPECT_EQ(reply["result"]["door_reversal"], true);
+  const json end = lift.wait_travel_end(10s);
+  ASSERT_FALSE(end.is_null()) << lift.log();
+  EXPECT_EQ(end["data"]["event"], "aborted") << end.dump();
+  EXPECT_EQ(end["data"]["cause"], "door_reversal") << end.dump();
+  EXPECT_TRUE(lift.b0_off_in_newest());
+  EXPECT_NEAR(lift.position_mm(), 0.0, 1.0) << "the car never left";
+}
+
 TEST(FastStart, ArmedThenDoorsLockedTravelsAndFinishes) {
   START_LIFT(lift, 4, kFastStartTravel);
   open_doors(lift);
@@ -260,6 +281,43 @@ TEST(FastStart, ArmedThenDoorsLockedTravelsAndFinishes) {
 }
 
 // ---- faults while the car moves ----
+
+/// True once each of the newest few master frames satisfies `pred` (checked for up to 3 s).
+bool newest_frames_all(Lift& lift, const std::function<bool(int)>& pred) {
+  for (int i = 0; i < 60; ++i) {
+    const auto frames = lift.newest_commands(3);
+    if (!frames.empty() &&
+        std::all_of(frames.begin(), frames.end(), [&](const auto& f) { return pred(f.second); })) {
+      return true;
+    }
+    lift.api().drain(50ms);
+  }
+  return false;
+}
+
+TEST(ShaftSignals, ADcp3TravelUpAtV4SlowsOnlyAtTheV4UpPointFromTheInputsApi) {
+  // DCP 10.1.1 step 3: B1 off at the deceleration point of the travel's own speed. The shaft's
+  // points come through `inputs`; those of other speeds and of the other direction pass by.
+  START_LIFT(lift, 3, json{{"dcp3_reference", "shaft_signals"}});
+  ASSERT_TRUE(is_ok(lift.call({{"cmd", "travel"}, {"floor", 4}, {"speed", "V4"}})));
+  ASSERT_TRUE(lift.wait_moved(level_mm(0), 1500.0)) << lift.log();
+  ASSERT_TRUE(newest_frames_all(lift, [](int c) { return (c & 0x02) != 0; })) << "B1 on at V4";
+  const json others = {{"cmd", "inputs"},     {"decel_v1_down", true}, {"decel_v1_up", true},
+                       {"decel_v3_up", true}, {"decel_v4_down", true}, {"decel_v2_up", true},
+                       {"decel_v7_up", true}, {"decel_v5_up", true}};
+  ASSERT_TRUE(is_ok(lift.call(others)));
+  lift.api().drain(500ms);
+  for (const auto& [t, command] : lift.newest_commands(20)) {
+    EXPECT_NE(command & 0x02, 0) << "B1 went off at another speed's or direction's point";
+  }
+  ASSERT_TRUE(is_ok(lift.call({{"cmd", "inputs"}, {"decel_v4_up", true}})));
+  EXPECT_TRUE(newest_frames_all(lift, [](int c) { return (c & 0x07) == 0x05; }))
+      << "B1 off, B2 and B0 on at the V4-up point";
+  ASSERT_TRUE(is_ok(lift.call({{"cmd", "inputs"}, {"zone_level", true}})));
+  const json end = lift.wait_travel_end(20s);
+  ASSERT_FALSE(end.is_null()) << lift.log();
+  EXPECT_EQ(end["data"]["event"], "finished") << end.dump();
+}
 
 struct FaultCase {
   const char* legend;  ///< what happens, in plain English

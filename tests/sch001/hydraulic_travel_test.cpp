@@ -258,10 +258,10 @@ TEST_F(HydraulicTest, ShaftSignalsSlowAndStopWhereTheyAreMet) {
   ASSERT_EQ(travel_.start_travel(floors_, 1, Speed::Fast, in_), Cause::None);
   tick(0, 0);
   EXPECT_EQ(tick(1500, 100), kUp | kHsp | kSfy);
-  in_.inputs.dcp3_decel_point = true;
+  in_.inputs.decel_up[0] = true;  // V1 (fast) up
   EXPECT_EQ(tick(1600, 1000), kUp | kSfy);
-  in_.inputs.dcp3_decel_point = false;
-  in_.inputs.dcp3_at_level = true;
+  in_.inputs.decel_up[0] = false;
+  in_.inputs.level_zone = true;
   EXPECT_EQ(tick(1700, 2900), 0);
   EXPECT_EQ(travel_.current_floor(), 1U);
 }

@@ -78,8 +78,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         if ((b & 8) != 0) in.inputs.end_zone_top = !in.inputs.end_zone_top;
         break;
       case 14:
-        if ((b & 1) != 0) in.inputs.dcp3_decel_point = !in.inputs.dcp3_decel_point;
-        if ((b & 2) != 0) in.inputs.dcp3_at_level = !in.inputs.dcp3_at_level;
+        if ((b & 1) != 0) in.inputs.decel_up[3] = !in.inputs.decel_up[3];
+        if ((b & 2) != 0) in.inputs.level_zone = !in.inputs.level_zone;
         if ((b & 4) != 0) in.inputs.door_zone_bridge = !in.inputs.door_zone_bridge;
         if ((b & 8) != 0 && protocol == dcp::Protocol::Dcp4) rig.with_position = !rig.with_position;
         break;

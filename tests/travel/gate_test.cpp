@@ -75,6 +75,9 @@ TravelConfig config_for() {
   TravelConfig config;
   config.use_i7 = false;
   config.auto_relevel = false;
+  // DCP3 travels by shaft signals: none is ever met here, so the car runs on until a forbidding
+  // condition comes (by position a target of 0 would be reached at once).
+  config.dcp3_reference = Dcp3Reference::ShaftSignals;
   return config;
 }
 
@@ -332,8 +335,9 @@ TEST(GateProperty, RandomCommandsAndFaultsNeverLeakMotionBits) {
       flip(in.inputs.button_down, 5);
       flip(in.inputs.end_zone_top, 2);
       flip(in.inputs.end_zone_bottom, 2);
-      flip(in.inputs.dcp3_decel_point, 2);
-      flip(in.inputs.dcp3_at_level, 2);
+      flip(in.inputs.decel_up[3], 2);
+      flip(in.inputs.decel_down[3], 2);
+      flip(in.inputs.level_zone, 2);
       flip(rig.drive.status().general_fault, rig.drive.status().general_fault ? 20 : 1);
       flip(rig.drive.status().ready, rig.drive.status().ready ? 1 : 20);
       flip(rig.drive.status().advance_warning, 2);

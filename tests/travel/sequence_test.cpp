@@ -433,15 +433,27 @@ TravelRequest dcp3_request(Speed speed, Direction direction, std::int64_t target
   return request;
 }
 
+/// The DCP3 lift the figures of DCP chapter 10 draw: deceleration points and the level from the
+/// shaft's signals, all seven travelling speeds, relevelling with electric stop (DCP 9.2.3.2,
+/// figure 9.6). A default TravelConfig is the daemon's default lift (by position, two speeds),
+/// so these tests say which lift they run.
+TravelConfig dcp3_shaft() {
+  TravelConfig config;
+  config.dcp3_reference = Dcp3Reference::ShaftSignals;
+  config.dcp3_speed_count = 7;
+  config.relevel_electric_stop = true;
+  return config;
+}
+
 TEST(Dcp3Travel, V4TravelWithShaftSignalsFollowsFigure10_1) {
-  Rig rig(Protocol::Dcp3);
+  Rig rig(Protocol::Dcp3, dcp3_shaft());
   rig.cycle();
   ASSERT_EQ(rig.controller.start(dcp3_request(Speed::V4, Direction::Up)), StartResult::Accepted);
   ASSERT_TRUE(rig.run_until([&] { return rig.drive.speed_mm_s() >= 1600.0; }));
-  rig.input.inputs.dcp3_decel_point = true;  // the SV4 magnet of the target floor
+  rig.input.inputs.decel_up[3] = true;  // the SV4 magnet of the target floor, travelling up
   ASSERT_TRUE(rig.run_until([&] { return rig.drive.speed_mm_s() <= 60.0; }));
   rig.cycle();
-  rig.input.inputs.dcp3_at_level = true;
+  rig.input.inputs.level_zone = true;
   ASSERT_TRUE(rig.run_to_idle());
   // 1: speed V4, 2: B1 (+B2, DCP 8.2 (2b)), 3: B1 off at SV4, 4: B2 positions, 5: B0 until S1=0.
   EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x09, 0x07, 0x05, 0x01, 0x00}));
@@ -453,8 +465,27 @@ TEST(Dcp3Travel, V4TravelWithShaftSignalsFollowsFigure10_1) {
   EXPECT_EQ(rig.event_types(), (std::vector<Type>{Type::Started, Type::Finished}));
 }
 
+TEST(Dcp3Travel, AV4TravelUpSlowsOnlyAtTheV4UpPoint) {
+  // DCP 10.1.1 step 3: B1 goes off at the fixed deceleration point SVx of the travel's own speed.
+  // Every other speed's point and the V4 point for travelling down pass by without effect.
+  Rig rig(Protocol::Dcp3, dcp3_shaft());
+  rig.cycle();
+  ASSERT_EQ(rig.controller.start(dcp3_request(Speed::V4, Direction::Up)), StartResult::Accepted);
+  ASSERT_TRUE(rig.run_until([&] { return rig.drive.speed_mm_s() >= 1600.0; }));
+  for (std::size_t n = 0; n < 7; ++n) {
+    rig.input.inputs.decel_down[n] = true;
+    if (n != 3) rig.input.inputs.decel_up[n] = true;
+  }
+  for (int i = 0; i < 20; ++i) rig.cycle();
+  EXPECT_EQ(rig.records.back().command, 0x07) << "B1 must stay on past other speeds' points";
+  EXPECT_GE(rig.drive.speed_mm_s(), 1600.0);
+  rig.input.inputs.decel_up[3] = true;
+  rig.cycle();
+  EXPECT_EQ(rig.records.back().command, 0x05) << "B1 off at the V4-up point";
+}
+
 TEST(Dcp3Travel, IntermediateSpeedByPositionClearsB1AtSvx) {
-  TravelConfig config;
+  TravelConfig config = dcp3_shaft();
   config.dcp3_reference = Dcp3Reference::Position;
   config.dcp3_decel_distance_mm[speed_index(Speed::V2)] = 600;  // SV2
   config.dcp3_speed_count = 3;                                  // V4, V3, V2 (DCP 3.5.3.7)
@@ -486,7 +517,7 @@ TEST(Dcp3Travel, SpeedsOutsideTheInstallationsCountAreRefused) {
       {7, Speed::VI, false}, {7, Speed::VF, false},
   };
   for (const auto& c : cases) {
-    TravelConfig config;
+    TravelConfig config = dcp3_shaft();
     config.dcp3_speed_count = c.count;
     Rig rig(Protocol::Dcp3, config);
     rig.cycle();
@@ -497,11 +528,11 @@ TEST(Dcp3Travel, SpeedsOutsideTheInstallationsCountAreRefused) {
 }
 
 TEST(Dcp3Travel, CrawlTravelFollowsFigure10_3) {
-  Rig rig(Protocol::Dcp3);
+  Rig rig(Protocol::Dcp3, dcp3_shaft());
   rig.cycle();
   ASSERT_EQ(rig.controller.start(dcp3_request(Speed::V0, Direction::Down)), StartResult::Accepted);
   for (int i = 0; i < 40; ++i) rig.cycle();
-  rig.input.inputs.dcp3_at_level = true;
+  rig.input.inputs.level_zone = true;
   ASSERT_TRUE(rig.run_to_idle());
   // 1: speed V0, 2: B1+B2, 3: both withdrawn, 4: B0 until S6 = 0 and S1 = 0.
   EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x19, 0x17, 0x11, 0x00}));
@@ -512,7 +543,7 @@ TEST(Dcp3Travel, CrawlTravelFollowsFigure10_3) {
 }
 
 TEST(Dcp3Travel, CrawlWithoutLevelSignalStopsAfterCrawlTimeout) {
-  TravelConfig config;
+  TravelConfig config = dcp3_shaft();
   config.crawl_timeout_ms = 1500;
   Rig rig(Protocol::Dcp3, config);
   rig.cycle();
@@ -551,7 +582,7 @@ TEST(Inspection, ViTravelCrawlAtEndZoneAndB0OffOnRelease) {
 }
 
 TEST(Inspection, FromInsideEndZoneStartsWithB2OnlyAfterViMessage) {
-  Rig rig(Protocol::Dcp3);
+  Rig rig(Protocol::Dcp3, dcp3_shaft());
   rig.input.inputs.recall = true;
   rig.input.inputs.end_zone_bottom = true;
   rig.input.inputs.button_down = true;
@@ -564,7 +595,7 @@ TEST(Inspection, FromInsideEndZoneStartsWithB2OnlyAfterViMessage) {
 }
 
 TEST(Inspection, BothButtonsOrDirectionChangeDropB0) {
-  Rig rig(Protocol::Dcp3);
+  Rig rig(Protocol::Dcp3, dcp3_shaft());
   rig.input.inputs.inspection = true;
   rig.input.inputs.button_up = true;
   for (int i = 0; i < 10; ++i) rig.cycle();
@@ -608,11 +639,11 @@ TravelRequest relevel_request(Direction direction) {
 }
 
 TEST(Relevel, WithElectricStopFollowsFigure9_6) {
-  Rig rig(Protocol::Dcp3);
+  Rig rig(Protocol::Dcp3, dcp3_shaft());
   rig.cycle();
   ASSERT_EQ(rig.controller.start(relevel_request(Direction::Up)), StartResult::Accepted);
   for (int i = 0; i < 30; ++i) rig.cycle();
-  rig.input.inputs.dcp3_at_level = true;
+  rig.input.inputs.level_zone = true;
   ASSERT_TRUE(rig.run_to_idle());
   // 1: speed VN, 2: B1 without B2, 3: B1 off, B0 held, 4: B0 off after S6 = 0 and S1 = 0.
   EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x09, 0x03, 0x01, 0x00}));
@@ -622,14 +653,40 @@ TEST(Relevel, WithElectricStopFollowsFigure9_6) {
   EXPECT_FALSE(rig.records[idle_at].status.travel_active);
 }
 
+TEST(Relevel, StartsByItselfOnTheShaftsRelevelSignalWithoutPosition) {
+  // Without a position the relevelling zones give the direction; the travel ends where the car is
+  // in the level zone and the signal that asked for it has dropped.
+  Rig rig(Protocol::Dcp3, dcp3_shaft());
+  rig.cycle();
+  rig.input.inputs.relevel_down = true;
+  for (int i = 0; i < 3; ++i) rig.cycle();
+  ASSERT_EQ(rig.controller.active_kind(), TravelKind::Relevel);
+  EXPECT_EQ(rig.controller.direction(), Direction::Down);
+  for (int i = 0; i < 30; ++i) rig.cycle();
+  rig.input.inputs.level_zone = true;  // still beyond the tolerance: the travel goes on
+  for (int i = 0; i < 5; ++i) rig.cycle();
+  EXPECT_EQ(rig.controller.active_kind(), TravelKind::Relevel);
+  rig.input.inputs.relevel_down = false;
+  ASSERT_TRUE(rig.run_to_idle());
+  // Figure 9.6 downwards: speed VN, B1 without B2, B1 off with B0 held, B0 off.
+  EXPECT_EQ(rig.command_runs(rig.first(0x19)), (std::vector<std::uint8_t>{0x19, 0x13, 0x11, 0x00}));
+  EXPECT_EQ(rig.event_types(), (std::vector<Type>{Type::Started, Type::Finished}));
+  // Both zones at once contradict each other: nothing moves.
+  rig.records.clear();
+  rig.input.inputs.relevel_up = true;
+  rig.input.inputs.relevel_down = true;
+  for (int i = 0; i < 10; ++i) rig.cycle();
+  EXPECT_EQ(rig.controller.active_kind(), TravelKind::None);
+}
+
 TEST(Relevel, WithoutElectricStopClearsB1AndB0Together) {
-  TravelConfig config;
+  TravelConfig config = dcp3_shaft();
   config.relevel_electric_stop = false;
   Rig rig(Protocol::Dcp3, config);
   rig.cycle();
   ASSERT_EQ(rig.controller.start(relevel_request(Direction::Down)), StartResult::Accepted);
   for (int i = 0; i < 30; ++i) rig.cycle();
-  rig.input.inputs.dcp3_at_level = true;
+  rig.input.inputs.level_zone = true;
   ASSERT_TRUE(rig.run_to_idle());
   EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x19, 0x13, 0x00}));
   EXPECT_EQ(rig.event_types(), (std::vector<Type>{Type::Started, Type::Finished}));
@@ -668,7 +725,7 @@ TEST(FastStart, Dcp4HoldThenGoWhenDoorsLocked) {
 }
 
 TEST(FastStart, Dcp3HoldIsTheVfSpeedMessageThenGoWith1111) {
-  Rig rig(Protocol::Dcp3);
+  Rig rig(Protocol::Dcp3, dcp3_shaft());
   rig.input.inputs.doors_locked = false;
   rig.cycle();
   TravelRequest request = dcp3_request(Speed::V3, Direction::Up);
@@ -705,7 +762,7 @@ TEST(FastStart, DoorReversalAbortsControlledAndWaitsForS6) {
 }
 
 TEST(FastStart, TimeoutAbortsControlled) {
-  TravelConfig config;
+  TravelConfig config = dcp3_shaft();
   config.use_i7 = false;
   config.fast_start_timeout_ms = 1500;
   Rig rig(Protocol::Dcp3, config);
@@ -737,7 +794,7 @@ TEST(FastStop, Dcp4SendsSpeedAfterFastStartWithVf) {
 }
 
 TEST(FastStop, Dcp3SendsSpeedAfterFastStartWithVf) {
-  Rig rig(Protocol::Dcp3);
+  Rig rig(Protocol::Dcp3, dcp3_shaft());
   rig.cycle();
   ASSERT_EQ(rig.controller.start(dcp3_request(Speed::V4, Direction::Down)), StartResult::Accepted);
   ASSERT_TRUE(rig.run_until([&] { return rig.drive.speed_mm_s() >= 1000; }));

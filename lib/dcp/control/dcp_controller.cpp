@@ -43,26 +43,6 @@ std::string_view abort_text(AbortCause cause) noexcept {
 
 // ---- names ----
 
-std::string_view fault_code_name(FaultCode code) noexcept {
-  switch (code) {
-    case FaultCode::LinkFault:
-      return "link_fault";
-    case FaultCode::DriveFault:
-      return "drive_fault";
-    case FaultCode::SafetyChain:
-      return "safety_chain_open";
-    case FaultCode::InputsLost:
-      return "inputs_lost";
-    case FaultCode::PositionLost:
-      return "position_lost";
-    case FaultCode::AdvanceWarning:
-      return "advance_warning";
-    case FaultCode::kCount:
-      break;
-  }
-  return "internal";
-}
-
 std::string_view fault_text(FaultCode code) noexcept {
   switch (code) {
     case FaultCode::LinkFault:
@@ -492,7 +472,25 @@ void DcpController::handle_relevel(std::uint32_t tag) noexcept {
     return;
   }
   if (!last_input_.position_mm) {
-    reply(tag, ReplyCode::NotReady, abort_text(AbortCause::PositionLost));
+    // Without a position the shaft's relevelling zones give the direction (relevelling without
+    // remaining distance, DCP 9.2.3); with neither there is nothing to relevel to.
+    const lift::Inputs& shaft = last_input_.inputs;
+    if (shaft.relevel_up == shaft.relevel_down) {
+      reply(tag, ReplyCode::NotReady,
+            "no position and no single relevelling signal (relevel_up / relevel_down)");
+      return;
+    }
+    travel::TravelRequest request;
+    request.kind = TravelKind::Relevel;
+    request.speed = dcp::Speed::VN;
+    request.direction = shaft.relevel_up ? travel::Direction::Up : travel::Direction::Down;
+    const travel::StartResult r = travel_.start(request);
+    if (r != travel::StartResult::Accepted) {
+      reply(tag, r == travel::StartResult::Busy ? ReplyCode::Busy : ReplyCode::NotReady,
+            travel::to_string(r));
+      return;
+    }
+    reply(tag, ReplyCode::Ok);
     return;
   }
   const auto nearest = lift_.floors().nearest(*last_input_.position_mm);
@@ -667,6 +665,7 @@ void DcpController::drain_travel(MonoTime now) noexcept {
         break;
     }
   }
+  travel_dropped_.store(travel_.dropped_events(), std::memory_order_relaxed);
 }
 
 void DcpController::serve_calls() noexcept {

@@ -18,8 +18,10 @@
 #include <vector>
 
 #include "common/mono_time.hpp"
+#include "config/defaults.hpp"
 #include "dcp/master_link.hpp"
 #include "dcp/travel/controller.hpp"
+#include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/position_source.hpp"
@@ -40,9 +42,9 @@ struct ControllerConfig {
   lift::LiftConfig lift;
   std::vector<std::int64_t> floors_mm;  ///< strictly increasing levels (config `floors`)
   /// Inputs older than this count as lost: a fault for any travel (config inputs.timeout_ms).
-  MonoTime inputs_timeout = std::chrono::milliseconds(500);
+  MonoTime inputs_timeout = std::chrono::milliseconds(defaults::kInputsTimeoutMs);
   /// An API inspection direction must be repeated within this (config travel.inspection_hold_ms).
-  MonoTime inspection_hold = std::chrono::milliseconds(500);
+  MonoTime inspection_hold = std::chrono::milliseconds(defaults::kInspectionHoldMs);
 };
 
 // ---- commands (non-RT -> cycle) ----
@@ -127,17 +129,8 @@ struct CommandReply {
 };
 
 /// Faults the controller tracks; each is reported once when it starts and once when it ends.
-enum class FaultCode : std::uint8_t {
-  LinkFault,       ///< DCP 7.3: link supervision tripped (or port lost)
-  DriveFault,      ///< S3 general fault
-  SafetyChain,     ///< safety chain open
-  InputsLost,      ///< input provider silent longer than inputs.timeout_ms
-  PositionLost,    ///< absolute position source invalid (DCP4)
-  AdvanceWarning,  ///< S2: no new travels until it clears
-  kCount,
-};
-/// snake_case code for the API ("link_fault", ...).
-std::string_view fault_code_name(FaultCode code) noexcept;
+using lift::fault_code_name;
+using lift::FaultCode;
 /// One line of explanation for a technician.
 std::string_view fault_text(FaultCode code) noexcept;
 
@@ -222,9 +215,11 @@ class DcpController final : public rt::CycleEngine {
   bool poll_event(ControllerEvent& out) noexcept { return events_.try_pop(out); }
   /// The latest published state.
   ControllerSnapshot snapshot() noexcept { return snapshot_.read(); }
-  /// Events lost because the event queue was full (read on any thread).
+  /// Events lost because a queue was full: ours to the io thread or the travel controller's own
+  /// (read on any thread; stats cycle.dropped_events).
   std::uint64_t dropped_events() const noexcept {
-    return dropped_events_.load(std::memory_order_relaxed);
+    return dropped_events_.load(std::memory_order_relaxed) +
+           travel_dropped_.load(std::memory_order_relaxed);
   }
   /// Floor levels as configured.
   std::span<const std::int64_t> floors_mm() const noexcept { return floors_mm_; }
@@ -284,6 +279,7 @@ class DcpController final : public rt::CycleEngine {
   rt::SpscQueue<ControllerEvent, kEventQueueSize> events_;
   rt::Snapshot<ControllerSnapshot> snapshot_;
   std::atomic<std::uint64_t> dropped_events_{0};
+  std::atomic<std::uint64_t> travel_dropped_{0};  ///< the travel's own count, copied each cycle
 
   // Cycle-thread state.
   dcp::FrameBytes frame_{};

@@ -202,11 +202,14 @@ void TravelController::abort_all_immediately() noexcept {
 }
 
 void TravelController::maybe_auto_relevel(const CycleInput& in) noexcept {
-  if (shut_down_ || start_held_ || !config_.auto_relevel || busy() || !home_level_mm_ ||
-      !in.position_mm)
-    return;
-  if (in.protocol != dcp::Protocol::Dcp4 || in.status.travel_active) return;
+  if (shut_down_ || start_held_ || !config_.auto_relevel || busy()) return;
+  if (in.protocol == dcp::Protocol::ComChan || in.status.travel_active) return;
   if (in.inputs.inspection || in.inputs.recall || in.now < relevel_blocked_until_) return;
+  if (!in.position_mm) {
+    relevel_by_shaft_signals(in);
+    return;
+  }
+  if (!home_level_mm_ || in.protocol != dcp::Protocol::Dcp4) return;
   const std::int64_t drift = *home_level_mm_ - *in.position_mm;
   const std::int64_t magnitude = drift < 0 ? -drift : drift;
   if (magnitude <= static_cast<std::int64_t>(config_.relevel_threshold_mm) ||
@@ -225,6 +228,23 @@ void TravelController::maybe_auto_relevel(const CycleInput& in) noexcept {
   request.speed = dcp::Speed::VN;
   request.target_mm = *home_level_mm_;
   dcp4_.begin(request, in, config_);
+}
+
+void TravelController::relevel_by_shaft_signals(const CycleInput& in) noexcept {
+  // Without a position the shaft's relevelling zones say where the level is: exactly one of them
+  // asks for a direction (both at once contradict each other and move nothing).
+  if (in.inputs.relevel_up == in.inputs.relevel_down) return;
+  GateProfile profile;
+  profile.door_bridge_allowed = true;
+  if (CommandGate::forbidding(in, profile, true) != AbortCause::None) {
+    relevel_blocked_until_ = in.now + kRelevelRetry;
+    return;
+  }
+  TravelRequest request;
+  request.kind = TravelKind::Relevel;
+  request.speed = dcp::Speed::VN;
+  request.direction = in.inputs.relevel_up ? Direction::Up : Direction::Down;
+  relevel_.begin(request, request.direction, in);
 }
 
 CycleOutput TravelController::step(const CycleInput& in) noexcept {
@@ -278,7 +298,9 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
   const TravelKind kind = active_kind();
   GateResult gated = gate_.apply(demand, in);
   if (gated.violation != AbortCause::None) {
-    if (kind == TravelKind::Dcp4Relevel) relevel_blocked_until_ = in.now + kRelevelRetry;
+    if (kind == TravelKind::Dcp4Relevel || kind == TravelKind::Relevel) {
+      relevel_blocked_until_ = in.now + kRelevelRetry;
+    }
     abort_all_immediately();
     ctx.emit(Event::Type::Aborted, kind, gated.violation, 0);
   }

@@ -73,6 +73,8 @@ class TravelController {
   bool busy() const noexcept;
   void begin_pending(const CycleInput& in) noexcept;
   void maybe_auto_relevel(const CycleInput& in) noexcept;
+  /// Automatic relevelling without a position: by the relevel_up / relevel_down shaft signals.
+  void relevel_by_shaft_signals(const CycleInput& in) noexcept;
   void abort_all_immediately() noexcept;
 
   TravelConfig config_;

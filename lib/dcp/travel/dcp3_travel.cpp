@@ -65,7 +65,7 @@ Demand Dcp3Travel::demand(std::uint8_t message, std::uint16_t data_word) const n
 
 bool Dcp3Travel::decel_point(const StepContext& ctx) const noexcept {
   if (ctx.config.dcp3_reference == Dcp3Reference::ShaftSignals) {
-    return ctx.in.inputs.dcp3_decel_point;
+    return ctx.in.inputs.decel_point(speed_number(speed_), direction_);
   }
   if (!ctx.in.position_mm) return false;
   const auto svx = ctx.config.dcp3_decel_distance_mm[speed_index(speed_)];
@@ -75,12 +75,14 @@ bool Dcp3Travel::decel_point(const StepContext& ctx) const noexcept {
 
 bool Dcp3Travel::at_level(const StepContext& ctx) const noexcept {
   if (ctx.config.dcp3_reference == Dcp3Reference::ShaftSignals) {
-    return ctx.in.inputs.dcp3_at_level;
+    return ctx.in.inputs.level_zone;
   }
   if (!ctx.in.position_mm) return false;
+  // DCP 10.1.1 step 4: B2 off at the level, which by position is the crawl stop distance ahead
+  // of it (dcp3_stop_lead_mm). Not the level tolerance: that says whether a car standing still
+  // is level, and withdrawing B2 inside it would stop every car short by the tolerance.
   return remaining_mm(target_mm_, *ctx.in.position_mm, direction_) <=
-         static_cast<std::int64_t>(ctx.config.level_tolerance_mm) +
-             static_cast<std::int64_t>(ctx.config.dcp3_stop_lead_mm);
+         static_cast<std::int64_t>(ctx.config.dcp3_stop_lead_mm);
 }
 
 void Dcp3Travel::finish(StepContext& ctx) noexcept {
@@ -202,12 +204,7 @@ Demand Dcp3Travel::step(StepContext& ctx) noexcept {
 
     case State::TravelEnd:
     case State::ControlledAbort:
-      if (!in.status.brake_open && !in.status.travel_active) {
-        finish(ctx);
-        return {};
-      }
-      if (since_ms >= config.stop_timeout_ms) {
-        end_cause_ = AbortCause::DriveDidNotStop;
+      if (stop_tail_done(in, since_ms, config, end_cause_)) {
         finish(ctx);
         return {};
       }

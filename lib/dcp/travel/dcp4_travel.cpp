@@ -357,12 +357,7 @@ Demand Dcp4Travel::step(StepContext& ctx) noexcept {
 
     case State::TravelEnd:
     case State::ControlledAbort:
-      if (!in.status.brake_open && !in.status.travel_active) {
-        finish(ctx);
-        return {};
-      }
-      if (since_ms >= config.stop_timeout_ms) {
-        end_cause_ = AbortCause::DriveDidNotStop;
+      if (stop_tail_done(in, since_ms, config, end_cause_)) {
         finish(ctx);
         return {};
       }

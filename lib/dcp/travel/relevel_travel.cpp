@@ -38,7 +38,9 @@ bool RelevelTravel::at_level(const StepContext& ctx) const noexcept {
     return remaining_mm(target_mm_, *ctx.in.position_mm, direction_) <=
            static_cast<std::int64_t>(ctx.config.level_tolerance_mm);
   }
-  return ctx.in.inputs.dcp3_at_level;
+  // Without a position the shaft says it: inside the level zone, and the relevelling signal that
+  // asked for this direction has dropped (the car is back within the tolerance).
+  return ctx.in.inputs.level_zone && !ctx.in.inputs.relevel_towards(direction_);
 }
 
 void RelevelTravel::finish(StepContext& ctx) noexcept {
@@ -96,12 +98,7 @@ Demand RelevelTravel::step(StepContext& ctx) noexcept {
 
     case State::ElectricStop:
     case State::ControlledAbort:
-      if (!in.status.brake_open && !in.status.travel_active) {
-        finish(ctx);
-        return {};
-      }
-      if (since_ms >= ctx.config.stop_timeout_ms) {
-        end_cause_ = AbortCause::DriveDidNotStop;
+      if (stop_tail_done(in, since_ms, ctx.config, end_cause_)) {
         finish(ctx);
         return {};
       }

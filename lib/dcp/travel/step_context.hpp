@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <optional>
 
+#include "common/fixed_queue.hpp"
 #include "dcp/travel/gate.hpp"
 #include "dcp/travel/types.hpp"
 
@@ -12,7 +13,7 @@ namespace liftd::travel {
 /// Capacity of the controller's event ring.
 inline constexpr std::size_t kEventCapacity = 64;
 /// The event ring type the controller drains.
-using EventQueue = EventRing<kEventCapacity>;
+using EventQueue = FixedQueue<Event, kEventCapacity>;
 
 /// What a state machine gets for one step, and where it leaves its side effects.
 struct StepContext {
@@ -71,6 +72,20 @@ constexpr std::uint32_t speed_cycles(const TravelConfig& config) noexcept {
 /// Milliseconds since `since`.
 constexpr std::int64_t elapsed_ms(MonoTime now, MonoTime since) noexcept {
   return std::chrono::duration_cast<std::chrono::milliseconds>(now - since).count();
+}
+
+/// The stop tail every DCP travel ends with: the stop message stays on the wire until the drive
+/// is at rest (brake closed, S6 = 0, and S1 = 0: DCP 9.1.1 holds B0 until then). True when the
+/// travel is over: at rest, or `stop_timeout_ms` passed, in which case `end_cause` becomes
+/// DriveDidNotStop.
+constexpr bool stop_tail_done(const CycleInput& in, std::int64_t since_ms,
+                              const TravelConfig& config, AbortCause& end_cause) noexcept {
+  if (!in.status.brake_open && !in.status.travel_active) return true;
+  if (since_ms >= static_cast<std::int64_t>(config.stop_timeout_ms)) {
+    end_cause = AbortCause::DriveDidNotStop;
+    return true;
+  }
+  return false;
 }
 
 /// Remaining distance from the position to the target along `direction` (negative once passed).

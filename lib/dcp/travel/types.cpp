@@ -81,6 +81,27 @@ std::size_t speed_index(dcp::Speed speed) noexcept {
   return index < dcp::kAllSpeeds.size() ? index : 0;
 }
 
+int speed_number(dcp::Speed speed) noexcept {
+  switch (speed) {
+    case dcp::Speed::V1:
+      return 1;
+    case dcp::Speed::V2:
+      return 2;
+    case dcp::Speed::V3:
+      return 3;
+    case dcp::Speed::V4:
+      return 4;
+    case dcp::Speed::V5:
+      return 5;
+    case dcp::Speed::V6:
+      return 6;
+    case dcp::Speed::V7:
+      return 7;
+    default:
+      return 0;
+  }
+}
+
 std::string_view to_string(TravelKind kind) noexcept {
   switch (kind) {
     case TravelKind::None:

@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "common/mono_time.hpp"
+#include "config/defaults.hpp"
 #include "dcp/frame.hpp"
 #include "lift/inputs.hpp"
 
@@ -128,41 +129,6 @@ struct Event {
   bool operator==(const Event&) const = default;
 };
 
-/// Fixed-capacity single-thread event ring: push in the cycle, pop outside it. When full, new
-/// events are dropped and counted.
-template <std::size_t N>
-class EventRing {
- public:
-  /// Appends; false (and counted) when full.
-  bool push(const Event& event) noexcept {
-    if (count_ == N) {
-      ++dropped_;
-      return false;
-    }
-    items_[(head_ + count_) % N] = event;
-    ++count_;
-    return true;
-  }
-  /// Takes the oldest event.
-  std::optional<Event> pop() noexcept {
-    if (count_ == 0) return std::nullopt;
-    Event event = items_[head_];
-    head_ = (head_ + 1) % N;
-    --count_;
-    return event;
-  }
-  /// Number of queued events.
-  std::size_t size() const noexcept { return count_; }
-  /// Events lost because the ring was full.
-  std::uint64_t dropped() const noexcept { return dropped_; }
-
- private:
-  std::array<Event, N> items_{};
-  std::size_t head_ = 0;
-  std::size_t count_ = 0;
-  std::uint64_t dropped_ = 0;
-};
-
 /// A travel order from the dispatcher / API.
 struct TravelRequest {
   TravelKind kind = TravelKind::Dcp4Distance;
@@ -181,7 +147,7 @@ struct TravelRequest {
 
 /// Where a DCP3 travel learns its deceleration point and level.
 enum class Dcp3Reference : std::uint8_t {
-  ShaftSignals,  ///< Inputs::dcp3_decel_point and Inputs::dcp3_at_level
+  ShaftSignals,  ///< Inputs::decel_point() of the travel's speed and Inputs::level_zone
   Position,      ///< absolute position against the target and the configured SVx
 };
 
@@ -191,32 +157,35 @@ struct TravelConfig {
   /// Cycles the speed message stays on the wire before the travel command (two, so one corrupt
   /// frame does not lose it).
   std::uint32_t speed_message_cycles = 2;
-  bool use_i7 = true;                      ///< DCP 11.1.2.1: exchange start parameters first
-  std::uint32_t i7_timeout_ms = 600;       ///< then go without Sv
+  bool use_i7 = defaults::kUseStartParameters;  ///< DCP 11.1.2.1: exchange start parameters
+  std::uint32_t i7_timeout_ms = 600;            ///< then go without Sv
   std::uint32_t i8_timeout_ms = 300;       ///< DCP 5.12.8: travel starts even without the reply
   std::uint32_t start_timeout_ms = 3000;   ///< S6 and S1 must come within this after enabling
   std::uint32_t stop_timeout_ms = 5000;    ///< S1 must clear within this after the stop
   std::uint32_t extension_margin_mm = 20;  ///< added to the deceleration distance for extensions
-  std::uint32_t fast_start_timeout_ms = 8000;  ///< DCP 12.1.2: fast start time limit
-  std::uint32_t level_tolerance_mm = 3;        ///< level reached (relevelling, DCP3 by position)
+  /// DCP 12.1.2: fast start time limit.
+  std::uint32_t fast_start_timeout_ms = defaults::kFastStartTimeoutMs;
+  /// Level reached (relevelling, DCP3 by position).
+  std::uint32_t level_tolerance_mm = defaults::kLevelToleranceMm;
   /// DCP4: a travel that ends farther than this from its target is reported as StoppedOffLevel.
   std::uint32_t arrival_tolerance_mm = 20;
   /// Longest crawl (DCP3 B2 positioning, relevelling without distance) before a controlled stop.
   std::uint32_t crawl_timeout_ms = 30000;
-  bool auto_relevel = true;                 ///< DCP4: VN' when the car drifts off the level
-  std::uint32_t relevel_threshold_mm = 15;  ///< drift that triggers auto relevelling
-  std::uint32_t relevel_zone_mm = 150;      ///< beyond this drift, no auto relevelling
-  bool relevel_electric_stop = true;        ///< DCP 9.2.3.2 (true) or 9.2.3.1 (false)
-  Dcp3Reference dcp3_reference = Dcp3Reference::ShaftSignals;
+  bool auto_relevel = true;  ///< DCP4: VN' when the car drifts off the level
+  std::uint32_t relevel_threshold_mm = defaults::kRelevelThresholdMm;  ///< starts auto relevelling
+  std::uint32_t relevel_zone_mm = 150;  ///< beyond this drift, no auto relevelling
+  bool relevel_electric_stop = defaults::kRelevelElectricStop;  ///< DCP 9.2.3.2 / 9.2.3.1
+  Dcp3Reference dcp3_reference = Dcp3Reference::Position;
   /// DCP 3.5.3.7: number of travelling speeds of a DCP3 installation (1..7).
-  int dcp3_speed_count = 7;
+  int dcp3_speed_count = defaults::kDcp3SpeedCount;
   /// DCP 8.1: fixed deceleration distance SVx per DCP3 speed, indexed by the speed's bit
-  /// number G0..G10 (used with Dcp3Reference::Position).
-  std::array<std::uint32_t, 11> dcp3_decel_distance_mm{};
+  /// number G0..G10 (used with Dcp3Reference::Position): SV3 (G6) and SV4 (G7) by default.
+  std::array<std::uint32_t, 11> dcp3_decel_distance_mm{
+      0, 0, 0, 0, 0, 0, defaults::kDcp3DecelV3Mm, defaults::kDcp3DecelV4Mm, 0, 0, 0};
   /// DCP 10.3 step 3: once B2 is withdrawn the drive stops from crawl on its own ramp. With
   /// Dcp3Reference::Position, withdraw B2 this much before the level so the car stops on it
   /// (the role a stop flag placed ahead of the level plays in the shaft). 0: at the level.
-  std::uint32_t dcp3_stop_lead_mm = 0;
+  std::uint32_t dcp3_stop_lead_mm = defaults::kDcp3StopLeadMm;
 };
 
 /// The name of the first out-of-range TravelConfig field, or nullopt when the config is usable.
@@ -224,6 +193,10 @@ std::optional<std::string_view> validate(const TravelConfig& config) noexcept;
 
 /// Bit number (0..10) of a speed, the index into TravelConfig::dcp3_decel_distance_mm.
 std::size_t speed_index(dcp::Speed speed) noexcept;
+
+/// n for the travel speeds V1..V7 (the shaft's deceleration point of Vn, lift::Inputs), 0 for
+/// V0, VN, VF and VI, which have no deceleration point of their own.
+int speed_number(dcp::Speed speed) noexcept;
 
 /// Why a target extension was refused.
 enum class ExtendResult : std::uint8_t {

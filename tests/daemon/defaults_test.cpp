@@ -1,0 +1,68 @@
+// One set of defaults: a default configuration file gives the controllers exactly the settings a
+// test gets from their default-constructed structs (both read config/defaults.hpp). A test that
+// builds a sequencer directly runs the lift the daemon runs.
+#include <gtest/gtest.h>
+
+#include "daemon/hydraulic_lift.hpp"
+#include "daemon/lift_app.hpp"
+
+namespace liftd::daemon {
+namespace {
+
+TEST(Defaults, ADefaultConfigGivesTheDcpControllersOwnDefaults) {
+  const control::ControllerConfig daemon = dcp_controller_config(config::Config{});
+  const control::ControllerConfig direct{};
+  const travel::TravelConfig& a = daemon.travel;
+  const travel::TravelConfig& b = direct.travel;
+  EXPECT_EQ(a.data_info_type, b.data_info_type);
+  EXPECT_EQ(a.use_i7, b.use_i7);
+  EXPECT_EQ(a.fast_start_timeout_ms, b.fast_start_timeout_ms);
+  EXPECT_EQ(a.level_tolerance_mm, b.level_tolerance_mm);
+  EXPECT_EQ(a.relevel_threshold_mm, b.relevel_threshold_mm);
+  EXPECT_EQ(a.auto_relevel, b.auto_relevel);
+  EXPECT_EQ(a.relevel_electric_stop, b.relevel_electric_stop);
+  EXPECT_EQ(a.dcp3_reference, b.dcp3_reference);
+  EXPECT_EQ(a.dcp3_speed_count, b.dcp3_speed_count);
+  EXPECT_EQ(a.dcp3_decel_distance_mm, b.dcp3_decel_distance_mm);
+  EXPECT_EQ(a.dcp3_stop_lead_mm, b.dcp3_stop_lead_mm);
+  EXPECT_EQ(daemon.link.data_info_type, direct.link.data_info_type);
+  EXPECT_EQ(daemon.link.extended_position, direct.link.extended_position);
+  EXPECT_EQ(daemon.link.fault_after_bad_frames, direct.link.fault_after_bad_frames);
+  EXPECT_EQ(daemon.link.recover_after_good_frames, direct.link.recover_after_good_frames);
+  EXPECT_EQ(daemon.link.request_timeout, direct.link.request_timeout);
+  EXPECT_EQ(daemon.lift.level_tolerance_mm, direct.lift.level_tolerance_mm);
+  EXPECT_EQ(daemon.inputs_timeout, direct.inputs_timeout);
+  EXPECT_EQ(daemon.inspection_hold, direct.inspection_hold);
+  // The lift model and the travels agree on when the car is level (status car.floor and the
+  // "already at that level" answer of travel).
+  EXPECT_EQ(a.level_tolerance_mm, daemon.lift.level_tolerance_mm);
+}
+
+TEST(Defaults, ADefaultConfigGivesTheSch001ControllersOwnDefaults) {
+  const sch001::ControllerConfig daemon = sch001_controller_config(config::Config{});
+  const sch001::ControllerConfig direct{};
+  const sch001::HydraulicConfig& a = daemon.hydraulic;
+  const sch001::HydraulicConfig& b = direct.hydraulic;
+  EXPECT_EQ(a.has_v3, b.has_v3);
+  EXPECT_EQ(a.has_v4, b.has_v4);
+  EXPECT_EQ(a.fast_down, b.fast_down);
+  EXPECT_EQ(a.star_delta_ms, b.star_delta_ms);
+  EXPECT_EQ(a.slowdown_up_mm, b.slowdown_up_mm);
+  EXPECT_EQ(a.slowdown_down_mm, b.slowdown_down_mm);
+  EXPECT_EQ(a.slowdown_v3_mm, b.slowdown_v3_mm);
+  EXPECT_EQ(a.slowdown_v4_mm, b.slowdown_v4_mm);
+  EXPECT_EQ(a.stop_tolerance_mm, b.stop_tolerance_mm);
+  EXPECT_EQ(a.relevel_start_mm, b.relevel_start_mm);
+  EXPECT_EQ(a.max_travel_ms, b.max_travel_ms);
+  EXPECT_EQ(a.relevel_doors_open, b.relevel_doors_open);
+  EXPECT_EQ(daemon.link.single_unit, direct.link.single_unit);
+  EXPECT_EQ(daemon.link.ids.to_card, direct.link.ids.to_card);
+  EXPECT_EQ(daemon.link.ids.from_card, direct.link.ids.from_card);
+  EXPECT_EQ(daemon.auto_relevel, direct.auto_relevel);
+  EXPECT_EQ(daemon.lift.level_tolerance_mm, direct.lift.level_tolerance_mm);
+  EXPECT_EQ(daemon.inputs_timeout, direct.inputs_timeout);
+  EXPECT_EQ(daemon.inspection_hold, direct.inspection_hold);
+}
+
+}  // namespace
+}  // namespace liftd::daemon
