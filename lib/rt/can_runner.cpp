@@ -12,7 +12,7 @@
 namespace liftd::rt {
 
 CanRunner::CanRunner(const CanRunnerConfig& config, CanEngine& engine)
-    : config_(config), engine_(engine), recorder_(config.recorder_records) {
+    : config_(config), engine_(engine), recorder_(config.recorder_records, kCanRecordBytes) {
   wake_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
 }
 

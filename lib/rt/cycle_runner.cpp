@@ -71,7 +71,9 @@ std::string describe(const CycleEvent& event) {
 }
 
 CycleRunner::CycleRunner(CycleConfig config, CycleEngine& engine)
-    : config_(std::move(config)), engine_(engine), recorder_(recorder_capacity(config_)) {
+    : config_(std::move(config)),
+      engine_(engine),
+      recorder_(recorder_capacity(config_), config_.recorder_bytes) {
   const auto max = max_send_window(config_.period, config_.reply_deadline);
   if (config_.send_window.count() < 0 || config_.send_window > max) {
     throw std::invalid_argument(

@@ -64,6 +64,9 @@ struct CycleConfig {
       std::chrono::seconds(2);  ///< retry interval cap (doubling)
   /// How much traffic the flight recorder keeps (default 30 s = 2000 cycles of 15 ms).
   std::chrono::nanoseconds recorder_span = std::chrono::seconds(30);
+  /// Bytes the flight recorder keeps per frame: the link's longest frame (kDcpRecordBytes for
+  /// DCP, kUssRecordBytes for USS).
+  std::size_t recorder_bytes = kDcpRecordBytes;
 };
 
 /// DCP 7.2: our driver must be off by 2.0624 ms and 6 bytes at 38400 baud take 1.5625 ms, so a

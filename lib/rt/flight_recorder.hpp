@@ -36,20 +36,27 @@ inline constexpr std::uint8_t kSendFailed = 0x40;  ///< the port refused the fra
 inline constexpr std::uint8_t kSkipped = 0x80;     ///< cycle skipped: woke too late to send
 }  // namespace record_flag
 
+/// Bytes a record keeps, per link kind. A longer frame is cut; its record still says its length.
+/// DCP: a frame is 6 bytes (DCP 3.1); the reply window may hold stray bytes beyond one frame.
+inline constexpr std::size_t kDcpRecordBytes = 16;
+/// CAN: the 11-bit identifier in 2 bytes, then up to 8 data bytes (classic struct can_frame).
+inline constexpr std::size_t kCanRecordBytes = 10;
+/// USS: the longest telegram, STX LGE ADR, 252 payload bytes and BCC (LGE at most 254, so
+/// LGE + 2 = 256 bytes on the wire).
+inline constexpr std::size_t kUssRecordBytes = 256;
+
 /// One recorded frame (a plain copy, outside the ring).
 struct FrameRecord {
-  /// Bytes kept per frame; longer frames are cut (length still says the real size).
-  static constexpr std::size_t kMaxBytes = 16;
-
-  MonoTime time{};                              ///< when it was sent / received
-  Direction direction = Direction::Tx;          ///< which way
-  std::uint8_t flags = 0;                       ///< record_flag bits
-  std::uint16_t length = 0;                     ///< real frame length in bytes
-  std::array<std::uint8_t, kMaxBytes> bytes{};  ///< the first min(length, kMaxBytes) bytes
+  MonoTime time{};                      ///< when it was sent / received
+  Direction direction = Direction::Tx;  ///< which way
+  std::uint8_t flags = 0;               ///< record_flag bits
+  std::uint16_t length = 0;             ///< real frame length in bytes
+  /// The recorder's record width, zero padded: the first min(length, width) are the frame's.
+  std::vector<std::uint8_t> bytes;
 
   /// The stored bytes.
   std::span<const std::uint8_t> data() const noexcept {
-    return {bytes.data(), length < kMaxBytes ? length : kMaxBytes};
+    return {bytes.data(), length < bytes.size() ? length : bytes.size()};
   }
 };
 
@@ -60,13 +67,16 @@ using FrameDecoder = std::function<std::string(const FrameRecord&)>;
 /// copy() may run on any other thread at the same time and returns only whole records.
 class FlightRecorder {
  public:
-  /// A ring holding the newest `capacity` records (allocated here, once).
-  explicit FlightRecorder(std::size_t capacity);
+  /// A ring holding the newest `capacity` records of `record_bytes` each (kDcpRecordBytes,
+  /// kCanRecordBytes, kUssRecordBytes: the link's longest frame), allocated here, once.
+  FlightRecorder(std::size_t capacity, std::size_t record_bytes);
 
   /// The ring size in records.
   std::size_t capacity() const noexcept { return capacity_; }
+  /// Bytes kept per record (the width asked for, rounded up to whole 8-byte words).
+  std::size_t record_bytes() const noexcept { return words_per_record_ * 8; }
 
-  /// Writer: appends a record (bytes beyond FrameRecord::kMaxBytes are cut).
+  /// Writer: appends a record (bytes beyond record_bytes() are cut).
   void record(MonoTime time, Direction direction, std::uint8_t flags,
               std::span<const std::uint8_t> bytes) noexcept;
 
@@ -79,15 +89,17 @@ class FlightRecorder {
 
  private:
   // Each slot is a small seqlock: stamp is odd while written, 2 * (index + 1) when complete.
+  // The slot's bytes live in `words_`, words_per_record_ words from slot * words_per_record_.
   struct Slot {
     std::atomic<std::uint64_t> stamp{0};
     std::atomic<std::int64_t> time_ns{0};
     std::atomic<std::uint64_t> meta{0};  // direction | flags << 8 | length << 16
-    std::array<std::atomic<std::uint64_t>, FrameRecord::kMaxBytes / 8> words{};
   };
 
   std::size_t capacity_;
+  std::size_t words_per_record_;
   std::unique_ptr<Slot[]> slots_;
+  std::unique_ptr<std::atomic<std::uint64_t>[]> words_;
   std::atomic<std::uint64_t> next_{0};
 };
 

@@ -448,102 +448,119 @@ void DriveSim::process(const dcp::MasterFrame& frame, MonoTime now) noexcept {
     process_channel(frame.comm1, now);
     process_channel(frame.comm2, now);
   }
-
-  const std::uint8_t cmd = frame.command;
-  const dcp::MessageType mt = dcp::classify_command(cmd, config_.protocol);
-  tracker_.observe(mt);
-  const bool b0 = (cmd & cb::kDriveEnable) != 0;
-  const bool b1 = (cmd & cb::kTravel) != 0;
-  const bool b2 = (cmd & cb::kStopSwitch) != 0;
-  const bool down = (cmd & cb::kDirectionDown) != 0;
-  if (mt == dcp::MessageType::Invalid) return;
-  const auto parsed = (mt == dcp::MessageType::Speed || mt == dcp::MessageType::SpeedAfterFastStart)
-                          ? dcp::speed_from_word(frame.data_word())
-                          : std::nullopt;
-  const bool has_speed = parsed.has_value();
-  const dcp::Speed speed = parsed.value_or(dcp::Speed::V0);
-  const bool speed_ok = has_speed && dcp::speed_allowed(speed, config_.protocol);
-
-  if (!b0) {
-    // DCP 9.1.1 / 12.2.1: enable withdrawn: drop everything at once, the brake stops the car.
-    if (phase_ != Phase::Idle && phase_ != Phase::Finished) abort_travel(now);
-    if (phase_ == Phase::Finished) set_phase(Phase::Idle, now);
-    kind_ = TravelKind::None;
-    if (stationary()) fast_stop_latched_ = false;
-    if (mt == dcp::MessageType::Idle) accepted_ = speed_selected_;
+  const FrameView f = view(frame);
+  tracker_.observe(f.type);
+  if (f.type == dcp::MessageType::Invalid) return;
+  if (!f.b0) {
+    on_enable_off(f, now);
     return;
   }
-
   if (phase_ == Phase::Finished) {
-    if ((!b1 && !b2) || mt == dcp::MessageType::Speed) {
+    if ((!f.b1 && !f.b2) || f.type == dcp::MessageType::Speed) {
       set_phase(Phase::Idle, now);
       kind_ = TravelKind::None;
     } else {
       return;  // B1/B2 still held from the finished travel
     }
   }
-
   if (phase_ == Phase::Idle) {
-    if (mt == dcp::MessageType::Speed) {
-      speed_selected_ = speed_ok;
-      accepted_ = speed_ok;
-      if (speed_ok) selected_ = speed;
-      // DCP 12.1.1: fast start = speed message VF with B3=1 B2=0 B1=0 B0=1.
-      if (speed_ok && speed == dcp::Speed::VF && can_start()) {
-        start_travel(TravelKind::FastStart, dcp::Speed::VF, down, now, 0);
-      }
-      return;
-    }
-    if (!can_start()) return;
-    b1_ = b1;
-    b2_ = b2;
-    if (mt == dcp::MessageType::DistanceOrDecel && config_.protocol == dcp::Protocol::Dcp4 &&
-        tracker_.meaning() == dcp::DistanceModeTracker::Meaning::RemainingDistance) {
-      const bool distance_speed =
-          selected_ == dcp::Speed::V4 || selected_ == dcp::Speed::V3 || selected_ == dcp::Speed::VN;
-      if (!speed_selected_ || !distance_speed) {
-        // DCP 9.2.1.2: VI then B2 only is an inspection travel at crawl speed.
-        if (speed_selected_ && selected_ == dcp::Speed::VI && b2 && !b1) {
-          start_travel(TravelKind::Crawl, dcp::Speed::V0, down, now, 0);
-        }
-        return;
-      }
-      const bool wide =
-          dcp::remaining_distance_width(data_info_type_) == dcp::DistanceWidth::Bits16;
-      const std::uint16_t word =
-          wide ? frame.data_word() : static_cast<std::uint16_t>(frame.data_word() & kMax15);
-      start_travel(TravelKind::Distance, selected_, down, now, word);
-      return;
-    }
-    if (b1 && speed_selected_) {
-      switch (selected_) {
-        case dcp::Speed::VI:
-          start_travel(TravelKind::Inspection, selected_, down, now, 0);
-          break;
-        case dcp::Speed::V0:
-          start_travel(TravelKind::Crawl, selected_, down, now, 0);
-          break;
-        case dcp::Speed::VN:
-          start_travel(TravelKind::Relevel, selected_, down, now, 0);
-          break;
-        case dcp::Speed::VF:
-          break;
-        default:
-          start_travel(TravelKind::Speed, selected_, down, now, 0);
-          break;
-      }
-      return;
-    }
-    if (b2 && !b1 && mt == dcp::MessageType::DistanceOrDecel) {
-      // DCP 10.3 note / 9.2.1.2: B2 alone travels at crawl speed.
-      start_travel(TravelKind::Crawl, dcp::Speed::V0, down, now, 0);
+    on_frame_at_rest(f, now);
+    return;
+  }
+  on_frame_in_travel(f, now);
+}
+
+DriveSim::FrameView DriveSim::view(const dcp::MasterFrame& frame) const noexcept {
+  FrameView f{frame};
+  f.command = frame.command;
+  f.type = dcp::classify_command(f.command, config_.protocol);
+  f.b0 = (f.command & cb::kDriveEnable) != 0;
+  f.b1 = (f.command & cb::kTravel) != 0;
+  f.b2 = (f.command & cb::kStopSwitch) != 0;
+  f.down = (f.command & cb::kDirectionDown) != 0;
+  const auto parsed =
+      (f.type == dcp::MessageType::Speed || f.type == dcp::MessageType::SpeedAfterFastStart)
+          ? dcp::speed_from_word(frame.data_word())
+          : std::nullopt;
+  f.has_speed = parsed.has_value();
+  f.speed = parsed.value_or(dcp::Speed::V0);
+  f.speed_ok = f.has_speed && dcp::speed_allowed(f.speed, config_.protocol);
+  return f;
+}
+
+void DriveSim::on_enable_off(const FrameView& f, MonoTime now) noexcept {
+  // DCP 9.1.1 / 12.2.1: enable withdrawn: drop everything at once, the brake stops the car.
+  if (phase_ != Phase::Idle && phase_ != Phase::Finished) abort_travel(now);
+  if (phase_ == Phase::Finished) set_phase(Phase::Idle, now);
+  kind_ = TravelKind::None;
+  if (stationary()) fast_stop_latched_ = false;
+  if (f.type == dcp::MessageType::Idle) accepted_ = speed_selected_;
+}
+
+void DriveSim::on_frame_at_rest(const FrameView& f, MonoTime now) noexcept {
+  if (f.type == dcp::MessageType::Speed) {
+    speed_selected_ = f.speed_ok;
+    accepted_ = f.speed_ok;
+    if (f.speed_ok) selected_ = f.speed;
+    // DCP 12.1.1: fast start = speed message VF with B3=1 B2=0 B1=0 B0=1.
+    if (f.speed_ok && f.speed == dcp::Speed::VF && can_start()) {
+      start_travel(TravelKind::FastStart, dcp::Speed::VF, f.down, now, 0);
     }
     return;
   }
+  if (!can_start()) return;
+  b1_ = f.b1;
+  b2_ = f.b2;
+  if (f.type == dcp::MessageType::DistanceOrDecel && config_.protocol == dcp::Protocol::Dcp4 &&
+      tracker_.meaning() == dcp::DistanceModeTracker::Meaning::RemainingDistance) {
+    start_distance_travel(f, now);
+    return;
+  }
+  if (f.b1 && speed_selected_) {
+    switch (selected_) {
+      case dcp::Speed::VI:
+        start_travel(TravelKind::Inspection, selected_, f.down, now, 0);
+        break;
+      case dcp::Speed::V0:
+        start_travel(TravelKind::Crawl, selected_, f.down, now, 0);
+        break;
+      case dcp::Speed::VN:
+        start_travel(TravelKind::Relevel, selected_, f.down, now, 0);
+        break;
+      case dcp::Speed::VF:
+        break;
+      default:
+        start_travel(TravelKind::Speed, selected_, f.down, now, 0);
+        break;
+    }
+    return;
+  }
+  if (f.b2 && !f.b1 && f.type == dcp::MessageType::DistanceOrDecel) {
+    // DCP 10.3 note / 9.2.1.2: B2 alone travels at crawl speed.
+    start_travel(TravelKind::Crawl, dcp::Speed::V0, f.down, now, 0);
+  }
+}
 
+void DriveSim::start_distance_travel(const FrameView& f, MonoTime now) noexcept {
+  const bool distance_speed =
+      selected_ == dcp::Speed::V4 || selected_ == dcp::Speed::V3 || selected_ == dcp::Speed::VN;
+  if (!speed_selected_ || !distance_speed) {
+    // DCP 9.2.1.2: VI then B2 only is an inspection travel at crawl speed.
+    if (speed_selected_ && selected_ == dcp::Speed::VI && f.b2 && !f.b1) {
+      start_travel(TravelKind::Crawl, dcp::Speed::V0, f.down, now, 0);
+    }
+    return;
+  }
+  const bool wide = dcp::remaining_distance_width(data_info_type_) == dcp::DistanceWidth::Bits16;
+  const std::uint16_t word =
+      wide ? f.frame.data_word() : static_cast<std::uint16_t>(f.frame.data_word() & kMax15);
+  start_travel(TravelKind::Distance, selected_, f.down, now, word);
+}
+
+void DriveSim::on_frame_in_travel(const FrameView& f, MonoTime now) noexcept {
   // A travel is running (Magnetising, Moving, FastStartHold or Holding).
   const bool fast_stop_msg =
-      mt == dcp::MessageType::SpeedAfterFastStart && has_speed && speed == dcp::Speed::VF;
+      f.type == dcp::MessageType::SpeedAfterFastStart && f.has_speed && f.speed == dcp::Speed::VF;
   if (fast_stop_latched_) return;  // DCP 13.2: no further travel command accepted
   if (phase_ == Phase::Moving && fast_stop_msg) {
     fast_stop_latched_ = true;
@@ -551,132 +568,142 @@ void DriveSim::process(const dcp::MasterFrame& frame, MonoTime now) noexcept {
     plan_stop(config_.fast_stop, now);
     return;
   }
-  if (phase_ == Phase::Moving && down != down_ && !stopping_) {
+  if (phase_ == Phase::Moving && f.down != down_ && !stopping_) {
     plan_stop(config_.decel, now);  // DCP 9.1.2: direction changed: decelerate, no fault
     return;
   }
-
   if (kind_ == TravelKind::FastStart || (kind_ == TravelKind::Distance && go_pending_)) {
-    if (mt == dcp::MessageType::Stop) {
-      controlled_abort(now);  // DCP 12.2.2
-      return;
-    }
-    if (mt == dcp::MessageType::SpeedAfterFastStart && kind_ == TravelKind::FastStart && speed_ok &&
-        speed != dcp::Speed::VN && speed != dcp::Speed::VF) {
-      // DCP 12.1.3: go.
-      run_speed_ = speed;
-      selected_ = speed;
-      accepted_ = true;
-      b1_ = b1;
-      b2_ = b2;
-      if (config_.protocol == dcp::Protocol::Dcp4) {
-        kind_ = TravelKind::Distance;
-        go_pending_ = true;
-        return;
-      }
-      kind_ = speed == dcp::Speed::VI   ? TravelKind::Inspection
-              : speed == dcp::Speed::V0 ? TravelKind::Crawl
-                                        : TravelKind::Speed;
-      if (phase_ == Phase::FastStartHold) begin_motion(now);
-      return;
-    }
-    if (mt == dcp::MessageType::DistanceOrDecel && go_pending_) {
-      on_remaining_distance(frame.data_word(), now);
-    }
+    on_frame_in_fast_start(f, now);
     return;
   }
-
   switch (kind_) {
     case TravelKind::Distance:
-      if (mt == dcp::MessageType::DistanceOrDecel) {
-        if (b2_) on_remaining_distance(frame.data_word(), now);
-      } else if (!b2 && b2_) {
-        b2_ = false;
-        if (phase_ == Phase::Magnetising) {
-          controlled_abort(now);  // nothing moves yet: close the brake (DCP 12.2.2)
-        } else if (phase_ == Phase::Moving && decelerating(now)) {
-          plan_stop(config_.decel, now);  // DCP 3.5.3.2: stop mode "During deceleration"
-        } else if (phase_ == Phase::Moving) {
-          // DCP 11.1.1 d: "Stop switch bit B2 remains activated until the lift car comes to the
-          // level and the drive controller switches the mechanical brake bit S6/MB off".
-          report_violation(Violation::StopAtSpeed, now);
-          plan_stop(config_.fast_stop, now);
-        }
-      }
+      on_frame_in_distance_travel(f, now);
       break;
     case TravelKind::Speed:
-      if (mt == dcp::MessageType::Speed) {
-        // DCP 3.1 B5: speed change during the travel.
-        if ((cmd & cb::kSpeedChange) != 0 && speed_ok && phase_ == Phase::Moving && !to_crawl_ &&
-            !stopping_) {
-          run_speed_ = speed;
-          plan_to_speed(config_.speeds.of(speed), now);
-        }
-        break;
-      }
-      b1_ = b1;
-      b2_ = b2;
-      if (phase_ == Phase::Magnetising && !b1 && !b2) {
-        controlled_abort(now);
-      } else if (phase_ == Phase::Moving && !stopping_) {
-        if (!b1 && !b2 && to_crawl_) {
-          plan_stop(config_.decel, now);  // DCP 10.1.1 step 4: B2 positions the car at crawl
-        } else if (!b1 && !b2) {
-          // DCP 3.5.3.2: stop mode only "During deceleration"; at speed B1 must drop first so
-          // the drive slows to crawl within SVx (DCP 10.1.1 step 3).
-          report_violation(Violation::StopAtSpeed, now);
-          plan_stop(config_.fast_stop, now);
-        } else if (!b1 && !to_crawl_) {
-          // DCP 10.1.1: B1 off -> decelerate to crawl within the fixed distance SVx. DCP 10.1.2 /
-          // 10.2.2: the same SVx when B1 drops before Vx was reached (time-optimised short
-          // travel): the car may still speed up towards Vx or cruise first, and brakes harder
-          // (at most on the fast-stop ramp) when its normal ramp cannot make it.
-          to_crawl_ = true;
-          const double t0 = std::max(seconds(now), motion_start_s_);
-          const MotionState st = plan_.at(t0);
-          plan_.plan_fixed_arrival(t0, st, st.s_m + dcp3_decel_m(run_speed_),
-                                   config_.speeds.of(run_speed_), config_.speeds.v0_mps,
-                                   config_.accel, config_.decel, config_.fast_stop);
-        }
-      }
+      on_frame_in_speed_travel(f, now);
       break;
     case TravelKind::Inspection:
-      if (mt == dcp::MessageType::Speed) break;
-      b1_ = b1;
-      b2_ = b2;
-      if (phase_ == Phase::Magnetising && !b1 && !b2) {
+      if (f.type == dcp::MessageType::Speed) break;
+      b1_ = f.b1;
+      b2_ = f.b2;
+      if (phase_ == Phase::Magnetising && !f.b1 && !f.b2) {
         controlled_abort(now);
       } else if (phase_ == Phase::Moving && !stopping_) {
-        if (!b1 && !b2) {
+        if (!f.b1 && !f.b2) {
           plan_stop(config_.decel, now);
-        } else if (!b1 && !to_crawl_) {
+        } else if (!f.b1 && !to_crawl_) {
           to_crawl_ = true;  // DCP 9.2.1.1: end zone reached: crawl while B2
           plan_to_speed(config_.speeds.v0_mps, now);
         }
       }
       break;
     case TravelKind::Crawl:
-      if (mt == dcp::MessageType::Speed) break;
-      if (!b1 && !b2) {
-        if (phase_ == Phase::Magnetising)
-          controlled_abort(now);
-        else if (phase_ == Phase::Moving && !stopping_)
-          plan_stop(config_.decel, now);
-      }
+      if (f.type == dcp::MessageType::Speed) break;
+      if (!f.b1 && !f.b2) stop_from_crawl(now);
       break;
     case TravelKind::Relevel:
-      if (mt == dcp::MessageType::Speed) break;
-      if (!b1) {
-        // DCP 9.2.3.2: electric stop: decelerate to 0, hold, then S6 and S1 drop.
-        if (phase_ == Phase::Magnetising)
-          controlled_abort(now);
-        else if (phase_ == Phase::Moving && !stopping_)
-          plan_stop(config_.decel, now);
-      }
+      if (f.type == dcp::MessageType::Speed) break;
+      // DCP 9.2.3.2: electric stop: decelerate to 0, hold, then S6 and S1 drop.
+      if (!f.b1) stop_from_crawl(now);
       break;
     case TravelKind::FastStart:
     case TravelKind::None:
       break;
+  }
+}
+
+void DriveSim::stop_from_crawl(MonoTime now) noexcept {
+  if (phase_ == Phase::Magnetising) {
+    controlled_abort(now);
+  } else if (phase_ == Phase::Moving && !stopping_) {
+    plan_stop(config_.decel, now);
+  }
+}
+
+void DriveSim::on_frame_in_fast_start(const FrameView& f, MonoTime now) noexcept {
+  if (f.type == dcp::MessageType::Stop) {
+    controlled_abort(now);  // DCP 12.2.2
+    return;
+  }
+  if (f.type == dcp::MessageType::SpeedAfterFastStart && kind_ == TravelKind::FastStart &&
+      f.speed_ok && f.speed != dcp::Speed::VN && f.speed != dcp::Speed::VF) {
+    // DCP 12.1.3: go.
+    run_speed_ = f.speed;
+    selected_ = f.speed;
+    accepted_ = true;
+    b1_ = f.b1;
+    b2_ = f.b2;
+    if (config_.protocol == dcp::Protocol::Dcp4) {
+      kind_ = TravelKind::Distance;
+      go_pending_ = true;
+      return;
+    }
+    kind_ = f.speed == dcp::Speed::VI   ? TravelKind::Inspection
+            : f.speed == dcp::Speed::V0 ? TravelKind::Crawl
+                                        : TravelKind::Speed;
+    if (phase_ == Phase::FastStartHold) begin_motion(now);
+    return;
+  }
+  if (f.type == dcp::MessageType::DistanceOrDecel && go_pending_) {
+    on_remaining_distance(f.frame.data_word(), now);
+  }
+}
+
+void DriveSim::on_frame_in_distance_travel(const FrameView& f, MonoTime now) noexcept {
+  if (f.type == dcp::MessageType::DistanceOrDecel) {
+    if (b2_) on_remaining_distance(f.frame.data_word(), now);
+    return;
+  }
+  if (f.b2 || !b2_) return;
+  b2_ = false;
+  if (phase_ == Phase::Magnetising) {
+    controlled_abort(now);  // nothing moves yet: close the brake (DCP 12.2.2)
+  } else if (phase_ == Phase::Moving && decelerating(now)) {
+    plan_stop(config_.decel, now);  // DCP 3.5.3.2: stop mode "During deceleration"
+  } else if (phase_ == Phase::Moving) {
+    // DCP 11.1.1 d: "Stop switch bit B2 remains activated until the lift car comes to the
+    // level and the drive controller switches the mechanical brake bit S6/MB off".
+    report_violation(Violation::StopAtSpeed, now);
+    plan_stop(config_.fast_stop, now);
+  }
+}
+
+void DriveSim::on_frame_in_speed_travel(const FrameView& f, MonoTime now) noexcept {
+  if (f.type == dcp::MessageType::Speed) {
+    // DCP 3.1 B5: speed change during the travel.
+    if ((f.command & cb::kSpeedChange) != 0 && f.speed_ok && phase_ == Phase::Moving &&
+        !to_crawl_ && !stopping_) {
+      run_speed_ = f.speed;
+      plan_to_speed(config_.speeds.of(f.speed), now);
+    }
+    return;
+  }
+  b1_ = f.b1;
+  b2_ = f.b2;
+  if (phase_ == Phase::Magnetising && !f.b1 && !f.b2) {
+    controlled_abort(now);
+    return;
+  }
+  if (phase_ != Phase::Moving || stopping_) return;
+  if (!f.b1 && !f.b2 && to_crawl_) {
+    plan_stop(config_.decel, now);  // DCP 10.1.1 step 4: B2 positions the car at crawl
+  } else if (!f.b1 && !f.b2) {
+    // DCP 3.5.3.2: stop mode only "During deceleration"; at speed B1 must drop first so
+    // the drive slows to crawl within SVx (DCP 10.1.1 step 3).
+    report_violation(Violation::StopAtSpeed, now);
+    plan_stop(config_.fast_stop, now);
+  } else if (!f.b1 && !to_crawl_) {
+    // DCP 10.1.1: B1 off -> decelerate to crawl within the fixed distance SVx. DCP 10.1.2 /
+    // 10.2.2: the same SVx when B1 drops before Vx was reached (time-optimised short
+    // travel): the car may still speed up towards Vx or cruise first, and brakes harder
+    // (at most on the fast-stop ramp) when its normal ramp cannot make it.
+    to_crawl_ = true;
+    const double t0 = std::max(seconds(now), motion_start_s_);
+    const MotionState st = plan_.at(t0);
+    plan_.plan_fixed_arrival(t0, st, st.s_m + dcp3_decel_m(run_speed_),
+                             config_.speeds.of(run_speed_), config_.speeds.v0_mps, config_.accel,
+                             config_.decel, config_.fast_stop);
   }
 }
 

@@ -290,7 +290,38 @@ class DriveSim {
  private:
   /// Keeps how late recent frames arrived (for the remaining-distance plausibility check).
   void note_transport_delay(MonoTime now) noexcept;
+  /// One master frame (DCP 3): the channel bytes, then the command byte by phase.
   void process(const dcp::MasterFrame& frame, MonoTime now) noexcept;
+  /// The master frame's command byte and speed word, decoded once.
+  struct FrameView {
+    const dcp::MasterFrame& frame;
+    std::uint8_t command = 0;
+    dcp::MessageType type = dcp::MessageType::Invalid;
+    bool b0 = false;    ///< drive enable
+    bool b1 = false;    ///< travel command
+    bool b2 = false;    ///< stop switch
+    bool down = false;  ///< B4: direction down
+    bool has_speed = false;
+    dcp::Speed speed = dcp::Speed::V0;
+    bool speed_ok = false;  ///< a speed this dialect has (DCP 3.5.3.7)
+  };
+  FrameView view(const dcp::MasterFrame& frame) const noexcept;
+  /// B0 withdrawn (DCP 9.1.1, 12.2.1).
+  void on_enable_off(const FrameView& f, MonoTime now) noexcept;
+  /// At rest: speed messages and the commands that start each travel (DCP 9 to 12).
+  void on_frame_at_rest(const FrameView& f, MonoTime now) noexcept;
+  /// DCP4 remaining-distance travel start (DCP 11.1), or inspection at crawl (DCP 9.2.1.2).
+  void start_distance_travel(const FrameView& f, MonoTime now) noexcept;
+  /// A travel is running: fast stop (DCP 13), direction change, then by travel kind.
+  void on_frame_in_travel(const FrameView& f, MonoTime now) noexcept;
+  /// Fast start hold and go (DCP 12).
+  void on_frame_in_fast_start(const FrameView& f, MonoTime now) noexcept;
+  /// DCP4 distance travel: remaining distance, B2 withdrawn (DCP 11.1).
+  void on_frame_in_distance_travel(const FrameView& f, MonoTime now) noexcept;
+  /// DCP3 speed travel: speed change, B1 off at SVx, B2 off at the level (DCP 10.1).
+  void on_frame_in_speed_travel(const FrameView& f, MonoTime now) noexcept;
+  /// Crawl and relevelling: the command withdrawn stops the car (DCP 9.2.3, 10.3).
+  void stop_from_crawl(MonoTime now) noexcept;
   void process_channel(std::uint8_t byte, MonoTime now) noexcept;
   void handle_i_message(std::span<const std::uint8_t> payload, MonoTime now) noexcept;
   void handle_keypad(std::uint8_t buttons, MonoTime now) noexcept;

@@ -118,7 +118,7 @@ TEST(DcpTrace, LongestLineFitsTheBuffer) {
 }
 
 TEST(DcpTrace, DecoderAddsAColumnToTheRecorderDump) {
-  rt::FlightRecorder recorder(8);
+  rt::FlightRecorder recorder(8, rt::kDcpRecordBytes);
   const auto tx = framed(0x09, 0x00, 0x80, 0x00, 0x00);
   const auto rx = framed(0x21, 0x7F, 0xFF, 0x00, 0x00);
   recorder.record(MonoTime{std::chrono::milliseconds(1500)}, rt::Direction::Tx,

@@ -18,7 +18,7 @@ using std::chrono::milliseconds;
 using std::chrono::seconds;
 
 TEST(RtFlightRecorder, KeepsOnlyTheNewestRecordsOldestFirst) {
-  FlightRecorder rec(4);
+  FlightRecorder rec(4, kDcpRecordBytes);
   for (std::uint8_t i = 0; i < 10; ++i) {
     const std::array<std::uint8_t, 1> b{i};
     rec.record(milliseconds(i), Direction::Tx, record_flag::kSent, b);
@@ -35,7 +35,7 @@ TEST(RtFlightRecorder, KeepsOnlyTheNewestRecordsOldestFirst) {
 TEST(RtFlightRecorder, WritesOneReadableLinePerFrame) {
   // Legend: a sent DCP-sized frame, a bad reply with a decoder column, a partial (missing)
   // reply of two bytes, and a byte-less port-lost event.
-  FlightRecorder rec(8);
+  FlightRecorder rec(8, kDcpRecordBytes);
   const std::array<std::uint8_t, 6> tx{0x09, 0x00, 0x80, 0x02, 0x1C, 0x97};
   const std::array<std::uint8_t, 6> rx{0x61, 0x80, 0x07, 0x49, 0x30, 0x00};
   const std::array<std::uint8_t, 2> part{0x61, 0x80};
@@ -59,19 +59,42 @@ TEST(RtFlightRecorder, WritesOneReadableLinePerFrame) {
 }
 
 TEST(RtFlightRecorder, CutsLongFramesButKeepsTheirLength) {
-  FlightRecorder rec(2);
+  FlightRecorder rec(2, kDcpRecordBytes);
   std::array<std::uint8_t, 40> big{};
   for (std::size_t i = 0; i < big.size(); ++i) big[i] = static_cast<std::uint8_t>(i);
   rec.record(seconds(1), Direction::Tx, record_flag::kSent, big);
   const auto copy = rec.copy();
   ASSERT_EQ(copy.size(), 1U);
   EXPECT_EQ(copy[0].length, 40);
-  EXPECT_EQ(copy[0].data().size(), FrameRecord::kMaxBytes);
+  EXPECT_EQ(copy[0].data().size(), kDcpRecordBytes);
   EXPECT_EQ(copy[0].bytes[15], 15);
 }
 
+TEST(RtFlightRecorder, RecordsAreSizedForTheirLinksLongestFrame) {
+  // A whole USS telegram of 256 bytes (LGE 254) and a CAN record (identifier + 8 data bytes)
+  // are kept whole in recorders sized for their link; a DCP-sized recorder cuts them.
+  std::array<std::uint8_t, kUssRecordBytes> telegram{};
+  for (std::size_t i = 0; i < telegram.size(); ++i) telegram[i] = static_cast<std::uint8_t>(i);
+  FlightRecorder uss(4, kUssRecordBytes);
+  uss.record(seconds(1), Direction::Tx, record_flag::kSent, telegram);
+  uss.record(seconds(2), Direction::Rx, record_flag::kReply, std::span(telegram).first(5));
+  const auto copy = uss.copy();
+  ASSERT_EQ(copy.size(), 2U);
+  ASSERT_EQ(copy[0].data().size(), 256U);
+  EXPECT_EQ(copy[0].data()[255], 255);
+  EXPECT_EQ(copy[1].data().size(), 5U) << "a short record after a long one carries only its own";
+  EXPECT_EQ(copy[1].bytes[5], 0) << "nothing of the longer record before it shows through";
+  FlightRecorder can(4, kCanRecordBytes);
+  can.record(seconds(1), Direction::Rx, record_flag::kReply, std::span(telegram).first(10));
+  EXPECT_EQ(can.copy()[0].data().size(), 10U);
+  FlightRecorder dcp(4, kDcpRecordBytes);
+  dcp.record(seconds(1), Direction::Tx, record_flag::kSent, telegram);
+  EXPECT_EQ(dcp.copy()[0].data().size(), kDcpRecordBytes);
+  EXPECT_EQ(dcp.copy()[0].length, 256);
+}
+
 TEST(RtFlightRecorder, WritesAFile) {
-  FlightRecorder rec(2);
+  FlightRecorder rec(2, kDcpRecordBytes);
   const std::array<std::uint8_t, 1> b{0xAB};
   rec.record(seconds(2), Direction::Tx, record_flag::kSent, b);
   const std::string path = "/tmp/liftd-rt-recorder-" + std::to_string(getpid()) + ".txt";
@@ -87,7 +110,7 @@ TEST(RtFlightRecorder, WritesAFile) {
 TEST(RtFlightRecorder, CopiesAreNeverTornWhileTheWriterRuns) {
   // The writer stores frames whose 6 bytes all equal the low byte of the record number and
   // whose time is that number; a copy must only ever contain such consistent records, in order.
-  FlightRecorder rec(64);
+  FlightRecorder rec(64, kDcpRecordBytes);
   std::atomic<bool> done{false};
   std::thread writer([&] {
     for (std::uint32_t n = 0; n < 200000; ++n) {

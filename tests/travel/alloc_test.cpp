@@ -1,5 +1,5 @@
 // The cycle path allocates nothing: operator new is counted while TravelController::step and
-// pop_event run through whole travels (system.md: no allocation inside the 15 ms cycle).
+// pop_event run through whole travels (docs/architecture.md: no allocation inside the 15 ms cycle).
 #include <gtest/gtest.h>
 
 #include <atomic>

@@ -198,12 +198,15 @@ int main(int argc, char** argv) {
   const auto s = runner.status();
   if (s.state == liftd::sim::RunnerState::DeviceLost)
     std::fprintf(stderr, "dcp-drive-sim: device lost\n");
-  std::printf("summary: frames %llu bad %llu replies %llu repeats %llu resyncs %llu travels %llu\n",
-              static_cast<unsigned long long>(s.sim.frames),
-              static_cast<unsigned long long>(s.sim.bad_frames),
-              static_cast<unsigned long long>(s.sim.replies),
-              static_cast<unsigned long long>(s.sim.repeats),
-              static_cast<unsigned long long>(s.runner.resyncs),
-              static_cast<unsigned long long>(s.sim.travels));
+  std::printf(
+      "summary: frames %llu bad %llu replies %llu repeats %llu resyncs %llu travels %llu "
+      "dropped-events %llu\n",
+      static_cast<unsigned long long>(s.sim.frames),
+      static_cast<unsigned long long>(s.sim.bad_frames),
+      static_cast<unsigned long long>(s.sim.replies),
+      static_cast<unsigned long long>(s.sim.repeats),
+      static_cast<unsigned long long>(s.runner.resyncs),
+      static_cast<unsigned long long>(s.sim.travels),
+      static_cast<unsigned long long>(s.runner.dropped_events));
   return 0;
 }
