@@ -4,7 +4,7 @@
 // stands.
 //
 // The 30 ordered floor pairs are split into five round trips from floor 0 (every daemon starts
-// there), each visiting six pairs; the trips of one test case run at the same time on separate
+// there), each visiting six pairs; the five trips of a dialect run at the same time on separate
 // daemons, so the case takes as long as its longest trip (about a minute) rather than the sum.
 #include <gtest/gtest.h>
 
@@ -71,6 +71,11 @@ TripResult run_trip(const std::vector<int>& trip, int dcp, const std::string& na
     Leg leg;
     leg.from = trip[i - 1];
     leg.to = trip[i];
+    // As a dispatcher does: travel once the link is up. A communication-channel timeout (a
+    // message cut by a lost reply on a loaded machine) re-runs the handshake at rest, DCP 5.4.
+    for (int wait = 0; wait < 100 && lift.status()["link"]["state"] != "up"; ++wait) {
+      lift.api().drain(100ms);
+    }
     const auto start = Clock::now();
     leg.reply = lift.call({{"cmd", "travel"}, {"floor", leg.to}});
     if (leg.reply.is_object() && leg.reply.value("ok", false)) {
@@ -146,20 +151,14 @@ TEST(AllFloorPairs, TripsCoverEveryOrderedPairOnce) {
   EXPECT_EQ(pairs.size(), 30U);
 }
 
-TEST(Dcp4AllFloors, RoundTrips1To3LandWithin2Mm) {
-  run_trips({0, 1, 2}, 4, kDcp4LandingMm);
+// The five trips of a dialect run at once, five daemons beside each other: their cycle threads
+// need well under a millisecond each per 15 ms, so two cores carry them with room to spare.
+TEST(Dcp4AllFloors, EveryPairOfFloorsLandsWithin2Mm) {
+  run_trips({0, 1, 2, 3, 4}, 4, kDcp4LandingMm);
 }
 
-TEST(Dcp4AllFloors, RoundTrips4And5LandWithin2Mm) {
-  run_trips({3, 4}, 4, kDcp4LandingMm);
-}
-
-TEST(Dcp3AllFloors, RoundTrips1To3LandWithin5Mm) {
-  run_trips({0, 1, 2}, 3, kDcp3LandingMm);
-}
-
-TEST(Dcp3AllFloors, RoundTrips4And5LandWithin5Mm) {
-  run_trips({3, 4}, 3, kDcp3LandingMm);
+TEST(Dcp3AllFloors, EveryPairOfFloorsLandsWithin5Mm) {
+  run_trips({0, 1, 2, 3, 4}, 3, kDcp3LandingMm);
 }
 
 }  // namespace
