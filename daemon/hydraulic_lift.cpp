@@ -62,18 +62,6 @@ sch001::ControllerConfig sch001_controller_config(const config::Config& c) {
 
 namespace {
 
-std::optional<std::string> direction_name(lift::Direction d) {
-  switch (d) {
-    case lift::Direction::Up:
-      return "up";
-    case lift::Direction::Down:
-      return "down";
-    case lift::Direction::None:
-      break;
-  }
-  return std::nullopt;
-}
-
 nlohmann::json card_json(const sch001::CardStatus& s, bool single_unit) {
   nlohmann::json j = nlohmann::json::object();
   j["err"] = s.err;
@@ -352,12 +340,9 @@ api::StatusSnapshot Sch001Backend::status() {
   } else {
     out.link = s.heard ? api::LinkState::Up : api::LinkState::Init;
   }
-  for (std::size_t i = 0; i < s.faults.size(); ++i) {
-    if (!s.faults[i]) continue;
-    const auto code = static_cast<sch001::FaultCode>(i);
-    out.faults.push_back({std::string(sch001::fault_code_name(code)),
-                          std::string(sch001::fault_text(code)), wall_time(s.fault_since[i])});
-  }
+  out.faults = active_faults(
+      s.faults, s.fault_since, [](lift::FaultCode code) { return sch001::fault_text(code); },
+      [this](MonoTime at) { return wall_time(at); });
   out.drive_state = drive::state_of(out.link == api::LinkState::Up,
                                     s.travel_kind != sch001::TravelKind::None, !out.faults.empty());
   nlohmann::json d = nlohmann::json::object();
@@ -377,11 +362,7 @@ api::StatusSnapshot Sch001Backend::status() {
   out.travel_direction = direction_name(s.direction);
   if (s.target_floor) out.target_floor = static_cast<int>(*s.target_floor);
   for (std::size_t i = 0; i < s.call_count; ++i) out.calls.push_back(s.calls[i]);
-  const rt::RtThreadStatus& rt = runner_.thread_status();
-  out.rt.realtime = rt.realtime;
-  out.rt.policy = rt.realtime ? "SCHED_FIFO" : "SCHED_OTHER";
-  out.rt.priority = rt.realtime ? config_.rt.priority : 0;
-  out.rt.memory_locked = rt.memory_locked;
+  out.rt = rt_info(runner_.thread_status(), config_.rt.priority);
   return out;
 }
 
@@ -429,27 +410,21 @@ nlohmann::json Sch001Backend::config() {
 }
 
 void Sch001Backend::send(sch001::CommandBody body, api::Responder done) {
-  std::uint32_t tag = ++next_tag_;
-  if (tag == 0) tag = next_tag_ = 1;
+  const std::uint32_t tag = pending_.add(std::move(done), mono_now() + kReplyGrace);
   if (!controller_.post(sch001::ControllerCommand{tag, std::move(body)})) {
-    done(Result::fail(api::ErrorCode::Busy, "the CAN thread's command queue is full; try again"));
-    return;
+    pending_.complete(tag, Result::fail(api::ErrorCode::Busy,
+                                        "the CAN thread's command queue is full; try again"));
   }
-  pending_[tag] = Pending{std::move(done), mono_now() + kReplyGrace};
 }
 
 void Sch001Backend::poll(MonoTime now) {
   sch001::CommandReply r;
   while (controller_.poll_reply(r)) {
-    auto it = pending_.find(r.tag);
-    if (it == pending_.end()) continue;
-    Pending p = std::move(it->second);
-    pending_.erase(it);
     if (r.code == sch001::ReplyCode::Ok) {
       nlohmann::json result = nlohmann::json::object();
       if (!r.detail.empty()) result["detail"] = std::string(r.detail);
       if (r.floor) result["floor"] = *r.floor;
-      p.done(Result::ok(std::move(result)));
+      pending_.complete(r.tag, Result::ok(std::move(result)));
       continue;
     }
     const api::ErrorCode code = r.code == sch001::ReplyCode::Busy ? api::ErrorCode::Busy
@@ -457,17 +432,9 @@ void Sch001Backend::poll(MonoTime now) {
                                     ? api::ErrorCode::BadRequest
                                 : r.code == sch001::ReplyCode::Fault ? api::ErrorCode::Fault
                                                                      : api::ErrorCode::NotReady;
-    p.done(Result::fail(code, std::string(r.detail)));
+    pending_.complete(r.tag, Result::fail(code, std::string(r.detail)));
   }
-  for (auto it = pending_.begin(); it != pending_.end();) {
-    if (now > it->second.deadline) {
-      it->second.done(
-          Result::fail(api::ErrorCode::Internal, "the CAN thread did not answer; see the journal"));
-      it = pending_.erase(it);
-    } else {
-      ++it;
-    }
-  }
+  pending_.expire(now, "the CAN thread did not answer; see the journal");
 }
 
 void Sch001Backend::update_inputs(const api::InputUpdate& update, api::Responder done) {
@@ -550,8 +517,10 @@ HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool 
       simulate_(simulate),
       socket_path_(config.api.socket),
       poll_timer_(daemon.io()),
-      state_interval_(std::chrono::nanoseconds(std::chrono::seconds(1)) /
-                      std::max(1, config.api.state_rate_hz)) {
+      publisher_(config.api.state_rate_hz),
+      wind_down_(
+          daemon, [this](bool force) { return backend_->send_shutdown(force); }, kShutdownDeadline,
+          kShutdownGrace) {
   rt::CanRunnerConfig rc;
   rc.endpoint = config.can.interface;
   const sch001::ControllerConfig cc = sch001_controller_config(config);
@@ -742,21 +711,9 @@ void HydraulicLift::poll() {
     logged_counters_ = s.counters;
     last_reject_log_ = now;
   }
-  publish_state(now);
-  check_wind_down(now);
-}
-
-void HydraulicLift::publish_state(MonoTime now) {
-  api::StatusSnapshot s = backend_->status();
-  if (last_state_ && s == *last_state_) return;
-  // Position alone changes often while moving: rate-limited; anything else goes out at once.
-  api::StatusSnapshot without_position = s;
-  if (last_state_) without_position.position_mm = last_state_->position_mm;
-  const bool discrete = !last_state_ || !(without_position == *last_state_);
-  if (!discrete && now - last_state_publish_ < state_interval_) return;
-  server_->publish("state", api::to_json(s));
-  last_state_ = std::move(s);
-  last_state_publish_ = now;
+  publisher_.publish(*server_, backend_->status(), now);
+  const sch001::ControllerSnapshot rest = controller_->snapshot();
+  wind_down_.check({rest.shutting_down, rest.quiesced, rest.floor, rest.position_mm}, now);
 }
 
 void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
@@ -835,21 +792,12 @@ void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
       }
       break;
     case Kind::FaultRaised:
-    case Kind::FaultCleared: {
-      const bool active = event.kind == Kind::FaultRaised;
-      const std::string code(sch001::fault_code_name(event.fault));
-      const std::string text(sch001::fault_text(event.fault));
-      log::event(active ? log::Level::warn : log::Level::info, "safety",
-                 active ? "fault_raised" : "fault_cleared", {{"code", code}},
-                 std::string(active ? "fault: " : "fault cleared: ") + text);
-      server_->publish("fault", {{"code", code}, {"text", text}, {"active", active}});
+    case Kind::FaultCleared:
+      report_fault(*server_, event.fault, sch001::fault_text(event.fault),
+                   event.kind == Kind::FaultRaised);
       break;
-    }
     case Kind::CallServed:
-      log::event(log::Level::info, "travel", "call_served",
-                 {{"floor", std::to_string(event.floor)}},
-                 "call served: floor " + std::to_string(event.floor));
-      server_->publish("call_served", {{"floor", event.floor}});
+      report_call_served(*server_, event.floor);
       break;
   }
 }
@@ -859,42 +807,8 @@ void HydraulicLift::wind_down(std::function<void()> done) {
     done();
     return;
   }
-  // As the DCP lift (issue 13): a service stop lands a moving car at the next floor it can
-  // reach, then exits with every signal off.
-  wind_down_done_ = std::move(done);
-  wind_down_deadline_ = mono_now() + kShutdownDeadline;
-  wind_down_forced_ = false;
-  if (controller_->snapshot().travel_kind != sch001::TravelKind::None) {
-    log::event(log::Level::info, "travel", "shutdown_stopping_travel", {},
-               "stopping: bringing the car to rest at the next possible floor before exit");
-    daemon_.report_status("stopping: bringing the car to rest before exit");
-  }
-  (void)backend_->send_shutdown(false);
-}
-
-void HydraulicLift::check_wind_down(MonoTime now) {
-  if (!wind_down_done_) return;
-  const sch001::ControllerSnapshot s = controller_->snapshot();
-  if (!s.shutting_down && !wind_down_forced_) (void)backend_->send_shutdown(false);
-  if (!s.quiesced && now < wind_down_deadline_) return;
-  if (!s.quiesced && !wind_down_forced_) {
-    wind_down_forced_ = true;
-    wind_down_deadline_ = now + kShutdownGrace;
-    (void)backend_->send_shutdown(true);
-    log::event(log::Level::error, "travel", "shutdown_forced", {},
-               "stopping: the car did not come to rest in time; every travel signal dropped");
-    return;
-  }
-  const std::string where =
-      s.floor ? "at floor " + std::to_string(*s.floor)
-              : (s.position_mm ? "at " + std::to_string(*s.position_mm) + " mm" : "");
-  log::event(log::Level::info, "travel", "shutdown_at_rest",
-             {{"floor", s.floor ? std::to_string(*s.floor) : "none"}},
-             "stopping: car at rest " + where + ", no travel signal");
-  daemon_.report_status("stopping: car at rest " + where);
-  auto done = std::move(wind_down_done_);
-  wind_down_done_ = nullptr;
-  done();
+  wind_down_.start(std::move(done), controller_->snapshot().travel_kind != sch001::TravelKind::None,
+                   mono_now());
 }
 
 }  // namespace liftd::daemon

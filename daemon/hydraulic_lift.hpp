@@ -19,6 +19,7 @@
 #include "daemon/daemon.hpp"
 #include "daemon/drives.hpp"
 #include "daemon/lift_common.hpp"
+#include "daemon/lift_core.hpp"
 #include "lift/position_source.hpp"
 #include "rt/can_runner.hpp"
 #include "rt/encoder_tap.hpp"
@@ -110,11 +111,6 @@ class Sch001Backend final : public api::Backend {
   std::chrono::system_clock::time_point wall_time(MonoTime at) const;
 
  private:
-  using Completion = std::function<api::Result(const sch001::CommandReply&)>;
-  struct Pending {
-    api::Responder done;
-    MonoTime deadline{};
-  };
   static void not_offered(api::Responder& done);
   void send(sch001::CommandBody body, api::Responder done);
   void send_inputs(const lift::Inputs& inputs);
@@ -124,8 +120,7 @@ class Sch001Backend final : public api::Backend {
   rt::CanRunner& runner_;
   SimulatedCard* sim_;
   MachineInputs inputs_;  ///< the API's and the simulated machine's inputs
-  std::map<std::uint32_t, Pending> pending_;
-  std::uint32_t next_tag_ = 0;
+  PendingReplies pending_;
   MonoTime mono_at_start_{};
   std::chrono::system_clock::time_point wall_at_start_{};
 };
@@ -147,9 +142,7 @@ class HydraulicLift final : public LiftRunner {
   void schedule_poll();
   void poll();
   void handle_event(const sch001::ControllerEvent& event);
-  void publish_state(MonoTime now);
   void wind_down(std::function<void()> done);
-  void check_wind_down(MonoTime now);
 
   Daemon& daemon_;
   const config::Config& config_;
@@ -166,15 +159,11 @@ class HydraulicLift final : public LiftRunner {
   asio::steady_timer poll_timer_;
   bool running_ = false;
   std::uint64_t last_progress_ = 0;
-  std::optional<api::StatusSnapshot> last_state_;
-  MonoTime last_state_publish_{};
+  StatePublisher publisher_;
   MonoTime last_sim_inputs_{};
-  std::chrono::nanoseconds state_interval_;
   sch001::CardLinkCounters logged_counters_{};
   MonoTime last_reject_log_{};
-  std::function<void()> wind_down_done_;
-  MonoTime wind_down_deadline_{};
-  bool wind_down_forced_ = false;
+  WindDown wind_down_;
 };
 
 }  // namespace liftd::daemon

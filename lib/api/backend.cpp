@@ -228,5 +228,11 @@ void Backend::calls(const std::string&, std::optional<int>, Responder done) {
 void Backend::sim(const SimRequest&, Responder done) {
   done(Result::fail(ErrorCode::NotReady, "only with liftd --simulate"));
 }
+void Backend::parameter(const ParameterArgs&, Responder done) {
+  done(Result::fail(ErrorCode::NotOffered, "this lift's drive has no parameter channel"));
+}
+void Backend::mirror(std::optional<int>, Responder done) {
+  done(Result::fail(ErrorCode::NotOffered, "this lift's drive has no mirror telegram"));
+}
 
 }  // namespace liftd::api

@@ -169,6 +169,25 @@ struct TravelArgs {
   std::optional<int> load_percent;   ///< car load for I8
 };
 
+/// What a parameter request addresses (USS C 4.2.2: IND selects an array element, a
+/// description element or a text element).
+enum class ParameterTarget : std::uint8_t { Value, Array, Description, Text };
+/// Wire names of ParameterTarget, in enum order.
+inline constexpr std::array<std::string_view, 4> kParameterTargets = {"value", "array",
+                                                                      "description", "text"};
+
+/// Arguments of `uss_read` and `uss_write` (USS C 4: one PKW request to one slave).
+struct ParameterArgs {
+  std::optional<int> address;  ///< USS slave 0..31; nullopt: the drive (uss.drive_address)
+  int pnu = 0;                 ///< parameter number 0..2047 (PKE bits 0..10)
+  ParameterTarget target = ParameterTarget::Value;
+  int index = 0;           ///< element of an array, description or text, passed unchanged (IND)
+  bool write = false;      ///< uss_write
+  std::int64_t value = 0;  ///< uss_write: the value
+  bool dword = false;      ///< uss_write: a double word (else a word)
+  bool eeprom = false;     ///< uss_write: also into the drive's EEPROM
+};
+
 /// What `sim` does to the simulated lift (only a daemon started with --simulate has one).
 enum class SimAction : std::uint8_t {
   GeneralFault,      ///< drive S3 on/off (DCP 4.1)
@@ -290,6 +309,12 @@ class Backend {
   /// simulated lift's state after it. The default refuses: `not_ready` "only with liftd
   /// --simulate".
   virtual void sim(const SimRequest& request, Responder done);
+
+  // ---- the drive's parameters (drive kinds with Capability::Parameters: USS) ----
+  /// One PKW request (USS C 4); the result is the slave's answer.
+  virtual void parameter(const ParameterArgs& args, Responder done);
+  /// A mirror telegram to `address` (nullopt: the drive) as a link test (USS A 5.3).
+  virtual void mirror(std::optional<int> address, Responder done);
 };
 
 /// JSON of a status snapshot, as in the `status` result and `state` event.

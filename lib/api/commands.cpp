@@ -234,6 +234,7 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
 
   add_travel_commands(dispatcher, *b);
   add_sim_command(dispatcher, *b);
+  add_parameter_commands(dispatcher, *b);
 }
 
 namespace {
@@ -394,6 +395,86 @@ void add_sim_command(Dispatcher& dispatcher, Backend& backend) {
          b->sim(request, std::move(done));
        },
        kEveryDriveKind});
+}
+
+namespace {
+
+// USS A 4.3: ADR bits 0..4 carry the slave address; C 4.2.1.3: the PNU is PKE bits 0..10;
+// C 4.2.2: the element index is one byte of IND.
+constexpr std::int64_t kMaxUssAddress = 31;
+constexpr std::int64_t kMaxPnu = 2047;
+constexpr std::int64_t kMaxElementIndex = 255;
+constexpr std::int64_t kMaxDword = 0xFFFFFFFF;
+constexpr std::int64_t kMinDword = -0x80000000LL;
+constexpr std::int64_t kMaxWord = 0xFFFF;
+constexpr std::int64_t kMinWord = -0x8000;
+
+ParameterArgs parameter_args(const nlohmann::json& request) {
+  ParameterArgs args;
+  if (request.contains("address")) args.address = request.at("address").get<int>();
+  args.pnu = request.at("pnu").get<int>();
+  args.target =
+      enum_of<ParameterTarget>(kParameterTargets, arg_or<std::string>(request, "target", "value"));
+  args.index = arg_or<int>(request, "index", 0);
+  return args;
+}
+
+}  // namespace
+
+void add_parameter_commands(Dispatcher& dispatcher, Backend& backend) {
+  Backend* b = &backend;
+  const ArgSpec address =
+      int_arg("address", false, 0, kMaxUssAddress, "USS slave address (default: the drive)");
+  const ArgSpec pnu = int_arg("pnu", true, 0, kMaxPnu, "parameter number (PNU)");
+  const ArgSpec index =
+      int_arg("index", false, 0, kMaxElementIndex,
+              "element of an array, description or text (IND), passed to the drive unchanged");
+  dispatcher.add({"uss_read",
+                  Access::Read,
+                  {address, pnu,
+                   choice_arg("target", false, names_of(kParameterTargets),
+                              "value (default), array element, description element or text"),
+                   index},
+                  "read a parameter of a USS slave (PKW request)",
+                  [b](const Call& call, Responder done) {
+                    b->parameter(parameter_args(call.request), std::move(done));
+                  },
+                  drive::Capability::Parameters});
+  dispatcher.add(
+      {"uss_write",
+       Access::Control,
+       {address, pnu,
+        choice_arg("target", false, {"value", "array"}, "value (default) or array element"), index,
+        int_arg("value", true, kMinDword, kMaxDword, "the new value"),
+        choice_arg("width", false, {"word", "dword"}, "word (default) or double word"),
+        flag_arg("eeprom", "also store it in the drive's EEPROM (default false)")},
+       "change a parameter of a USS slave (PKW request)",
+       [b](const Call& call, Responder done) {
+         ParameterArgs args = parameter_args(call.request);
+         args.write = true;
+         args.value = call.request.at("value").get<std::int64_t>();
+         args.dword = arg_or<std::string>(call.request, "width", "word") == "dword";
+         args.eeprom = arg_or<bool>(call.request, "eeprom", false);
+         if (!args.dword && (args.value < kMinWord || args.value > kMaxWord)) {
+           done(Result::fail(ErrorCode::BadRequest,
+                             "value " + std::to_string(args.value) +
+                                 " does not fit a word (-32768..65535): use \"width\": \"dword\"",
+                             "value"));
+           return;
+         }
+         b->parameter(args, std::move(done));
+       },
+       drive::Capability::Parameters});
+  dispatcher.add({"uss_mirror",
+                  Access::Control,
+                  {address},
+                  "send a mirror telegram (link test, USS A 5.3)",
+                  [b](const Call& call, Responder done) {
+                    std::optional<int> a;
+                    if (call.request.contains("address")) a = call.request.at("address").get<int>();
+                    b->mirror(a, std::move(done));
+                  },
+                  drive::Capability::Parameters});
 }
 
 }  // namespace liftd::api

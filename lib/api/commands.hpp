@@ -1,5 +1,6 @@
 // The built-in commands (status, watch, stats, trace, display, key, drive_reset, power, load,
-// config, version, inputs, the travel commands, sim), each one table entry on a Dispatcher.
+// config, version, inputs, the travel commands, sim, the USS parameter commands), each one table
+// entry on a Dispatcher.
 #pragma once
 
 #include <functional>
@@ -29,6 +30,10 @@ inline constexpr std::int64_t kMaxSimDriftMm = 1000;
 /// Adds `sim`, the simulated lift's fault injection (a backend without one refuses it).
 /// add_builtin_commands() calls it.
 void add_sim_command(Dispatcher& dispatcher, Backend& backend);
+
+/// Adds `uss_read`, `uss_write` and `uss_mirror` (offered by drive kinds with
+/// Capability::Parameters). add_builtin_commands() calls it.
+void add_parameter_commands(Dispatcher& dispatcher, Backend& backend);
 
 /// Adds every built-in command to `dispatcher`, served by `backend`. `api_stats` supplies the
 /// server's own counters for `stats` ("api" object); it may be empty.

@@ -29,6 +29,19 @@ constexpr std::array<std::string_view, 2> kByteOrderNames{"little", "big"};
 constexpr std::array<std::string_view, 4> kRelevelDoorsNames{"open", "closed", "both", "never"};
 constexpr std::array<std::string_view, 2> kDcp3ReferenceNames{"position", "shaft_signals"};
 constexpr std::array<std::string_view, 5> kDataInfoTypeNames{"0", "1", "2", "3", "4"};
+// USS C 4.1: a PKW area of 0, 3 or 4 words, or of variable length (PKW = 127 in the drive).
+constexpr std::array<std::string_view, 4> kUssPkwNames{"0", "3", "4", "variable"};
+// USS B 2.4: the rates a USS interface offers.
+constexpr std::array<int, 13> kUssBauds{300,   600,   1200,  2400,  4800,   9600,  19200,
+                                        38400, 57600, 76800, 93750, 115200, 187500};
+// USS A 4.3: ADR bits 0..4.
+constexpr int kMaxUssAddress = 31;
+// USS C 5.1: at most 16 PZD words.
+constexpr int kMaxUssPzdWords = 16;
+// USS A 4.3: 32 addresses on a bus, the drive one of them.
+constexpr std::size_t kMaxUssSlaves = 31;
+// A polling list may repeat addresses (USS A 2.1); 64 entries cover any sensible weighting.
+constexpr std::size_t kMaxPollingList = 64;
 
 // DCP 3.5.3.7: the DCP3 travelling speeds in the order an installation adds them.
 constexpr const auto& kDcp3SpeedOrder = drive::kTravelSpeedNames;
@@ -61,7 +74,7 @@ std::optional<E> enum_from(std::string_view name, const std::array<std::string_v
   return std::nullopt;
 }
 
-enum class Type : std::uint8_t { boolean, integer, string, choice, floors, speed_map };
+enum class Type : std::uint8_t { boolean, integer, string, choice, floors, speed_map, custom };
 
 using Problems = std::vector<Problem>;
 
@@ -73,6 +86,7 @@ struct Key {
   std::int64_t max = 0;              // integer: largest value; string: longest length
   std::vector<std::string> choices;  // choice: the allowed strings
   std::string allowed_text;          // overrides the generated "allowed" column when set
+  std::string type_text;             // custom: the "type" column
   std::string description;
   // string: extra rule; returns what is wrong, or an empty string.
   std::function<std::string(const std::string&)> check;
@@ -477,6 +491,148 @@ void apply_speed_map(const json& value, const std::string& where, Config& config
   if (good) config.travel.dcp3_decel_distance_mm = std::move(distances);
 }
 
+void apply_uss_baud(const json& value, const std::string& where, Config& config,
+                    Problems& problems) {
+  std::string allowed;
+  for (int baud : kUssBauds) allowed += (allowed.empty() ? "" : ", ") + std::to_string(baud);
+  if (!is_integer(value) ||
+      std::find(kUssBauds.begin(), kUssBauds.end(), value.get<std::int64_t>()) == kUssBauds.end()) {
+    problems.push_back(
+        {where, show(value) + " is not a USS rate: use one of " + allowed + " (USS B 2.4)"});
+    return;
+  }
+  config.uss.baud = static_cast<int>(value.get<std::int64_t>());
+}
+
+std::optional<UssPkw> uss_pkw_from(const json& value) {
+  if (!value.is_string()) return std::nullopt;
+  return enum_from<UssPkw>(value.get<std::string>(), kUssPkwNames);
+}
+
+void apply_uss_slaves(const json& value, const std::string& where, Config& config,
+                      Problems& problems) {
+  if (!value.is_array()) {
+    problems.push_back(
+        {where,
+         "expected an array of {\"address\", \"pkw\", \"pzd_words\"} objects, got " + show(value)});
+    return;
+  }
+  if (value.size() > kMaxUssSlaves) {
+    problems.push_back({where, "has " + std::to_string(value.size()) + " entries: at most " +
+                                   std::to_string(kMaxUssSlaves) + " (USS A 4.3)"});
+    return;
+  }
+  const std::vector<std::string> members{"address", "pkw", "pzd_words"};
+  std::vector<UssSlave> slaves;
+  bool good = true;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    const std::string at = where + "[" + std::to_string(i) + "]";
+    const json& entry = value[i];
+    if (!entry.is_object()) {
+      problems.push_back(
+          {at, "expected an object {\"address\", \"pkw\", \"pzd_words\"}, got " + show(entry)});
+      good = false;
+      continue;
+    }
+    for (const auto& [k, v] : entry.items()) {
+      if (std::find(members.begin(), members.end(), k) == members.end()) {
+        problems.push_back({at + "." + k, "unknown key" + did_you_mean(k, members)});
+        good = false;
+      }
+    }
+    UssSlave slave;
+    if (!entry.contains("address")) {
+      problems.push_back({at, "missing \"address\""});
+      good = false;
+    } else if (check_integer(entry["address"], at + ".address", 0, kMaxUssAddress, problems)) {
+      slave.address = static_cast<int>(entry["address"].get<std::int64_t>());
+      for (std::size_t j = 0; j < slaves.size(); ++j) {
+        if (slaves[j].address == slave.address) {
+          problems.push_back({at + ".address", std::to_string(slave.address) +
+                                                   " is already the address of " + where + "[" +
+                                                   std::to_string(j) + "]"});
+          good = false;
+        }
+      }
+    } else {
+      good = false;
+    }
+    if (entry.contains("pkw")) {
+      if (auto pkw = uss_pkw_from(entry["pkw"])) {
+        slave.pkw = *pkw;
+      } else {
+        problems.push_back({at + ".pkw", show(entry["pkw"]) +
+                                             " is not allowed: use \"0\", \"3\", \"4\" or "
+                                             "\"variable\" (USS C 4.1)"});
+        good = false;
+      }
+    }
+    if (entry.contains("pzd_words")) {
+      if (check_integer(entry["pzd_words"], at + ".pzd_words", 0, kMaxUssPzdWords, problems)) {
+        slave.pzd_words = static_cast<int>(entry["pzd_words"].get<std::int64_t>());
+      } else {
+        good = false;
+      }
+    }
+    slaves.push_back(slave);
+  }
+  if (good) config.uss.slaves = std::move(slaves);
+}
+
+void apply_polling_list(const json& value, const std::string& where, Config& config,
+                        Problems& problems) {
+  if (!value.is_array() || value.size() > kMaxPollingList) {
+    problems.push_back({where, "expected an array of at most " + std::to_string(kMaxPollingList) +
+                                   " slave addresses 0..31, got " + show(value)});
+    return;
+  }
+  std::vector<int> list;
+  bool good = true;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    const std::string at = where + "[" + std::to_string(i) + "]";
+    if (check_integer(value[i], at, 0, kMaxUssAddress, problems)) {
+      list.push_back(static_cast<int>(value[i].get<std::int64_t>()));
+    } else {
+      good = false;
+    }
+  }
+  if (good) config.uss.polling_list = std::move(list);
+}
+
+void apply_uss_speeds(const json& value, const std::string& where, Config& config,
+                      Problems& problems) {
+  const std::vector<std::string> names(kAllSpeedNames.begin(), kAllSpeedNames.end());
+  if (!value.is_object()) {
+    problems.push_back(
+        {where,
+         "expected an object of speed name -> setpoint (e.g. {\"V4\": 100}), got " + show(value)});
+    return;
+  }
+  std::map<std::string, double> speeds;
+  bool good = true;
+  for (const auto& [name, setpoint] : value.items()) {
+    const std::string at = where + "." + name;
+    if (std::find(names.begin(), names.end(), name) == names.end()) {
+      problems.push_back({at,
+                          "is not a speed name: use V0 (crawl), VN (relevelling), VI "
+                          "(inspection) or V1..V7" +
+                              did_you_mean(name, names)});
+      good = false;
+      continue;
+    }
+    if (!setpoint.is_number() || setpoint.get<double>() <= 0) {
+      problems.push_back({at,
+                          "expected a positive number in the drive's unit (uss.full_scale), "
+                          "got " +
+                              show(setpoint)});
+      good = false;
+      continue;
+    }
+    speeds[name] = setpoint.get<double>();
+  }
+  if (good) config.uss.speeds = std::move(speeds);
+}
+
 const std::vector<Key>& schema() {
   static const std::vector<Key> table = [] {
     std::vector<Key> t;
@@ -487,7 +643,7 @@ const std::vector<Key>& schema() {
     t.push_back(
         enum_key("drive.kind", drive::kKindNames,
                  "protocol of the drive: DCP over RS485, SCH001 hydraulic card over CAN, or "
-                 "Siemens USS (\"uss\" is refused: not implemented in this version)",
+                 "Siemens USS over RS485",
                  &Config::drive, &DriveConfig::kind));
     t.push_back(string_key("drive.device", 1, 4096, "absolute path", absolute_path_rule,
                            "serial port of the drive link", &Config::drive, &DriveConfig::device));
@@ -750,6 +906,111 @@ const std::vector<Key>& schema() {
     t.push_back(bool_key("sch001.auto_relevel",
                          "relevel by itself when the car at rest sinks out of the level zone",
                          &Config::sch001, &Sch001Config::auto_relevel));
+    // uss
+    {
+      Key k;
+      k.path = "uss.baud";
+      k.type = Type::custom;
+      k.type_text = "integer";
+      k.allowed_text =
+          "300, 600, 1200, 2400, 4800, 9600, 19200, 38400, 57600, 76800, 93750, "
+          "115200, 187500";
+      k.description = "USS bus rate in baud; 8E1 characters (USS B 2.4, B 3.2)";
+      k.custom = apply_uss_baud;
+      k.get = [](const Config& c) { return json(c.uss.baud); };
+      t.push_back(std::move(k));
+    }
+    t.push_back(int_key("uss.drive_address", 0, kMaxUssAddress,
+                        "USS address of the lift drive (ADR bits 0..4, USS A 4.3)", &Config::uss,
+                        &UssConfig::drive_address));
+    t.push_back(enum_key("uss.drive_pkw", kUssPkwNames,
+                         "the drive's PKW area: none, 3 or 4 words, or variable (USS C 4.1); "
+                         "set the drive's own PKW parameter alike",
+                         &Config::uss, &UssConfig::drive_pkw));
+    t.push_back(int_key("uss.drive_pzd_words", 2, kMaxUssPzdWords,
+                        "PZD words of the drive (USS C 5.1): STW/ZSW and HSW/HIW at least",
+                        &Config::uss, &UssConfig::drive_pzd_words));
+    {
+      Key k;
+      k.path = "uss.slaves";
+      k.type = Type::custom;
+      k.type_text = "array of {address, pkw, pzd_words}";
+      k.allowed_text =
+          "at most 31 slaves besides the drive, addresses 0..31 unique, pkw \"0\" "
+          "\"3\" \"4\" \"variable\" (default \"4\"), pzd_words 0..16 (default 2)";
+      k.description =
+          "other USS slaves on the bus (e.g. a door operator), polled for their "
+          "parameters and process data";
+      k.custom = apply_uss_slaves;
+      k.get = [](const Config& c) {
+        json out = json::array();
+        for (const auto& slave : c.uss.slaves) {
+          out.push_back({{"address", slave.address},
+                         {"pkw", std::string(enum_name(slave.pkw, kUssPkwNames))},
+                         {"pzd_words", slave.pzd_words}});
+        }
+        return out;
+      };
+      t.push_back(std::move(k));
+    }
+    {
+      Key k;
+      k.path = "uss.polling_list";
+      k.type = Type::custom;
+      k.type_text = "array of integers";
+      k.allowed_text =
+          "at most 64 addresses of the drive and uss.slaves, any order, repeats "
+          "allowed, the drive at least once; [] = the drive, then each slave";
+      k.description = "the order in which the master polls the slaves (USS A 2.1)";
+      k.custom = apply_polling_list;
+      k.get = [](const Config& c) { return json(c.uss.polling_list); };
+      t.push_back(std::move(k));
+    }
+    t.push_back(int_key("uss.reply_delay_ms", 1, 20,
+                        "longest wait for the start of a reply; never below the start pause "
+                        "(USS A 5.2.1.1: at most 20 ms)",
+                        &Config::uss, &UssConfig::reply_delay_ms));
+    t.push_back(int_key("uss.cycle_time_ms", 0, 6500,
+                        "fixed time of one pass through the polling list; 0 = as fast as the "
+                        "bus allows (USS A 5.1.1)",
+                        &Config::uss, &UssConfig::cycle_time_ms));
+    t.push_back(int_key("uss.telegram_failures", 1, 100,
+                        "consecutive failed telegrams of the drive that end a travel (like a DCP "
+                        "link fault)",
+                        &Config::uss, &UssConfig::telegram_failures));
+    t.push_back(int_key("uss.pkw_repeat_limit", 1, 1000,
+                        "polls a parameter request is repeated without its reply before it "
+                        "fails (USS C 4)",
+                        &Config::uss, &UssConfig::pkw_repeat_limit));
+    t.push_back(bool_key("uss.mirror_at_start",
+                         "send each slave a mirror telegram as a link test at start (USS A 5.3)",
+                         &Config::uss, &UssConfig::mirror_at_start));
+    t.push_back(int_key("uss.full_scale_raw", 1, 32767,
+                        "main setpoint / actual value word that stands for uss.full_scale "
+                        "(USS C 5.2.2: 0x4000 = 16384 = 100 %)",
+                        &Config::uss, &UssConfig::full_scale_raw));
+    t.push_back(int_key("uss.full_scale", 1, 100000,
+                        "the drive's unit at uss.full_scale_raw (100 for percent, 50 for Hz of a "
+                        "50 Hz motor, ...)",
+                        &Config::uss, &UssConfig::full_scale));
+    t.push_back(int_key("uss.profile_timeout_ms", 100, 30000,
+                        "the drive reaches the state asked for in its status word within this, "
+                        "or it is a drive fault (USS C 5.2.1)",
+                        &Config::uss, &UssConfig::profile_timeout_ms));
+    {
+      Key k;
+      k.path = "uss.speeds";
+      k.type = Type::custom;
+      k.type_text = "object: speed -> setpoint";
+      k.allowed_text =
+          "V0 (crawl), VN (relevelling), VI (inspection) and every travelling speed "
+          "of travel.dcp3_speed_count, each > 0 in uss.full_scale units and within "
+          "a signed word once scaled";
+      k.description = "main setpoint (HSW) of each speed, in the drive's unit";
+      k.custom = apply_uss_speeds;
+      k.get = [](const Config& c) { return json(c.uss.speeds); };
+      t.push_back(std::move(k));
+    }
     t.push_back(int_key("sim.dcp", 3, 4, "DCP version the simulated drive speaks (--simulate)",
                         &Config::sim, &SimConfig::dcp));
     return t;
@@ -858,19 +1119,59 @@ void apply_key(const Key& key, const json& value, Config& config, Problems& prob
       break;
     case Type::floors:
     case Type::speed_map:
+    case Type::custom:
       key.custom(value, key.path, config, problems);
       return;
   }
   key.set(config, value);
 }
 
-// Values the schema names for later versions but this build cannot run: refused here, so that
-// --check-config and the daemon agree (a later implementation only removes the refusal).
-void check_implemented(const Config& config, Problems& problems) {
-  if (config.drive.kind == DriveKind::Uss) {
-    problems.push_back({"drive.kind", json_quoted(to_string(config.drive.kind)) +
-                                          " is not implemented in this version: use \"dcp\" or "
-                                          "\"sch001\""});
+// The uss.* keys that must agree with each other (only for a USS lift).
+void check_uss(const Config& config, Problems& problems) {
+  const UssConfig& uss = config.uss;
+  auto known = [&](int address) {
+    return address == uss.drive_address ||
+           std::any_of(uss.slaves.begin(), uss.slaves.end(),
+                       [&](const UssSlave& s) { return s.address == address; });
+  };
+  for (std::size_t i = 0; i < uss.slaves.size(); ++i) {
+    if (uss.slaves[i].address == uss.drive_address) {
+      problems.push_back({"uss.slaves[" + std::to_string(i) + "].address",
+                          std::to_string(uss.drive_address) +
+                              " is uss.drive_address: the drive is not listed again"});
+    }
+  }
+  for (std::size_t i = 0; i < uss.polling_list.size(); ++i) {
+    if (!known(uss.polling_list[i])) {
+      problems.push_back({"uss.polling_list[" + std::to_string(i) + "]",
+                          std::to_string(uss.polling_list[i]) +
+                              " is neither uss.drive_address nor in uss.slaves"});
+    }
+  }
+  if (!uss.polling_list.empty() && std::find(uss.polling_list.begin(), uss.polling_list.end(),
+                                             uss.drive_address) == uss.polling_list.end()) {
+    problems.push_back({"uss.polling_list", "never polls the drive (uss.drive_address " +
+                                                std::to_string(uss.drive_address) + ")"});
+  }
+  std::vector<std::string> needed = {"V0", "VN", "VI"};
+  for (const auto& name : dcp3_speeds(config.travel.dcp3_speed_count)) needed.push_back(name);
+  for (const auto& name : needed) {
+    if (uss.speeds.count(name) == 0) {
+      problems.push_back({"uss.speeds", "has no setpoint for " + name +
+                                            ": V0, VN, VI and every speed of "
+                                            "travel.dcp3_speed_count need one"});
+    }
+  }
+  // USS C 5.2.2: the main setpoint is a signed word.
+  const double limit = static_cast<double>(uss.full_scale) * 32767.0 / uss.full_scale_raw;
+  for (const auto& [name, setpoint] : uss.speeds) {
+    if (setpoint > limit) {
+      std::ostringstream text;
+      text << setpoint << " does not fit the signed setpoint word: at most " << limit
+           << " with uss.full_scale " << uss.full_scale << " = uss.full_scale_raw "
+           << uss.full_scale_raw;
+      problems.push_back({"uss.speeds." + name, text.str()});
+    }
   }
 }
 
@@ -944,6 +1245,8 @@ std::string type_name(const Key& key) {
       return "array of {name, level_mm}";
     case Type::speed_map:
       return "object: speed -> mm";
+    case Type::custom:
+      return key.type_text;
   }
   return {};
 }
@@ -1025,8 +1328,8 @@ LoadResult from_json(const json& document) {
       }
     }
   }
-  check_implemented(result.config, result.problems);
   check_cross_keys(result.config, document, result.problems);
+  if (result.config.drive.kind == DriveKind::Uss) check_uss(result.config, result.problems);
   return result;
 }
 
@@ -1248,6 +1551,15 @@ std::string summary(const Config& config) {
             : config.sch001.has_v3 ? ", V3"
                                    : "")
         << ", star-delta " << config.sch001.star_delta_ms << " ms\n";
+  } else if (config.drive.kind == DriveKind::Uss) {
+    out << "drive:    uss on " << config.drive.device << " at " << config.uss.baud
+        << " baud 8E1 (rs485 " << to_string(config.drive.rs485) << "), drive address "
+        << config.uss.drive_address << ", PKW " << enum_name(config.uss.drive_pkw, kUssPkwNames)
+        << ", PZD " << config.uss.drive_pzd_words << " words\n";
+    out << "uss:      " << config.uss.slaves.size() << " other slave(s), polling list "
+        << (config.uss.polling_list.empty() ? std::string("drive then each slave")
+                                            : json(config.uss.polling_list).dump())
+        << ", reply delay " << config.uss.reply_delay_ms << " ms\n";
   } else {
     out << "drive:    " << to_string(config.drive.kind) << " on " << config.drive.device
         << " (rs485 " << to_string(config.drive.rs485) << ")\n";

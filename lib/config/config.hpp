@@ -160,6 +160,38 @@ struct Sch001Config {
   bool auto_relevel = defaults::kHydraulicAutoRelevel;  ///< sch001.auto_relevel
 };
 
+/// Length of a USS slave's PKW area (USS C 4.1): none, 3 or 4 words, or variable.
+enum class UssPkw : std::uint8_t { none, three, four, variable };
+
+/// One USS slave besides the drive on the same bus (e.g. a door operator): `uss.slaves[]`.
+struct UssSlave {
+  int address = 0;            ///< 0..31 (USS A 4.3)
+  UssPkw pkw = UssPkw::four;  ///< its PKW area
+  int pzd_words = 2;          ///< 0..16 PZD words (USS C 5.1)
+  friend bool operator==(const UssSlave&, const UssSlave&) = default;
+};
+
+/// `uss.*`: the USS bus and the drive on it.
+struct UssConfig {
+  int baud = defaults::kUssBaud;    ///< uss.baud
+  int drive_address = 0;            ///< uss.drive_address
+  UssPkw drive_pkw = UssPkw::four;  ///< uss.drive_pkw
+  int drive_pzd_words = 2;          ///< uss.drive_pzd_words (STW/ZSW, HSW/HIW at least)
+  std::vector<UssSlave> slaves;     ///< uss.slaves: other slaves on the bus
+  std::vector<int> polling_list;    ///< uss.polling_list; empty: drive, then each slave
+  int reply_delay_ms = defaults::kUssReplyDelayMs;          ///< uss.reply_delay_ms
+  int cycle_time_ms = 0;                                    ///< uss.cycle_time_ms, 0 = none
+  int telegram_failures = defaults::kUssTelegramFailures;   ///< uss.telegram_failures
+  int pkw_repeat_limit = defaults::kUssPkwRepeatLimit;      ///< uss.pkw_repeat_limit
+  bool mirror_at_start = true;                              ///< uss.mirror_at_start
+  int full_scale_raw = defaults::kUssFullScaleRaw;          ///< uss.full_scale_raw
+  int full_scale = defaults::kUssFullScale;                 ///< uss.full_scale
+  int profile_timeout_ms = defaults::kUssProfileTimeoutMs;  ///< uss.profile_timeout_ms
+  /// uss.speeds: speed name -> main setpoint in the drive's unit (uss.full_scale).
+  std::map<std::string, double> speeds = {
+      {"V0", 5}, {"VN", 2}, {"VI", 30}, {"V3", 63}, {"V4", 100}};
+};
+
 /// `sim.*`
 struct SimConfig {
   int dcp = 4;  ///< sim.dcp: the simulated drive speaks DCP3 or DCP4
@@ -179,6 +211,7 @@ struct Config {
   TravelConfig travel;                           ///< travel.*
   CanConfig can;                                 ///< can.*
   Sch001Config sch001;                           ///< sch001.*
+  UssConfig uss;                                 ///< uss.*
   SimConfig sim;                                 ///< sim.*
 };
 

@@ -43,4 +43,15 @@ inline constexpr int kRelevelStartMm = 10;   ///< hydraulic relevelling starts t
 inline constexpr int kMaxTravelMs = 45000;   ///< motor run-time limiter
 inline constexpr bool kHydraulicAutoRelevel = true;  ///< relevel a sinking car by itself
 
+// USS drive (drive.kind "uss"): the uss.* keys and lib/uss.
+inline constexpr int kUssBaud = 38400;  ///< USS B 2.4: one of the recommended rates
+/// USS A 5.2.1.1: the master waits at most 20 ms for the start of a reply.
+inline constexpr int kUssReplyDelayMs = 20;
+inline constexpr int kUssTelegramFailures = 3;  ///< failed telegrams of the drive that end a travel
+inline constexpr int kUssPkwRepeatLimit = 10;   ///< polls a PKW request is repeated unanswered
+inline constexpr int kUssFullScaleRaw = 0x4000;  ///< USS C 5.2.2: 0x4000 = 100 %
+inline constexpr int kUssFullScale = 100;        ///< what kUssFullScaleRaw stands for (percent)
+/// The drive reaches a state the profile asks for within this (USS C 5.2.1), or it is a fault.
+inline constexpr int kUssProfileTimeoutMs = 2000;
+
 }  // namespace liftd::defaults

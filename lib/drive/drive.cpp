@@ -44,6 +44,8 @@ std::string_view to_string(Capability capability) noexcept {
       return "fast_start";
     case Capability::FastStop:
       return "fast_stop";
+    case Capability::Parameters:
+      return "parameters";
     case Capability::kCount:
       break;
   }
@@ -52,11 +54,19 @@ std::string_view to_string(Capability capability) noexcept {
 
 Capabilities capabilities_of(Kind kind) noexcept {
   switch (kind) {
-    case Kind::Dcp:
-      return Capabilities::all();
+    case Kind::Dcp: {
+      Capabilities dcp;
+      for (unsigned c = 0; c < static_cast<unsigned>(Capability::kCount); ++c) {
+        if (static_cast<Capability>(c) != Capability::Parameters) {
+          dcp.add(static_cast<Capability>(c));
+        }
+      }
+      return dcp;
+    }
     case Kind::Sch001:
-    case Kind::Uss:
       return {};
+    case Kind::Uss:
+      return Capabilities{}.add(Capability::Parameters).add(Capability::DriveReset);
   }
   return {};
 }

@@ -58,6 +58,7 @@ enum class Capability : std::uint8_t {
   DriveReset,  ///< `drive_reset`: fault reset asked of the drive (DCP I2 'R')
   FastStart,   ///< `fast_start`: start while the doors close (DCP 12)
   FastStop,    ///< `fast_stop`: fast stop of a travel (DCP 13)
+  Parameters,  ///< `uss_read`, `uss_write`, `uss_mirror`: the drive's parameters (USS C 4)
   kCount,
 };
 /// "keypad", "display", ...
@@ -87,8 +88,9 @@ class Capabilities {
 };
 
 /// What a drive kind offers beyond the common commands.
-/// DCP: all of them. SCH001: none (the card's CAN frames carry travel signals and floors only,
-/// and its status frame has no keypad, display, supply or load). USS: none yet.
+/// DCP: all but `parameters`. SCH001: none (the card's CAN frames carry travel signals and
+/// floors only, and its status frame has no keypad, display, supply or load). USS: parameters
+/// (the PKW channel, USS C 4) and drive_reset (fault acknowledge by STW bit 7, USS C 5.2.1).
 Capabilities capabilities_of(Kind kind) noexcept;
 
 }  // namespace liftd::drive

@@ -65,6 +65,16 @@ class FakeBackend : public Backend {
   void drive_reset(Responder done) override {
     answer("drive_reset", Result::ok(), std::move(done));
   }
+  void parameter(const ParameterArgs& a, Responder done) override {
+    answer("parameter " + std::to_string(a.address.value_or(-1)) + " " + std::to_string(a.pnu) +
+               " " + std::string(kParameterTargets[static_cast<std::size_t>(a.target)]) + " " +
+               std::to_string(a.index) + (a.write ? " write " + std::to_string(a.value) : "") +
+               (a.dword ? " dword" : "") + (a.eeprom ? " eeprom" : ""),
+           Result::ok({{"pnu", a.pnu}}), std::move(done));
+  }
+  void mirror(std::optional<int> address, Responder done) override {
+    answer("mirror " + std::to_string(address.value_or(-1)), Result::ok(), std::move(done));
+  }
   void power(PowerSetting setting, Responder done) override {
     answer(std::string("power ") + (setting.emergency ? "emergency " : "mains ") +
                std::to_string(setting.saving),

@@ -104,6 +104,21 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/sch001/relevel_start_mm", 10},
       {"/sch001/max_travel_ms", 45000},
       {"/sch001/auto_relevel", true},
+      {"/uss/baud", 38400},
+      {"/uss/drive_address", 0},
+      {"/uss/drive_pkw", "4"},
+      {"/uss/drive_pzd_words", 2},
+      {"/uss/slaves", json::array()},
+      {"/uss/polling_list", json::array()},
+      {"/uss/reply_delay_ms", 20},
+      {"/uss/cycle_time_ms", 0},
+      {"/uss/telegram_failures", 3},
+      {"/uss/pkw_repeat_limit", 10},
+      {"/uss/mirror_at_start", true},
+      {"/uss/full_scale_raw", 16384},
+      {"/uss/full_scale", 100},
+      {"/uss/profile_timeout_ms", 2000},
+      {"/uss/speeds", {{"V0", 5}, {"VN", 2}, {"VI", 30}, {"V3", 63}, {"V4", 100}}},
       {"/sim/dcp", 4},
   };
   const LoadResult result = parse("{}", "test");
@@ -163,12 +178,16 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
                "use_start_parameters": false, "fast_start_timeout_ms": 10000,
                "inspection_hold_ms": 100, "dcp3_speed_count": 3,
                "dcp3_decel_distance_mm": {"V4": 2000, "V3": 1000, "V2": 600}},
+    "uss": {"baud": 187500, "drive_address": 7, "drive_pkw": "variable", "drive_pzd_words": 4,
+            "slaves": [{"address": 12, "pkw": "3", "pzd_words": 0}, {"address": 31}],
+            "polling_list": [7, 12, 7, 31], "reply_delay_ms": 5, "cycle_time_ms": 100,
+            "telegram_failures": 7, "pkw_repeat_limit": 50, "mirror_at_start": false,
+            "full_scale_raw": 8192, "full_scale": 50, "profile_timeout_ms": 500,
+            "speeds": {"V0": 2.5, "VN": 1, "VI": 15, "V2": 20, "V3": 40, "V4": 99.9}},
     "sim": {"dcp": 3}
   })";
   const LoadResult r = parse(text, "test");
-  // The values reach the struct; the one this version cannot run is refused (and nothing else).
-  ASSERT_EQ(all_problems(r),
-            "drive.kind: \"uss\" is not implemented in this version: use \"dcp\" or \"sch001\"\n");
+  ASSERT_TRUE(r.ok()) << all_problems(r);
   const Config& c = r.config;
   EXPECT_EQ(c.log.level, LogLevel::debug);
   EXPECT_EQ(c.drive.kind, DriveKind::Uss);
@@ -210,6 +229,23 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
   EXPECT_EQ(c.travel.dcp3_speed_count, 3);
   EXPECT_EQ(c.travel.dcp3_decel_distance_mm,
             (std::map<std::string, int>{{"V4", 2000}, {"V3", 1000}, {"V2", 600}}));
+  EXPECT_EQ(c.uss.baud, 187500);
+  EXPECT_EQ(c.uss.drive_address, 7);
+  EXPECT_EQ(c.uss.drive_pkw, UssPkw::variable);
+  EXPECT_EQ(c.uss.drive_pzd_words, 4);
+  EXPECT_EQ(c.uss.slaves, (std::vector<UssSlave>{{12, UssPkw::three, 0}, {31, UssPkw::four, 2}}));
+  EXPECT_EQ(c.uss.polling_list, (std::vector<int>{7, 12, 7, 31}));
+  EXPECT_EQ(c.uss.reply_delay_ms, 5);
+  EXPECT_EQ(c.uss.cycle_time_ms, 100);
+  EXPECT_EQ(c.uss.telegram_failures, 7);
+  EXPECT_EQ(c.uss.pkw_repeat_limit, 50);
+  EXPECT_FALSE(c.uss.mirror_at_start);
+  EXPECT_EQ(c.uss.full_scale_raw, 8192);
+  EXPECT_EQ(c.uss.full_scale, 50);
+  EXPECT_EQ(c.uss.profile_timeout_ms, 500);
+  EXPECT_EQ(c.uss.speeds,
+            (std::map<std::string, double>{
+                {"V0", 2.5}, {"VN", 1}, {"VI", 15}, {"V2", 20}, {"V3", 40}, {"V4", 99.9}}));
   EXPECT_EQ(c.sim.dcp, 3);
   // The dump reads back to the same configuration.
   const LoadResult again = from_json(to_json(c));
@@ -376,8 +412,32 @@ TEST(ConfigFile, UnreadableFileNamesThePathAndTheErrnoText) {
 // would refuse (or misuse) at start, so --check-config must refuse it too.
 TEST(ConfigProblems, WhatTheDaemonCannotRunIsRefused) {
   const std::vector<BadCase> cases = {
-      {"USS drive: not implemented yet", R"({"drive": {"kind": "uss"}})", "drive.kind",
-       "\"uss\" is not implemented in this version: use \"dcp\" or \"sch001\""},
+      {"USS rate that is none of B 2.4", R"({"drive": {"kind": "uss"}, "uss": {"baud": 12345}})",
+       "uss.baud", "12345 is not a USS rate: use one of 300, 600"},
+      {"USS slave address beyond ADR bits 0..4", R"({"uss": {"slaves": [{"address": 32}]}})",
+       "uss.slaves[0].address", "32 is out of range: allowed 0..31"},
+      {"USS slave listed twice",
+       R"({"uss": {"slaves": [{"address": 3}, {"address": 3, "pkw": "3"}]}})",
+       "uss.slaves[1].address", "3 is already the address of uss.slaves[0]"},
+      {"USS PKW length a drive cannot have", R"({"uss": {"slaves": [{"address": 3, "pkw": 5}]}})",
+       "uss.slaves[0].pkw", "5 is not allowed: use \"0\", \"3\", \"4\" or \"variable\""},
+      {"USS slave that is the drive",
+       R"({"drive": {"kind": "uss"}, "uss": {"slaves": [{"address": 0}]}})",
+       "uss.slaves[0].address", "0 is uss.drive_address: the drive is not listed again"},
+      {"USS polling list with an unknown slave",
+       R"({"drive": {"kind": "uss"}, "uss": {"polling_list": [0, 5]}})", "uss.polling_list[1]",
+       "5 is neither uss.drive_address nor in uss.slaves"},
+      {"USS polling list without the drive",
+       R"({"drive": {"kind": "uss"}, "uss": {"slaves": [{"address": 4}], "polling_list": [4]}})",
+       "uss.polling_list", "never polls the drive (uss.drive_address 0)"},
+      {"USS speeds without a crawl speed",
+       R"({"drive": {"kind": "uss"}, "uss": {"speeds": {"VN": 2, "VI": 30, "V3": 63, "V4": 100}}})",
+       "uss.speeds", "has no setpoint for V0"},
+      {"USS speed that is no speed name", R"({"uss": {"speeds": {"V9": 2}}})", "uss.speeds.V9",
+       "is not a speed name"},
+      {"USS speed beyond the signed setpoint word",
+       R"({"drive": {"kind": "uss"}, "uss": {"speeds": {"V0": 5, "VN": 2, "VI": 30, "V3": 63, "V4": 200.5}}})",
+       "uss.speeds.V4", "200.5 does not fit the signed setpoint word: at most 199.99"},
       {"CAN endpoint that is neither an interface nor unix:PATH",
        R"({"can": {"interface": "can 0"}})", "can.interface",
        "is neither an interface name (letters, digits, _ - .) nor unix:PATH"},

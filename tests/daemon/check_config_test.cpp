@@ -149,8 +149,8 @@ TEST(CheckConfigAgreesWithTheDaemon, EverythingTheDaemonRefusesIsRefusedWithTwo)
   const std::string fifo = scratch.dir() + "/fifo.json";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   const std::vector<RefusedCase> cases = {
-      {"USS drive", R"({"drive": {"kind": "uss"}})", "",
-       "drive.kind: \"uss\" is not implemented in this version: use \"dcp\""},
+      {"USS drive at a rate USS has not", R"({"drive": {"kind": "uss"}, "uss": {"baud": 1000}})",
+       "", "uss.baud: 1000 is not a USS rate"},
       {"CPU that is not there", R"({"rt": {"cpu": 1023}})", "",
        "rt.cpu: 1023 is not a CPU this machine lets liftd run on"},
       {"NUL inside the socket path", R"({"api": {"socket": "/tmp/liftd.sock\u0000x"}})", "",

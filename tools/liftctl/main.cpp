@@ -53,6 +53,11 @@ void usage(std::FILE* out) {
       "  calls [add|cancel N]   list, add or cancel destinations (served in order)\n"
       "  inspection on|off [up|down|none]   software inspection; repeat to hold a direction\n"
       "  fast-start arm FLOOR|go|abort      DCP fast start while the doors close\n"
+      "  uss-read PNU [array|description|text INDEX] [@ADDRESS]\n"
+      "                         read a parameter of the USS drive (or of slave ADDRESS)\n"
+      "  uss-write PNU VALUE [dword] [eeprom] [array INDEX] [@ADDRESS]\n"
+      "                         change a parameter of the USS drive (or of slave ADDRESS)\n"
+      "  uss-mirror [ADDRESS]   mirror telegram to the USS drive (or slave ADDRESS)\n"
       "  config                 the daemon's effective configuration\n"
       "  version                daemon and API version\n"
       "  raw 'JSON'             send any request, e.g. raw '{\"cmd\":\"status\"}'\n"
@@ -376,6 +381,44 @@ int main(int argc, char** argv) {
       request["floor"] = *floor;
     } else if (args.size() != 2) {
       return bad_usage("usage: fast-start arm FLOOR|go|abort");
+    }
+  } else if (command == "uss-read" || command == "uss-write") {
+    const bool write = command == "uss-write";
+    const char* use = write ? "usage: uss-write PNU VALUE [dword] [eeprom] [array INDEX] [@ADDRESS]"
+                            : "usage: uss-read PNU [array|description|text INDEX] [@ADDRESS]";
+    const std::size_t first_option = write ? 3 : 2;
+    const auto pnu = args.size() >= first_option ? parse_int(args[1]) : std::nullopt;
+    if (!pnu) return bad_usage(use);
+    request = {{"cmd", write ? "uss_write" : "uss_read"}, {"pnu", *pnu}};
+    if (write) {
+      const auto value = parse_int(args[2]);
+      if (!value) return bad_usage(use);
+      request["value"] = *value;
+    }
+    for (std::size_t i = first_option; i < args.size(); ++i) {
+      const std::string& word = args[i];
+      if (write && (word == "dword" || word == "eeprom")) {
+        if (word == "dword") request["width"] = "dword";
+        if (word == "eeprom") request["eeprom"] = true;
+      } else if (word == "array" || (!write && (word == "description" || word == "text"))) {
+        const auto index = i + 1 < args.size() ? parse_int(args[i + 1]) : std::nullopt;
+        if (!index) return bad_usage(use);
+        request["target"] = word;
+        request["index"] = *index;
+        ++i;
+      } else if (word.size() > 1 && word[0] == '@' && parse_int(word.substr(1))) {
+        request["address"] = *parse_int(word.substr(1));
+      } else {
+        return bad_usage(use);
+      }
+    }
+  } else if (command == "uss-mirror") {
+    request = {{"cmd", "uss_mirror"}};
+    if (args.size() > 2) return bad_usage("usage: uss-mirror [ADDRESS]");
+    if (args.size() == 2) {
+      const auto address = parse_int(args[1]);
+      if (!address) return bad_usage("usage: uss-mirror [ADDRESS]");
+      request["address"] = *address;
     }
   } else if (command == "raw") {
     if (args.size() != 2) return bad_usage("usage: raw '{\"cmd\":...}'");

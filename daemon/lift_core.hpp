@@ -1,0 +1,122 @@
+// The daemon side every drive kind's lift shares once its controller runs on a real-time thread
+// behind lock-free queues (SCH001 and USS; the DCP lift keeps its own richer copies for the
+// display and the DCP status byte): replies waiting for their controller, the `state` events,
+// the service stop that lands a moving car first, and the drive-neutral half of `status`.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "api/backend.hpp"
+#include "api/server.hpp"
+#include "common/mono_time.hpp"
+#include "daemon/daemon.hpp"
+#include "lift/faults.hpp"
+#include "lift/inputs.hpp"
+#include "rt/rt_thread.hpp"
+
+namespace liftd::daemon {
+
+/// Requests sent to a controller, waiting for its reply: the responder of each by tag. A
+/// controller that never answers (a stalled thread) fails the request after a grace time.
+class PendingReplies {
+ public:
+  /// Keeps `done` under a new tag (never 0: tag 0 means "no reply wanted").
+  std::uint32_t add(api::Responder done, MonoTime deadline);
+  /// Answers the request of `tag` (false when there is none: answered or expired already).
+  bool complete(std::uint32_t tag, api::Result result);
+  /// Drops a request whose command never reached the controller.
+  void forget(std::uint32_t tag) { pending_.erase(tag); }
+  /// Fails every request past its deadline with `message` (an internal error).
+  void expire(MonoTime now, const std::string& message);
+
+ private:
+  struct Pending {
+    api::Responder done;
+    MonoTime deadline{};
+  };
+  std::map<std::uint32_t, Pending> pending_;
+  std::uint32_t next_tag_ = 0;
+};
+
+/// Publishes `state` events: at once for a discrete change, coalesced to api.state_rate_hz when
+/// only the position moved.
+class StatePublisher {
+ public:
+  explicit StatePublisher(int state_rate_hz)
+      : interval_(std::chrono::nanoseconds(std::chrono::seconds(1)) /
+                  (state_rate_hz > 0 ? state_rate_hz : 1)) {}
+  void publish(api::Server& server, api::StatusSnapshot status, MonoTime now);
+
+ private:
+  std::chrono::nanoseconds interval_;
+  std::optional<api::StatusSnapshot> last_;
+  MonoTime last_publish_{};
+};
+
+/// What the wind-down reads of a controller's snapshot.
+struct RestFacts {
+  bool shutting_down = false;  ///< the controller took the shutdown command
+  bool quiesced = false;       ///< at rest, no travel signal in the last telegram
+  std::optional<std::size_t> floor;
+  std::optional<std::int64_t> position_mm;
+};
+
+/// A service stop must not leave a moving car to the drive's own timeout (issue 13): the
+/// controller stops the travel as `stop` does and refuses new ones; the stop completes once the
+/// car is at rest with every travel signal off, or, after `deadline`, with every signal dropped
+/// at once and `grace` for the last telegrams to go out.
+class WindDown {
+ public:
+  /// `send_shutdown(force)` posts the controller's shutdown command (false: its queue was full).
+  WindDown(Daemon& daemon, std::function<bool(bool force)> send_shutdown,
+           std::chrono::nanoseconds deadline, std::chrono::nanoseconds grace)
+      : daemon_(daemon),
+        send_shutdown_(std::move(send_shutdown)),
+        deadline_(deadline),
+        grace_(grace) {}
+  /// Starts the wind-down; `moving`: a travel is running (journalled).
+  void start(std::function<void()> done, bool moving, MonoTime now);
+  /// Every poll: completes `done` once the controller reports rest (or the deadline forced it).
+  void check(const RestFacts& facts, MonoTime now);
+
+ private:
+  Daemon& daemon_;
+  std::function<bool(bool)> send_shutdown_;
+  std::chrono::nanoseconds deadline_;
+  std::chrono::nanoseconds grace_;
+  std::function<void()> done_;
+  MonoTime until_{};
+  bool forced_ = false;
+};
+
+/// status.rt from what the real-time thread got.
+api::RtInfo rt_info(const rt::RtThreadStatus& status, int priority);
+/// "up", "down" or nullopt for no direction (status travel.direction).
+std::optional<std::string> direction_name(lift::Direction direction);
+/// The active faults of a controller's fault table, oldest first as the table lists them.
+template <std::size_t N, typename TextFn, typename WallFn>
+std::vector<api::FaultInfo> active_faults(const std::array<bool, N>& active,
+                                          const std::array<MonoTime, N>& since, TextFn text,
+                                          WallFn wall) {
+  std::vector<api::FaultInfo> out;
+  for (std::size_t i = 0; i < N; ++i) {
+    if (!active[i]) continue;
+    const auto code = static_cast<lift::FaultCode>(i);
+    out.push_back(
+        {std::string(lift::fault_code_name(code)), std::string(text(code)), wall(since[i])});
+  }
+  return out;
+}
+/// Journals and publishes a fault that became active or ended.
+void report_fault(api::Server& server, lift::FaultCode code, std::string_view text, bool active);
+/// Journals and publishes a served call.
+void report_call_served(api::Server& server, std::size_t floor);
+
+}  // namespace liftd::daemon
