@@ -128,8 +128,16 @@ int configure_tty(int fd, const SerialSettings& settings, const char** failed_ca
   if (settings.parity != Parity::None) {
     tio.c_cflag |= PARENB;
     if (settings.parity == Parity::Odd) tio.c_cflag |= PARODD;
-    // A character with a parity error is dropped, so the frame comes up short and is lost.
-    tio.c_iflag |= INPCK | IGNPAR;
+    if (!settings.mark_errors) {
+      // A character with a parity error is dropped, so the frame comes up short and is lost.
+      tio.c_iflag |= INPCK | IGNPAR;
+    }
+  }
+  if (settings.mark_errors) {
+    // Parity and framing errors arrive as 0xFF 0x00 c, a break as 0xFF 0x00 0x00 (no IGNBRK,
+    // no BRKINT: no signal, no flush), a data 0xFF doubled. INPCK also with no parity bit, so
+    // framing errors are marked too.
+    tio.c_iflag |= INPCK | PARMRK;
   }
   if (settings.stop_bits == 2) tio.c_cflag |= CSTOPB;
   const unsigned code = baud_code(settings.baud);
@@ -143,6 +151,20 @@ int configure_tty(int fd, const SerialSettings& settings, const char** failed_ca
     *call = "TCSETS2";
     return errno;
   }
+  return 0;
+}
+
+int read_line_counts(int fd, LineCounts& out) noexcept {
+  serial_icounter_struct counts{};
+  if (ioctl(fd, TIOCGICOUNT, &counts) != 0) return errno;
+  auto u = [](int v) { return static_cast<std::uint64_t>(static_cast<unsigned>(v)); };
+  out.rx = u(counts.rx);
+  out.tx = u(counts.tx);
+  out.frame = u(counts.frame);
+  out.parity = u(counts.parity);
+  out.overrun = u(counts.overrun);
+  out.brk = u(counts.brk);
+  out.buf_overrun = u(counts.buf_overrun);
   return 0;
 }
 

@@ -36,7 +36,29 @@ struct SerialSettings {
   std::uint8_t stop_bits = 1;         ///< 1 or 2
   Rs485Mode rs485 = Rs485Mode::Auto;  ///< kernel RS485 mode policy
   bool low_latency = true;            ///< ask the driver for ASYNC_LOW_LATENCY where it has it
+  /// Deliver characters received with a parity or framing error, and breaks, marked in the
+  /// data stream instead of dropping them (termios INPCK | PARMRK, without IGNPAR, IGNBRK and
+  /// BRKINT): a bad character c arrives as 0xFF 0x00 c, a break as 0xFF 0x00 0x00 and a data
+  /// byte 0xFF as 0xFF 0xFF. The reader must undo the marking (uss::ParmrkDecoder); USS A 5.2.2
+  /// counts parity and framing errors. Off: such characters are dropped (IGNPAR) and 0xFF is
+  /// plain data.
+  bool mark_errors = false;
 };
+
+/// The UART's own error counters (TIOCGICOUNT), counting since the driver loaded.
+struct LineCounts {
+  std::uint64_t rx = 0;           ///< characters received
+  std::uint64_t tx = 0;           ///< characters sent
+  std::uint64_t frame = 0;        ///< framing errors
+  std::uint64_t parity = 0;       ///< parity errors
+  std::uint64_t overrun = 0;      ///< UART receive overruns (characters lost in hardware)
+  std::uint64_t brk = 0;          ///< breaks received
+  std::uint64_t buf_overrun = 0;  ///< tty buffer overruns (characters lost in the kernel)
+};
+
+/// Reads the driver's line counters of a tty into `out`. Returns 0, or an errno: EINVAL or
+/// ENOTTY when the driver keeps none (a pty never has them). No allocation, never blocks.
+int read_line_counts(int fd, LineCounts& out) noexcept;
 
 /// Why an open (or pty creation) failed: the device, the call that failed and errno.
 struct OpenError {
@@ -123,6 +145,10 @@ class SerialPort {
   /// Waits until the port is readable or `deadline` passes. Ok (readable), Timeout, or
   /// DeviceLost as soon as the device reports a hang-up or error (even with data pending).
   IoResult wait_readable(MonoTime deadline) noexcept;
+
+  /// The driver's line error counters (read_line_counts()); 0 or an errno (EINVAL/ENOTTY:
+  /// not kept by this driver, e.g. a pty; EBADF: closed).
+  int line_counts(LineCounts& out) const noexcept { return read_line_counts(fd_, out); }
 
   /// Closes the descriptor (no-op when closed). May block briefly while a real UART drains.
   void close() noexcept;
