@@ -1,0 +1,369 @@
+#include "rt/uss_runner.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <ctime>
+#include <stdexcept>
+#include <string_view>
+#include <utility>
+
+#include "uss/timing.hpp"
+
+namespace liftd::rt {
+namespace {
+
+constexpr auto kKeeperTick = std::chrono::milliseconds(5);  // keeper's polling interval
+constexpr auto kIdleTick = std::chrono::milliseconds(5);    // hooks' pace while without port
+// Longest single sleep: a long wait (fixed cycle time, A 5.1.1) is cut into slices so that
+// stop() and a reopened port are seen and the watchdog progress keeps moving.
+constexpr auto kMaxSleep = std::chrono::milliseconds(20);
+
+timespec to_timespec(MonoTime t) noexcept {
+  constexpr std::int64_t kNsPerS = 1'000'000'000;
+  const auto ns = t.count();
+  return timespec{static_cast<time_t>(ns / kNsPerS), static_cast<long>(ns % kNsPerS)};
+}
+
+void sleep_until(MonoTime when) noexcept {
+  const timespec ts = to_timespec(when);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+
+void set_text(CycleEvent& event, std::string_view text) noexcept {
+  const std::size_t n = std::min(text.size(), event.text.size() - 1);
+  std::copy_n(text.data(), n, event.text.data());
+  event.text[n] = '\0';
+}
+
+std::size_t recorder_capacity(const UssRunnerConfig& config, const uss::Master& master) {
+  // Each exchange writes the sent telegram and the reply (or missing) record.
+  const auto per_pass = master.config().polling_list.size();
+  const auto exchange = std::max<std::int64_t>(
+      master.expected_cycle_time().count() / static_cast<std::int64_t>(per_pass > 0 ? per_pass : 1),
+      std::chrono::nanoseconds(std::chrono::milliseconds(1)).count());
+  const auto exchanges =
+      static_cast<std::size_t>(std::max<std::int64_t>(config.recorder_span.count() / exchange, 1));
+  return std::clamp<std::size_t>(2 * exchanges, 256, UssRunner::kMaxRecords);
+}
+
+}  // namespace
+
+io::SerialSettings uss_serial_settings(std::uint32_t baud) {
+  io::SerialSettings s;
+  s.baud = baud;
+  s.data_bits = 8;              // A 6.1: start, 8 data, parity, stop = 11 bits
+  s.parity = io::Parity::Even;  // B: even parity
+  s.stop_bits = 1;
+  s.mark_errors = true;  // A 5.2.2: parity and framing errors are counted
+  return s;
+}
+
+UssRunner::UssRunner(UssRunnerConfig config, uss::Master& master, UssHooks& hooks)
+    : config_(std::move(config)),
+      master_(master),
+      hooks_(hooks),
+      recorder_(recorder_capacity(config_, master), config_.recorder_bytes) {
+  if (config_.serial.baud != master_.config().baud) {
+    throw std::invalid_argument("uss runner: the line runs at " +
+                                std::to_string(config_.serial.baud) + " baud, the master at " +
+                                std::to_string(master_.config().baud) +
+                                " (the timing rules of A 5 and A 6 follow the baud rate)");
+  }
+}
+
+UssRunner::~UssRunner() {
+  stop();
+}
+
+int UssRunner::start() {
+  if (started_) return EBUSY;
+  stop_.store(false);
+  port_wanted_.store(true);
+  if (const int err = thread_.start(config_.thread, [this] { loop(); }); err != 0) return err;
+  started_ = true;
+  if (const std::string text = thread_.status().describe(); !text.empty()) {
+    CycleEvent e;
+    e.kind = CycleEventKind::ThreadStatus;
+    e.time = mono_now();
+    e.error_number = thread_.status().sched_errno;
+    set_text(e, text);
+    keeper_events_.try_push(e);  // before the keeper exists: this thread is its producer now
+  }
+  keeper_ = std::thread([this] { keeper_loop(); });
+  return 0;
+}
+
+void UssRunner::stop() noexcept {
+  if (!started_) return;
+  stop_.store(true);
+  thread_.join();
+  if (keeper_.joinable()) keeper_.join();
+  port_.close();
+  port_ready_.store(false);
+  if (const int fd = offered_fd_.exchange(-1); fd >= 0) ::close(fd);
+  if (const int fd = dead_fd_.exchange(-1); fd >= 0) ::close(fd);
+  started_ = false;
+}
+
+bool UssRunner::poll_event(CycleEvent& out) noexcept {
+  return bus_events_.try_pop(out) || keeper_events_.try_pop(out);
+}
+
+UssRunnerStats UssRunner::stats() const {
+  UssRunnerStats s;
+  auto get = [](const std::atomic<std::uint64_t>& a) { return a.load(std::memory_order_relaxed); };
+  s.counters.exchanges = get(counters_.exchanges);
+  s.counters.good_replies = get(counters_.good_replies);
+  s.counters.bad_replies = get(counters_.bad_replies);
+  s.counters.reply_timeouts = get(counters_.reply_timeouts);
+  s.counters.no_reply_expected = get(counters_.no_reply_expected);
+  s.counters.cycles = get(counters_.cycles);
+  s.counters.port_losses = get(counters_.port_losses);
+  s.counters.port_opens = get(counters_.port_opens);
+  s.counters.send_failures = get(counters_.send_failures);
+  s.counters.stray_bytes = get(counters_.stray_bytes);
+  s.counters.chars_received = get(counters_.chars_received);
+  s.counters.line_errors = get(counters_.line_errors);
+  s.cycle_time = cycle_time_.copy();
+  s.wake_lateness = wake_lateness_.copy();
+  s.reply_time = reply_time_.copy();
+  return s;
+}
+
+void UssRunner::notify() noexcept {
+  if (notify_fd_ < 0) return;
+  const std::uint64_t one = 1;
+  // eventfd, non-blocking: EAGAIN only if the counter were near 2^64 (never in practice).
+  [[maybe_unused]] const ssize_t n = ::write(notify_fd_, &one, sizeof one);
+}
+
+void UssRunner::adopt_offered_port() noexcept {
+  const int fd = offered_fd_.exchange(-1, std::memory_order_acq_rel);
+  if (fd < 0) return;
+  port_ = io::SerialPort::adopt(fd);
+  decoder_.reset();
+  port_ready_.store(true, std::memory_order_relaxed);
+  bump(counters_.port_opens);
+  const MonoTime now = mono_now();
+  // The line state is unknown: a full start pause before the first telegram (A 5.1.2).
+  master_.reset_link(now);
+  hooks_.on_port(true, now);
+}
+
+void UssRunner::loop() noexcept {
+  while (!stop_.load(std::memory_order_relaxed)) {
+    adopt_offered_port();
+    if (!port_.is_open()) {
+      sleep_until(mono_now() + kIdleTick);
+      hooks_.after_exchange(mono_now());
+    } else {
+      // A 5.1.2 start pause, A 5.1.1 fixed cycle time: the master says when.
+      const MonoTime at = master_.send_at();
+      const MonoTime now = mono_now();
+      if (at > now + kMaxSleep) {
+        sleep_until(now + kMaxSleep);
+        progress_.fetch_add(1, std::memory_order_relaxed);
+        continue;
+      }
+      if (at > now) sleep_until(at);
+      const MonoTime wake = mono_now();
+      wake_lateness_.record(wake - at);
+      run_exchange(wake);
+      const MonoTime done = mono_now();
+      if (const std::uint64_t cycles = master_.cycles(); cycles != last_cycles_) {
+        last_cycles_ = cycles;
+        bump(counters_.cycles);
+        cycle_time_.record(master_.last_cycle_time());
+      }
+      hooks_.after_exchange(done);
+    }
+    progress_.fetch_add(1, std::memory_order_relaxed);
+    notify();
+  }
+}
+
+void UssRunner::run_exchange(MonoTime wake) noexcept {
+  // Anything still queued is stray (a late reply, line noise): not part of the next reply.
+  const io::IoResult flushed = port_.flush_input();
+  if (flushed.status == io::IoStatus::DeviceLost) {
+    lose_port(wake, flushed.error_number);
+    return;
+  }
+  bump(counters_.stray_bytes, flushed.bytes);
+  decoder_.reset();
+  const MonoTime sent_at = mono_now();
+  const std::span<const std::uint8_t> telegram = master_.next_telegram(sent_at);
+  if (telegram.empty()) return;
+  const io::IoResult written = port_.write_frame(telegram);
+  // The UART sends in the background: the last bit leaves the line after n character times
+  // (A 6.2); on a pty this is what keeps the reply delay and the next start pause honest.
+  const MonoTime end = sent_at + uss::transmission_time(master_.config().baud, telegram.size());
+  if (written.status == io::IoStatus::DeviceLost) {
+    recorder_.record(sent_at, Direction::Tx, record_flag::kSendFailed, telegram);
+    lose_port(sent_at, written.error_number);
+    return;
+  }
+  if (written.status == io::IoStatus::Ok) {
+    recorder_.record(sent_at, Direction::Tx, record_flag::kSent, telegram);
+  } else {
+    // The port refused (part of) the telegram: the reply supervision still runs (it will
+    // time out), so the slave is flagged as A 5.2.1.1 says.
+    bump(counters_.send_failures);
+    recorder_.record(sent_at, Direction::Tx, record_flag::kSendFailed, telegram);
+  }
+  master_.on_sent(end);
+  sent_end_ = end;
+  receive(sent_at);
+}
+
+void UssRunner::feed(std::size_t raw_bytes, MonoTime now) noexcept {
+  const std::span<const std::uint8_t> raw(raw_.data(), raw_bytes);
+  std::size_t count = 0;
+  if (config_.serial.mark_errors) {
+    count = decoder_.decode(raw, chars_);
+  } else {
+    for (const std::uint8_t b : raw) chars_[count++] = uss::RxChar{b, uss::LineError::None};
+  }
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!master_.awaiting_reply()) break;  // the rest is stray, flushed before the next send
+    const uss::RxChar& c = chars_[i];
+    bump(counters_.chars_received);
+    if (c.error != uss::LineError::None) bump(counters_.line_errors);
+    if (rx_record_size_ < rx_record_.size()) rx_record_[rx_record_size_++] = c.byte;
+    master_.on_char(c, now);
+  }
+}
+
+void UssRunner::receive(MonoTime sent_at) noexcept {
+  rx_record_size_ = 0;
+  MonoTime now = sent_at;
+  while (master_.awaiting_reply()) {
+    // Read first: characters already queued count even if this thread woke late.
+    const io::IoResult got = port_.read_available(raw_);
+    now = mono_now();
+    if (got.bytes > 0) feed(got.bytes, now);
+    if (got.status == io::IoStatus::DeviceLost) {
+      lose_port(now, got.error_number);
+      return;
+    }
+    if (got.bytes > 0) continue;
+    if (now >= master_.deadline()) {
+      master_.on_time(now);
+      continue;
+    }
+    const io::IoResult waited = port_.wait_readable(master_.deadline());
+    if (waited.status == io::IoStatus::DeviceLost) {
+      lose_port(mono_now(), waited.error_number);
+      return;
+    }
+    if (stop_.load(std::memory_order_relaxed)) {
+      master_.reset_link(mono_now());
+      return;
+    }
+  }
+  bump(counters_.exchanges);
+  const std::span<const std::uint8_t> reply(rx_record_.data(), rx_record_size_);
+  switch (master_.last_outcome()) {
+    case uss::ExchangeOutcome::Reply:
+      bump(counters_.good_replies);
+      reply_time_.record(now - sent_end_);
+      recorder_.record(now, Direction::Rx, record_flag::kReply, reply);
+      break;
+    case uss::ExchangeOutcome::BadReply:
+      bump(counters_.bad_replies);
+      recorder_.record(now, Direction::Rx, record_flag::kReply | record_flag::kBad, reply);
+      break;
+    case uss::ExchangeOutcome::Timeout:
+      bump(counters_.reply_timeouts);
+      recorder_.record(
+          now, Direction::Rx,
+          reply.empty() ? record_flag::kMissing : record_flag::kMissing | record_flag::kPartial,
+          reply);
+      break;
+    case uss::ExchangeOutcome::NoReplyExpected:
+      bump(counters_.no_reply_expected);
+      break;
+    case uss::ExchangeOutcome::None:
+    case uss::ExchangeOutcome::Abandoned:
+      break;
+  }
+}
+
+void UssRunner::lose_port(MonoTime now, int error_number) noexcept {
+  port_ready_.store(false, std::memory_order_relaxed);
+  // Closing a tty may wait for output to drain: leave that to the keeper thread.
+  if (const int old = dead_fd_.exchange(port_.release(), std::memory_order_acq_rel); old >= 0) {
+    ::close(old);  // the keeper has not collected the previous one yet (rare)
+  }
+  port_wanted_.store(true, std::memory_order_release);
+  bump(counters_.port_losses);
+  recorder_.record(now, Direction::Event, record_flag::kPortLost, {});
+  master_.reset_link(now);
+  CycleEvent e;
+  e.kind = CycleEventKind::PortLost;
+  e.time = now;
+  e.error_number = error_number;
+  bus_events_.try_push(e);
+  hooks_.on_port(false, now);
+}
+
+void UssRunner::keeper_loop() {
+  auto backoff = config_.reopen_backoff_min;
+  MonoTime next_attempt = mono_now();
+  int last_reported_errno = -1;
+  while (!stop_.load(std::memory_order_relaxed)) {
+    const MonoTime now = mono_now();
+    if (const int dead = dead_fd_.exchange(-1, std::memory_order_acq_rel); dead >= 0) {
+      ::close(dead);
+      // Give a replugged adapter time to come back before the first attempt.
+      backoff = config_.reopen_backoff_min;
+      next_attempt = now + backoff;
+    }
+    if (port_wanted_.load(std::memory_order_acquire) &&
+        offered_fd_.load(std::memory_order_acquire) < 0 && now >= next_attempt) {
+      auto opened = io::SerialPort::open(config_.device_path, config_.serial);
+      CycleEvent e;
+      e.time = now;
+      if (opened.ok()) {
+        const io::PortFeatures& f = opened.value().features();
+        std::string text = config_.device_path;
+        text += f.rs485_enabled ? ", rs485 mode on" : "";
+        if (f.rs485_errno != 0) {
+          text += ", rs485 mode not supported by the driver (" +
+                  std::string(std::strerror(f.rs485_errno)) + ")";
+        }
+        text += f.low_latency_enabled ? ", low latency on" : ", low latency not available";
+        io::LineCounts counts;
+        const int count_err = opened.value().line_counts(counts);
+        text += count_err == 0
+                    ? ", line error counters available"
+                    : ", no line error counters (" + std::string(std::strerror(count_err)) + ")";
+        e.kind = CycleEventKind::PortOpened;
+        set_text(e, text);
+        keeper_events_.try_push(e);
+        last_reported_errno = -1;
+        backoff = config_.reopen_backoff_min;
+        port_wanted_.store(false, std::memory_order_release);
+        offered_fd_.store(opened.value().release(), std::memory_order_release);
+      } else {
+        // Report the first failure and every change of reason, not every retry.
+        if (opened.error().error_number != last_reported_errno) {
+          e.kind = CycleEventKind::PortOpenFailed;
+          e.error_number = opened.error().error_number;
+          set_text(e, opened.error().message());
+          keeper_events_.try_push(e);
+          last_reported_errno = opened.error().error_number;
+        }
+        next_attempt = now + backoff;
+        backoff = std::min(backoff * 2, config_.reopen_backoff_max);
+      }
+    }
+    std::this_thread::sleep_for(kKeeperTick);
+  }
+}
+
+}  // namespace liftd::rt
