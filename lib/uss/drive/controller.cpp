@@ -1,0 +1,570 @@
+#include "uss/drive/controller.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+#include "drive/drive.hpp"
+
+namespace liftd::uss {
+namespace {
+
+/// After start, the port, the drive, the inputs and the position get this long before they
+/// count as lost (as the DCP and SCH001 lifts).
+MonoTime start_grace(const UssControllerConfig& config) {
+  return config.inputs_timeout * 2;
+}
+
+}  // namespace
+
+std::string_view fault_text(FaultCode code) noexcept {
+  switch (code) {
+    case FaultCode::LinkFault:
+      return "USS link fault: the drive missed uss.link_fault_replies replies in a row (A 5.2.1.1 "
+             "'Teilnehmer sendet nicht'), was never heard, or the serial port failed";
+    case FaultCode::DriveFault:
+      return "the drive reports a fault (ZSW bit 3, C 5.2.1) or did not reach the state asked of "
+             "it in time; drive_reset acknowledges it (STW bit 7)";
+    case FaultCode::SafetyChain:
+      return "safety chain open";
+    case FaultCode::InputsLost:
+      return "no input update from the I/O provider within inputs.timeout_ms";
+    case FaultCode::PositionLost:
+      return "the car position is unknown or stale: no travel possible";
+    case FaultCode::AdvanceWarning:
+      return "the drive reports a warning (ZSW bit 7, C 5.2.1): no new travel until it clears";
+    case FaultCode::kCount:
+      break;
+  }
+  return "internal";
+}
+
+UssController::UssController(const UssControllerConfig& config, Master& master,
+                             const lift::PositionSource& position, MonoTime start)
+    : config_(config),
+      master_(master),
+      position_(position),
+      travel_(config.travel),
+      lift_(config.lift),
+      start_at_(start) {
+  if (config.floors_mm.size() < 2 || !lift_.set_floors(config.floors_mm)) {
+    throw std::invalid_argument("floors: need 2 or more strictly increasing levels");
+  }
+  if (const auto bad = validate(config.travel)) {
+    throw std::invalid_argument("uss: bad travel setting " + std::string(*bad));
+  }
+  if (config.drive_address > kMaxSlaveAddress || !master.slave(config.drive_address).configured) {
+    throw std::invalid_argument("uss.drive.address: not a configured slave of the bus");
+  }
+  if (config.drive_pzd_words < 2 || config.drive_pzd_words > kMaxPzdWords) {
+    throw std::invalid_argument(
+        "uss: the lift drive needs 2..16 PZD words (PZD1 STW/ZSW, PZD2 HSW/HIW, C 5.1)");
+  }
+  if (config.normalisation.raw_full_scale <= 0 || !(config.normalisation.full_scale > 0.0)) {
+    throw std::invalid_argument("uss.normalisation: full scale must be positive (C 5.2.2)");
+  }
+  if (config.link_fault_replies == 0) {
+    throw std::invalid_argument("uss.link_fault_replies: must be 1 or more");
+  }
+  publish(start);
+}
+
+// ---- rt::UssHooks ----
+
+void UssController::after_exchange(MonoTime now) noexcept {
+  step(now);
+}
+
+void UssController::on_port(bool up, MonoTime now) noexcept {
+  port_up_ = up;
+  port_failed_ = !up;
+  ControllerEvent e;
+  e.kind = ControllerEvent::Kind::Port;
+  e.at = now;
+  e.port_up = up;
+  push_event(e);
+  step(now);
+}
+
+// ---- one step ----
+
+DriveInput UssController::build_input(MonoTime now) const noexcept {
+  DriveInput in;
+  in.now = now;
+  in.position_mm = position_.position_mm(now);
+  in.inputs = provider_inputs_;
+  in.inputs.valid = inputs_seen_ && now - inputs_at_ <= config_.inputs_timeout;
+  if (api_inspection_) {
+    in.inputs.inspection = true;
+    const bool held = now <= api_hold_until_;
+    in.inputs.button_up = in.inputs.button_up || (held && api_direction_ == lift::Direction::Up);
+    in.inputs.button_down =
+        in.inputs.button_down || (held && api_direction_ == lift::Direction::Down);
+  }
+  const SlaveState& s = master_.slave(config_.drive_address);
+  // C 5.1: PZD1 of the reply is ZSW, PZD2 the main actual value HIW.
+  in.zsw = s.pzd_in_count >= 1 ? s.pzd_in[0] : 0;
+  in.actual_percent = s.pzd_in_count >= 2
+                          ? config_.normalisation.from_raw(static_cast<std::int16_t>(s.pzd_in[1]))
+                          : 0.0;
+  in.replies = s.good;
+  in.link_ok = port_up_ && s.heard && s.pzd_in_count >= 1 &&
+               s.consecutive_failures < config_.link_fault_replies;
+  return in;
+}
+
+void UssController::step(MonoTime now) noexcept {
+  ++steps_;
+  drain_master(now);
+  DriveInput in = build_input(now);
+  ControllerCommand command;
+  while (commands_.try_pop(command)) {
+    handle(command, in);
+    in = build_input(now);  // an inputs command changes what follows
+  }
+  if (!place_known_ && in.position_mm) {
+    // The current floor is the one the car last stopped at; at start, the nearest.
+    if (const auto nearest = lift_.floors().nearest(*in.position_mm)) {
+      travel_.set_current_floor(*nearest);
+      place_known_ = true;
+    }
+  }
+  // Inspection (the car-roof switch, or the API's): hold-to-run with the buttons.
+  if (in.inputs.inspection) {
+    if (travel_.kind() == TravelKind::Travel || travel_.kind() == TravelKind::Relevel) {
+      travel_.abort(Cause::ModeChanged, now);
+    }
+    const lift::Direction d =
+        in.inputs.button_up == in.inputs.button_down
+            ? lift::Direction::None
+            : (in.inputs.button_up ? lift::Direction::Up : lift::Direction::Down);
+    (void)travel_.inspect(lift_.floors(), shutting_down_ ? lift::Direction::None : d, in);
+  } else if (travel_.kind() == TravelKind::Inspection) {
+    (void)travel_.inspect(lift_.floors(), lift::Direction::None, in);
+  }
+  if (!shutting_down_) {
+    serve_calls(in);
+    maybe_relevel(in);
+  }
+  last_output_ = travel_.tick(lift_.floors(), in);
+  drain_travel(now);
+  update_faults(in, now);
+
+  // C 5.1: PZD1 STW, PZD2 the main setpoint HSW (normalised, C 5.2.2), further words 0.
+  std::array<std::uint16_t, kMaxPzdWords> words{};
+  words[0] = last_output_.stw;
+  setpoint_raw_ = config_.normalisation.to_raw(last_output_.setpoint_percent);
+  words[1] = static_cast<std::uint16_t>(setpoint_raw_);
+  master_.set_pzd(config_.drive_address,
+                  std::span<const std::uint16_t>(words.data(), config_.drive_pzd_words));
+
+  if (in.link_ok) {
+    const ProfileState state = travel_.profile().state();
+    if (!state_reported_ || state != last_state_) {
+      state_reported_ = true;
+      last_state_ = state;
+      ControllerEvent e;
+      e.kind = ControllerEvent::Kind::DriveState;
+      e.at = now;
+      e.drive_state = state;
+      e.zsw = in.zsw;
+      push_event(e);
+    }
+  }
+  // While running at speed by position the car can still stop at any floor beyond its
+  // speed's slowdown distance (LiftTravel::stop uses the same rule).
+  std::optional<std::uint32_t> decel;
+  if (travel_.phase() == Phase::Run && config_.travel.reference == Reference::Position) {
+    decel = config_.travel.slowdown_mm[speed_index(travel_.speed())];
+  }
+  lift_.update(in.position_mm, travel_.direction(), decel);
+  publish(now);
+}
+
+void UssController::drain_master(MonoTime now) noexcept {
+  LinkChange change;
+  while (master_.poll_link_change(change)) {
+    ControllerEvent e;
+    e.kind = ControllerEvent::Kind::Link;
+    e.at = change.at;
+    e.link = change;
+    push_event(e);
+  }
+  while (master_.poll_spontaneous(report_)) {
+    ControllerEvent e;
+    e.kind = ControllerEvent::Kind::Spontaneous;
+    e.at = report_.at;
+    e.spontaneous = report_;
+    push_event(e);
+  }
+  while (master_.poll_pkw_result(pkw_result_)) {
+    if (pkw_result_.tag == 0) continue;
+    CommandReply r;
+    r.tag = pkw_result_.tag;
+    r.code = ReplyCode::Ok;
+    r.pkw = pkw_result_;
+    (void)replies_.try_push(r);
+  }
+  MirrorResult mirror;
+  while (master_.poll_mirror(mirror)) {
+    if (mirror.tag != 0 && mirror.tag != kStartMirrorTag) {
+      CommandReply r;
+      r.tag = mirror.tag;
+      r.code = ReplyCode::Ok;
+      r.mirror = mirror;
+      (void)replies_.try_push(r);
+      continue;
+    }
+    ControllerEvent e;
+    e.kind = ControllerEvent::Kind::Mirror;
+    e.at = now;
+    e.mirror = mirror;
+    push_event(e);
+  }
+}
+
+// ---- commands ----
+
+void UssController::reply(std::uint32_t tag, ReplyCode code, std::string_view detail,
+                          std::optional<std::size_t> floor) noexcept {
+  if (tag == 0) return;
+  CommandReply r;
+  r.tag = tag;
+  r.code = code;
+  r.detail = detail;
+  r.floor = floor;
+  (void)replies_.try_push(r);  // as deep as the command queue
+}
+
+ReplyCode UssController::code_for(Cause cause) noexcept {
+  switch (cause) {
+    case Cause::LinkFault:
+    case Cause::DriveFault:
+    case Cause::DriveDidNotStart:
+    case Cause::DriveDidNotStop:
+    case Cause::SafetyChain:
+    case Cause::InputsLost:
+    case Cause::PositionLost:
+      return ReplyCode::Fault;
+    case Cause::BadSpeed:
+      return ReplyCode::BadRequest;
+    default:
+      return ReplyCode::NotReady;
+  }
+}
+
+std::string_view UssController::text_for(Cause cause) noexcept {
+  switch (cause) {
+    case Cause::LinkFault:
+      return "the USS link to the drive is down (no current reply)";
+    case Cause::DriveFault:
+      return "the drive reports a fault (ZSW bit 3) or missed a state in time: drive_reset "
+             "acknowledges it";
+    case Cause::DriveNotReady:
+      return "the drive is not ready (not ready to switch on, or ZSW bit 9 = 0: local control)";
+    case Cause::AdvanceWarning:
+      return "the drive reports a warning (ZSW bit 7)";
+    case Cause::SafetyChain:
+      return "safety chain open";
+    case Cause::DoorsUnlocked:
+      return "doors not locked";
+    case Cause::InputsLost:
+      return "machine inputs lost";
+    case Cause::PositionLost:
+      return "car position unknown";
+    case Cause::BadSpeed:
+      return "that speed has no setpoint in this installation (uss.speeds)";
+    default:
+      return "not possible now";
+  }
+}
+
+void UssController::handle(const ControllerCommand& command, DriveInput& in) noexcept {
+  const std::uint32_t tag = command.tag;
+  std::visit(
+      [&](const auto& body) {
+        using T = std::decay_t<decltype(body)>;
+        if constexpr (std::is_same_v<T, InputsCommand>) {
+          provider_inputs_ = body.inputs;
+          inputs_at_ = in.now;
+          inputs_seen_ = true;
+          reply(tag, ReplyCode::Ok);
+        } else if constexpr (std::is_same_v<T, ShutdownCommand>) {
+          shutting_down_ = true;
+          lift_.calls().clear();
+          if (body.force) {
+            travel_.abort(Cause::Shutdown, in.now);
+          } else {
+            (void)travel_.stop(lift_.floors(), in);
+          }
+          reply(tag, ReplyCode::Ok);
+        } else if constexpr (std::is_same_v<T, TravelCommand>) {
+          if (shutting_down_) return reply(tag, ReplyCode::NotReady, "the service is stopping");
+          if (body.floor >= lift_.floors().size()) {
+            return reply(tag, ReplyCode::BadRequest, "no such floor in this installation");
+          }
+          if (speed_number(body.speed) == 0 || !travel_.speed_available(body.speed)) {
+            return reply(tag, ReplyCode::BadRequest, text_for(Cause::BadSpeed));
+          }
+          if (in.inputs.inspection) return reply(tag, ReplyCode::NotReady, "inspection is on");
+          if (travel_.busy()) return reply(tag, ReplyCode::Busy, "a travel is running");
+          if (in.position_mm && std::llabs(*in.position_mm - lift_.floors().level_mm(body.floor)) <=
+                                    static_cast<std::int64_t>(config_.lift.level_tolerance_mm)) {
+            return reply(tag, ReplyCode::NotReady, "the car is already at that level");
+          }
+          const Cause why = travel_.start_travel(lift_.floors(), body.floor, body.speed, in);
+          if (why != Cause::None) return reply(tag, code_for(why), text_for(why));
+          reply(tag, ReplyCode::Ok);
+        } else if constexpr (std::is_same_v<T, StopCommand>) {
+          lift_.calls().clear();
+          const auto floor = travel_.stop(lift_.floors(), in);
+          reply(tag, ReplyCode::Ok, {}, floor);
+        } else if constexpr (std::is_same_v<T, RelevelCommand>) {
+          if (shutting_down_) return reply(tag, ReplyCode::NotReady, "the service is stopping");
+          if (travel_.busy()) return reply(tag, ReplyCode::Busy, "a travel is running");
+          if (in.inputs.inspection) return reply(tag, ReplyCode::NotReady, "inspection is on");
+          std::size_t floor = travel_.current_floor();
+          lift::Direction direction = lift::Direction::None;
+          if (in.position_mm) {
+            const auto nearest = lift_.floors().nearest(*in.position_mm);
+            if (!nearest) return reply(tag, ReplyCode::NotReady, "no floor");
+            floor = *nearest;
+            if (std::llabs(*in.position_mm - lift_.floors().level_mm(floor)) <=
+                static_cast<std::int64_t>(config_.travel.level_tolerance_mm)) {
+              return reply(tag, ReplyCode::NotReady, "the car is level: nothing to relevel");
+            }
+          } else if (in.inputs.relevel_up != in.inputs.relevel_down) {
+            direction = in.inputs.relevel_up ? lift::Direction::Up : lift::Direction::Down;
+          } else {
+            return reply(tag, ReplyCode::NotReady,
+                         "no position and no relevelling signal: nothing to relevel");
+          }
+          const Cause why = travel_.start_relevel(lift_.floors(), floor, direction, in);
+          if (why != Cause::None) return reply(tag, code_for(why), text_for(why));
+          reply(tag, ReplyCode::Ok, {}, floor);
+        } else if constexpr (std::is_same_v<T, InspectionCommand>) {
+          api_inspection_ = body.on;
+          api_direction_ = body.on ? body.direction : lift::Direction::None;
+          api_hold_until_ = in.now + config_.inspection_hold;
+          reply(tag, ReplyCode::Ok);
+        } else if constexpr (std::is_same_v<T, CallCommand>) {
+          if (body.add) {
+            if (shutting_down_) return reply(tag, ReplyCode::NotReady, "the service is stopping");
+            switch (lift_.add_call(body.floor)) {
+              case lift::CallError::None:
+                return reply(tag, ReplyCode::Ok);
+              case lift::CallError::NoSuchFloor:
+                return reply(tag, ReplyCode::BadRequest, "no such floor in this installation");
+              default:
+                return reply(tag, ReplyCode::Busy, "the calls queue is full");
+            }
+          }
+          if (!lift_.cancel_call(body.floor)) {
+            return reply(tag, ReplyCode::BadRequest, "that floor is not in the calls queue");
+          }
+          reply(tag, ReplyCode::Ok);
+        } else if constexpr (std::is_same_v<T, DriveResetCommand>) {
+          if (travel_.busy()) {
+            return reply(tag, ReplyCode::Busy, "a travel is running: no drive reset during travel");
+          }
+          travel_.acknowledge();
+          reply(tag, ReplyCode::Ok, {});
+        } else if constexpr (std::is_same_v<T, ParameterCommand>) {
+          if (body.address > kMaxSlaveAddress || !master_.slave(body.address).configured) {
+            return reply(tag, ReplyCode::BadRequest, "no such slave on the USS bus");
+          }
+          if (!master_.submit_pkw(body.address, body.request, tag)) {
+            if (master_.slave(body.address).pkw_busy) {
+              return reply(tag, ReplyCode::Busy, "a parameter request to that slave is running");
+            }
+            return reply(tag, ReplyCode::BadRequest,
+                         "the request does not fit the slave's PKW area (uss.slaves[].pkw)");
+          }
+          // The reply follows with the result (drain_master).
+        } else if constexpr (std::is_same_v<T, MirrorCommand>) {
+          if (body.address > kMaxSlaveAddress || !master_.slave(body.address).configured) {
+            return reply(tag, ReplyCode::BadRequest, "no such slave on the USS bus");
+          }
+          if (!master_.request_mirror(body.address, tag)) {
+            return reply(tag, ReplyCode::Busy, "a mirror to that slave is still pending");
+          }
+        }
+      },
+      command.body);
+}
+
+// ---- travels, calls, faults ----
+
+void UssController::drain_travel(MonoTime now) noexcept {
+  TravelEvent t;
+  while (travel_.poll_event(t)) {
+    ControllerEvent e;
+    e.kind = ControllerEvent::Kind::Travel;
+    e.at = now;
+    e.travel = t;
+    push_event(e);
+    if (t.type == TravelEvent::Type::Finished && t.kind == TravelKind::Travel) {
+      const auto front = lift_.calls().front();
+      if (front && *front == t.floor) {
+        lift_.calls().pop_front();
+        ControllerEvent served;
+        served.kind = ControllerEvent::Kind::CallServed;
+        served.at = now;
+        served.floor = t.floor;
+        push_event(served);
+      }
+    }
+  }
+  travel_dropped_.store(travel_.dropped_events(), std::memory_order_relaxed);
+}
+
+void UssController::serve_calls(const DriveInput& in) noexcept {
+  if (travel_.busy() || in.inputs.inspection) return;
+  const auto front = lift_.calls().front();
+  if (!front) return;
+  const std::size_t floor = *front;
+  if (in.position_mm && std::llabs(*in.position_mm - lift_.floors().level_mm(floor)) <=
+                            static_cast<std::int64_t>(config_.lift.level_tolerance_mm)) {
+    lift_.calls().pop_front();  // already there
+    ControllerEvent served;
+    served.kind = ControllerEvent::Kind::CallServed;
+    served.at = in.now;
+    served.floor = floor;
+    push_event(served);
+    return;
+  }
+  // The fastest speed the installation has, in the order DCP 3.5.3.7 adds them.
+  for (const std::string_view name : drive::kTravelSpeedNames) {
+    const auto speed = parse_speed(name);
+    if (speed && travel_.speed_available(*speed)) {
+      (void)travel_.start_travel(lift_.floors(), floor, *speed, in);  // waits while refused
+      return;
+    }
+  }
+}
+
+void UssController::maybe_relevel(const DriveInput& in) noexcept {
+  if (!config_.auto_relevel || travel_.busy() || in.inputs.inspection) return;
+  if (in.position_mm) {
+    const auto nearest = lift_.floors().nearest(*in.position_mm);
+    if (!nearest) return;
+    const std::int64_t off = std::llabs(*in.position_mm - lift_.floors().level_mm(*nearest));
+    if (off <= static_cast<std::int64_t>(config_.relevel_threshold_mm) ||
+        off > static_cast<std::int64_t>(config_.relevel_zone_mm)) {
+      return;
+    }
+    // Only where it may start now; otherwise it waits (a refused relevel is no event).
+    if (travel_.forbidding(TravelKind::Relevel, in) == Cause::None) {
+      (void)travel_.start_relevel(lift_.floors(), *nearest, lift::Direction::None, in);
+    }
+    return;
+  }
+  // Without a position the shaft's relevelling zones say it: exactly one of them asks.
+  if (in.inputs.relevel_up == in.inputs.relevel_down) return;
+  if (travel_.forbidding(TravelKind::Relevel, in) == Cause::None) {
+    (void)travel_.start_relevel(lift_.floors(), travel_.current_floor(),
+                                in.inputs.relevel_up ? lift::Direction::Up : lift::Direction::Down,
+                                in);
+  }
+}
+
+void UssController::update_faults(const DriveInput& in, MonoTime now) noexcept {
+  const bool started = now - start_at_ > start_grace(config_);
+  const SlaveState& s = master_.slave(config_.drive_address);
+  const bool failing = s.heard && s.consecutive_failures >= config_.link_fault_replies;
+  // A lost port or a drive missing its replies is a fault at once; a port not open or a drive
+  // not heard yet after the start grace.
+  set_fault(FaultCode::LinkFault, port_failed_ || failing || (started && (!port_up_ || !s.heard)),
+            now);
+  set_fault(FaultCode::DriveFault,
+            in.link_ok && ((in.zsw & zsw::kFault) != 0 ||
+                           travel_.profile().supervision() != Supervision::None),
+            now);
+  set_fault(FaultCode::AdvanceWarning, in.link_ok && (in.zsw & zsw::kWarning) != 0, now);
+  set_fault(FaultCode::InputsLost, started && !in.inputs.valid, now);
+  set_fault(FaultCode::SafetyChain, in.inputs.valid && !in.inputs.safety_chain_closed, now);
+  set_fault(FaultCode::PositionLost,
+            started && config_.travel.reference == Reference::Position && !in.position_mm, now);
+}
+
+void UssController::set_fault(FaultCode code, bool active, MonoTime now) noexcept {
+  const auto i = static_cast<std::size_t>(code);
+  if (faults_[i] == active) return;
+  faults_[i] = active;
+  if (active) fault_since_[i] = now;
+  ControllerEvent e;
+  e.kind = active ? ControllerEvent::Kind::FaultRaised : ControllerEvent::Kind::FaultCleared;
+  e.at = now;
+  e.fault = code;
+  push_event(e);
+}
+
+void UssController::push_event(const ControllerEvent& event) noexcept {
+  if (!events_.try_push(event)) dropped_events_.fetch_add(1, std::memory_order_relaxed);
+}
+
+void UssController::publish(MonoTime now) noexcept {
+  ControllerSnapshot& s = snapshot_scratch_;
+  s.at = now;
+  s.steps = steps_;
+  s.port_up = port_up_;
+  s.slave_count = 0;
+  for (std::size_t a = 0; a <= kMaxSlaveAddress; ++a) {
+    const SlaveState& st = master_.slave(static_cast<std::uint8_t>(a));
+    if (!st.configured) continue;
+    SlaveSnapshot& out = s.slaves[s.slave_count++];
+    out.address = static_cast<std::uint8_t>(a);
+    out.heard = st.heard;
+    out.responding = st.responding;
+    out.consecutive_failures = st.consecutive_failures;
+    out.good = st.good;
+    out.failures = st.failures;
+    out.pzd_in = st.pzd_in;
+    out.pzd_in_count = st.pzd_in_count;
+    out.pkw_busy = st.pkw_busy;
+  }
+  const DriveInput in = build_input(now);
+  const SlaveState& drive = master_.slave(config_.drive_address);
+  s.drive_address = config_.drive_address;
+  s.drive_heard = drive.heard;
+  s.link_ok = in.link_ok;
+  s.stw_sent = last_output_.stw;
+  s.zsw = in.zsw;
+  s.drive_state = travel_.profile().state();
+  s.wish = last_output_.wish;
+  s.supervision = travel_.profile().supervision();
+  s.acknowledging = travel_.profile().acknowledging();
+  s.setpoint_raw = setpoint_raw_;
+  s.setpoint_percent = config_.normalisation.from_raw(setpoint_raw_);
+  s.actual_raw = drive.pzd_in_count >= 2 ? static_cast<std::int16_t>(drive.pzd_in[1]) : 0;
+  s.actual_percent = in.actual_percent;
+  s.brake_open = last_output_.brake_open;
+  s.contactors_on = last_output_.contactors_on;
+  s.rx = master_.rx_counters();
+  s.cycles = master_.cycles();
+  s.expected_cycle_time = master_.expected_cycle_time();
+  s.last_cycle_time = master_.last_cycle_time();
+  s.position_mm = lift_.position_mm();
+  s.floor = lift_.current_floor();
+  s.travel_kind = travel_.kind();
+  s.phase = travel_.phase();
+  s.direction = travel_.direction();
+  s.target_floor = travel_.target();
+  s.speed = travel_.speed();
+  s.inputs = in.inputs;
+  s.call_count = std::min(lift_.calls().size(), kMaxSnapshotCalls);
+  for (std::size_t i = 0; i < s.call_count; ++i) {
+    s.calls[i] = static_cast<std::uint8_t>(lift_.calls().at(i));
+  }
+  s.faults = faults_;
+  s.fault_since = fault_since_;
+  s.shutting_down = shutting_down_;
+  s.quiesced = shutting_down_ && !travel_.busy() && (last_output_.stw & stw::kOn) == 0 &&
+               !last_output_.brake_open && !last_output_.contactors_on &&
+               !(in.link_ok && operation_enabled(in.zsw));
+  snapshot_.publish(s);
+}
+
+}  // namespace liftd::uss

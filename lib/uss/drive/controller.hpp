@@ -1,0 +1,297 @@
+// The USS side of one lift: the user side of the USS master (lib/uss/master) for the lift's
+// drive and any other slave on the bus, the travel sequencing (lift_travel.hpp) with the drive
+// profile (drive_profile.hpp), and the drive-neutral lift model (lib/lift), joined into one
+// engine that the USS runner (lib/rt/uss_runner.hpp) calls after every exchange. Talks to the
+// non-real-time side only through lock-free structures: commands in, replies and events out
+// (SPSC queues), state out (triple buffer).
+//
+// Threads: the USS runner's thread calls the rt::UssHooks methods (and so every uss::Master
+// user-side call); ONE other thread (the daemon's io thread) calls post(), poll_reply(),
+// poll_event() and snapshot().
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "common/mono_time.hpp"
+#include "config/defaults.hpp"
+#include "lift/faults.hpp"
+#include "lift/inputs.hpp"
+#include "lift/lift_model.hpp"
+#include "lift/position_source.hpp"
+#include "rt/snapshot.hpp"
+#include "rt/spsc_queue.hpp"
+#include "rt/uss_runner.hpp"
+#include "uss/drive/drive_profile.hpp"
+#include "uss/drive/lift_travel.hpp"
+#include "uss/master/master.hpp"
+#include "uss/pkw.hpp"
+#include "uss/pzd.hpp"
+#include "uss/receiver.hpp"
+
+namespace liftd::uss {
+
+/// Everything the controller needs, fixed at construction.
+struct UssControllerConfig {
+  std::uint8_t drive_address = 0;  ///< uss.drive.address: the lift drive's slave address
+  /// PZD words sent to the drive: PZD1 STW, PZD2 HSW, the rest 0 (the slave's PZD count).
+  std::uint8_t drive_pzd_words = 2;
+  Normalisation normalisation;  ///< HSW / HIW scaling (C 5.2.2), e.g. 4000 hex = 100 %
+  LiftTravelConfig travel;
+  /// Replies of the drive that fail in a row before its link counts as down and a travel ends
+  /// (the master flags "sendet nicht" at the first, A 5.2.1.1).
+  std::uint32_t link_fault_replies = uss_defaults::kLinkFaultReplies;
+  lift::LiftConfig lift;                ///< level tolerance: status car.floor
+  std::vector<std::int64_t> floors_mm;  ///< strictly increasing levels (config `floors`)
+  MonoTime inputs_timeout = std::chrono::milliseconds(defaults::kInputsTimeoutMs);
+  MonoTime inspection_hold = std::chrono::milliseconds(defaults::kInspectionHoldMs);
+  /// Relevel by itself when the car at rest leaves the level (by position beyond
+  /// relevel_threshold_mm up to relevel_zone_mm; without position by the shaft's relevel_up /
+  /// relevel_down).
+  bool auto_relevel = true;
+  std::uint32_t relevel_threshold_mm = defaults::kRelevelThresholdMm;
+  std::uint32_t relevel_zone_mm = 150;
+};
+
+// ---- commands (io thread -> USS thread) ----
+struct TravelCommand {
+  std::size_t floor = 0;
+  SpeedName speed = SpeedName::V4;  ///< one of V1..V7 with a setpoint
+};
+struct StopCommand {};
+struct RelevelCommand {};
+struct InspectionCommand {
+  bool on = false;
+  lift::Direction direction = lift::Direction::None;
+};
+struct CallCommand {
+  bool add = true;
+  std::size_t floor = 0;
+};
+struct InputsCommand {
+  lift::Inputs inputs;
+};
+/// The service is stopping: no new travel, the running one lands as `stop` does, then OFF1;
+/// `force`: OFF2 at once.
+struct ShutdownCommand {
+  bool force = false;
+};
+/// Acknowledge a drive fault: one rising edge of STW bit 7 (C 5.2.1 table 5.3); also clears a
+/// latched drive-profile supervision. Refused while a run is in progress.
+struct DriveResetCommand {};
+/// A PKW request to any configured slave; the reply carries the uss::PkwResult.
+struct ParameterCommand {
+  std::uint8_t address = 0;
+  Pkw request;
+};
+/// A mirror telegram (A 5.3) to a configured slave; the reply carries the MirrorResult.
+struct MirrorCommand {
+  std::uint8_t address = 0;
+};
+using CommandBody = std::variant<TravelCommand, StopCommand, RelevelCommand, InspectionCommand,
+                                 CallCommand, InputsCommand, ShutdownCommand, DriveResetCommand,
+                                 ParameterCommand, MirrorCommand>;
+struct ControllerCommand {
+  std::uint32_t tag = 0;  ///< echoed in the reply; 0 = no reply wanted
+  CommandBody body;
+};
+
+// ---- replies and events (USS thread -> io thread) ----
+enum class ReplyCode : std::uint8_t { Ok, NotReady, Busy, BadRequest, Fault };
+struct CommandReply {
+  std::uint32_t tag = 0;
+  ReplyCode code = ReplyCode::Ok;
+  std::string_view detail;           ///< a static string
+  std::optional<std::size_t> floor;  ///< stop / relevel: where the car will stop
+  /// ParameterCommand: its one reply comes when the request ended (Ok with the result, whatever
+  /// its outcome; Unanswered after the master's pkw_repeat_limit), or at once without a result
+  /// when the master refused it.
+  std::optional<PkwResult> pkw;
+  /// MirrorCommand: likewise, Ok with the result once the mirror came back (or failed).
+  std::optional<MirrorResult> mirror;
+};
+
+using lift::fault_code_name;
+using lift::FaultCode;
+/// One line of explanation for a technician, in USS terms.
+std::string_view fault_text(FaultCode code) noexcept;
+
+struct ControllerEvent {
+  enum class Kind : std::uint8_t {
+    Link,          ///< a slave's "sendet nicht" flag changed (`link`)
+    Port,          ///< the serial port opened or was lost (`port_up`)
+    Spontaneous,   ///< a spontaneous report (C 4.2.1.2)
+    Mirror,        ///< a mirror result without a command (the start test)
+    DriveState,    ///< the drive-profile state read from ZSW changed
+    Travel,        ///< `travel`
+    FaultRaised,   ///< `fault`
+    FaultCleared,  ///< `fault`
+    CallServed,    ///< `floor`
+  };
+  Kind kind = Kind::Link;
+  MonoTime at{};
+  LinkChange link{};
+  bool port_up = false;
+  SpontaneousReport spontaneous{};
+  MirrorResult mirror{};
+  ProfileState drive_state = ProfileState::NotReadyToSwitchOn;
+  std::uint16_t zsw = 0;
+  TravelEvent travel{};
+  FaultCode fault = FaultCode::LinkFault;
+  std::size_t floor = 0;
+};
+
+/// One configured slave as the snapshot shows it.
+struct SlaveSnapshot {
+  std::uint8_t address = 0;
+  bool heard = false;
+  bool responding = false;  ///< false = "sendet nicht" (A 5.2.1.1) or not heard yet
+  std::uint32_t consecutive_failures = 0;
+  std::uint64_t good = 0;
+  std::uint64_t failures = 0;
+  std::array<std::uint16_t, kMaxPzdWords> pzd_in{};
+  std::uint8_t pzd_in_count = 0;
+  bool pkw_busy = false;
+};
+
+inline constexpr std::size_t kMaxSnapshotCalls = 64;
+inline constexpr std::size_t kMaxSnapshotSlaves = kMaxSlaveAddress + 1;
+
+/// The state published after every step.
+struct ControllerSnapshot {
+  MonoTime at{};
+  std::uint64_t steps = 0;
+  bool port_up = false;
+  std::array<SlaveSnapshot, kMaxSnapshotSlaves> slaves{};  ///< configured ones, by address
+  std::size_t slave_count = 0;
+  std::uint8_t drive_address = 0;
+  bool drive_heard = false;
+  bool link_ok = false;        ///< the drive's replies are current (link_fault_replies)
+  std::uint16_t stw_sent = 0;  ///< PZD1 set for the next telegram to the drive
+  std::uint16_t zsw = 0;       ///< PZD1 of the drive's last good reply
+  ProfileState drive_state = ProfileState::NotReadyToSwitchOn;
+  ProfileWish wish = ProfileWish::Stop;
+  Supervision supervision = Supervision::None;
+  bool acknowledging = false;
+  std::int16_t setpoint_raw = 0;  ///< HSW
+  double setpoint_percent = 0.0;
+  std::int16_t actual_raw = 0;  ///< HIW
+  double actual_percent = 0.0;
+  bool brake_open = false;
+  bool contactors_on = false;
+  RxCounters rx{};  ///< A 5.2.3 counters and error word
+  std::uint64_t cycles = 0;
+  std::chrono::nanoseconds expected_cycle_time{0};
+  std::chrono::nanoseconds last_cycle_time{0};
+  std::optional<std::int64_t> position_mm;
+  std::optional<std::size_t> floor;
+  TravelKind travel_kind = TravelKind::None;
+  Phase phase = Phase::Idle;
+  lift::Direction direction = lift::Direction::None;
+  std::optional<std::size_t> target_floor;
+  SpeedName speed = SpeedName::V4;
+  lift::Inputs inputs{};
+  std::array<std::uint8_t, kMaxSnapshotCalls> calls{};
+  std::size_t call_count = 0;
+  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults{};
+  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
+  bool shutting_down = false;
+  bool quiesced = false;  ///< shutting down, no run, OFF1 (or OFF2) sent, brake and contactors off
+};
+
+inline constexpr std::size_t kCommandQueueSize = 64;
+inline constexpr std::size_t kReplyQueueSize = 64;
+inline constexpr std::size_t kEventQueueSize = 256;
+
+class UssController final : public rt::UssHooks {
+ public:
+  /// Throws std::invalid_argument on a bad floor table, a bad travel config or a drive address
+  /// the master does not poll.
+  UssController(const UssControllerConfig& config, Master& master,
+                const lift::PositionSource& position, MonoTime start);
+
+  // ---- io thread ----
+  bool post(const ControllerCommand& command) noexcept { return commands_.try_push(command); }
+  bool poll_reply(CommandReply& out) noexcept { return replies_.try_pop(out); }
+  bool poll_event(ControllerEvent& out) noexcept { return events_.try_pop(out); }
+  ControllerSnapshot snapshot() noexcept { return snapshot_.read(); }
+  /// Events lost because a queue was full (the controller's and the travel's own).
+  std::uint64_t dropped_events() const noexcept {
+    return dropped_events_.load(std::memory_order_relaxed) +
+           travel_dropped_.load(std::memory_order_relaxed);
+  }
+  std::span<const std::int64_t> floors_mm() const noexcept { return config_.floors_mm; }
+
+  // ---- rt::UssHooks (USS thread) ----
+  void after_exchange(MonoTime now) noexcept override;
+  void on_port(bool up, MonoTime now) noexcept override;
+
+  /// Direct access for single-threaded tests.
+  const LiftTravel& travel() const noexcept { return travel_; }
+
+ private:
+  void step(MonoTime now) noexcept;
+  void drain_master(MonoTime now) noexcept;
+  void handle(const ControllerCommand& command, DriveInput& in) noexcept;
+  void reply(std::uint32_t tag, ReplyCode code, std::string_view detail = {},
+             std::optional<std::size_t> floor = std::nullopt) noexcept;
+  void push_event(const ControllerEvent& event) noexcept;
+  DriveInput build_input(MonoTime now) const noexcept;
+  void update_faults(const DriveInput& in, MonoTime now) noexcept;
+  void set_fault(FaultCode code, bool active, MonoTime now) noexcept;
+  void drain_travel(MonoTime now) noexcept;
+  void serve_calls(const DriveInput& in) noexcept;
+  void maybe_relevel(const DriveInput& in) noexcept;
+  void publish(MonoTime now) noexcept;
+  static ReplyCode code_for(Cause cause) noexcept;
+  static std::string_view text_for(Cause cause) noexcept;
+
+  UssControllerConfig config_;
+  Master& master_;
+  const lift::PositionSource& position_;
+  LiftTravel travel_;
+  lift::LiftModel lift_;
+
+  rt::SpscQueue<ControllerCommand, kCommandQueueSize> commands_;
+  rt::SpscQueue<CommandReply, kReplyQueueSize> replies_;
+  rt::SpscQueue<ControllerEvent, kEventQueueSize> events_;
+  rt::Snapshot<ControllerSnapshot> snapshot_;
+  std::atomic<std::uint64_t> dropped_events_{0};
+  std::atomic<std::uint64_t> travel_dropped_{0};
+
+  // USS-thread state.
+  bool port_up_ = false;
+  bool port_failed_ = false;  ///< the port was lost and has not reopened
+  lift::Inputs provider_inputs_{};
+  MonoTime inputs_at_{};
+  bool inputs_seen_ = false;
+  bool api_inspection_ = false;
+  lift::Direction api_direction_ = lift::Direction::None;
+  MonoTime api_hold_until_{};
+  bool shutting_down_ = false;
+  bool place_known_ = false;
+  MonoTime start_at_{};
+  DriveOutput last_output_{};
+  std::int16_t setpoint_raw_ = 0;
+  ProfileState last_state_ = ProfileState::NotReadyToSwitchOn;
+  bool state_reported_ = false;
+  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults_{};
+  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since_{};
+  std::uint64_t steps_ = 0;
+  // Scratch for the master's results (large; kept off the stack of the real-time thread).
+  PkwResult pkw_result_{};
+  SpontaneousReport report_{};
+  CommandReply reply_scratch_{};
+  ControllerEvent event_scratch_{};
+  ControllerSnapshot snapshot_scratch_{};
+};
+
+}  // namespace liftd::uss

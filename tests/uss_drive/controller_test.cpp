@@ -1,0 +1,471 @@
+// The USS controller driven as the runner drives it, without a serial port: a real uss::Master
+// builds every telegram, the fake drive (fake_drive.hpp) takes STW/HSW from those bytes and
+// answers with a reply telegram encoded by the codec (encode_payload / encode_telegram), fed to
+// the master character by character with the character times of 38400 baud; then
+// after_exchange(). The STW each telegram carried is read back from the bytes on the wire.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <vector>
+
+#include "uss/drive/controller.hpp"
+#include "uss/telegram.hpp"
+#include "uss/timing.hpp"
+#include "uss_drive/fake_drive.hpp"
+
+namespace liftd::uss {
+namespace {
+
+using std::chrono::milliseconds;
+using test::Car;
+using test::FakeDrive;
+
+constexpr std::uint8_t kDrive = 1;
+constexpr std::uint32_t kBaud = 38400;
+constexpr std::uint16_t kParameter = 52;  ///< the fake drive's one readable parameter
+constexpr std::uint16_t kParameterValue = 1234;
+
+class CarPosition final : public lift::PositionSource {
+ public:
+  explicit CarPosition(const Car& car) : car_(car) {}
+  std::optional<std::int64_t> position_mm(MonoTime) const noexcept override {
+    if (!valid) return std::nullopt;
+    return std::llround(car_.position_mm);
+  }
+  bool valid = true;
+
+ private:
+  const Car& car_;
+};
+
+MasterConfig master_config() {
+  MasterConfig m;
+  m.baud = kBaud;
+  SlaveConfig drive;
+  drive.address = kDrive;
+  drive.pkw = PkwLength::Four;
+  drive.pzd_words = 2;
+  m.slaves = {drive};
+  m.polling_list = {kDrive};
+  m.mirror_at_start = false;
+  return m;
+}
+
+UssControllerConfig controller_config() {
+  UssControllerConfig c;
+  c.drive_address = kDrive;
+  c.floors_mm = {0, 3000, 6000, 9000};
+  c.travel.slowdown_mm[speed_index(SpeedName::V4)] = 700;
+  c.travel.slowdown_mm[speed_index(SpeedName::V3)] = 400;
+  c.travel.stop_lead_mm = 2;
+  c.link_fault_replies = 3;
+  return c;
+}
+
+class Bus {
+ public:
+  explicit Bus(const UssControllerConfig& config = controller_config())
+      : master(master_config()), position(car), controller(config, master, position, now) {
+    inputs.valid = inputs.safety_chain_closed = true;
+    inputs.doors_closed = inputs.doors_locked = true;
+    controller.on_port(true, now);
+    for (int i = 0; i < 10; ++i) exchange();
+    drain();
+  }
+
+  /// One exchange as the runner does it, then after_exchange().
+  void exchange() {
+    ControllerCommand inputs_command;
+    inputs_command.body = InputsCommand{inputs};
+    EXPECT_TRUE(controller.post(inputs_command));
+    const MonoTime before = now;
+    now = std::max(now, master.send_at());
+    const auto bytes = master.next_telegram(now);
+    ASSERT_GE(bytes.size(), 4U);
+    const std::vector<std::uint8_t> request(bytes.begin(), bytes.end());
+    const MonoTime sent_end = now + transmission_time(kBaud, request.size());
+    master.on_sent(sent_end);
+    const AddressByte adr = parse_adr(request[2]);
+    std::vector<std::uint8_t> reply;
+    if (adr.type == TelegramType::Mirror) {
+      reply = request;  // A 5.3: sent back "ohne irgendwelche Veränderungen"
+    } else {
+      ASSERT_EQ(adr.type, TelegramType::Normal);
+      Pkw pkw;
+      std::array<std::uint16_t, 2> pzd{};
+      ASSERT_TRUE(decode_payload(std::span(request).subspan(3, request.size() - 4), PkwLength::Four,
+                                 2, pkw, pzd));
+      stw_sent.push_back(pzd[0]);
+      hsw_sent.push_back(static_cast<std::int16_t>(pzd[1]));
+      drive.receive(pzd[0], norm.from_raw(static_cast<std::int16_t>(pzd[1])), sent_end - last_);
+      last_ = sent_end;
+      // C 4.2.1.1: read parameter value (AK 1) -> transfer value (AK 1), else no reply (AK 0).
+      Pkw answer;
+      answer.toggle = pkw.toggle;
+      if (pkw.id == 1 && pkw.pnu == kParameter) {
+        answer.id = 1;
+        answer.pnu = kParameter;
+        set_value(answer, PkwLength::Four, PkwWidth::Word, kParameterValue);
+      }
+      const std::array<std::uint16_t, 2> zsw_hiw = {
+          drive.zsw(), static_cast<std::uint16_t>(norm.to_raw(drive.actual()))};
+      std::array<std::uint8_t, kMaxPayloadBytes> payload{};
+      const std::size_t n = encode_payload(answer, PkwLength::Four, zsw_hiw, payload);
+      ASSERT_GT(n, 0U);
+      reply.resize(telegram_bytes(n));
+      ASSERT_EQ(encode_telegram(make_adr(kDrive, TelegramType::Normal), std::span(payload).first(n),
+                                reply),
+                reply.size());
+    }
+    if (drive_answers) {
+      // Characters stamped when complete, the STX 1 ms after our BCC (reply delay, A 5.2.1.1).
+      MonoTime t = sent_end + milliseconds(1);
+      for (std::uint8_t b : reply) {
+        t += character_time(kBaud);
+        master.on_char(RxChar{b, LineError::None}, t);
+      }
+      now = t;
+    } else {
+      now = master.deadline();
+      master.on_time(now);
+    }
+    ASSERT_FALSE(master.awaiting_reply());
+    car.advance(drive.actual(), controller.travel().output().brake_open, now - before);
+    controller.after_exchange(now);
+    drain();
+  }
+
+  bool run_until(const std::function<bool()>& done, int limit_ms = 60000) {
+    const MonoTime end = now + milliseconds(limit_ms);
+    while (now < end) {
+      exchange();
+      if (done()) return true;
+    }
+    return false;
+  }
+
+  void post(std::uint32_t tag, CommandBody body) {
+    ControllerCommand c;
+    c.tag = tag;
+    c.body = body;
+    ASSERT_TRUE(controller.post(c));
+  }
+  /// Posts, runs one exchange and returns the reply to `tag`.
+  CommandReply command(std::uint32_t tag, CommandBody body) {
+    post(tag, body);
+    exchange();
+    for (const CommandReply& r : replies) {
+      if (r.tag == tag) return r;
+    }
+    ADD_FAILURE() << "no reply to " << tag;
+    return {};
+  }
+
+  void drain() {
+    CommandReply r;
+    while (controller.poll_reply(r)) {
+      if (r.tag != 0) replies.push_back(r);
+    }
+    ControllerEvent e;
+    while (controller.poll_event(e)) events.push_back(e);
+  }
+  std::vector<ControllerEvent> travel_events() const {
+    std::vector<ControllerEvent> out;
+    for (const auto& e : events) {
+      if (e.kind == ControllerEvent::Kind::Travel) out.push_back(e);
+    }
+    return out;
+  }
+  int count(ControllerEvent::Kind kind, FaultCode fault) const {
+    int n = 0;
+    for (const auto& e : events) n += e.kind == kind && e.fault == fault ? 1 : 0;
+    return n;
+  }
+  bool idle() { return !controller.travel().busy(); }
+
+  MonoTime now{std::chrono::seconds(1)};
+  Normalisation norm;
+  Master master;
+  FakeDrive drive;
+  Car car;
+  CarPosition position;
+  UssController controller;
+  lift::Inputs inputs;
+  bool drive_answers = true;
+  std::vector<std::uint16_t> stw_sent;
+  std::vector<std::int16_t> hsw_sent;
+  std::vector<CommandReply> replies;
+  std::vector<ControllerEvent> events;
+
+ private:
+  MonoTime last_{std::chrono::seconds(1)};
+};
+
+TEST(UssController, IdleBusShowsTheDriveReadyInTheSnapshot) {
+  Bus bus;
+  const ControllerSnapshot s = bus.controller.snapshot();
+  EXPECT_TRUE(s.port_up);
+  EXPECT_TRUE(s.link_ok);
+  ASSERT_EQ(s.slave_count, 1U);
+  EXPECT_EQ(s.slaves[0].address, kDrive);
+  EXPECT_TRUE(s.slaves[0].responding);
+  EXPECT_EQ(s.slaves[0].good, 10U);
+  EXPECT_EQ(s.stw_sent, 0x047E);
+  EXPECT_EQ(s.drive_state, ProfileState::ReadyToSwitchOn);
+  EXPECT_EQ(s.zsw, bus.drive.zsw());
+  EXPECT_EQ(s.rx.good, 10U);
+  EXPECT_EQ(s.cycles, 9U);
+  EXPECT_GT(s.expected_cycle_time.count(), 0);
+  EXPECT_EQ(s.floor, std::optional<std::size_t>(0));
+  EXPECT_FALSE(s.brake_open);
+  EXPECT_FALSE(s.quiesced);
+  // The drive left its power-up inhibit on our OFF1: both states reported once.
+  std::vector<ProfileState> states;
+  for (const auto& e : bus.events) {
+    if (e.kind == ControllerEvent::Kind::DriveState) states.push_back(e.drive_state);
+  }
+  EXPECT_EQ(states, (std::vector<ProfileState>{ProfileState::SwitchOnInhibit,
+                                               ProfileState::ReadyToSwitchOn}));
+  // The first telegram went out before any machine input had come: OFF2 (nothing may switch
+  // the drive on while the safety chain is unknown), then OFF1.
+  ASSERT_GE(bus.stw_sent.size(), 2U);
+  EXPECT_EQ(bus.stw_sent[0], 0x0404);
+  EXPECT_EQ(bus.stw_sent[1], 0x047E);
+}
+
+TEST(UssController, TravelUpAndDownThroughTheMasterLandWithinTolerance) {
+  Bus bus;
+  ASSERT_EQ(bus.command(7, TravelCommand{2, SpeedName::V4}).code, ReplyCode::Ok);
+  ASSERT_TRUE(bus.run_until([&] { return bus.idle(); }));
+  EXPECT_LE(std::abs(bus.car.position_mm - 6000.0), 5.0) << bus.car.position_mm;
+  // C 5.2.2: V4 = 100 % went out as 4000 hex.
+  EXPECT_NE(std::find(bus.hsw_sent.begin(), bus.hsw_sent.end(), 0x4000), bus.hsw_sent.end());
+  ASSERT_EQ(bus.command(8, TravelCommand{0, SpeedName::V3}).code, ReplyCode::Ok);
+  ASSERT_TRUE(bus.run_until([&] { return bus.idle(); }));
+  EXPECT_LE(std::abs(bus.car.position_mm), 5.0) << bus.car.position_mm;
+  // V3 = -60 % downwards.
+  EXPECT_NE(std::find(bus.hsw_sent.begin(), bus.hsw_sent.end(), bus.norm.to_raw(-60.0)),
+            bus.hsw_sent.end());
+  const auto travel = bus.travel_events();
+  ASSERT_EQ(travel.size(), 4U);
+  EXPECT_EQ(travel[1].travel.type, TravelEvent::Type::Finished);
+  EXPECT_EQ(travel[1].travel.floor, 2U);
+  EXPECT_EQ(travel[3].travel.type, TravelEvent::Type::Finished);
+  EXPECT_EQ(travel[3].travel.floor, 0U);
+  EXPECT_EQ(bus.controller.snapshot().floor, std::optional<std::size_t>(0));
+  EXPECT_EQ(bus.stw_sent.back(), 0x047E);
+}
+
+TEST(UssController, SafetyChainOpenIsOff2InTheVeryNextTelegram) {
+  Bus bus;
+  bus.post(1, TravelCommand{3, SpeedName::V4});
+  ASSERT_TRUE(bus.run_until([&] { return bus.car.position_mm > 2000.0; }));
+  ASSERT_TRUE(bus.controller.snapshot().brake_open);
+  ASSERT_EQ(bus.stw_sent.back(), 0x047F);
+  bus.inputs.safety_chain_closed = false;
+  bus.exchange();  // the controller learns it after this exchange
+  bus.exchange();
+  EXPECT_EQ(bus.stw_sent.back(), 0x0404) << "OFF2 in the next telegram";
+  EXPECT_EQ(bus.hsw_sent.back(), 0);
+  const ControllerSnapshot s = bus.controller.snapshot();
+  EXPECT_FALSE(s.brake_open);
+  EXPECT_FALSE(s.contactors_on);
+  EXPECT_TRUE(s.faults[static_cast<std::size_t>(FaultCode::SafetyChain)]);
+  EXPECT_EQ(bus.count(ControllerEvent::Kind::FaultRaised, FaultCode::SafetyChain), 1);
+  const auto travel = bus.travel_events();
+  ASSERT_EQ(travel.size(), 2U);
+  EXPECT_EQ(travel[1].travel.cause, Cause::SafetyChain);
+  EXPECT_EQ(bus.command(2, TravelCommand{0, SpeedName::V4}).code, ReplyCode::Fault);
+}
+
+TEST(UssController, ReplyFailuresEndTheTravelAtTheConfiguredCount) {
+  Bus bus;
+  bus.post(1, TravelCommand{3, SpeedName::V4});
+  ASSERT_TRUE(bus.run_until([&] { return bus.car.position_mm > 2000.0; }));
+  bus.drive_answers = false;
+  bus.exchange();
+  bus.exchange();
+  EXPECT_EQ(bus.controller.snapshot().phase, Phase::Run) << "two failures: the travel goes on";
+  EXPECT_FALSE(bus.controller.snapshot().slaves[0].responding) << "'sendet nicht' (A 5.2.1.1)";
+  EXPECT_EQ(bus.travel_events().size(), 1U);
+  bus.exchange();  // the third
+  auto travel = bus.travel_events();
+  ASSERT_EQ(travel.size(), 2U);
+  EXPECT_EQ(travel[1].travel.cause, Cause::LinkFault);
+  EXPECT_EQ(to_string(travel[1].travel.cause), "link_down");
+  EXPECT_EQ(bus.count(ControllerEvent::Kind::FaultRaised, FaultCode::LinkFault), 1);
+  EXPECT_FALSE(bus.controller.snapshot().brake_open);
+  bus.exchange();
+  EXPECT_EQ(bus.stw_sent.back(), 0x0404) << "OFF2 for whenever the drive hears us again";
+  bus.drive_answers = true;
+  bus.exchange();
+  bus.exchange();
+  EXPECT_EQ(bus.count(ControllerEvent::Kind::FaultCleared, FaultCode::LinkFault), 1);
+  ASSERT_TRUE(bus.run_until([&] { return bus.stw_sent.back() == 0x047E; }, 200));
+  EXPECT_EQ(bus.travel_events().size(), 2U) << "reported once";
+}
+
+TEST(UssController, DriveFaultEndsTheTravelAndDriveResetAcknowledgesOnARisingEdge) {
+  Bus bus;
+  bus.post(1, TravelCommand{3, SpeedName::V4});
+  ASSERT_TRUE(bus.run_until([&] { return bus.car.position_mm > 2000.0; }));
+  bus.drive.trip();
+  bus.exchange();
+  bus.exchange();
+  auto travel = bus.travel_events();
+  ASSERT_EQ(travel.size(), 2U);
+  EXPECT_EQ(travel[1].travel.cause, Cause::DriveFault);
+  EXPECT_EQ(bus.count(ControllerEvent::Kind::FaultRaised, FaultCode::DriveFault), 1);
+  EXPECT_EQ(bus.controller.snapshot().drive_state, ProfileState::Fault);
+  EXPECT_EQ(bus.command(2, TravelCommand{0, SpeedName::V4}).code, ReplyCode::Fault);
+  bus.drive.clear_fault_cause();
+  bus.exchange();
+  EXPECT_EQ(bus.controller.snapshot().drive_state, ProfileState::Fault) << "needs the edge";
+  const std::size_t from = bus.stw_sent.size();
+  EXPECT_EQ(bus.command(3, DriveResetCommand{}).code, ReplyCode::Ok);
+  for (int i = 0; i < 5; ++i) bus.exchange();
+  std::vector<std::uint16_t> words(bus.stw_sent.begin() + static_cast<std::ptrdiff_t>(from),
+                                   bus.stw_sent.end());
+  // On the wire: the 0 the drive had seen, the 0 once more after the command, the 1, then 0.
+  ASSERT_GE(words.size(), 4U);
+  EXPECT_EQ(words[0], 0x047E);
+  EXPECT_EQ(words[1], 0x047E);
+  EXPECT_EQ(words[2], 0x04FE);
+  EXPECT_EQ(words[3], 0x047E);
+  EXPECT_EQ(bus.count(ControllerEvent::Kind::FaultCleared, FaultCode::DriveFault), 1);
+  ASSERT_EQ(bus.command(4, TravelCommand{0, SpeedName::V4}).code, ReplyCode::Ok);
+  ASSERT_TRUE(bus.run_until([&] { return bus.idle(); }));
+  EXPECT_LE(std::abs(bus.car.position_mm), 5.0);
+}
+
+TEST(UssController, ShutdownLandsTheTravelThenQuiesces) {
+  Bus bus;
+  bus.post(1, TravelCommand{3, SpeedName::V4});
+  ASSERT_TRUE(bus.run_until([&] { return bus.car.position_mm > 1500.0; }));
+  EXPECT_EQ(bus.command(2, ShutdownCommand{false}).code, ReplyCode::Ok);
+  EXPECT_TRUE(bus.controller.snapshot().shutting_down);
+  EXPECT_FALSE(bus.controller.snapshot().quiesced);
+  ASSERT_TRUE(bus.run_until([&] { return bus.controller.snapshot().quiesced; }));
+  EXPECT_LE(std::abs(bus.car.position_mm - 3000.0), 5.0) << "landed at the next floor ahead";
+  EXPECT_EQ(bus.stw_sent.back(), 0x047E) << "OFF1";
+  const auto travel = bus.travel_events();
+  ASSERT_EQ(travel.size(), 2U);
+  EXPECT_EQ(travel[1].travel.type, TravelEvent::Type::Finished);
+  EXPECT_EQ(bus.command(3, TravelCommand{0, SpeedName::V4}).code, ReplyCode::NotReady);
+  EXPECT_TRUE(bus.controller.snapshot().quiesced);
+}
+
+TEST(UssController, ForcedShutdownCoastsAtOnce) {
+  Bus bus;
+  bus.post(1, TravelCommand{3, SpeedName::V4});
+  ASSERT_TRUE(bus.run_until([&] { return bus.car.position_mm > 1500.0; }));
+  bus.post(2, ShutdownCommand{true});
+  bus.exchange();
+  bus.exchange();
+  EXPECT_EQ(bus.stw_sent.back(), 0x0404);
+  const auto travel = bus.travel_events();
+  ASSERT_EQ(travel.size(), 2U);
+  EXPECT_EQ(travel[1].travel.cause, Cause::Shutdown);
+  ASSERT_TRUE(bus.run_until([&] { return bus.controller.snapshot().quiesced; }, 500));
+}
+
+TEST(UssController, ParameterReadAndMirrorRepliesCarryTheirResults) {
+  Bus bus;
+  ParameterCommand read;
+  read.address = kDrive;
+  read.request.id = 1;  // C 4.2.1.1: request parameter value
+  read.request.pnu = kParameter;
+  bus.post(9, read);
+  ASSERT_TRUE(bus.run_until(
+      [&] {
+        return std::any_of(bus.replies.begin(), bus.replies.end(),
+                           [](const CommandReply& r) { return r.tag == 9; });
+      },
+      200));
+  const CommandReply& r = bus.replies.back();
+  EXPECT_EQ(r.code, ReplyCode::Ok);
+  ASSERT_TRUE(r.pkw.has_value());
+  EXPECT_EQ(r.pkw->outcome, PkwResult::Outcome::Done);
+  EXPECT_EQ(value(r.pkw->reply, PkwLength::Four, PkwWidth::Word), kParameterValue);
+
+  read.address = 5;
+  EXPECT_EQ(bus.command(10, read).code, ReplyCode::BadRequest);
+
+  bus.post(11, MirrorCommand{kDrive});
+  ASSERT_TRUE(bus.run_until(
+      [&] {
+        return std::any_of(bus.replies.begin(), bus.replies.end(),
+                           [](const CommandReply& c) { return c.tag == 11; });
+      },
+      200));
+  ASSERT_TRUE(bus.replies.back().mirror.has_value());
+  EXPECT_TRUE(bus.replies.back().mirror->ok);
+}
+
+TEST(UssController, CallsAreServedInOrder) {
+  Bus bus;
+  EXPECT_EQ(bus.command(1, CallCommand{true, 1}).code, ReplyCode::Ok);
+  EXPECT_EQ(bus.command(2, CallCommand{true, 3}).code, ReplyCode::Ok);
+  ASSERT_TRUE(
+      bus.run_until([&] { return bus.controller.snapshot().call_count == 0 && bus.idle(); }));
+  EXPECT_LE(std::abs(bus.car.position_mm - 9000.0), 5.0);
+  std::vector<std::size_t> served;
+  for (const auto& e : bus.events) {
+    if (e.kind == ControllerEvent::Kind::CallServed) served.push_back(e.floor);
+  }
+  EXPECT_EQ(served, (std::vector<std::size_t>{1, 3}));
+}
+
+TEST(UssController, AutoRelevelBringsASinkingCarBack) {
+  Bus bus;
+  bus.car.position_mm = 3000.0;
+  bus.exchange();
+  bus.car.position_mm = 2980.0;  // 20 mm below floor 1: beyond the 15 mm threshold
+  ASSERT_TRUE(bus.run_until(
+      [&] { return bus.controller.snapshot().travel_kind == TravelKind::Relevel; }, 100));
+  ASSERT_TRUE(bus.run_until([&] { return bus.idle(); }));
+  EXPECT_LE(std::abs(bus.car.position_mm - 3000.0), 5.0);
+}
+
+TEST(UssController, InspectionFromTheApiIsHoldToRun) {
+  Bus bus;
+  bus.car.position_mm = 4000.0;
+  // Held: the command repeats within inspection_hold_ms (500 ms).
+  for (int i = 0; i < 150; ++i) {
+    if (i % 20 == 0) bus.post(0, InspectionCommand{true, lift::Direction::Up});
+    bus.exchange();
+  }
+  EXPECT_EQ(bus.controller.snapshot().travel_kind, TravelKind::Inspection);
+  EXPECT_EQ(bus.hsw_sent.back(), bus.norm.to_raw(30.0)) << "VI";
+  const double moved_to = bus.car.position_mm;
+  EXPECT_GT(moved_to, 4100.0);
+  // Not repeated: the hold runs out and the car stops on the drive's ramp.
+  ASSERT_TRUE(bus.run_until([&] { return bus.idle(); }, 2000));
+  EXPECT_LT(bus.car.position_mm - moved_to, 300.0 * 0.5 + 60.0);
+  EXPECT_EQ(bus.stw_sent.back(), 0x047E);
+  const auto travel = bus.travel_events();
+  ASSERT_EQ(travel.size(), 2U);
+  EXPECT_EQ(travel[1].travel.type, TravelEvent::Type::Finished);
+  // A travel is refused while inspection is on.
+  EXPECT_EQ(bus.command(5, TravelCommand{0, SpeedName::V4}).code, ReplyCode::NotReady);
+}
+
+TEST(UssController, RejectsAConfigItCannotRun) {
+  Master master(master_config());
+  Car car;
+  CarPosition position(car);
+  UssControllerConfig config = controller_config();
+  config.drive_address = 2;
+  EXPECT_THROW(UssController(config, master, position, MonoTime{}), std::invalid_argument);
+  config = controller_config();
+  config.travel.speed_percent[speed_index(SpeedName::V0)] = 0.0;
+  EXPECT_THROW(UssController(config, master, position, MonoTime{}), std::invalid_argument);
+  config = controller_config();
+  config.floors_mm = {0};
+  EXPECT_THROW(UssController(config, master, position, MonoTime{}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace liftd::uss
