@@ -4,6 +4,7 @@
 
 #include "daemon/hydraulic_lift.hpp"
 #include "daemon/lift_app.hpp"
+#include "daemon/uss_lift.hpp"
 
 namespace liftd::daemon {
 
@@ -14,10 +15,10 @@ std::unique_ptr<LiftRunner> make_lift(Daemon& daemon, const config::Config& conf
     case drive::Kind::Sch001:
       return std::make_unique<HydraulicLift>(daemon, config, simulate);
     case drive::Kind::Uss:
-      break;
+      return std::make_unique<UssLift>(daemon, config, simulate);
   }
   throw std::invalid_argument("drive.kind \"" + std::string(drive::to_string(config.drive.kind)) +
-                              "\" is not available in this build; use \"dcp\" or \"sch001\"");
+                              "\" is not available in this build");
 }
 
 }  // namespace liftd::daemon

@@ -1,6 +1,7 @@
-// One factory turns drive.kind into the daemon's lift: the DCP lift (lift_app.*) or the
-// hydraulic SCH001 lift (hydraulic_lift.*). Each builds its controller, its runner, its API
-// backend and, with --simulate, its simulated drive, and registers them with the daemon.
+// One factory turns drive.kind into the daemon's lift: the DCP lift (lift_app.*), the
+// hydraulic SCH001 lift (hydraulic_lift.*) or the USS lift (uss_lift.*). Each builds its
+// controller, its runner, its API backend and, with --simulate, its simulated drive, and registers
+// them with the daemon.
 #pragma once
 
 #include <memory>

@@ -129,22 +129,13 @@ sim::CardSimConfig card_sim_config(const config::Config& c) {
   return out;
 }
 
-sim::SimIoConfig card_io_config(const config::Config& c) {
-  sim::SimIoConfig out;
-  if (!c.floors.empty()) {
-    out.shaft_bottom_mm = static_cast<double>(c.floors.front().level_mm);
-    out.shaft_top_mm = static_cast<double>(c.floors.back().level_mm);
-  }
-  return out;
-}
-
 }  // namespace
 
 SimulatedCard::SimulatedCard(const config::Config& config, can::CanSocket card_end)
     : socket_(std::move(card_end)),
       card_(card_sim_config(config), mono_now()),
-      io_(card_io_config(config), mono_now()) {
-  encoder_.mm_.store(std::llround(card_.state().position_mm), std::memory_order_relaxed);
+      board_(config, mono_now()) {
+  encoder_.set(std::llround(card_.state().position_mm));
 }
 
 SimulatedCard::~SimulatedCard() {
@@ -196,14 +187,14 @@ void SimulatedCard::loop() {
     }
     if (const auto frame = card_.poll(now)) (void)socket_.write(*frame);
     const auto& s = card_.state();
-    encoder_.mm_.store(std::llround(s.position_mm), std::memory_order_relaxed);
-    io_.set_car(s.velocity_mps != 0.0, s.position_mm, now);
+    encoder_.set(std::llround(s.position_mm));
+    board_.io().set_car(s.velocity_mps != 0.0, s.position_mm, now);
   }
 }
 
 lift::Inputs SimulatedCard::inputs(MonoTime now) {
   std::lock_guard<std::mutex> lock(mutex_);
-  return io_.inputs(now);
+  return board_.io().inputs(now);
 }
 
 void SimulatedCard::log_violations() {
@@ -256,38 +247,20 @@ api::Result SimulatedCard::apply(const api::SimRequest& request, MonoTime now) {
       card_.drift(request.drift_mm);
       break;
     case SimAction::SafetyChainOpen:
-      chain_open_ = request.on;
-      io_.set_safety_chain_open(request.on);
-      break;
     case SimAction::DoorReversal:
-      io_.inject_door_reversal(now);
-      break;
     case SimAction::OpenDoors:
-      io_.open_doors(now);
-      break;
     case SimAction::CloseDoors:
-      io_.close_doors(now);
-      break;
     case SimAction::ObstructDoors:
-      obstructed_ = request.on;
-      io_.set_door_obstructed(request.on, now);
+      (void)board_.apply(request, now);
       break;
     case SimAction::AdvanceWarning:
     case SimAction::ReplyFault:
     case SimAction::ClearReplyFaults:
     case SimAction::ChannelFault:
     case SimAction::RefuseTarget:
-      return Result::fail(
-          api::ErrorCode::BadRequest,
-          "\"" + std::string(api::kSimActions[static_cast<std::size_t>(request.action)]) +
-              "\" is for the simulated DCP drive; this lift is SCH001 (hydraulic)",
-          "action");
+      return sim_action_refused(request, "SCH001 (hydraulic)");
   }
-  io_.advance(now);
-  log::event(
-      log::Level::info, "sim", "sim_injected",
-      {{"action", std::string(api::kSimActions[static_cast<std::size_t>(request.action)])}},
-      "simulated lift: " + std::string(api::kSimActions[static_cast<std::size_t>(request.action)]));
+  journal_sim_action(request);
   return Result::ok(state_json_locked());
 }
 
@@ -298,15 +271,14 @@ nlohmann::json SimulatedCard::state_json() const {
 
 nlohmann::json SimulatedCard::state_json_locked() const {
   const auto& s = card_.state();
-  return {{"card", card_json(s.status, true)},
-          {"silent", s.silent},
-          {"cold_oil", s.cold_oil},
-          {"sink_mm_per_s", s.sink_mm_per_s},
-          {"safety_chain_open", chain_open_},
-          {"doors", sim::to_string(io_.door_state())},
-          {"door_obstructed", obstructed_},
-          {"position_mm", std::llround(s.position_mm)},
-          {"violations", s.violations}};
+  nlohmann::json out = {{"card", card_json(s.status, true)},
+                        {"silent", s.silent},
+                        {"cold_oil", s.cold_oil},
+                        {"sink_mm_per_s", s.sink_mm_per_s},
+                        {"position_mm", std::llround(s.position_mm)},
+                        {"violations", s.violations}};
+  board_.add_state(out);
+  return out;
 }
 
 // ---- the backend ----
@@ -410,45 +382,22 @@ nlohmann::json Sch001Backend::config() {
 }
 
 void Sch001Backend::send(sch001::CommandBody body, api::Responder done) {
-  const std::uint32_t tag = pending_.add(std::move(done), mono_now() + kReplyGrace);
-  if (!controller_.post(sch001::ControllerCommand{tag, std::move(body)})) {
-    pending_.complete(tag, Result::fail(api::ErrorCode::Busy,
-                                        "the CAN thread's command queue is full; try again"));
-  }
+  (void)post_command<sch001::ControllerCommand>(controller_, pending_, std::move(body),
+                                                std::move(done), kReplyGrace, "CAN");
 }
 
 void Sch001Backend::poll(MonoTime now) {
   sch001::CommandReply r;
-  while (controller_.poll_reply(r)) {
-    if (r.code == sch001::ReplyCode::Ok) {
-      nlohmann::json result = nlohmann::json::object();
-      if (!r.detail.empty()) result["detail"] = std::string(r.detail);
-      if (r.floor) result["floor"] = *r.floor;
-      pending_.complete(r.tag, Result::ok(std::move(result)));
-      continue;
-    }
-    const api::ErrorCode code = r.code == sch001::ReplyCode::Busy ? api::ErrorCode::Busy
-                                : r.code == sch001::ReplyCode::BadRequest
-                                    ? api::ErrorCode::BadRequest
-                                : r.code == sch001::ReplyCode::Fault ? api::ErrorCode::Fault
-                                                                     : api::ErrorCode::NotReady;
-    pending_.complete(r.tag, Result::fail(code, std::string(r.detail)));
-  }
+  while (controller_.poll_reply(r)) pending_.complete(r.tag, reply_result(r));
   pending_.expire(now, "the CAN thread did not answer; see the journal");
 }
 
 void Sch001Backend::update_inputs(const api::InputUpdate& update, api::Responder done) {
-  if (auto refused = inputs_.update(update)) {
-    done(std::move(*refused));
-    return;
-  }
-  if (const auto now = inputs_.current()) send_inputs(*now);
-  done(Result::ok(api::to_json(inputs_.from_api())));
+  done(inputs_.take(update, [this](const lift::Inputs& now) { send_inputs(now); }));
 }
 
 void Sch001Backend::simulated_inputs(const lift::Inputs& sample) {
-  inputs_.simulated_sample(sample);
-  if (const auto now = inputs_.current()) send_inputs(*now);
+  inputs_.take_sample(sample, [this](const lift::Inputs& now) { send_inputs(now); });
 }
 
 void Sch001Backend::send_inputs(const lift::Inputs& inputs) {
@@ -480,19 +429,14 @@ void Sch001Backend::relevel(api::Responder done) {
 void Sch001Backend::inspection(bool on, const std::string& direction, api::Responder done) {
   sch001::InspectionCommand cmd;
   cmd.on = on;
-  cmd.direction = direction == "up"     ? lift::Direction::Up
-                  : direction == "down" ? lift::Direction::Down
-                                        : lift::Direction::None;
+  cmd.direction = direction_of(direction);
   send(cmd, std::move(done));
 }
 
 void Sch001Backend::calls(const std::string& action, std::optional<int> floor,
                           api::Responder done) {
   if (action == "list") {
-    const auto s = controller_.snapshot();
-    nlohmann::json list = nlohmann::json::array();
-    for (std::size_t i = 0; i < s.call_count; ++i) list.push_back(s.calls[i]);
-    done(Result::ok({{"calls", list}}));
+    done(Result::ok({{"calls", calls_list(controller_.snapshot())}}));
     return;
   }
   sch001::CallCommand cmd;
@@ -570,27 +514,14 @@ HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool 
   }
   daemon.add_component({"sch001", [this] { return start_runner(); }, [this] { stop_runner(); },
                         [this](std::function<void()> done) { wind_down(std::move(done)); }});
-  daemon.add_component({"api", [this] { return start_api(); }, [this] { stop_api(); }});
-  daemon.set_progress_probe([this] {
-    const std::uint64_t p = runner_->progress();
-    const bool advanced = p != last_progress_;
-    last_progress_ = p;
-    return advanced;
-  });
-  daemon.set_config_applier([this](const config::Config& next) {
-    try {
-      server_->reconfigure(api_reload_config(next));
-    } catch (const std::exception& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  });
+  register_api(daemon, *server_);
+  daemon.set_progress_probe(progress_probe([this] { return runner_->progress(); }));
   daemon.set_running_status(simulate_ ? "simulated hydraulic lift running; API on " + socket_path_
                                       : "SCH001 card link starting on " + config.can.interface);
 }
 
 HydraulicLift::~HydraulicLift() {
-  stop_api();
+  if (server_) server_->stop();
   stop_runner();
   if (sim_) sim_->stop();
 }
@@ -632,15 +563,9 @@ bool HydraulicLift::start_runner() {
                std::string("cannot start the CAN thread: ") + std::strerror(error));
     return false;
   }
-  if (config_.rt.require_realtime && !runner_->thread_status().realtime) {
-    log::event(log::Level::error, "rt", "realtime_refused", {},
-               "rt.require_realtime is true but the CAN thread runs without real time: " +
-                   runner_->thread_status().describe());
+  if (!accept_rt_thread(config_, runner_->thread_status(), simulate_, "CAN")) {
     runner_->stop();
     return false;
-  }
-  if (const std::string line = runner_->thread_status().describe(); !line.empty()) {
-    log::event(log::Level::warn, "rt", "rt_degraded", {}, line);
   }
   log::event(log::Level::info, "sch001", "can_started", {{"interface", runner_->config().endpoint}},
              "SCH001 card link running on " + runner_->config().endpoint);
@@ -655,20 +580,6 @@ void HydraulicLift::stop_runner() {
   poll_timer_.cancel();
   runner_->stop();
   poll();  // the last events
-}
-
-bool HydraulicLift::start_api() {
-  try {
-    server_->start();
-  } catch (const std::exception& e) {
-    log::event(log::Level::error, "api", "api_start_failed", {}, e.what());
-    return false;
-  }
-  return true;
-}
-
-void HydraulicLift::stop_api() {
-  if (server_) server_->stop();
 }
 
 void HydraulicLift::schedule_poll() {

@@ -55,23 +55,14 @@ class SimulatedCard {
   void log_violations();
 
  private:
-  class Encoder final : public lift::PositionSource {
-   public:
-    std::optional<std::int64_t> position_mm(MonoTime) const noexcept override {
-      return mm_.load(std::memory_order_relaxed);
-    }
-    std::atomic<std::int64_t> mm_{0};
-  };
   void loop();
   nlohmann::json state_json_locked() const;  ///< state_json() with mutex_ held
 
   can::CanSocket socket_;
-  mutable std::mutex mutex_;  ///< guards card_, io_ and bus_off_ (the simulator's thread and io)
+  mutable std::mutex mutex_;  ///< guards card_, board_ and bus_off_ (the simulator's thread and io)
   sim::Sch001CardSim card_;
-  sim::SimulatedIo io_;
-  Encoder encoder_;
-  bool chain_open_ = false;
-  bool obstructed_ = false;
+  SimulatedBoard board_;
+  SimulatedEncoder encoder_;
   bool bus_off_ = false;  ///< inject one bus-off error frame (then back to normal)
   std::atomic<bool> stop_{false};
   std::thread thread_;
@@ -137,8 +128,6 @@ class HydraulicLift final : public LiftRunner {
   void check_interface() const;
   bool start_runner();
   void stop_runner();
-  bool start_api();
-  void stop_api();
   void schedule_poll();
   void poll();
   void handle_event(const sch001::ControllerEvent& event);
@@ -158,7 +147,6 @@ class HydraulicLift final : public LiftRunner {
   std::unique_ptr<api::Server> server_;
   asio::steady_timer poll_timer_;
   bool running_ = false;
-  std::uint64_t last_progress_ = 0;
   StatePublisher publisher_;
   MonoTime last_sim_inputs_{};
   sch001::CardLinkCounters logged_counters_{};

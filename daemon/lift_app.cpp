@@ -15,6 +15,7 @@
 #include "common/mono_time.hpp"
 #include "common/version.hpp"
 #include "daemon/lift_common.hpp"
+#include "daemon/lift_core.hpp"
 #include "daemon/simulated_lift.hpp"
 #include "dcp/charset.hpp"
 #include "dcp/messages.hpp"
@@ -381,14 +382,7 @@ void LiftApp::log_cycle_events() {
       }
       continue;
     }
-    const bool bad =
-        e.kind == rt::CycleEventKind::PortLost || e.kind == rt::CycleEventKind::PortOpenFailed;
-    log::event(bad ? log::Level::warn : log::Level::info, "rt",
-               e.kind == rt::CycleEventKind::PortLost         ? "port_lost"
-               : e.kind == rt::CycleEventKind::PortOpenFailed ? "port_open_failed"
-               : e.kind == rt::CycleEventKind::PortOpened     ? "port_opened"
-                                                              : "thread_status",
-               {}, rt::describe(e));
+    journal_port_event(e);
   }
 }
 

@@ -324,17 +324,11 @@ void LiftBackend::load(int percent, api::Responder done) {
 }
 
 void LiftBackend::update_inputs(const api::InputUpdate& update, api::Responder done) {
-  if (auto refused = inputs_.update(update)) {
-    done(std::move(*refused));
-    return;
-  }
-  if (const auto now = inputs_.current()) send_inputs(*now);
-  done(Result::ok(api::to_json(inputs_.from_api())));
+  done(inputs_.take(update, [this](const lift::Inputs& now) { send_inputs(now); }));
 }
 
 void LiftBackend::simulated_inputs(const lift::Inputs& sample) {
-  inputs_.simulated_sample(sample);
-  if (const auto now = inputs_.current()) send_inputs(*now);
+  inputs_.take_sample(sample, [this](const lift::Inputs& now) { send_inputs(now); });
 }
 
 void LiftBackend::send_inputs(const lift::Inputs& inputs) {

@@ -135,4 +135,70 @@ std::string snake(std::string_view text) {
   return out;
 }
 
+namespace {
+
+sim::SimIoConfig board_config(const config::Config& c) {
+  sim::SimIoConfig out;
+  if (!c.floors.empty()) {
+    out.shaft_bottom_mm = static_cast<double>(c.floors.front().level_mm);
+    out.shaft_top_mm = static_cast<double>(c.floors.back().level_mm);
+  }
+  return out;
+}
+
+std::string action_name(const api::SimRequest& request) {
+  return std::string(api::kSimActions[static_cast<std::size_t>(request.action)]);
+}
+
+}  // namespace
+
+SimulatedBoard::SimulatedBoard(const config::Config& config, MonoTime now)
+    : io_(board_config(config), now) {}
+
+bool SimulatedBoard::apply(const api::SimRequest& request, MonoTime now) {
+  using api::SimAction;
+  switch (request.action) {
+    case SimAction::SafetyChainOpen:
+      chain_open_ = request.on;
+      io_.set_safety_chain_open(request.on);
+      break;
+    case SimAction::DoorReversal:
+      io_.inject_door_reversal(now);
+      break;
+    case SimAction::OpenDoors:
+      io_.open_doors(now);
+      break;
+    case SimAction::CloseDoors:
+      io_.close_doors(now);
+      break;
+    case SimAction::ObstructDoors:
+      obstructed_ = request.on;
+      io_.set_door_obstructed(request.on, now);
+      break;
+    default:
+      return false;
+  }
+  io_.advance(now);
+  return true;
+}
+
+void SimulatedBoard::add_state(nlohmann::json& out) const {
+  out["safety_chain_open"] = chain_open_;
+  out["doors"] = sim::to_string(io_.door_state());
+  out["door_obstructed"] = obstructed_;
+}
+
+api::Result sim_action_refused(const api::SimRequest& request, std::string_view this_lift) {
+  return api::Result::fail(api::ErrorCode::BadRequest,
+                           "\"" + action_name(request) +
+                               "\" is for the simulator of another drive kind; this lift is " +
+                               std::string(this_lift),
+                           "action");
+}
+
+void journal_sim_action(const api::SimRequest& request) {
+  log::event(log::Level::info, "sim", "sim_injected", {{"action", action_name(request)}},
+             "simulated lift: " + action_name(request));
+}
+
 }  // namespace liftd::daemon

@@ -3,6 +3,8 @@
 // API server, and applying a reloaded configuration to the server.
 #pragma once
 
+#include <atomic>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -12,6 +14,7 @@
 #include "config/config.hpp"
 #include "lift/inputs.hpp"
 #include "lift/position_source.hpp"
+#include "sim/sim_io.hpp"
 
 namespace liftd::daemon {
 
@@ -45,6 +48,20 @@ class MachineInputs {
   std::optional<lift::Inputs> current() const;
   /// The API's inputs as merged so far (the `inputs` command's result).
   const api::Inputs& from_api() const noexcept { return api_; }
+  /// The `inputs` command of every backend: takes the update, hands `send` what the controller
+  /// should see now, and gives the command's result (or the refusal, changing nothing).
+  template <typename Send>
+  api::Result take(const api::InputUpdate& update, Send&& send) {
+    if (auto refused = this->update(update)) return std::move(*refused);
+    if (const auto now = current()) send(*now);
+    return api::Result::ok(api::to_json(from_api()));
+  }
+  /// A sample of the simulated machine, handed to `send` with the API's shaft signals at once.
+  template <typename Send>
+  void take_sample(const lift::Inputs& sample, Send&& send) {
+    simulated_sample(sample);
+    if (const auto now = current()) send(*now);
+  }
 
  private:
   const config::Config& config_;
@@ -53,6 +70,43 @@ class MachineInputs {
   api::Inputs api_{};
   std::optional<lift::Inputs> sample_;
 };
+/// A simulated car's encoder: the simulator's thread stores the position, the controller's thread
+/// reads it (lock-free).
+class SimulatedEncoder final : public lift::PositionSource {
+ public:
+  std::optional<std::int64_t> position_mm(MonoTime) const noexcept override {
+    return mm_.load(std::memory_order_relaxed);
+  }
+  void set(std::int64_t mm) noexcept { mm_.store(mm, std::memory_order_relaxed); }
+
+ private:
+  std::atomic<std::int64_t> mm_{0};
+};
+
+/// The simulated I/O board of every simulated lift (--simulate): safety chain, doors and shaft
+/// (from the floors), and the `sim` actions that act on it whatever the drive.
+class SimulatedBoard {
+ public:
+  SimulatedBoard(const config::Config& config, MonoTime now);
+  /// The board's actions (safety chain, door reversal, open, close, obstruct): applied, true;
+  /// any other action, false (the drive's simulator takes it).
+  bool apply(const api::SimRequest& request, MonoTime now);
+  sim::SimulatedIo& io() noexcept { return io_; }
+  const sim::SimulatedIo& io() const noexcept { return io_; }
+  /// The board's part of a `sim` result: safety_chain_open, doors, door_obstructed.
+  void add_state(nlohmann::json& out) const;
+
+ private:
+  sim::SimulatedIo io_;
+  bool chain_open_ = false;  ///< injected safety chain opening
+  bool obstructed_ = false;  ///< injected door obstruction
+};
+/// `sim` with an action of another drive kind's simulator: bad_request, naming the action and
+/// this lift's kind.
+api::Result sim_action_refused(const api::SimRequest& request, std::string_view this_lift);
+/// Journals a `sim` action that was applied.
+void journal_sim_action(const api::SimRequest& request);
+
 /// The sequencers' inputs from the API's inputs (every drive kind reads the same machine).
 lift::Inputs to_lift(const api::Inputs& inputs);
 /// "state changed" -> "state_changed": journal field values are snake_case words.

@@ -1,5 +1,6 @@
 #include "daemon/lift_core.hpp"
 
+#include "daemon/lift_common.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -36,7 +37,14 @@ void StatePublisher::publish(api::Server& server, api::StatusSnapshot status, Mo
   if (last_ && status == *last_) return;
   // Position alone changes often while moving: rate-limited; anything else goes out at once.
   api::StatusSnapshot without_position = status;
-  if (last_) without_position.position_mm = last_->position_mm;
+  if (last_) {
+    without_position.position_mm = last_->position_mm;
+    for (const std::string& key : continuous_) {
+      if (without_position.details.contains(key) && last_->details.contains(key)) {
+        without_position.details[key] = last_->details[key];
+      }
+    }
+  }
   const bool discrete = !last_ || !(without_position == *last_);
   if (!discrete && now - last_publish_ < interval_) return;
   server.publish("state", api::to_json(status));
@@ -113,6 +121,69 @@ void report_call_served(api::Server& server, std::size_t floor) {
   log::event(log::Level::info, "travel", "call_served", {{"floor", std::to_string(floor)}},
              "call served: floor " + std::to_string(floor));
   server.publish("call_served", {{"floor", floor}});
+}
+
+lift::Direction direction_of(std::string_view name) noexcept {
+  return name == "up"     ? lift::Direction::Up
+         : name == "down" ? lift::Direction::Down
+                          : lift::Direction::None;
+}
+
+void register_api(Daemon& daemon, api::Server& server) {
+  api::Server* s = &server;
+  daemon.add_component({"api",
+                        [s] {
+                          try {
+                            s->start();
+                          } catch (const std::exception& e) {
+                            log::event(log::Level::error, "api", "api_start_failed", {}, e.what());
+                            return false;
+                          }
+                          return true;
+                        },
+                        [s] { s->stop(); }});
+  daemon.set_config_applier([s](const config::Config& next) {
+    try {
+      s->reconfigure(api_reload_config(next));
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  });
+}
+
+std::function<bool()> progress_probe(std::function<std::uint64_t()> progress) {
+  return [progress = std::move(progress), last = std::uint64_t{0}]() mutable {
+    const std::uint64_t p = progress();
+    const bool advanced = p != last;
+    last = p;
+    return advanced;
+  };
+}
+
+bool accept_rt_thread(const config::Config& config, const rt::RtThreadStatus& status, bool simulate,
+                      std::string_view thread) {
+  if (config.rt.require_realtime && !simulate && !status.realtime) {
+    log::event(log::Level::error, "rt", "realtime_refused", {},
+               "rt.require_realtime is true but the " + std::string(thread) +
+                   " thread runs without real time: " + status.describe());
+    return false;
+  }
+  if (const std::string line = status.describe(); !line.empty()) {
+    log::event(log::Level::warn, "rt", "rt_degraded", {}, line);
+  }
+  return true;
+}
+
+void journal_port_event(const rt::CycleEvent& e) {
+  const bool bad =
+      e.kind == rt::CycleEventKind::PortLost || e.kind == rt::CycleEventKind::PortOpenFailed;
+  log::event(bad ? log::Level::warn : log::Level::info, "rt",
+             e.kind == rt::CycleEventKind::PortLost         ? "port_lost"
+             : e.kind == rt::CycleEventKind::PortOpenFailed ? "port_open_failed"
+             : e.kind == rt::CycleEventKind::PortOpened     ? "port_opened"
+                                                            : "thread_status",
+             {}, rt::describe(e));
 }
 
 }  // namespace liftd::daemon

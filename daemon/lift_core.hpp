@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "api/backend.hpp"
 #include "api/server.hpp"
@@ -19,6 +20,7 @@
 #include "daemon/daemon.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
+#include "rt/cycle_runner.hpp"
 #include "rt/rt_thread.hpp"
 
 namespace liftd::daemon {
@@ -31,6 +33,8 @@ class PendingReplies {
   std::uint32_t add(api::Responder done, MonoTime deadline);
   /// Answers the request of `tag` (false when there is none: answered or expired already).
   bool complete(std::uint32_t tag, api::Result result);
+  /// True while the request of `tag` waits for its reply.
+  bool waiting(std::uint32_t tag) const { return pending_.count(tag) != 0; }
   /// Drops a request whose command never reached the controller.
   void forget(std::uint32_t tag) { pending_.erase(tag); }
   /// Fails every request past its deadline with `message` (an internal error).
@@ -46,16 +50,18 @@ class PendingReplies {
 };
 
 /// Publishes `state` events: at once for a discrete change, coalesced to api.state_rate_hz when
-/// only the position moved.
+/// only the position (or a `continuous` member of the kind's details, e.g. a speed) moved.
 class StatePublisher {
  public:
-  explicit StatePublisher(int state_rate_hz)
+  explicit StatePublisher(int state_rate_hz, std::vector<std::string> continuous = {})
       : interval_(std::chrono::nanoseconds(std::chrono::seconds(1)) /
-                  (state_rate_hz > 0 ? state_rate_hz : 1)) {}
+                  (state_rate_hz > 0 ? state_rate_hz : 1)),
+        continuous_(std::move(continuous)) {}
   void publish(api::Server& server, api::StatusSnapshot status, MonoTime now);
 
  private:
   std::chrono::nanoseconds interval_;
+  std::vector<std::string> continuous_;
   std::optional<api::StatusSnapshot> last_;
   MonoTime last_publish_{};
 };
@@ -95,6 +101,63 @@ class WindDown {
   MonoTime until_{};
   bool forced_ = false;
 };
+
+/// A controller's reply as the API's result: ok with its `detail` and `floor`, or the error its
+/// code stands for. Every controller's CommandReply has `code` (Ok, NotReady, Busy, BadRequest,
+/// Fault), `detail` and `floor`.
+template <typename Reply>
+api::Result reply_result(const Reply& r) {
+  using Code = decltype(r.code);
+  if (r.code == Code::Ok) {
+    nlohmann::json result = nlohmann::json::object();
+    if (!r.detail.empty()) result["detail"] = std::string(r.detail);
+    if (r.floor) result["floor"] = *r.floor;
+    return api::Result::ok(std::move(result));
+  }
+  const api::ErrorCode code = r.code == Code::Busy         ? api::ErrorCode::Busy
+                              : r.code == Code::BadRequest ? api::ErrorCode::BadRequest
+                              : r.code == Code::Fault      ? api::ErrorCode::Fault
+                                                           : api::ErrorCode::NotReady;
+  return api::Result::fail(code, std::string(r.detail));
+}
+
+/// Posts `body` to a controller's command queue under a new tag of `pending`; a full queue
+/// answers `busy` at once. Returns the tag (0 when refused).
+template <typename Command, typename Controller, typename Body>
+std::uint32_t post_command(Controller& controller, PendingReplies& pending, Body&& body,
+                           api::Responder done, std::chrono::nanoseconds grace,
+                           std::string_view thread) {
+  const std::uint32_t tag = pending.add(std::move(done), mono_now() + grace);
+  if (!controller.post(Command{tag, std::forward<Body>(body)})) {
+    pending.complete(tag, api::Result::fail(api::ErrorCode::Busy,
+                                            "the " + std::string(thread) +
+                                                " thread's command queue is full; try again"));
+    return 0;
+  }
+  return tag;
+}
+
+/// "up" / "down" / anything else as a direction (the `inspection` command's argument).
+lift::Direction direction_of(std::string_view name) noexcept;
+
+/// The `calls` list of a controller's snapshot (`calls`, `call_count`).
+template <typename Snapshot>
+nlohmann::json calls_list(const Snapshot& s) {
+  nlohmann::json list = nlohmann::json::array();
+  for (std::size_t i = 0; i < s.call_count; ++i) list.push_back(s.calls[i]);
+  return list;
+}
+
+/// The API server as a daemon component ("api") with reloads applied to it.
+void register_api(Daemon& daemon, api::Server& server);
+/// The daemon's watchdog probe over a counter a live real-time thread keeps raising.
+std::function<bool()> progress_probe(std::function<std::uint64_t()> progress);
+/// After a real-time thread started: journals what it lacks, and false (the caller stops it)
+/// when rt.require_realtime asked for real time it did not get (--simulate always runs).
+bool accept_rt_thread(const config::Config& config, const rt::RtThreadStatus& status, bool simulate,
+                      std::string_view thread);
+/// Journals an event of a serial runner: port opened, open failed, lost, thread status.
+void journal_port_event(const rt::CycleEvent& event);
 
 /// status.rt from what the real-time thread got.
 api::RtInfo rt_info(const rt::RtThreadStatus& status, int priority);

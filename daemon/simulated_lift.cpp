@@ -57,18 +57,9 @@ sim::ReplyFault to_sim(api::SimReplyFault fault) {
   return sim::ReplyFault::NoReply;
 }
 
-sim::SimIoConfig io_config(const config::Config& c) {
-  sim::SimIoConfig out;
-  if (!c.floors.empty()) {
-    out.shaft_bottom_mm = c.floors.front().level_mm;
-    out.shaft_top_mm = c.floors.back().level_mm;
-  }
-  return out;
-}
-
 }  // namespace
 
-SimulatedLift::SimulatedLift(const config::Config& config) : io_(io_config(config), mono_now()) {
+SimulatedLift::SimulatedLift(const config::Config& config) : board_(config, mono_now()) {
   io::SerialSettings settings;  // DCP 7.1: 38400 8N1 (a pty ignores the rate)
   auto pair = io::PtyPair::create(settings, true);
   if (!pair) throw std::runtime_error("simulated drive: " + pair.error().message());
@@ -137,8 +128,8 @@ void SimulatedLift::stop() {
 
 lift::Inputs SimulatedLift::inputs(MonoTime now) {
   const double v = drive_->velocity_mps();
-  io_.set_car(std::abs(v) > 0.001, drive_->position_mm(), now);
-  return io_.inputs(now);
+  board_.io().set_car(std::abs(v) > 0.001, drive_->position_mm(), now);
+  return board_.io().inputs(now);
 }
 
 void SimulatedLift::log_events() {
@@ -188,21 +179,11 @@ api::Result SimulatedLift::apply(const api::SimRequest& request, MonoTime now) {
       break;
     }
     case SimAction::SafetyChainOpen:
-      chain_open_ = request.on;
-      io_.set_safety_chain_open(request.on);
-      break;
     case SimAction::DoorReversal:
-      io_.inject_door_reversal(now);
-      break;
     case SimAction::OpenDoors:
-      io_.open_doors(now);
-      break;
     case SimAction::CloseDoors:
-      io_.close_doors(now);
-      break;
     case SimAction::ObstructDoors:
-      obstructed_ = request.on;
-      io_.set_door_obstructed(request.on, now);
+      (void)board_.apply(request, now);
       break;
     case SimAction::OilTemperature:
     case SimAction::Pressure:
@@ -211,30 +192,21 @@ api::Result SimulatedLift::apply(const api::SimRequest& request, MonoTime now) {
     case SimAction::BusOff:
     case SimAction::ColdOil:
     case SimAction::Sink:
-      return api::Result::fail(
-          api::ErrorCode::BadRequest,
-          "\"" + std::string(api::kSimActions[static_cast<std::size_t>(request.action)]) +
-              "\" is for the simulated SCH001 card (drive.kind \"sch001\"); this lift is DCP",
-          "action");
+      return sim_action_refused(request, "DCP");
   }
-  io_.advance(now);
-  log::event(
-      log::Level::info, "sim", "sim_injected",
-      {{"action", std::string(api::kSimActions[static_cast<std::size_t>(request.action)])}},
-      "simulated lift: " + std::string(api::kSimActions[static_cast<std::size_t>(request.action)]));
+  journal_sim_action(request);
   return api::Result::ok(state_json());
 }
 
 nlohmann::json SimulatedLift::state_json() const {
-  return {{"general_fault", general_fault_},
-          {"advance_warning", advance_warning_},
-          {"not_ready", not_ready_},
-          {"safety_chain_open", chain_open_},
-          {"doors", sim::to_string(io_.door_state())},
-          {"door_obstructed", obstructed_},
-          {"position_mm", std::llround(drive_->position_mm())},
-          {"violations", drive_->status().sim.violations},
-          {"implausible", drive_->status().sim.implausible}};
+  nlohmann::json out = {{"general_fault", general_fault_},
+                        {"advance_warning", advance_warning_},
+                        {"not_ready", not_ready_},
+                        {"position_mm", std::llround(drive_->position_mm())},
+                        {"violations", drive_->status().sim.violations},
+                        {"implausible", drive_->status().sim.implausible}};
+  board_.add_state(out);
+  return out;
 }
 
 }  // namespace liftd::daemon

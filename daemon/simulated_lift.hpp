@@ -9,6 +9,7 @@
 #include "api/backend.hpp"
 #include "api/result.hpp"
 #include "config/config.hpp"
+#include "daemon/lift_common.hpp"
 #include "dcp/control/dcp_controller.hpp"
 #include "io/pty.hpp"
 #include "lift/inputs.hpp"
@@ -51,13 +52,11 @@ class SimulatedLift {
   std::string device_path_;
   std::unique_ptr<sim::SerialDriveRunner> drive_;
   std::unique_ptr<Encoder> position_;
-  sim::SimulatedIo io_;
+  SimulatedBoard board_;  ///< safety chain, doors, shaft
   bool started_ = false;
   bool general_fault_ = false;    ///< injected S3
   bool advance_warning_ = false;  ///< injected S2
   bool not_ready_ = false;        ///< injected S0 = 0
-  bool chain_open_ = false;       ///< injected safety chain opening
-  bool obstructed_ = false;       ///< injected door obstruction
 };
 
 }  // namespace liftd::daemon

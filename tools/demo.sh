@@ -4,6 +4,7 @@
 # foreground with readable logs. Ctrl-C stops it.
 #   tools/demo.sh              DCP4 drive
 #   tools/demo.sh --hydraulic  hydraulic lift: the SCH001 card over CAN (config/hydraulic.json)
+#   tools/demo.sh --uss        USS drive on an 8E1 pseudo-terminal (config/uss.json)
 #   tools/demo.sh --config F   your own configuration (floors, sim.dcp = 3, ...) with --simulate
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -16,13 +17,15 @@ runtime=${XDG_RUNTIME_DIR:-$PWD}
 socket="$runtime/liftd-sim.sock"
 args=()
 for arg in "$@"; do
-  if [ "$arg" = "--hydraulic" ]; then
-    # config/hydraulic.json with the API socket where the demo's user may create it.
-    demo_config="$runtime/liftd-hydraulic-demo.json"
+  if [ "$arg" = "--hydraulic" ] || [ "$arg" = "--uss" ]; then
+    # config/hydraulic.json or config/uss.json with the API socket where the demo's user may
+    # create it.
+    kind=${arg#--}
+    demo_config="$runtime/liftd-$kind-demo.json"
     sed -E -e "s#\"socket\": \"/run/liftd/api.sock\"#\"socket\": \"$socket\"#" \
         -e 's#"(socket|read|control|inputs)_group": "[^"]*"#"\1_group": ""#' \
         -e 's#"require_realtime": true, "lock_memory": true#"require_realtime": false, "lock_memory": false#' \
-        config/hydraulic.json >"$demo_config"
+        "config/$kind.json" >"$demo_config"
     args+=(--config "$demo_config")
     continue
   fi
@@ -39,6 +42,7 @@ liftd is starting against a simulated lift. In another terminal, try:
   build/bin/liftctl --socket $socket calls add 2
   build/bin/liftctl --socket $socket key 1 && build/bin/liftctl --socket $socket display   (DCP only)
   build/bin/liftctl --socket $socket raw '{"cmd":"sim","action":"sink"}'   (hydraulic: the car sinks, liftd relevels)
+  build/bin/liftctl --socket $socket uss-read 52        (USS: a parameter of the drive)
 
 Ctrl-C stops liftd.
 

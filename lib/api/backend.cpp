@@ -143,28 +143,30 @@ nlohmann::json to_json(const StatusSnapshot& s) {
 }
 
 nlohmann::json to_json(const StatsSnapshot& s) {
-  return {{"link",
-           {{"frames_sent", s.frames_sent},
-            {"replies_good", s.replies_good},
-            {"checksum_errors", s.checksum_errors},
-            {"missing_replies", s.missing_replies},
-            {"repeats", s.repeats},
-            {"link_losses", s.link_losses},
-            {"b7_sent", s.b7_sent},
-            {"channel_resets", s.channel_resets},
-            {"decode_errors", s.decode_errors},
-            {"request_timeouts", s.request_timeouts},
-            {"longest_error_run", s.longest_error_run}}},
-          {"cycle",
-           {{"cycles", s.cycles},
-            {"late_sends", s.late_sends},
-            {"overruns", s.overruns},
-            {"skipped_cycles", s.skipped_cycles},
-            {"max_lateness_us", s.max_lateness_us},
-            {"lateness_p99_us", s.lateness_p99_us},
-            {"reply_p99_us", s.reply_p99_us},
-            {"max_work_us", s.max_work_us},
-            {"dropped_events", s.dropped_events}}}};
+  nlohmann::json out = {{"link",
+                         {{"frames_sent", s.frames_sent},
+                          {"replies_good", s.replies_good},
+                          {"checksum_errors", s.checksum_errors},
+                          {"missing_replies", s.missing_replies},
+                          {"repeats", s.repeats},
+                          {"link_losses", s.link_losses},
+                          {"b7_sent", s.b7_sent},
+                          {"channel_resets", s.channel_resets},
+                          {"decode_errors", s.decode_errors},
+                          {"request_timeouts", s.request_timeouts},
+                          {"longest_error_run", s.longest_error_run}}},
+                        {"cycle",
+                         {{"cycles", s.cycles},
+                          {"late_sends", s.late_sends},
+                          {"overruns", s.overruns},
+                          {"skipped_cycles", s.skipped_cycles},
+                          {"max_lateness_us", s.max_lateness_us},
+                          {"lateness_p99_us", s.lateness_p99_us},
+                          {"reply_p99_us", s.reply_p99_us},
+                          {"max_work_us", s.max_work_us},
+                          {"dropped_events", s.dropped_events}}}};
+  if (s.details) out[s.details->first] = s.details->second;
+  return out;
 }
 
 nlohmann::json to_json(const TraceEntry& e) {

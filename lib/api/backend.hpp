@@ -90,6 +90,8 @@ struct StatsSnapshot {
   std::uint64_t request_timeouts = 0;   ///< I-messages the drive did not answer
   std::uint64_t longest_error_run = 0;  ///< longest run of consecutive bad or missing replies
   std::uint64_t dropped_events = 0;     ///< cycle events lost: a queue towards the io thread full
+  /// What only one drive kind counts, reported under the kind's name (e.g. stats.uss).
+  std::optional<std::pair<std::string, nlohmann::json>> details;
 };
 
 /// One exchange of the frame trace (DCP: one cycle).

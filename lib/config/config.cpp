@@ -1129,6 +1129,12 @@ void apply_key(const Key& key, const json& value, Config& config, Problems& prob
 // The uss.* keys that must agree with each other (only for a USS lift).
 void check_uss(const Config& config, Problems& problems) {
   const UssConfig& uss = config.uss;
+  // The CAN encoder needs a CAN runner of its own; the USS lift has none in this version.
+  if (config.position.source == PositionSource::can) {
+    problems.push_back({"position.source",
+                        "\"can\" is not available with drive.kind \"uss\" in "
+                        "this version: use \"api\" (the inputs command)"});
+  }
   auto known = [&](int address) {
     return address == uss.drive_address ||
            std::any_of(uss.slaves.begin(), uss.slaves.end(),

@@ -188,8 +188,11 @@ struct UssConfig {
   int full_scale = defaults::kUssFullScale;                 ///< uss.full_scale
   int profile_timeout_ms = defaults::kUssProfileTimeoutMs;  ///< uss.profile_timeout_ms
   /// uss.speeds: speed name -> main setpoint in the drive's unit (uss.full_scale).
-  std::map<std::string, double> speeds = {
-      {"V0", 5}, {"VN", 2}, {"VI", 30}, {"V3", 63}, {"V4", 100}};
+  std::map<std::string, double> speeds = {{"V0", defaults::kUssSpeedV0Percent},
+                                          {"VN", defaults::kUssSpeedVnPercent},
+                                          {"VI", defaults::kUssSpeedViPercent},
+                                          {"V3", defaults::kUssSpeedV3Percent},
+                                          {"V4", defaults::kUssSpeedV4Percent}};
 };
 
 /// `sim.*`

@@ -183,15 +183,19 @@ void expect_table_rows(const std::vector<std::string>& names, const char* what) 
   }
 }
 
-// Every event the daemon publishes: the server's greeting, the watch start, lift_app.cpp.
-const std::vector<std::string> kEvents = {"hello",  "state",       "display", "link",
-                                          "travel", "drive_error", "fault",   "call_served"};
+// Every event the daemon publishes: the server's greeting, the watch start, the lifts.
+const std::vector<std::string> kEvents = {"hello", "state",       "display",
+                                          "link",  "travel",      "drive_error",
+                                          "fault", "call_served", "parameter_changed"};
 
 TEST(ApiDocs, EventListMatchesWhatTheDaemonPublishes) {
   std::set<std::string> published;
-  const std::string app = read_source("daemon/lift_app.cpp");
-  for (const auto& pattern : {R"re(\bname = "([a-z_]+)";)re", R"re(publish\("([a-z_]+)")re"}) {
-    published.merge(matches(app, pattern));
+  for (const char* lift : {"daemon/lift_app.cpp", "daemon/hydraulic_lift.cpp",
+                           "daemon/uss_lift.cpp", "daemon/lift_core.cpp"}) {
+    const std::string app = read_source(lift);
+    for (const auto& pattern : {R"re(\bname = "([a-z_]+)";)re", R"re(publish\("([a-z_]+)")re"}) {
+      published.merge(matches(app, pattern));
+    }
   }
   published.merge(matches(read_source("lib/api/server.cpp"), R"re(event_line\("([a-z_]+)")re"));
   published.merge(matches(read_source("lib/api/commands.cpp"), R"re(event_line\("([a-z_]+)")re"));
@@ -225,20 +229,21 @@ TEST(ApiDocs, FaultCodesMatchTheController) {
 }
 
 const std::vector<std::string> kAbortCauses = {
-    "link_down",           "no_handshake",       "drive_not_ready",    "advance_warning",
-    "drive_fault",         "safety_chain_open",  "doors_not_locked",   "position_lost",
-    "inputs_lost",         "door_reversal",      "fast_start_timeout", "stop_requested",
-    "drive_did_not_start", "drive_did_not_stop", "mode_changed",       "stopped_off_level",
-    "level_not_reached",   "target_refused",     "shutting_down",      "card_silent",
-    "bus_fault",           "travel_timeout"};
+    "link_down",           "no_handshake",       "drive_not_ready",     "advance_warning",
+    "drive_fault",         "safety_chain_open",  "doors_not_locked",    "position_lost",
+    "inputs_lost",         "door_reversal",      "fast_start_timeout",  "stop_requested",
+    "drive_did_not_start", "drive_did_not_stop", "mode_changed",        "stopped_off_level",
+    "level_not_reached",   "target_refused",     "shutting_down",       "card_silent",
+    "bus_fault",           "travel_timeout",     "speed_not_configured"};
 
 TEST(ApiDocs, AbortCausesMatchTheTravelLibrary) {
-  // The DCP travels' causes and the hydraulic travels' (which reuse the names where the
+  // The DCP travels' causes, the hydraulic and the USS travels' (which reuse the names where the
   // meaning is the same).
   std::set<std::string> causes =
       returned_names("lib/dcp/travel/types.cpp", "to_string(AbortCause cause)", {"none"});
   causes.merge(
       returned_names("lib/sch001/hydraulic_travel.cpp", "to_string(Cause cause)", {"none"}));
+  causes.merge(returned_names("lib/uss/drive/lift_travel.cpp", "to_string(Cause cause)", {"none"}));
   EXPECT_EQ(causes, as_set(kAbortCauses));
   expect_table_rows(kAbortCauses, "abort cause");
   const auto schema = read_schema();
@@ -270,6 +275,8 @@ TEST(ApiDocs, TravelKindsMatchTheTravelLibrary) {
       returned_names("lib/dcp/travel/types.cpp", "to_string(TravelKind kind)", {"none"});
   named.merge(
       returned_names("lib/sch001/hydraulic_travel.cpp", "to_string(TravelKind kind)", {"idle"}));
+  named.merge(
+      returned_names("lib/uss/drive/lift_travel.cpp", "to_string(TravelKind kind)", {"idle"}));
   EXPECT_EQ(named, as_set(kTravelKinds));
   expect_table_rows(kTravelKinds, "travel kind");
   const auto schema = read_schema();

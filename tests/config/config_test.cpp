@@ -118,7 +118,7 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/uss/full_scale_raw", 16384},
       {"/uss/full_scale", 100},
       {"/uss/profile_timeout_ms", 2000},
-      {"/uss/speeds", {{"V0", 5}, {"VN", 2}, {"VI", 30}, {"V3", 63}, {"V4", 100}}},
+      {"/uss/speeds", {{"V0", 5}, {"VN", 3}, {"VI", 30}, {"V3", 60}, {"V4", 100}}},
       {"/sim/dcp", 4},
   };
   const LoadResult result = parse("{}", "test");
@@ -157,6 +157,17 @@ TEST(ConfigExample, ShippedExampleIsValidCompleteAndAtDefaults) {
   EXPECT_EQ(to_json(result.config), to_json(Config{}));
 }
 
+// Every sample in config/ is a file the daemon accepts as it stands, for its drive kind.
+TEST(ConfigExample, EverySampleConfigurationIsValid) {
+  for (const auto& [file, kind] :
+       {std::pair{"liftd.json", DriveKind::Dcp}, std::pair{"hydraulic.json", DriveKind::Sch001},
+        std::pair{"uss.json", DriveKind::Uss}}) {
+    const LoadResult result = load_file(std::string(LIFTD_SOURCE_DIR) + "/config/" + file);
+    EXPECT_TRUE(result.ok()) << file << ": " << all_problems(result);
+    EXPECT_EQ(result.config.drive.kind, kind) << file;
+  }
+}
+
 TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
   const std::string text = R"({
     "log": {"level": "debug"},
@@ -172,7 +183,7 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
             "idle_timeout_s": 86400},
     "inputs": {"timeout_ms": 50},
     "floors": [{"name": "UG", "level_mm": -2800}, {"name": "EG", "level_mm": 0}],
-    "position": {"source": "can"},
+    "position": {"source": "sim"},
     "travel": {"level_tolerance_mm": 1, "relevel_threshold_mm": 2,
                "relevel_with_doors": "never", "relevel_electric_stop": true,
                "use_start_parameters": false, "fast_start_timeout_ms": 10000,
@@ -218,7 +229,7 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
   EXPECT_EQ(c.api.idle_timeout_s, 86400);
   EXPECT_EQ(c.inputs.timeout_ms, 50);
   EXPECT_EQ(c.floors, (std::vector<Floor>{{"UG", -2800}, {"EG", 0}}));
-  EXPECT_EQ(c.position.source, PositionSource::can);
+  EXPECT_EQ(c.position.source, PositionSource::sim);
   EXPECT_EQ(c.travel.level_tolerance_mm, 1);
   EXPECT_EQ(c.travel.relevel_threshold_mm, 2);
   EXPECT_EQ(c.travel.relevel_with_doors, RelevelDoors::never);
@@ -433,6 +444,9 @@ TEST(ConfigProblems, WhatTheDaemonCannotRunIsRefused) {
       {"USS speeds without a crawl speed",
        R"({"drive": {"kind": "uss"}, "uss": {"speeds": {"VN": 2, "VI": 30, "V3": 63, "V4": 100}}})",
        "uss.speeds", "has no setpoint for V0"},
+      {"USS lift with the CAN encoder (no CAN runner beside the USS bus)",
+       R"({"drive": {"kind": "uss"}, "position": {"source": "can"}})", "position.source",
+       "\"can\" is not available with drive.kind \"uss\""},
       {"USS speed that is no speed name", R"({"uss": {"speeds": {"V9": 2}}})", "uss.speeds.V9",
        "is not a speed name"},
       {"USS speed beyond the signed setpoint word",
