@@ -460,7 +460,7 @@ HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool 
       config_(config),
       simulate_(simulate),
       socket_path_(config.api.socket),
-      poll_timer_(daemon.io()),
+      poll_timer_(daemon.io(), kPollPeriod),
       publisher_(config.api.state_rate_hz),
       wind_down_(
           daemon, [this](bool force) { return backend_->send_shutdown(force); }, kShutdownDeadline,
@@ -569,26 +569,15 @@ bool HydraulicLift::start_runner() {
   }
   log::event(log::Level::info, "sch001", "can_started", {{"interface", runner_->config().endpoint}},
              "SCH001 card link running on " + runner_->config().endpoint);
-  running_ = true;
-  schedule_poll();
+  poll_timer_.start([this] { poll(); });
   return true;
 }
 
 void HydraulicLift::stop_runner() {
-  if (!running_) return;
-  running_ = false;
-  poll_timer_.cancel();
+  if (!poll_timer_.running()) return;
+  poll_timer_.stop();
   runner_->stop();
   poll();  // the last events
-}
-
-void HydraulicLift::schedule_poll() {
-  poll_timer_.expires_after(kPollPeriod);
-  poll_timer_.async_wait([this](const std::error_code& ec) {
-    if (ec || !running_) return;
-    poll();
-    schedule_poll();
-  });
 }
 
 void HydraulicLift::poll() {
@@ -714,7 +703,7 @@ void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
 }
 
 void HydraulicLift::wind_down(std::function<void()> done) {
-  if (!running_) {
+  if (!poll_timer_.running()) {
     done();
     return;
   }

@@ -128,7 +128,6 @@ class HydraulicLift final : public LiftRunner {
   void check_interface() const;
   bool start_runner();
   void stop_runner();
-  void schedule_poll();
   void poll();
   void handle_event(const sch001::ControllerEvent& event);
   void wind_down(std::function<void()> done);
@@ -145,8 +144,7 @@ class HydraulicLift final : public LiftRunner {
   std::unique_ptr<rt::CanRunner> runner_;
   std::unique_ptr<Sch001Backend> backend_;
   std::unique_ptr<api::Server> server_;
-  asio::steady_timer poll_timer_;
-  bool running_ = false;
+  PollTimer poll_timer_;
   StatePublisher publisher_;
   MonoTime last_sim_inputs_{};
   sch001::CardLinkCounters logged_counters_{};

@@ -52,6 +52,26 @@ void StatePublisher::publish(api::Server& server, api::StatusSnapshot status, Mo
   last_publish_ = now;
 }
 
+void PollTimer::start(std::function<void()> poll) {
+  poll_ = std::move(poll);
+  running_ = true;
+  arm();
+}
+
+void PollTimer::stop() {
+  running_ = false;
+  timer_.cancel();
+}
+
+void PollTimer::arm() {
+  timer_.expires_after(period_);
+  timer_.async_wait([this](const std::error_code& ec) {
+    if (ec || !running_) return;
+    poll_();
+    arm();
+  });
+}
+
 void WindDown::start(std::function<void()> done, bool moving, MonoTime now) {
   done_ = std::move(done);
   until_ = now + deadline_;

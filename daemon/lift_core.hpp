@@ -14,6 +14,8 @@
 #include <string_view>
 #include <vector>
 
+#include <asio.hpp>
+
 #include "api/backend.hpp"
 #include "api/server.hpp"
 #include "common/mono_time.hpp"
@@ -64,6 +66,23 @@ class StatePublisher {
   std::vector<std::string> continuous_;
   std::optional<api::StatusSnapshot> last_;
   MonoTime last_publish_{};
+};
+
+/// The io thread's periodic poll of a lift (replies, events, the watch stream), running between
+/// start() and stop().
+class PollTimer {
+ public:
+  PollTimer(asio::io_context& io, std::chrono::nanoseconds period) : timer_(io), period_(period) {}
+  void start(std::function<void()> poll);
+  void stop();
+  bool running() const noexcept { return running_; }
+
+ private:
+  void arm();
+  asio::steady_timer timer_;
+  std::chrono::nanoseconds period_;
+  std::function<void()> poll_;
+  bool running_ = false;
 };
 
 /// What the wind-down reads of a controller's snapshot.

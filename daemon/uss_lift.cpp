@@ -1,6 +1,8 @@
 #include "daemon/uss_lift.hpp"
 
 #include <poll.h>
+#include <pthread.h>
+#include <sched.h>
 
 #include <algorithm>
 #include <cmath>
@@ -137,6 +139,7 @@ nlohmann::json word_bits(std::uint16_t word, const std::array<std::string_view, 
 SimulatedUssBus::SimulatedUssBus(const config::Config& config)
     : baud_(static_cast<std::uint32_t>(config.uss.baud)),
       drive_address_(static_cast<std::uint8_t>(config.uss.drive_address)),
+      priority_(std::max(1, config.rt.priority - 1)),
       board_(config, mono_now()) {
   auto pair = io::PtyPair::create(rt::uss_serial_settings(baud_), true);
   if (!pair) throw std::runtime_error("simulated USS bus: " + pair.error().message());
@@ -201,6 +204,12 @@ void SimulatedUssBus::stop() {
 }
 
 void SimulatedUssBus::loop() {
+  // The simulated slaves stand for separate devices that answer within their reply delay
+  // (USS A 5.2.1.1): one step below the master's real-time priority where the system permits
+  // it, so a loaded machine delays neither side (as the simulated DCP drive).
+  sched_param param{};
+  param.sched_priority = priority_;
+  (void)::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &param);
   std::array<std::uint8_t, 512> buffer{};
   while (!stop_.load()) {
     const timespec slice{0, std::chrono::nanoseconds(kSimSlice).count()};
@@ -752,7 +761,7 @@ UssLift::UssLift(Daemon& daemon, const config::Config& config, bool simulate)
       config_(config),
       simulate_(simulate),
       socket_path_(config.api.socket),
-      poll_timer_(daemon.io()),
+      poll_timer_(daemon.io(), kPollPeriod),
       publisher_(config.api.state_rate_hz, {"actual"}),
       wind_down_(
           daemon, [this](bool force) { return backend_->send_shutdown(force); }, kShutdownDeadline,
@@ -828,26 +837,15 @@ bool UssLift::start_runner() {
                  std::to_string(master_->config().polling_list.size()) +
                  " telegram(s) per pass: expected cycle time " + std::to_string(expected) +
                  " us (start pauses, telegrams, reply delays)");
-  running_ = true;
-  schedule_poll();
+  poll_timer_.start([this] { poll(); });
   return true;
 }
 
 void UssLift::stop_runner() {
-  if (!running_) return;
-  running_ = false;
-  poll_timer_.cancel();
+  if (!poll_timer_.running()) return;
+  poll_timer_.stop();
   runner_->stop();
   poll();  // the last events
-}
-
-void UssLift::schedule_poll() {
-  poll_timer_.expires_after(kPollPeriod);
-  poll_timer_.async_wait([this](const std::error_code& ec) {
-    if (ec || !running_) return;
-    poll();
-    schedule_poll();
-  });
 }
 
 void UssLift::poll() {
@@ -974,7 +972,7 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
 }
 
 void UssLift::wind_down(std::function<void()> done) {
-  if (!running_) {
+  if (!poll_timer_.running()) {
     done();
     return;
   }

@@ -72,6 +72,7 @@ class SimulatedUssBus {
 
   std::uint32_t baud_;
   std::uint8_t drive_address_;
+  int priority_;  ///< SCHED_FIFO priority of the bus thread, one below the master's
   std::unique_ptr<io::PtyPair> pty_;
   io::SerialPort port_;                  ///< the pseudo-terminal's master end
   mutable std::mutex mutex_;             ///< guards bus_ and board_ (sim thread and io)
@@ -153,7 +154,6 @@ class UssLift final : public LiftRunner {
  private:
   bool start_runner();
   void stop_runner();
-  void schedule_poll();
   void poll();
   void handle_event(const uss::ControllerEvent& event);
   void wind_down(std::function<void()> done);
@@ -169,8 +169,7 @@ class UssLift final : public LiftRunner {
   std::unique_ptr<rt::UssRunner> runner_;
   std::unique_ptr<UssBackend> backend_;
   std::unique_ptr<api::Server> server_;
-  asio::steady_timer poll_timer_;
-  bool running_ = false;
+  PollTimer poll_timer_;
   StatePublisher publisher_;
   MonoTime last_sim_inputs_{};
   WindDown wind_down_;

@@ -99,6 +99,7 @@ if [ "$coverage" = 1 ]; then
     [sim_drive_fuzz]="lib/sim/drive_sim.cpp"
     [sch001_link_fuzz]="lib/sch001/protocol.cpp lib/sch001/card_link.cpp"
     [travel_controller_fuzz]="lib/dcp/travel/controller.cpp lib/dcp/travel/dcp3_travel.cpp lib/dcp/travel/dcp4_travel.cpp lib/dcp/travel/gate.cpp"
+    [uss_receiver_fuzz]="lib/uss/receiver.cpp lib/uss/telegram.cpp lib/uss/line.cpp"
   )
   llvm_bin=/usr/lib/llvm-14/bin
   [ -x "$llvm_bin/llvm-cov" ] || apt-get install -y -qq llvm-14 >/dev/null

@@ -67,6 +67,32 @@ TEST_F(Liftctl, ControlCommandsReachTheBackend) {
             (std::vector<std::string>{"key 2", "drive_reset", "power emergency 1", "load 80"}));
 }
 
+TEST_F(Liftctl, StatusOfAUssLiftShowsTheDriveProfile) {
+  backend_.status_snapshot.drive_kind = drive::Kind::Uss;
+  backend_.status_snapshot.details = {
+      {"drive_address", 0},
+      {"profile_state", "operation_enabled"},
+      {"wish", "run"},
+      {"phase", "run"},
+      {"control_bits", {{"on", true}, {"enable_operation", true}}},
+      {"status_bits", {{"ready", true}, {"fault", false}}},
+      {"setpoint", {{"raw", 16384}, {"percent", 100.0}}},
+      {"actual", {{"raw", 8192}, {"percent", 50.0}}},
+      {"slaves",
+       {{{"address", 0}, {"responding", true}}, {{"address", 5}, {"responding", false}}}}};
+  start_server();
+  const RunResult r = run(liftctl("status"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("uss:      drive 0 operation_enabled (asked: run), phase run"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("words:    control enable_operation on; status ready"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("speed:    setpoint 100.0 %, actual 50.0 %"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("slaves:   2 on the bus, not sending: 5"), std::string::npos) << r.output;
+}
+
 TEST_F(Liftctl, UssParameterCommandsReachTheBackend) {
   backend_.status_snapshot.drive_kind = drive::Kind::Uss;
   start_server();

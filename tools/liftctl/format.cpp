@@ -83,6 +83,26 @@ std::string format_status(const json& s) {
     out << "signals:  " << true_flags(at(at(s, "sch001"), "commands")) << " (phase "
         << text(at(at(s, "sch001"), "phase")) << ")\n";
   }
+  if (at(drive, "kind") == "uss") {
+    const json& uss = at(s, "uss");
+    out << "uss:      drive " << text(at(uss, "drive_address")) << " "
+        << text(at(uss, "profile_state")) << " (asked: " << text(at(uss, "wish")) << "), phase "
+        << text(at(uss, "phase")) << '\n';
+    out << "words:    control " << true_flags(at(uss, "control_bits")) << "; status "
+        << true_flags(at(uss, "status_bits")) << '\n';
+    out << "speed:    setpoint " << text(at(at(uss, "setpoint"), "percent")) << " %, actual "
+        << text(at(at(uss, "actual"), "percent")) << " %\n";
+    std::string silent;
+    const json& slaves = at(uss, "slaves");
+    if (slaves.is_array()) {
+      for (const auto& slave : slaves) {
+        if (at(slave, "responding") == false)
+          silent += (silent.empty() ? "" : " ") + text(at(slave, "address"));
+      }
+    }
+    out << "slaves:   " << (slaves.is_array() ? slaves.size() : 0) << " on the bus"
+        << (silent.empty() ? "" : ", not sending: " + silent) << '\n';
+  }
   const json& dcp = dcp_of(s);
   if (at(drive, "kind").is_null() || at(drive, "kind") == "dcp") {
     out << "dcp:      " << text(at(dcp, "mode")) << ", status: " << true_flags(at(dcp, "status"))
