@@ -647,34 +647,9 @@ void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
                      "P2 overpressure)");
       break;
     }
-    case Kind::Travel: {
-      const sch001::TravelEvent& t = event.travel;
-      const char* type = t.type == sch001::TravelEvent::Type::Started    ? "started"
-                         : t.type == sch001::TravelEvent::Type::Finished ? "finished"
-                                                                         : "aborted";
-      const std::string kind(sch001::to_string(t.kind));
-      std::string text = std::string("travel ") + type + " (" + kind + ")";
-      log::Fields fields{{"kind", kind}};
-      if (t.type == sch001::TravelEvent::Type::Aborted) {
-        text += ": " + std::string(sch001::to_string(t.cause));
-        fields.push_back({"cause", std::string(sch001::to_string(t.cause))});
-      }
-      const sch001::ControllerSnapshot s = controller_->snapshot();
-      if (s.position_mm) text += " at " + std::to_string(*s.position_mm) + " mm";
-      log::event(t.type == sch001::TravelEvent::Type::Aborted ? log::Level::warn : log::Level::info,
-                 "travel", std::string("travel_") + type, fields, text);
-      const auto floors = controller_->floors_mm();
-      server_->publish(
-          "travel", {{"event", type},
-                     {"kind", kind},
-                     {"cause", t.cause == sch001::Cause::None
-                                   ? nlohmann::json(nullptr)
-                                   : nlohmann::json(std::string(sch001::to_string(t.cause)))},
-                     {"target_mm", t.floor < floors.size() ? floors[t.floor] : 0},
-                     {"position_mm",
-                      s.position_mm ? nlohmann::json(*s.position_mm) : nlohmann::json(nullptr)}});
+    case Kind::Travel:
+      report_travel(*server_, event.travel, *controller_);
       break;
-    }
     case Kind::BusError:
       log::event(event.bus_error.is_fault() ? log::Level::error : log::Level::warn, "sch001",
                  "can_error", {{"error", event.bus_error.describe()}},

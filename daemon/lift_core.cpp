@@ -137,6 +137,27 @@ void report_fault(api::Server& server, lift::FaultCode code, std::string_view te
   server.publish("fault", {{"code", name}, {"text", std::string(text)}, {"active", active}});
 }
 
+void report_travel(api::Server& server, std::string_view type, std::string_view kind,
+                   std::string_view cause, bool aborted, std::int64_t target_mm,
+                   std::optional<std::int64_t> position_mm) {
+  std::string text = "travel " + std::string(type) + " (" + std::string(kind) + ")";
+  log::Fields fields{{"kind", std::string(kind)}};
+  if (aborted) {
+    text += ": " + std::string(cause);
+    fields.push_back({"cause", std::string(cause)});
+  }
+  if (position_mm) text += " at " + std::to_string(*position_mm) + " mm";
+  log::event(aborted ? log::Level::warn : log::Level::info, "travel", "travel_" + std::string(type),
+             fields, text);
+  server.publish(
+      "travel",
+      {{"event", std::string(type)},
+       {"kind", std::string(kind)},
+       {"cause", cause.empty() ? nlohmann::json(nullptr) : nlohmann::json(cause)},
+       {"target_mm", target_mm},
+       {"position_mm", position_mm ? nlohmann::json(*position_mm) : nlohmann::json(nullptr)}});
+}
+
 void report_call_served(api::Server& server, std::size_t floor) {
   log::event(log::Level::info, "travel", "call_served", {{"floor", std::to_string(floor)}},
              "call served: floor " + std::to_string(floor));

@@ -932,34 +932,9 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
                      std::to_string(event.zsw) + ")");
       break;
     }
-    case Kind::Travel: {
-      const uss::TravelEvent& t = event.travel;
-      const char* type = t.type == uss::TravelEvent::Type::Started    ? "started"
-                         : t.type == uss::TravelEvent::Type::Finished ? "finished"
-                                                                      : "aborted";
-      const std::string kind(uss::to_string(t.kind));
-      std::string text = std::string("travel ") + type + " (" + kind + ")";
-      log::Fields fields{{"kind", kind}};
-      if (t.type == uss::TravelEvent::Type::Aborted) {
-        text += ": " + std::string(uss::to_string(t.cause));
-        fields.push_back({"cause", std::string(uss::to_string(t.cause))});
-      }
-      const uss::ControllerSnapshot s = controller_->snapshot();
-      if (s.position_mm) text += " at " + std::to_string(*s.position_mm) + " mm";
-      log::event(t.type == uss::TravelEvent::Type::Aborted ? log::Level::warn : log::Level::info,
-                 "travel", std::string("travel_") + type, fields, text);
-      const auto floors = controller_->floors_mm();
-      server_->publish(
-          "travel", {{"event", type},
-                     {"kind", kind},
-                     {"cause", t.cause == uss::Cause::None
-                                   ? nlohmann::json(nullptr)
-                                   : nlohmann::json(std::string(uss::to_string(t.cause)))},
-                     {"target_mm", t.floor < floors.size() ? floors[t.floor] : 0},
-                     {"position_mm",
-                      s.position_mm ? nlohmann::json(*s.position_mm) : nlohmann::json(nullptr)}});
+    case Kind::Travel:
+      report_travel(*server_, event.travel, *controller_);
       break;
-    }
     case Kind::FaultRaised:
     case Kind::FaultCleared:
       report_fault(*server_, event.fault, uss::fault_text(event.fault),
