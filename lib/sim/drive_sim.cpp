@@ -734,6 +734,7 @@ void DriveSim::start_travel(TravelKind kind, dcp::Speed speed, bool down, MonoTi
   crawl_limited_ = false;
   rd_saturated_ = false;
   target_s_m_ = static_cast<double>(distance_mm) / 1000.0;
+  target_read_at_mps_ = 0.0;
   if (kind == TravelKind::Distance &&
       distance_mm < static_cast<std::int64_t>(config_.crawl_limit_mm)) {
     crawl_limited_ = true;  // DCP 11.1.2 safety note: start distance < 20 cm -> crawl
@@ -778,11 +779,15 @@ void DriveSim::plan_to_speed(double speed_mps, MonoTime now) noexcept {
   stopping_ = speed_mps <= 0.0;
 }
 
+double DriveSim::target_vmax_mps() const noexcept {
+  const double vmax = config_.speeds.of(run_speed_);
+  return crawl_limited_ ? std::min(vmax, config_.speeds.v0_mps) : vmax;
+}
+
 void DriveSim::plan_to_target(MonoTime now) noexcept {
   const double t0 = std::max(seconds(now), motion_start_s_);
-  double vmax = config_.speeds.of(run_speed_);
-  if (crawl_limited_) vmax = std::min(vmax, config_.speeds.v0_mps);
-  plan_.plan_arrival(t0, plan_.at(t0), target_s_m_, vmax, 0.0, config_.accel, config_.decel);
+  plan_.plan_arrival(t0, plan_.at(t0), target_s_m_, target_vmax_mps(), 0.0, config_.accel,
+                     config_.decel);
   stopping_ = true;
 }
 
@@ -826,7 +831,23 @@ void DriveSim::on_remaining_distance(std::uint16_t raw, MonoTime now) noexcept {
   const bool exact = saturated || rd_saturated_;
   rd_saturated_ = saturated;
   const double extend_tol_m = exact ? 1e-4 : lag_tol_m;
-  if (diff_m >= 0.0 ? diff_m <= extend_tol_m : -diff_m <= lag_tol_m) return;
+  if (diff_m >= 0.0 ? diff_m <= extend_tol_m : -diff_m <= lag_tol_m) {
+    // DCP 3.5.3.4: "the drive unit must process always the remaining distance during the
+    // total travel". A distance read at speed is off by the master's measuring lag times that
+    // speed; once a target came from a moving car, each reading at a lower speed is the better
+    // one and the drive follows it, so the readings converge on the level as the car slows.
+    // A target read at rest (the start of a travel) is exact and stays. A correction while
+    // the car already brakes may need a slightly harder ramp (at most the fast-stop ramp).
+    if (!saturated && st.v_mps < target_read_at_mps_) {
+      target_s_m_ = implied_m;
+      target_read_at_mps_ = st.v_mps;
+      const double t0 = std::max(seconds(now), motion_start_s_);
+      plan_.plan_fixed_arrival(t0, plan_.at(t0), target_s_m_, target_vmax_mps(), 0.0, config_.accel,
+                               config_.decel, config_.fast_stop);
+      stopping_ = true;
+    }
+    return;
+  }
   const double remaining_m = target_s_m_ - st.s_m;
   const double stop_m = MotionPlan::ramp_distance_from_m(st, 0.0, config_.accel, config_.decel);
   if (refuse_next_target_) {  // injected: this drive's plausibility check says no
@@ -841,6 +862,7 @@ void DriveSim::on_remaining_distance(std::uint16_t raw, MonoTime now) noexcept {
     const double limit_m = std::max(stop_m, travel_i7_decel_m_);
     if (st.a_mps2 >= 0.0 && remaining_m > limit_m) {
       target_s_m_ = implied_m;
+      target_read_at_mps_ = st.v_mps;
       plan_to_target(now);
       ++counters_.extensions;
       if (!saturated) emit(SimEvent::Kind::TargetExtended, now, word);
@@ -854,6 +876,7 @@ void DriveSim::on_remaining_distance(std::uint16_t raw, MonoTime now) noexcept {
   // travel curve online": a level the car can still reach on its normal ramp is taken over.
   if (rd_m > stop_m + tol_m) {
     target_s_m_ = implied_m;
+    target_read_at_mps_ = st.v_mps;
     plan_to_target(now);
     ++counters_.shortened;
     emit(SimEvent::Kind::TargetExtended, now, word);

@@ -338,6 +338,8 @@ class DriveSim {
   void plan_stop(const RampLimits& ramp, MonoTime now) noexcept;
   void plan_to_speed(double speed_mps, MonoTime now) noexcept;
   void plan_to_target(MonoTime now) noexcept;
+  /// The top speed of a distance travel: the selected speed, crawl when crawl-limited.
+  double target_vmax_mps() const noexcept;
   void abort_travel(MonoTime now) noexcept;
   void controlled_abort(MonoTime now) noexcept;
   void raise_fault(FaultCause cause, MonoTime now) noexcept;
@@ -392,6 +394,9 @@ class DriveSim {
   dcp::Speed run_speed_ = dcp::Speed::V0;
   double origin_mm_ = 0.0;   // plan origin (position at s = 0)
   double target_s_m_ = 0.0;  // Distance travels: stop point along the direction
+  // The car's speed when target_s_m_ was read from a remaining distance (0 at rest): the
+  // reading's error is the master's measuring lag times this speed.
+  double target_read_at_mps_ = 0.0;
   double travel_start_mm_ = 0.0;
   double decel_report_m_ = 0.0;  // deceleration distance reported in the data bytes
   MotionPlan plan_{};

@@ -245,6 +245,33 @@ TEST(SimTravel, Dcp4FrameHeldUpOnItsWayIsNotATargetChange) {
   EXPECT_EQ(on_time.sim.counters().shortened, 1U) << "96 mm nearer, read on time, is a change";
 }
 
+TEST(SimTravel, Dcp4NearerLevelReadLateIsRefinedAsTheCarSlowsAndLandsOnTheLevel) {
+  // DCP 3.5.3.4: "the drive unit must process always the remaining distance during the total
+  // travel". The first frame with a nearer level (9 m instead of 15 m) was measured 20 ms
+  // before the drive reads it: 32 mm long at 1.6 m/s, within the frame-age tolerance, so the
+  // drive takes the level 32 mm too far. The frames that follow are on time; as the car slows
+  // their error shrinks, and the drive must follow them onto the level the master means.
+  Harness m;
+  m.init();
+  m.cycle(cmd::kSpeed, kV4);
+  for (int i = 0; i < 4000 && m.sim.velocity_mps() < 1.6 - 1e-9; ++i) {
+    m.distance_cycle(cmd::kDecel, 15000.0);
+  }
+  m.sim.advance(m.now + 15ms);
+  const double measured_at = m.sim.position_mm();
+  m.now += 20ms;
+  m.cycle(cmd::kDecel, static_cast<std::uint16_t>(std::lround(9000.0 - measured_at)));
+  EXPECT_EQ(m.sim.counters().shortened, 1U);
+  for (int i = 0; i < 4000; ++i) {
+    const Cycle c = m.distance_cycle(cmd::kDecel, 9000.0);
+    if (c.velocity_mps == 0.0 && !has(c.status, sb::kBrakeOpen)) break;
+  }
+  EXPECT_EQ(m.sim.counters().shortened, 1U) << "refinements are not new targets";
+  EXPECT_EQ(m.sim.counters().extensions, 0U);
+  EXPECT_EQ(m.sim.counters().implausible, 0U);
+  EXPECT_NEAR(m.sim.position_mm(), 9000.0, 1.0);
+}
+
 TEST(SimTravel, StopMessageAtSpeedIsAViolationAndAnEmergencyStop) {
   // DCP 3.5.3.2: stop mode 0001 "During deceleration" only; DCP 11.1.1 d: B2 "remains
   // activated until the lift car comes to the level".
