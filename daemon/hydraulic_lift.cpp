@@ -18,11 +18,8 @@ namespace {
 using namespace std::chrono_literals;
 using api::Result;
 
-constexpr auto kPollPeriod = 10ms;        // io thread: replies, events, watch stream
-constexpr auto kSimInputsPeriod = 100ms;  // the simulated I/O board reports this often
-constexpr auto kReplyGrace = 3s;  // the CAN thread answers within a tick; this catches a stall
-constexpr auto kShutdownDeadline = 20s;   // as the DCP lift: landing from full speed takes seconds
-constexpr auto kShutdownGrace = 300ms;    // after a forced end: three answers without a signal
+constexpr auto kCardReplyGrace = 3s;  // the CAN thread answers within a tick; this catches a stall
+constexpr auto kCardShutdownGrace = 300ms;  // after a forced end: three answers without a signal
 constexpr auto kRejectLogInterval = 10s;  // rejected card frames are journalled at most this often
 constexpr double kSinkMmPerS = 2.0;       // `sim sink`: a leaking valve or cooling oil
 
@@ -383,7 +380,7 @@ nlohmann::json Sch001Backend::config() {
 
 void Sch001Backend::send(sch001::CommandBody body, api::Responder done) {
   (void)post_command<sch001::ControllerCommand>(controller_, pending_, std::move(body),
-                                                std::move(done), kReplyGrace, "CAN");
+                                                std::move(done), kCardReplyGrace, "CAN");
 }
 
 void Sch001Backend::poll(MonoTime now) {
@@ -464,7 +461,7 @@ HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool 
       publisher_(config.api.state_rate_hz),
       wind_down_(
           daemon, [this](bool force) { return backend_->send_shutdown(force); }, kShutdownDeadline,
-          kShutdownGrace) {
+          kCardShutdownGrace) {
   rt::CanRunnerConfig rc;
   rc.endpoint = config.can.interface;
   const sch001::ControllerConfig cc = sch001_controller_config(config);

@@ -30,14 +30,9 @@ using namespace std::chrono_literals;
 // The cycle thread wakes the io thread after every cycle; this timer only matters if the cycle
 // thread stalls (API replies still time out, the clock and simulated inputs still go out).
 constexpr auto kFallbackPoll = 100ms;
-// The simulated I/O board reports its inputs this often (well inside inputs.timeout_ms).
-constexpr auto kSimInputsPeriod = 100ms;
-// A service stop during a travel waits this long for the car to come to rest at a floor: a stop
-// from full speed at the next possible floor plus the drive's hold time takes a few seconds; the
-// unit's TimeoutStopSec=30s leaves room for the forced end below and the rest of the shutdown.
-constexpr auto kShutdownDeadline = std::chrono::seconds(20);
-// After a forced end: time for one DCP 7.3 supervision window (10 x 15 ms) of B0-off frames.
-constexpr auto kShutdownGrace = std::chrono::milliseconds(500);
+// After a forced service stop: time for one DCP 7.3 supervision window (10 x 15 ms) of B0-off
+// frames.
+constexpr auto kDcpShutdownGrace = std::chrono::milliseconds(500);
 
 dcp::Code2 code2(const std::string& s) {
   return {s.at(0), s.at(1)};
@@ -286,7 +281,7 @@ void LiftApp::check_wind_down(MonoTime now) {
     // The deadline inside the unit's TimeoutStopSec= passed with the car still moving: drive
     // enable off now, then one supervision window of B0-off frames before exit.
     wind_down_forced_ = true;
-    wind_down_deadline_ = now + kShutdownGrace;
+    wind_down_deadline_ = now + kDcpShutdownGrace;
     backend_->send_shutdown(true);
     log::event(log::Level::error, "travel", "shutdown_forced", {},
                "stopping: the car did not come to rest in time; drive enable withdrawn");

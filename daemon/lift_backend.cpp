@@ -7,6 +7,7 @@
 
 #include "common/mono_time.hpp"
 #include "daemon/lift_common.hpp"
+#include "daemon/lift_core.hpp"
 #include "daemon/simulated_lift.hpp"
 #include "dcp/charset.hpp"
 #include "dcp/trace.hpp"
@@ -23,7 +24,7 @@ using control::ReplyCode;
 // How long a client waits for the cycle to answer a command. The cycle answers travel
 // commands within a cycle and I-messages within dcp.request_timeout_ms; this only catches a
 // cycle that stopped.
-constexpr std::chrono::seconds kReplyGrace{3};
+constexpr std::chrono::seconds kDcpReplyGrace{3};
 
 api::LinkState to_api(dcp::LinkState state) {
   switch (state) {
@@ -38,12 +39,6 @@ api::LinkState to_api(dcp::LinkState state) {
       return api::LinkState::Fault;
   }
   return api::LinkState::Down;
-}
-
-std::optional<std::string> direction_name(lift::Direction d) {
-  if (d == lift::Direction::Up) return "up";
-  if (d == lift::Direction::Down) return "down";
-  return std::nullopt;
 }
 
 std::string utf8_row(const std::array<std::uint8_t, dcp::kDisplayColumns>& row) {
@@ -241,7 +236,7 @@ void LiftBackend::send(control::CommandBody body, api::Responder done, Completio
     done(Result::fail(api::ErrorCode::Busy, "the cycle's command queue is full; try again"));
     return;
   }
-  pending_[tag] = Pending{std::move(done), std::move(complete), mono_now() + kReplyGrace};
+  pending_[tag] = Pending{std::move(done), std::move(complete), mono_now() + kDcpReplyGrace};
 }
 
 void LiftBackend::send_ok(control::CommandBody body, api::Responder done) {

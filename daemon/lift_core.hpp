@@ -27,6 +27,18 @@
 
 namespace liftd::daemon {
 
+// Every lift's io thread alike.
+/// The io thread's look at replies, events and the watch stream of a lift whose controller
+/// runs on a real-time thread of its own (SCH001, USS).
+inline constexpr std::chrono::milliseconds kPollPeriod{10};
+/// The simulated I/O board reports its inputs this often (well inside inputs.timeout_ms).
+inline constexpr std::chrono::milliseconds kSimInputsPeriod{100};
+/// A service stop during a travel waits this long for the car to come to rest at a floor: a
+/// stop from full speed at the next possible floor plus the drive's hold time takes a few
+/// seconds; the unit's TimeoutStopSec=30s leaves room for the forced end and the rest of the
+/// shutdown.
+inline constexpr std::chrono::seconds kShutdownDeadline{20};
+
 /// Requests sent to a controller, waiting for its reply: the responder of each by tag. A
 /// controller that never answers (a stalled thread) fails the request after a grace time.
 class PendingReplies {

@@ -19,14 +19,11 @@ namespace {
 using namespace std::chrono_literals;
 using api::Result;
 
-constexpr auto kPollPeriod = 10ms;        // io thread: replies, events, watch stream
-constexpr auto kSimInputsPeriod = 100ms;  // the simulated I/O board reports this often
 // A parameter request may wait uss.pkw_repeat_limit polls of a long polling list; this only
 // catches a stalled USS thread.
-constexpr auto kReplyGrace = 30s;
-constexpr auto kShutdownDeadline = 20s;  // as the other lifts: landing from speed takes seconds
-constexpr auto kShutdownGrace = 300ms;   // after a forced end: telegrams with OFF2 go out
-constexpr auto kSimSlice = 1ms;          // the simulated bus checks its reply times this often
+constexpr auto kUssReplyGrace = 30s;
+constexpr auto kUssShutdownGrace = 300ms;  // after a forced end: telegrams with OFF2 go out
+constexpr auto kSimSlice = 1ms;            // the simulated bus checks its reply times this often
 // The simulated drive's ramp, and the crawl it leaves before the level: its nominal speed is
 // sized so that the fastest speed, braked at this ramp from its configured deceleration point,
 // crawls this far (as the simulated DCP3 drive does).
@@ -510,7 +507,7 @@ nlohmann::json UssBackend::config() {
 
 void UssBackend::send(uss::CommandBody body, api::Responder done) {
   (void)post_command<uss::ControllerCommand>(controller_, pending_, std::move(body),
-                                             std::move(done), kReplyGrace, "USS");
+                                             std::move(done), kUssReplyGrace, "USS");
 }
 
 std::optional<uss::PkwLength> UssBackend::pkw_length(std::uint8_t address) const {
@@ -730,7 +727,7 @@ void UssBackend::parameter(const api::ParameterArgs& args, api::Responder done) 
   cmd.request = request;
   // The context must be there before the reply can come: kept under the request's tag.
   const std::uint32_t tag = post_command<uss::ControllerCommand>(
-      controller_, pending_, cmd, std::move(done), kReplyGrace, "USS");
+      controller_, pending_, cmd, std::move(done), kUssReplyGrace, "USS");
   if (tag != 0) parameter_requests_[tag] = ParameterContext{args, address, *length};
 }
 
@@ -765,7 +762,7 @@ UssLift::UssLift(Daemon& daemon, const config::Config& config, bool simulate)
       publisher_(config.api.state_rate_hz, {"actual"}),
       wind_down_(
           daemon, [this](bool force) { return backend_->send_shutdown(force); }, kShutdownDeadline,
-          kShutdownGrace) {
+          kUssShutdownGrace) {
   rt::UssRunnerConfig rc;
   rc.device_path = config.drive.device;
   rc.serial = rt::uss_serial_settings(static_cast<std::uint32_t>(config.uss.baud));

@@ -414,7 +414,6 @@ TEST(ReplyLine, BytesAreThoseOfTheDumpedObject) {
   EXPECT_EQ(event_line("x", json("\xff")), "{\"data\":\"\xef\xbf\xbd\",\"event\":\"x\"}\n");
 }
 
-}  // namespace
 // A lift whose drive kind lacks a capability: its commands are refused before their arguments
 // are looked at, the common commands still reach the backend, and status carries the kind's
 // own object and none of the API 1 DCP fields.
@@ -537,4 +536,5 @@ TEST_F(UssDriveKindTest, BadParameterRequestsChangeNothing) {
   }
 }
 
+}  // namespace
 }  // namespace liftd::api

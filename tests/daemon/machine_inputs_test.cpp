@@ -36,12 +36,12 @@ TEST(MachineInputs, EveryApiInputReachesTheSequencersInputs) {
 
 TEST(MachineInputs, EachSpeedsDecelerationPointArrivesForItsOwnSpeedAndDirection) {
   const config::Config config;
-  struct Case {
+  struct DecelCase {
     std::string_view name;
     int speed;
     lift::Direction direction;
   };
-  const Case cases[] = {
+  const DecelCase cases[] = {
       {"decel_v1_up", 1, lift::Direction::Up}, {"decel_v1_down", 1, lift::Direction::Down},
       {"decel_v2_up", 2, lift::Direction::Up}, {"decel_v2_down", 2, lift::Direction::Down},
       {"decel_v3_up", 3, lift::Direction::Up}, {"decel_v3_down", 3, lift::Direction::Down},
@@ -50,7 +50,7 @@ TEST(MachineInputs, EachSpeedsDecelerationPointArrivesForItsOwnSpeedAndDirection
       {"decel_v6_up", 6, lift::Direction::Up}, {"decel_v6_down", 6, lift::Direction::Down},
       {"decel_v7_up", 7, lift::Direction::Up}, {"decel_v7_down", 7, lift::Direction::Down},
   };
-  for (const Case& c : cases) {
+  for (const DecelCase& c : cases) {
     MachineInputs inputs(config, nullptr, false);
     ASSERT_EQ(inputs.update(set_only(flag(c.name), true)), std::nullopt);
     const lift::Inputs in = *inputs.current();

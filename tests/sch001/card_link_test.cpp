@@ -23,7 +23,7 @@ can::Frame from_card(Bytes bytes) {
 can::Frame status(std::uint8_t byte) {
   return from_card({0x61, byte});
 }
-Bytes bytes_of(const can::Frame& f) {
+Bytes answer_bytes(const can::Frame& f) {
   return {f.bytes().begin(), f.bytes().end()};
 }
 
@@ -41,7 +41,7 @@ class CardLinkTest : public ::testing::Test {
     const FrameResult r = link_.on_frame(frame, milliseconds(t_ms));
     if (!r.answer) return std::nullopt;
     EXPECT_EQ(r.answer->id, 0x551U);
-    return bytes_of(*r.answer);
+    return answer_bytes(*r.answer);
   }
   CardLink link_;
 };
