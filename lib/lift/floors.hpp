@@ -35,6 +35,23 @@ class FloorTable {
   std::size_t size_ = 0;
 };
 
+/// How far `level_mm` lies ahead of the position for a car moving in `direction` (negative:
+/// behind it): above the car for Up, below it otherwise.
+constexpr std::int64_t distance_ahead(std::int64_t position_mm, std::int64_t level_mm,
+                                      Direction direction) noexcept {
+  return direction == Direction::Up ? level_mm - position_mm : position_mm - level_mm;
+}
+
+/// The car is at or beyond the terminal level it moves towards (false for Direction::None and
+/// an empty table).
+inline bool at_terminal_level(const FloorTable& floors, Direction direction,
+                              std::int64_t position_mm) noexcept {
+  if (floors.size() == 0) return false;
+  if (direction == Direction::Up) return position_mm >= floors.level_mm(floors.size() - 1);
+  if (direction == Direction::Down) return position_mm <= floors.level_mm(0);
+  return false;
+}
+
 /// The nearest floor ahead in `direction` whose level is at least `decel_distance_mm +
 /// margin_mm` away from the position, i.e. where the car can still stop. nullopt when stationary
 /// (Direction::None) or when no floor ahead is far enough.

@@ -21,13 +21,12 @@
 #include "can/socket.hpp"
 #include "common/mono_time.hpp"
 #include "config/defaults.hpp"
+#include "lift/controller_core.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/position_source.hpp"
 #include "rt/can_runner.hpp"
-#include "rt/snapshot.hpp"
-#include "rt/spsc_queue.hpp"
 #include "sch001/card_link.hpp"
 #include "sch001/hydraulic_travel.hpp"
 
@@ -46,45 +45,25 @@ struct ControllerConfig {
   bool auto_relevel = defaults::kHydraulicAutoRelevel;
 };
 
-// ---- commands (io thread -> CAN thread) ----
-struct TravelCommand {
-  std::size_t floor = 0;
-  Speed speed = Speed::V4;  ///< the fastest the unit has unless the client limits it
-};
-struct StopCommand {};
-struct RelevelCommand {};
-struct InspectionCommand {
-  bool on = false;
-  lift::Direction direction = lift::Direction::None;
-};
-struct CallCommand {
-  bool add = true;
-  std::size_t floor = 0;
-};
-struct InputsCommand {
-  lift::Inputs inputs;
-};
+// ---- commands (io thread -> CAN thread): lib/lift/controller_core.hpp ----
+/// The card's speeds: the fastest the unit has unless the client limits it.
+using TravelCommand = lift::BasicTravelCommand<Speed>;
+using lift::CallCommand;
+using lift::InputsCommand;
+using lift::InspectionCommand;
+using lift::RelevelCommand;
 /// The service is stopping: no new travel, the running one lands as `stop` does; `force`
 /// drops every signal at once.
-struct ShutdownCommand {
-  bool force = false;
-};
+using lift::ShutdownCommand;
+using lift::StopCommand;
 using CommandBody = std::variant<TravelCommand, StopCommand, RelevelCommand, InspectionCommand,
                                  CallCommand, InputsCommand, ShutdownCommand>;
 /// A command with the caller's tag (the frame's command bits are `Command` in protocol.hpp).
-struct ControllerCommand {
-  std::uint32_t tag = 0;  ///< echoed in the reply; 0 = no reply wanted
-  CommandBody body;
-};
+using ControllerCommand = lift::TaggedCommand<CommandBody>;
 
 // ---- replies and events (CAN thread -> io thread) ----
-enum class ReplyCode : std::uint8_t { Ok, NotReady, Busy, BadRequest, Fault };
-struct CommandReply {
-  std::uint32_t tag = 0;
-  ReplyCode code = ReplyCode::Ok;
-  std::string_view detail;           ///< a static string
-  std::optional<std::size_t> floor;  ///< stop: where the car will stop
-};
+using lift::CommandReply;
+using lift::ReplyCode;
 
 /// Faults; each reported once when it starts and once when it ends. The API names are those of
 /// the DCP lift where the meaning is the same.
@@ -115,7 +94,7 @@ struct ControllerEvent {
   std::size_t floor = 0;
 };
 
-inline constexpr std::size_t kMaxSnapshotCalls = 64;
+using lift::kMaxSnapshotCalls;
 
 /// The state published after every step.
 struct ControllerSnapshot {
@@ -149,27 +128,31 @@ struct ControllerSnapshot {
   bool quiesced = false;  ///< shutting down, no travel, no signal in the last answer
 };
 
-inline constexpr std::size_t kCommandQueueSize = 64;
-inline constexpr std::size_t kReplyQueueSize = 64;
-inline constexpr std::size_t kEventQueueSize = 256;
+using lift::kCommandQueueSize;
+using lift::kEventQueueSize;
+using lift::kReplyQueueSize;
 
-class Sch001Controller final : public rt::CanEngine {
+/// The types the shared command handling works on.
+struct Sch001CoreTypes {
+  using Command = ControllerCommand;
+  using Reply = CommandReply;
+  using Event = ControllerEvent;
+  using Snapshot = ControllerSnapshot;
+  using Travel = HydraulicTravel;
+  using TravelEvent = sch001::TravelEvent;
+  using TravelKind = sch001::TravelKind;
+  using TravelCommand = sch001::TravelCommand;
+  using Input = TickInput;
+  using Cause = sch001::Cause;
+};
+
+class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore<Sch001CoreTypes> {
  public:
   /// Throws std::invalid_argument on a bad floor table.
   Sch001Controller(const ControllerConfig& config, const lift::PositionSource& position,
                    MonoTime start);
 
-  // ---- io thread ----
-  bool post(const ControllerCommand& command) noexcept { return commands_.try_push(command); }
-  bool poll_reply(CommandReply& out) noexcept { return replies_.try_pop(out); }
-  bool poll_event(ControllerEvent& out) noexcept { return events_.try_pop(out); }
-  ControllerSnapshot snapshot() noexcept { return snapshot_.read(); }
-  /// Events lost because a queue was full: the controller's to the io thread or the travel's own
-  /// (stats cycle.dropped_events).
-  std::uint64_t dropped_events() const noexcept {
-    return dropped_events_.load(std::memory_order_relaxed) +
-           travel_dropped_.load(std::memory_order_relaxed);
-  }
+  // ---- io thread: post(), poll_reply(), poll_event(), snapshot(), dropped_events() ----
   std::span<const std::int64_t> floors_mm() const noexcept { return config_.floors_mm; }
 
   // ---- rt::CanEngine (CAN thread) ----
@@ -178,20 +161,14 @@ class Sch001Controller final : public rt::CanEngine {
   void on_endpoint(bool up, MonoTime now) noexcept override;
   void on_tick(MonoTime now) noexcept override;
 
-  /// Direct access for single-threaded tests.
+  /// Direct access for single-threaded tests (and travel()).
   const CardLink& link() const noexcept { return link_; }
-  const HydraulicTravel& travel() const noexcept { return travel_; }
 
  private:
   void step(MonoTime now) noexcept;
   void handle(const ControllerCommand& command, TickInput& in) noexcept;
-  void reply(std::uint32_t tag, ReplyCode code, std::string_view detail = {},
-             std::optional<std::size_t> floor = std::nullopt) noexcept;
-  void push_event(const ControllerEvent& event) noexcept;
   TickInput build_input(MonoTime now) noexcept;
   void update_faults(const TickInput& in, MonoTime now) noexcept;
-  void set_fault(FaultCode code, bool active, MonoTime now) noexcept;
-  void drain_travel(MonoTime now) noexcept;
   void serve_calls(TickInput& in) noexcept;
   void maybe_relevel(TickInput& in) noexcept;
   void publish(MonoTime now) noexcept;
@@ -201,39 +178,17 @@ class Sch001Controller final : public rt::CanEngine {
   ControllerConfig config_;
   const lift::PositionSource& position_;
   CardLink link_;
-  HydraulicTravel travel_;
-  lift::LiftModel lift_;
-
-  rt::SpscQueue<ControllerCommand, kCommandQueueSize> commands_;
-  rt::SpscQueue<CommandReply, kReplyQueueSize> replies_;
-  rt::SpscQueue<ControllerEvent, kEventQueueSize> events_;
-  rt::Snapshot<ControllerSnapshot> snapshot_;
-  std::atomic<std::uint64_t> dropped_events_{0};
-  std::atomic<std::uint64_t> travel_dropped_{0};  ///< the travel's own count, copied each step
 
   // CAN-thread state.
   bool endpoint_up_ = false;
   bool endpoint_failed_ = false;  ///< the endpoint failed and has not reopened
-  lift::Inputs provider_inputs_{};
-  MonoTime inputs_at_{};
-  bool inputs_seen_ = false;
-  bool api_inspection_ = false;
-  lift::Direction api_direction_ = lift::Direction::None;
-  MonoTime api_hold_until_{};
-  std::uint32_t travel_tag_ = 0;
-  bool shutting_down_ = false;
-  bool place_known_ = false;  ///< the sequencer was told the floor the car stands at
-  bool bus_fault_ = false;    ///< an error frame said bus-off, error passive, no ACK, ...
-  CommandBits bits_sent_{};   ///< of the last answer
+  bool bus_fault_ = false;        ///< an error frame said bus-off, error passive, no ACK, ...
+  CommandBits bits_sent_{};       ///< of the last answer
   std::uint8_t current_sent_ = 0;
   std::uint8_t destination_sent_ = 0;
-  MonoTime start_at_{};
   TickOutput last_output_{};
   std::uint64_t bus_errors_ = 0;
   can::ErrorReport last_bus_error_{};
-  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults_{};
-  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since_{};
-  std::uint64_t steps_ = 0;
 };
 
 }  // namespace liftd::sch001

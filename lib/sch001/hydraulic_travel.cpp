@@ -9,11 +9,6 @@ namespace {
 
 using std::chrono::milliseconds;
 
-std::int64_t distance_to(std::int64_t position_mm, std::int64_t level_mm,
-                         lift::Direction direction) noexcept {
-  return direction == lift::Direction::Up ? level_mm - position_mm : position_mm - level_mm;
-}
-
 /// The shaft's deceleration point that belongs to a speed: its API name V1 (fast), V3 or V4.
 int speed_number(Speed speed) noexcept {
   switch (speed) {
@@ -94,23 +89,10 @@ Cause HydraulicTravel::forbidding(TravelKind kind, const TickInput& in) const no
   if (!in.card_allows_travel) return Cause::CardNotReady;  // no status yet, or RDY = 0 (3e)
   // The machine's rules, common to every drive kind (lib/lift/gate.hpp). Inspection: the
   // safety chain holds the door contacts.
-  lift::MachineNeeds needs;
-  needs.doors_locked = kind == TravelKind::Travel || kind == TravelKind::Relevel;
-  needs.door_bridge_allowed = kind == TravelKind::Relevel && config_.relevel_doors_open;
-  needs.position = needs.doors_locked;
-  switch (lift::machine_refusal(in.inputs, in.position_mm.has_value(), needs)) {
-    case lift::MachineRefusal::InputsLost:
-      return Cause::InputsLost;
-    case lift::MachineRefusal::SafetyChainOpen:
-      return Cause::SafetyChain;
-    case lift::MachineRefusal::DoorsNotLocked:
-      return Cause::DoorsUnlocked;
-    case lift::MachineRefusal::PositionLost:
-      return Cause::PositionLost;
-    case lift::MachineRefusal::None:
-      break;
-  }
-  return Cause::None;
+  const lift::MachineNeeds needs =
+      lift::run_needs(kind, config_.relevel_doors_open, /*steers_by_position=*/true);
+  return lift::refusal_cause<Cause>(
+      lift::machine_refusal(in.inputs, in.position_mm.has_value(), needs));
 }
 
 Cause HydraulicTravel::begin(TravelKind kind, const lift::FloorTable& floors, std::size_t floor,
@@ -186,7 +168,8 @@ std::optional<std::size_t> HydraulicTravel::stop(const lift::FloorTable& floors,
     const bool up = direction_ == lift::Direction::Up;
     for (std::ptrdiff_t i = up ? 0 : n - 1; up ? i < n : i >= 0; i += up ? 1 : -1) {
       const auto floor = static_cast<std::size_t>(i);
-      const std::int64_t d = distance_to(*in.position_mm, floors.level_mm(floor), direction_);
+      const std::int64_t d =
+          lift::distance_ahead(*in.position_mm, floors.level_mm(floor), direction_);
       if (d >= static_cast<std::int64_t>(slowdown_mm())) {
         if (up ? floor < target_ : floor > target_) target_ = floor;
         break;
@@ -251,7 +234,7 @@ TickOutput HydraulicTravel::tick(const lift::FloorTable& floors, const TickInput
   if ((kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel) &&
       phase_ != Phase::MotorStart && in.position_mm) {
     const std::int64_t remaining =
-        distance_to(*in.position_mm, floors.level_mm(target_), direction_);
+        lift::distance_ahead(*in.position_mm, floors.level_mm(target_), direction_);
     if (phase_ == Phase::Fast && (remaining <= static_cast<std::int64_t>(slowdown_mm()) ||
                                   in.inputs.decel_point(speed_number(speed_), direction_))) {
       phase_ = Phase::Slow;
@@ -262,13 +245,10 @@ TickOutput HydraulicTravel::tick(const lift::FloorTable& floors, const TickInput
       finish(in.now);
     }
   }
-  if (kind_ == TravelKind::Inspection && in.position_mm && floors.size() > 0) {
-    // The inspection run stops at the terminal levels (the limit switches' job in the shaft).
-    const bool at_top =
-        direction_ == lift::Direction::Up && *in.position_mm >= floors.level_mm(floors.size() - 1);
-    const bool at_bottom =
-        direction_ == lift::Direction::Down && *in.position_mm <= floors.level_mm(0);
-    if (at_top || at_bottom) end(TravelEvent::Type::Finished, Cause::None, in.now);
+  // The inspection run stops at the terminal levels (the limit switches' job in the shaft).
+  if (kind_ == TravelKind::Inspection && in.position_mm &&
+      lift::at_terminal_level(floors, direction_, *in.position_mm)) {
+    end(TravelEvent::Type::Finished, Cause::None, in.now);
   }
   TickOutput out;
   out.bits = signals();
@@ -293,13 +273,6 @@ void HydraulicTravel::end(TravelEvent::Type type, Cause cause, MonoTime now) noe
   phase_ = Phase::Idle;
   direction_ = lift::Direction::None;
   motor_on_ = false;  // every motor off: SFY drops with it (1.4)
-}
-
-bool HydraulicTravel::poll_event(TravelEvent& out) noexcept {
-  const auto event = events_.pop();
-  if (!event) return false;
-  out = *event;
-  return true;
 }
 
 }  // namespace liftd::sch001

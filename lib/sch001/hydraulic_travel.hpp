@@ -19,11 +19,11 @@
 #include <optional>
 #include <string_view>
 
-#include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
 #include "config/defaults.hpp"
 #include "lift/floors.hpp"
 #include "lift/inputs.hpp"
+#include "lift/travel_event.hpp"
 #include "sch001/protocol.hpp"
 
 namespace liftd::sch001 {
@@ -109,15 +109,7 @@ struct TickOutput {
 };
 
 /// Something that happened, drained by the controller.
-struct TravelEvent {
-  enum class Type : std::uint8_t { Started, Finished, Aborted };
-  Type type = Type::Started;
-  TravelKind kind = TravelKind::None;
-  lift::Direction direction = lift::Direction::None;
-  std::size_t floor = 0;  ///< target (started) or where it ended (finished)
-  Cause cause = Cause::None;
-  MonoTime at{};
-};
+using TravelEvent = lift::BasicTravelEvent<TravelKind, Cause>;
 
 /// The sequencer. Floors are the installation's; the car's current floor is the last one it
 /// stopped at (3c: "updated each time the stop contact is reached").
@@ -148,6 +140,8 @@ class HydraulicTravel {
   Cause forbidding(TravelKind kind, const TickInput& in) const noexcept;
 
   TravelKind kind() const noexcept { return kind_; }
+  /// Something runs: no new run may start.
+  bool busy() const noexcept { return kind_ != TravelKind::None; }
   Phase phase() const noexcept { return phase_; }
   lift::Direction direction() const noexcept { return direction_; }
   std::optional<std::size_t> target() const noexcept {
@@ -162,7 +156,7 @@ class HydraulicTravel {
   const HydraulicConfig& config() const noexcept { return config_; }
 
   /// The next event, if any.
-  bool poll_event(TravelEvent& out) noexcept;
+  bool poll_event(TravelEvent& out) noexcept { return events_.poll(out); }
   /// Events lost because the queue was full.
   std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
 
@@ -186,7 +180,7 @@ class HydraulicTravel {
   MonoTime motor_on_at_{};
   bool motor_on_ = false;
 
-  FixedQueue<TravelEvent, 16> events_;
+  lift::TravelEventQueue<TravelEvent> events_;
 };
 
 }  // namespace liftd::sch001

@@ -11,10 +11,8 @@
 namespace liftd::uss {
 namespace {
 
-/// After start, the port, the drive, the inputs and the position get this long before they
-/// count as lost (as the DCP and SCH001 lifts).
-MonoTime start_grace(const UssControllerConfig& config) {
-  return config.inputs_timeout * 2;
+lift::ControllerCoreConfig core_config(const UssControllerConfig& config, MonoTime start) {
+  return {config.lift, config.floors_mm, config.inputs_timeout, config.inspection_hold, start};
 }
 
 }  // namespace
@@ -43,13 +41,11 @@ std::string_view fault_text(FaultCode code) noexcept {
 
 UssController::UssController(const UssControllerConfig& config, Master& master,
                              const lift::PositionSource& position, MonoTime start)
-    : config_(config),
+    : ControllerCore(core_config(config, start), config.travel),
+      config_(config),
       master_(master),
-      position_(position),
-      travel_(config.travel),
-      lift_(config.lift),
-      start_at_(start) {
-  if (config.floors_mm.size() < 2 || !lift_.set_floors(config.floors_mm)) {
+      position_(position) {
+  if (config.floors_mm.size() < 2) {
     throw std::invalid_argument("floors: need 2 or more strictly increasing levels");
   }
   if (const auto bad = validate(config.travel)) {
@@ -94,15 +90,7 @@ DriveInput UssController::build_input(MonoTime now) const noexcept {
   DriveInput in;
   in.now = now;
   in.position_mm = position_.position_mm(now);
-  in.inputs = provider_inputs_;
-  in.inputs.valid = inputs_seen_ && now - inputs_at_ <= config_.inputs_timeout;
-  if (api_inspection_) {
-    in.inputs.inspection = true;
-    const bool held = now <= api_hold_until_;
-    in.inputs.button_up = in.inputs.button_up || (held && api_direction_ == lift::Direction::Up);
-    in.inputs.button_down =
-        in.inputs.button_down || (held && api_direction_ == lift::Direction::Down);
-  }
+  in.inputs = current_inputs(now);
   const SlaveState& s = master_.slave(config_.drive_address);
   // C 5.1: PZD1 of the reply is ZSW, PZD2 the main actual value HIW.
   in.zsw = s.pzd_in_count >= 1 ? s.pzd_in[0] : 0;
@@ -120,30 +108,13 @@ void UssController::step(MonoTime now) noexcept {
   drain_master(now);
   DriveInput in = build_input(now);
   ControllerCommand command;
-  while (commands_.try_pop(command)) {
+  while (next_command(command)) {
     handle(command, in);
     in = build_input(now);  // an inputs command changes what follows
   }
-  if (!place_known_ && in.position_mm) {
-    // The current floor is the one the car last stopped at; at start, the nearest.
-    if (const auto nearest = lift_.floors().nearest(*in.position_mm)) {
-      travel_.set_current_floor(*nearest);
-      place_known_ = true;
-    }
-  }
-  // Inspection (the car-roof switch, or the API's): hold-to-run with the buttons.
-  if (in.inputs.inspection) {
-    if (travel_.kind() == TravelKind::Travel || travel_.kind() == TravelKind::Relevel) {
-      travel_.abort(Cause::ModeChanged, now);
-    }
-    const lift::Direction d =
-        in.inputs.button_up == in.inputs.button_down
-            ? lift::Direction::None
-            : (in.inputs.button_up ? lift::Direction::Up : lift::Direction::Down);
-    (void)travel_.inspect(lift_.floors(), shutting_down_ ? lift::Direction::None : d, in);
-  } else if (travel_.kind() == TravelKind::Inspection) {
-    (void)travel_.inspect(lift_.floors(), lift::Direction::None, in);
-  }
+  locate_car(in);
+  follow_inspection(in, Cause::ModeChanged,
+                    [&](lift::Direction d) { (void)travel_.inspect(lift_.floors(), d, in); });
   if (!shutting_down_) {
     serve_calls(in);
     maybe_relevel(in);
@@ -205,7 +176,7 @@ void UssController::drain_master(MonoTime now) noexcept {
     r.tag = pkw_result_.tag;
     r.code = ReplyCode::Ok;
     r.pkw = pkw_result_;
-    (void)replies_.try_push(r);
+    push_reply(r);
   }
   MirrorResult mirror;
   while (master_.poll_mirror(mirror)) {
@@ -214,7 +185,7 @@ void UssController::drain_master(MonoTime now) noexcept {
       r.tag = mirror.tag;
       r.code = ReplyCode::Ok;
       r.mirror = mirror;
-      (void)replies_.try_push(r);
+      push_reply(r);
       continue;
     }
     ControllerEvent e;
@@ -227,31 +198,17 @@ void UssController::drain_master(MonoTime now) noexcept {
 
 // ---- commands ----
 
-void UssController::reply(std::uint32_t tag, ReplyCode code, std::string_view detail,
-                          std::optional<std::size_t> floor) noexcept {
-  if (tag == 0) return;
-  CommandReply r;
-  r.tag = tag;
-  r.code = code;
-  r.detail = detail;
-  r.floor = floor;
-  (void)replies_.try_push(r);  // as deep as the command queue
-}
-
 ReplyCode UssController::code_for(Cause cause) noexcept {
   switch (cause) {
     case Cause::LinkFault:
     case Cause::DriveFault:
     case Cause::DriveDidNotStart:
     case Cause::DriveDidNotStop:
-    case Cause::SafetyChain:
-    case Cause::InputsLost:
-    case Cause::PositionLost:
       return ReplyCode::Fault;
     case Cause::BadSpeed:
       return ReplyCode::BadRequest;
     default:
-      return ReplyCode::NotReady;
+      return lift::shared_cause_code(cause);
   }
 }
 
@@ -266,18 +223,10 @@ std::string_view UssController::text_for(Cause cause) noexcept {
       return "the drive is not ready (not ready to switch on, or ZSW bit 9 = 0: local control)";
     case Cause::AdvanceWarning:
       return "the drive reports a warning (ZSW bit 7)";
-    case Cause::SafetyChain:
-      return "safety chain open";
-    case Cause::DoorsUnlocked:
-      return "doors not locked";
-    case Cause::InputsLost:
-      return "machine inputs lost";
-    case Cause::PositionLost:
-      return "car position unknown";
     case Cause::BadSpeed:
       return "that speed has no setpoint in this installation (uss.speeds)";
     default:
-      return "not possible now";
+      return lift::shared_cause_text(cause);
   }
 }
 
@@ -286,44 +235,19 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
   std::visit(
       [&](const auto& body) {
         using T = std::decay_t<decltype(body)>;
-        if constexpr (std::is_same_v<T, InputsCommand>) {
-          provider_inputs_ = body.inputs;
-          inputs_at_ = in.now;
-          inputs_seen_ = true;
-          reply(tag, ReplyCode::Ok);
-        } else if constexpr (std::is_same_v<T, ShutdownCommand>) {
-          shutting_down_ = true;
-          lift_.calls().clear();
-          if (body.force) {
-            travel_.abort(Cause::Shutdown, in.now);
-          } else {
-            (void)travel_.stop(lift_.floors(), in);
-          }
-          reply(tag, ReplyCode::Ok);
-        } else if constexpr (std::is_same_v<T, TravelCommand>) {
-          if (shutting_down_) return reply(tag, ReplyCode::NotReady, "the service is stopping");
-          if (body.floor >= lift_.floors().size()) {
-            return reply(tag, ReplyCode::BadRequest, "no such floor in this installation");
-          }
-          if (speed_number(body.speed) == 0 || !travel_.speed_available(body.speed)) {
-            return reply(tag, ReplyCode::BadRequest, text_for(Cause::BadSpeed));
-          }
-          if (in.inputs.inspection) return reply(tag, ReplyCode::NotReady, "inspection is on");
-          if (travel_.busy()) return reply(tag, ReplyCode::Busy, "a travel is running");
-          if (in.position_mm && std::llabs(*in.position_mm - lift_.floors().level_mm(body.floor)) <=
-                                    static_cast<std::int64_t>(config_.lift.level_tolerance_mm)) {
-            return reply(tag, ReplyCode::NotReady, "the car is already at that level");
-          }
-          const Cause why = travel_.start_travel(lift_.floors(), body.floor, body.speed, in);
-          if (why != Cause::None) return reply(tag, code_for(why), text_for(why));
-          reply(tag, ReplyCode::Ok);
-        } else if constexpr (std::is_same_v<T, StopCommand>) {
-          lift_.calls().clear();
-          const auto floor = travel_.stop(lift_.floors(), in);
-          reply(tag, ReplyCode::Ok, {}, floor);
+        if constexpr (std::is_same_v<T, TravelCommand>) {
+          const auto speed_refusal = [&]() -> std::optional<lift::Refusal> {
+            if (speed_number(body.speed) == 0 || !travel_.speed_available(body.speed)) {
+              return lift::Refusal{ReplyCode::BadRequest, text_for(Cause::BadSpeed)};
+            }
+            return std::nullopt;
+          };
+          (void)handle_travel(
+              tag, body, in, speed_refusal,
+              [&] { return travel_.start_travel(lift_.floors(), body.floor, body.speed, in); },
+              code_for, text_for);
         } else if constexpr (std::is_same_v<T, RelevelCommand>) {
-          if (shutting_down_) return reply(tag, ReplyCode::NotReady, "the service is stopping");
-          if (travel_.busy()) return reply(tag, ReplyCode::Busy, "a travel is running");
+          if (relevel_refused(tag)) return;
           if (in.inputs.inspection) return reply(tag, ReplyCode::NotReady, "inspection is on");
           std::size_t floor = travel_.current_floor();
           lift::Direction direction = lift::Direction::None;
@@ -344,27 +268,6 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
           const Cause why = travel_.start_relevel(lift_.floors(), floor, direction, in);
           if (why != Cause::None) return reply(tag, code_for(why), text_for(why));
           reply(tag, ReplyCode::Ok, {}, floor);
-        } else if constexpr (std::is_same_v<T, InspectionCommand>) {
-          api_inspection_ = body.on;
-          api_direction_ = body.on ? body.direction : lift::Direction::None;
-          api_hold_until_ = in.now + config_.inspection_hold;
-          reply(tag, ReplyCode::Ok);
-        } else if constexpr (std::is_same_v<T, CallCommand>) {
-          if (body.add) {
-            if (shutting_down_) return reply(tag, ReplyCode::NotReady, "the service is stopping");
-            switch (lift_.add_call(body.floor)) {
-              case lift::CallError::None:
-                return reply(tag, ReplyCode::Ok);
-              case lift::CallError::NoSuchFloor:
-                return reply(tag, ReplyCode::BadRequest, "no such floor in this installation");
-              default:
-                return reply(tag, ReplyCode::Busy, "the calls queue is full");
-            }
-          }
-          if (!lift_.cancel_call(body.floor)) {
-            return reply(tag, ReplyCode::BadRequest, "that floor is not in the calls queue");
-          }
-          reply(tag, ReplyCode::Ok);
         } else if constexpr (std::is_same_v<T, DriveResetCommand>) {
           if (travel_.busy()) {
             return reply(tag, ReplyCode::Busy, "a travel is running: no drive reset during travel");
@@ -390,6 +293,8 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
           if (!master_.request_mirror(body.address, tag)) {
             return reply(tag, ReplyCode::Busy, "a mirror to that slave is still pending");
           }
+        } else {
+          handle_shared(tag, body, in);
         }
       },
       command.body);
@@ -397,49 +302,14 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
 
 // ---- travels, calls, faults ----
 
-void UssController::drain_travel(MonoTime now) noexcept {
-  TravelEvent t;
-  while (travel_.poll_event(t)) {
-    ControllerEvent e;
-    e.kind = ControllerEvent::Kind::Travel;
-    e.at = now;
-    e.travel = t;
-    push_event(e);
-    if (t.type == TravelEvent::Type::Finished && t.kind == TravelKind::Travel) {
-      const auto front = lift_.calls().front();
-      if (front && *front == t.floor) {
-        lift_.calls().pop_front();
-        ControllerEvent served;
-        served.kind = ControllerEvent::Kind::CallServed;
-        served.at = now;
-        served.floor = t.floor;
-        push_event(served);
-      }
-    }
-  }
-  travel_dropped_.store(travel_.dropped_events(), std::memory_order_relaxed);
-}
-
 void UssController::serve_calls(const DriveInput& in) noexcept {
-  if (travel_.busy() || in.inputs.inspection) return;
-  const auto front = lift_.calls().front();
-  if (!front) return;
-  const std::size_t floor = *front;
-  if (in.position_mm && std::llabs(*in.position_mm - lift_.floors().level_mm(floor)) <=
-                            static_cast<std::int64_t>(config_.lift.level_tolerance_mm)) {
-    lift_.calls().pop_front();  // already there
-    ControllerEvent served;
-    served.kind = ControllerEvent::Kind::CallServed;
-    served.at = in.now;
-    served.floor = floor;
-    push_event(served);
-    return;
-  }
+  const auto floor = next_call(in);
+  if (!floor) return;
   // The fastest speed the installation has, in the order DCP 3.5.3.7 adds them.
   for (const std::string_view name : drive::kTravelSpeedNames) {
     const auto speed = parse_speed(name);
     if (speed && travel_.speed_available(*speed)) {
-      (void)travel_.start_travel(lift_.floors(), floor, *speed, in);  // waits while refused
+      (void)travel_.start_travel(lift_.floors(), *floor, *speed, in);  // waits while refused
       return;
     }
   }
@@ -471,7 +341,7 @@ void UssController::maybe_relevel(const DriveInput& in) noexcept {
 }
 
 void UssController::update_faults(const DriveInput& in, MonoTime now) noexcept {
-  const bool started = now - start_at_ > start_grace(config_);
+  const bool started = start_grace_over(now);
   const SlaveState& s = master_.slave(config_.drive_address);
   const bool failing = s.heard && s.consecutive_failures >= config_.link_fault_replies;
   // A lost port or a drive missing its replies is a fault at once; a port not open or a drive
@@ -489,26 +359,8 @@ void UssController::update_faults(const DriveInput& in, MonoTime now) noexcept {
             started && config_.travel.reference == Reference::Position && !in.position_mm, now);
 }
 
-void UssController::set_fault(FaultCode code, bool active, MonoTime now) noexcept {
-  const auto i = static_cast<std::size_t>(code);
-  if (faults_[i] == active) return;
-  faults_[i] = active;
-  if (active) fault_since_[i] = now;
-  ControllerEvent e;
-  e.kind = active ? ControllerEvent::Kind::FaultRaised : ControllerEvent::Kind::FaultCleared;
-  e.at = now;
-  e.fault = code;
-  push_event(e);
-}
-
-void UssController::push_event(const ControllerEvent& event) noexcept {
-  if (!events_.try_push(event)) dropped_events_.fetch_add(1, std::memory_order_relaxed);
-}
-
 void UssController::publish(MonoTime now) noexcept {
   ControllerSnapshot& s = snapshot_scratch_;
-  s.at = now;
-  s.steps = steps_;
   s.port_up = port_up_;
   s.slave_count = 0;
   for (std::size_t a = 0; a <= kMaxSlaveAddress; ++a) {
@@ -546,25 +398,12 @@ void UssController::publish(MonoTime now) noexcept {
   s.cycles = master_.cycles();
   s.expected_cycle_time = master_.expected_cycle_time();
   s.last_cycle_time = master_.last_cycle_time();
-  s.position_mm = lift_.position_mm();
-  s.floor = lift_.current_floor();
-  s.travel_kind = travel_.kind();
-  s.phase = travel_.phase();
-  s.direction = travel_.direction();
-  s.target_floor = travel_.target();
   s.speed = travel_.speed();
-  s.inputs = in.inputs;
-  s.call_count = std::min(lift_.calls().size(), kMaxSnapshotCalls);
-  for (std::size_t i = 0; i < s.call_count; ++i) {
-    s.calls[i] = static_cast<std::uint8_t>(lift_.calls().at(i));
-  }
-  s.faults = faults_;
-  s.fault_since = fault_since_;
-  s.shutting_down = shutting_down_;
+  fill_lift_snapshot(s, now, in.inputs);
   s.quiesced = shutting_down_ && !travel_.busy() && (last_output_.stw & stw::kOn) == 0 &&
                !last_output_.brake_open && !last_output_.contactors_on &&
                !(in.link_ok && operation_enabled(in.zsw));
-  snapshot_.publish(s);
+  publish_snapshot(s);
 }
 
 }  // namespace liftd::uss

@@ -23,12 +23,11 @@
 
 #include "common/mono_time.hpp"
 #include "config/defaults.hpp"
+#include "lift/controller_core.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/position_source.hpp"
-#include "rt/snapshot.hpp"
-#include "rt/spsc_queue.hpp"
 #include "rt/uss_runner.hpp"
 #include "uss/drive/drive_profile.hpp"
 #include "uss/drive/lift_travel.hpp"
@@ -61,29 +60,17 @@ struct UssControllerConfig {
   std::uint32_t relevel_zone_mm = 150;
 };
 
-// ---- commands (io thread -> USS thread) ----
-struct TravelCommand {
-  std::size_t floor = 0;
-  SpeedName speed = SpeedName::V4;  ///< one of V1..V7 with a setpoint
-};
-struct StopCommand {};
-struct RelevelCommand {};
-struct InspectionCommand {
-  bool on = false;
-  lift::Direction direction = lift::Direction::None;
-};
-struct CallCommand {
-  bool add = true;
-  std::size_t floor = 0;
-};
-struct InputsCommand {
-  lift::Inputs inputs;
-};
+// ---- commands (io thread -> USS thread): the shared ones in lib/lift/controller_core.hpp ----
+/// One of V1..V7 with a setpoint.
+using TravelCommand = lift::BasicTravelCommand<SpeedName>;
+using lift::CallCommand;
+using lift::InputsCommand;
+using lift::InspectionCommand;
+using lift::RelevelCommand;
 /// The service is stopping: no new travel, the running one lands as `stop` does, then OFF1;
 /// `force`: OFF2 at once.
-struct ShutdownCommand {
-  bool force = false;
-};
+using lift::ShutdownCommand;
+using lift::StopCommand;
 /// Acknowledge a drive fault: one rising edge of STW bit 7 (C 5.2.1 table 5.3); also clears a
 /// latched drive-profile supervision. Refused while a run is in progress.
 struct DriveResetCommand {};
@@ -99,18 +86,12 @@ struct MirrorCommand {
 using CommandBody = std::variant<TravelCommand, StopCommand, RelevelCommand, InspectionCommand,
                                  CallCommand, InputsCommand, ShutdownCommand, DriveResetCommand,
                                  ParameterCommand, MirrorCommand>;
-struct ControllerCommand {
-  std::uint32_t tag = 0;  ///< echoed in the reply; 0 = no reply wanted
-  CommandBody body;
-};
+using ControllerCommand = lift::TaggedCommand<CommandBody>;
 
 // ---- replies and events (USS thread -> io thread) ----
-enum class ReplyCode : std::uint8_t { Ok, NotReady, Busy, BadRequest, Fault };
-struct CommandReply {
-  std::uint32_t tag = 0;
-  ReplyCode code = ReplyCode::Ok;
-  std::string_view detail;           ///< a static string
-  std::optional<std::size_t> floor;  ///< stop / relevel: where the car will stop
+using lift::ReplyCode;
+/// The shared reply (tag, code, detail, floor) with the results of the USS requests.
+struct CommandReply : lift::CommandReply {
   /// ParameterCommand: its one reply comes when the request ended (Ok with the result, whatever
   /// its outcome; Unanswered after the master's pkw_repeat_limit), or at once without a result
   /// when the master refused it.
@@ -162,7 +143,7 @@ struct SlaveSnapshot {
   bool pkw_busy = false;
 };
 
-inline constexpr std::size_t kMaxSnapshotCalls = 64;
+using lift::kMaxSnapshotCalls;
 inline constexpr std::size_t kMaxSnapshotSlaves = kMaxSlaveAddress + 1;
 
 /// The state published after every step.
@@ -207,47 +188,44 @@ struct ControllerSnapshot {
   bool quiesced = false;  ///< shutting down, no run, OFF1 (or OFF2) sent, brake and contactors off
 };
 
-inline constexpr std::size_t kCommandQueueSize = 64;
-inline constexpr std::size_t kReplyQueueSize = 64;
-inline constexpr std::size_t kEventQueueSize = 256;
+using lift::kCommandQueueSize;
+using lift::kEventQueueSize;
+using lift::kReplyQueueSize;
 
-class UssController final : public rt::UssHooks {
+/// The types the shared command handling works on.
+struct UssCoreTypes {
+  using Command = ControllerCommand;
+  using Reply = CommandReply;
+  using Event = ControllerEvent;
+  using Snapshot = ControllerSnapshot;
+  using Travel = LiftTravel;
+  using TravelEvent = uss::TravelEvent;
+  using TravelKind = uss::TravelKind;
+  using TravelCommand = uss::TravelCommand;
+  using Input = DriveInput;
+  using Cause = uss::Cause;
+};
+
+class UssController final : public rt::UssHooks, public lift::ControllerCore<UssCoreTypes> {
  public:
   /// Throws std::invalid_argument on a bad floor table, a bad travel config or a drive address
   /// the master does not poll.
   UssController(const UssControllerConfig& config, Master& master,
                 const lift::PositionSource& position, MonoTime start);
 
-  // ---- io thread ----
-  bool post(const ControllerCommand& command) noexcept { return commands_.try_push(command); }
-  bool poll_reply(CommandReply& out) noexcept { return replies_.try_pop(out); }
-  bool poll_event(ControllerEvent& out) noexcept { return events_.try_pop(out); }
-  ControllerSnapshot snapshot() noexcept { return snapshot_.read(); }
-  /// Events lost because a queue was full (the controller's and the travel's own).
-  std::uint64_t dropped_events() const noexcept {
-    return dropped_events_.load(std::memory_order_relaxed) +
-           travel_dropped_.load(std::memory_order_relaxed);
-  }
+  // ---- io thread: post(), poll_reply(), poll_event(), snapshot(), dropped_events() ----
   std::span<const std::int64_t> floors_mm() const noexcept { return config_.floors_mm; }
 
   // ---- rt::UssHooks (USS thread) ----
   void after_exchange(MonoTime now) noexcept override;
   void on_port(bool up, MonoTime now) noexcept override;
 
-  /// Direct access for single-threaded tests.
-  const LiftTravel& travel() const noexcept { return travel_; }
-
  private:
   void step(MonoTime now) noexcept;
   void drain_master(MonoTime now) noexcept;
   void handle(const ControllerCommand& command, DriveInput& in) noexcept;
-  void reply(std::uint32_t tag, ReplyCode code, std::string_view detail = {},
-             std::optional<std::size_t> floor = std::nullopt) noexcept;
-  void push_event(const ControllerEvent& event) noexcept;
   DriveInput build_input(MonoTime now) const noexcept;
   void update_faults(const DriveInput& in, MonoTime now) noexcept;
-  void set_fault(FaultCode code, bool active, MonoTime now) noexcept;
-  void drain_travel(MonoTime now) noexcept;
   void serve_calls(const DriveInput& in) noexcept;
   void maybe_relevel(const DriveInput& in) noexcept;
   void publish(MonoTime now) noexcept;
@@ -257,35 +235,14 @@ class UssController final : public rt::UssHooks {
   UssControllerConfig config_;
   Master& master_;
   const lift::PositionSource& position_;
-  LiftTravel travel_;
-  lift::LiftModel lift_;
-
-  rt::SpscQueue<ControllerCommand, kCommandQueueSize> commands_;
-  rt::SpscQueue<CommandReply, kReplyQueueSize> replies_;
-  rt::SpscQueue<ControllerEvent, kEventQueueSize> events_;
-  rt::Snapshot<ControllerSnapshot> snapshot_;
-  std::atomic<std::uint64_t> dropped_events_{0};
-  std::atomic<std::uint64_t> travel_dropped_{0};
 
   // USS-thread state.
   bool port_up_ = false;
   bool port_failed_ = false;  ///< the port was lost and has not reopened
-  lift::Inputs provider_inputs_{};
-  MonoTime inputs_at_{};
-  bool inputs_seen_ = false;
-  bool api_inspection_ = false;
-  lift::Direction api_direction_ = lift::Direction::None;
-  MonoTime api_hold_until_{};
-  bool shutting_down_ = false;
-  bool place_known_ = false;
-  MonoTime start_at_{};
   DriveOutput last_output_{};
   std::int16_t setpoint_raw_ = 0;
   ProfileState last_state_ = ProfileState::NotReadyToSwitchOn;
   bool state_reported_ = false;
-  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults_{};
-  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since_{};
-  std::uint64_t steps_ = 0;
   // Scratch for the master's results (large; kept off the stack of the real-time thread).
   PkwResult pkw_result_{};
   SpontaneousReport report_{};

@@ -12,11 +12,6 @@ using std::chrono::milliseconds;
 constexpr std::array<std::string_view, kSpeedCount> kSpeedNames = {"V0", "VN", "VI", "V1", "V2",
                                                                    "V3", "V4", "V5", "V6", "V7"};
 
-std::int64_t distance_to(std::int64_t position_mm, std::int64_t level_mm,
-                         lift::Direction direction) noexcept {
-  return direction == lift::Direction::Up ? level_mm - position_mm : position_mm - level_mm;
-}
-
 bool is_travel_speed(SpeedName speed) noexcept {
   return speed_number(speed) != 0;
 }
@@ -30,14 +25,6 @@ bool drive_running(std::uint16_t zsw) noexcept {
 
 double magnitude(double v) noexcept {
   return v < 0.0 ? -v : v;
-}
-
-/// The car is at or beyond the terminal level it moves towards.
-bool at_terminal(const lift::FloorTable& floors, lift::Direction direction,
-                 std::int64_t position_mm) noexcept {
-  if (direction == lift::Direction::Up) return position_mm >= floors.level_mm(floors.size() - 1);
-  if (direction == lift::Direction::Down) return position_mm <= floors.level_mm(0);
-  return false;
 }
 
 }  // namespace
@@ -252,23 +239,10 @@ Cause LiftTravel::ending(TravelKind kind, const DriveInput& in) const noexcept {
   if (!profile_.plc_control(in.zsw)) return Cause::DriveNotReady;
   // The machine's rules, common to every drive kind (lib/lift/gate.hpp). Inspection: the
   // safety chain holds the door contacts.
-  lift::MachineNeeds needs;
-  needs.doors_locked = kind == TravelKind::Travel || kind == TravelKind::Relevel;
-  needs.door_bridge_allowed = kind == TravelKind::Relevel && config_.relevel_doors_open;
-  needs.position = needs.doors_locked && config_.reference == Reference::Position;
-  switch (lift::machine_refusal(in.inputs, in.position_mm.has_value(), needs)) {
-    case lift::MachineRefusal::InputsLost:
-      return Cause::InputsLost;
-    case lift::MachineRefusal::SafetyChainOpen:
-      return Cause::SafetyChain;
-    case lift::MachineRefusal::DoorsNotLocked:
-      return Cause::DoorsUnlocked;
-    case lift::MachineRefusal::PositionLost:
-      return Cause::PositionLost;
-    case lift::MachineRefusal::None:
-      break;
-  }
-  return Cause::None;
+  const lift::MachineNeeds needs =
+      lift::run_needs(kind, config_.relevel_doors_open, config_.reference == Reference::Position);
+  return lift::refusal_cause<Cause>(
+      lift::machine_refusal(in.inputs, in.position_mm.has_value(), needs));
 }
 
 // ---- starting and stopping ----
@@ -323,7 +297,7 @@ Cause LiftTravel::inspect(const lift::FloorTable& floors, lift::Direction direct
     return Cause::None;
   }
   if (direction == lift::Direction::None || busy()) return Cause::None;
-  if (in.position_mm && floors.size() > 0 && at_terminal(floors, direction, *in.position_mm)) {
+  if (in.position_mm && lift::at_terminal_level(floors, direction, *in.position_mm)) {
     return Cause::None;  // a button held at the terminal level moves nothing
   }
   return begin(TravelKind::Inspection, current_floor_, SpeedName::VI, direction, in);
@@ -379,7 +353,7 @@ std::optional<std::size_t> LiftTravel::stop(const lift::FloorTable& floors,
   const bool up = direction_ == lift::Direction::Up;
   for (std::ptrdiff_t i = up ? 0 : n - 1; up ? i < n : i >= 0; i += up ? 1 : -1) {
     const auto floor = static_cast<std::size_t>(i);
-    if (distance_to(*in.position_mm, floors.level_mm(floor), direction_) >=
+    if (lift::distance_ahead(*in.position_mm, floors.level_mm(floor), direction_) >=
         static_cast<std::int64_t>(slowdown)) {
       if (up ? floor < target_ : floor > target_) target_ = floor;
       return target_;
@@ -435,13 +409,6 @@ void LiftTravel::push(TravelEvent::Type type, Cause cause, MonoTime now) noexcep
   events_.push({type, kind_, direction_, floor, cause, now});
 }
 
-bool LiftTravel::poll_event(TravelEvent& out) noexcept {
-  const auto event = events_.pop();
-  if (!event) return false;
-  out = *event;
-  return true;
-}
-
 // ---- one step ----
 
 bool LiftTravel::decel_point(const lift::FloorTable& floors, const DriveInput& in) const noexcept {
@@ -449,7 +416,7 @@ bool LiftTravel::decel_point(const lift::FloorTable& floors, const DriveInput& i
     return in.inputs.decel_point(speed_number(speed_), direction_);
   }
   if (!in.position_mm) return false;
-  return distance_to(*in.position_mm, floors.level_mm(target_), direction_) <=
+  return lift::distance_ahead(*in.position_mm, floors.level_mm(target_), direction_) <=
          static_cast<std::int64_t>(config_.slowdown_mm[speed_index(speed_)]);
 }
 
@@ -458,7 +425,7 @@ bool LiftTravel::at_level(const lift::FloorTable& floors, const DriveInput& in) 
       (config_.reference == Reference::Position || kind_ == TravelKind::Relevel)) {
     // The setpoint goes to 0 the crawl's ramp distance before the level, so the car stops on
     // it (the role a stop flag ahead of the level plays in the shaft).
-    return distance_to(*in.position_mm, floors.level_mm(target_), direction_) <=
+    return lift::distance_ahead(*in.position_mm, floors.level_mm(target_), direction_) <=
            static_cast<std::int64_t>(config_.stop_lead_mm);
   }
   if (kind_ == TravelKind::Relevel) {
@@ -516,7 +483,7 @@ void LiftTravel::sequence(const lift::FloorTable& floors, const DriveInput& in) 
           abort(Cause::LevelNotReached, in.now);
         }
       } else if (in.position_mm && floors.size() > 0 &&
-                 at_terminal(floors, direction_, *in.position_mm)) {
+                 lift::at_terminal_level(floors, direction_, *in.position_mm)) {
         // The inspection run stops at the terminal levels (the limit switches' job in the shaft).
         enter(Phase::Stopping, in.now);
       }

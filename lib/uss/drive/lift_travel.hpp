@@ -36,11 +36,11 @@
 #include <optional>
 #include <string_view>
 
-#include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
 #include "config/defaults.hpp"
 #include "lift/floors.hpp"
 #include "lift/inputs.hpp"
+#include "lift/travel_event.hpp"
 #include "uss/drive/drive_profile.hpp"
 
 namespace liftd::uss {
@@ -202,15 +202,7 @@ struct DriveOutput {
 };
 
 /// Something that happened, drained by the controller.
-struct TravelEvent {
-  enum class Type : std::uint8_t { Started, Finished, Aborted };
-  Type type = Type::Started;
-  TravelKind kind = TravelKind::None;
-  lift::Direction direction = lift::Direction::None;
-  std::size_t floor = 0;  ///< target (started) or where it ended (finished)
-  Cause cause = Cause::None;
-  MonoTime at{};
-};
+using TravelEvent = lift::BasicTravelEvent<TravelKind, Cause>;
 
 /// The sequencer. The car's current floor is the one it last stopped at.
 class LiftTravel {
@@ -270,7 +262,7 @@ class LiftTravel {
   /// The output of the last tick.
   const DriveOutput& output() const noexcept { return out_; }
 
-  bool poll_event(TravelEvent& out) noexcept;
+  bool poll_event(TravelEvent& out) noexcept { return events_.poll(out); }
   std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
 
  private:
@@ -301,7 +293,7 @@ class LiftTravel {
   bool coast_hold_ = false;    ///< OFF2 held until a reply shows ZSW bit 2 = 0
   DriveOutput out_{};
 
-  FixedQueue<TravelEvent, 16> events_;
+  lift::TravelEventQueue<TravelEvent> events_;
 };
 
 }  // namespace liftd::uss

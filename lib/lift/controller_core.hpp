@@ -1,0 +1,436 @@
+// The command plumbing the SCH001 and USS controllers share (lib/sch001/controller,
+// lib/uss/drive/controller): the commands every lift takes, the reply codes, the lock-free queues
+// and the snapshot box between the real-time thread and the io thread, and the handling of the
+// commands that do not depend on the drive (inputs, inspection, shutdown, stop, calls and the
+// gates of a travel command), of the travel events and of the fault table.
+//
+// A controller derives from ControllerCore<Types>, where Types names its command, reply, event,
+// snapshot, travel sequencer, travel event and tick input types; the drive's own parts (its link,
+// its travel and relevelling starts, its snapshot fields) stay in the controller. The travel
+// sequencer has kind(), phase(), direction(), target(), busy(), stop(floors, in), abort(cause,
+// now), poll_event() and dropped_events(); its Cause enum has None, Shutdown, SafetyChain,
+// DoorsUnlocked, InputsLost and PositionLost.
+//
+// Threads: the real-time thread calls the protected members; ONE other thread (the daemon's io
+// thread) calls post(), poll_reply(), poll_event(), snapshot() and dropped_events().
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string_view>
+
+#include "common/mono_time.hpp"
+#include "lift/calls.hpp"
+#include "lift/faults.hpp"
+#include "lift/inputs.hpp"
+#include "lift/lift_model.hpp"
+#include "rt/snapshot.hpp"
+#include "rt/spsc_queue.hpp"
+
+namespace liftd::lift {
+
+// ---- commands (io thread -> real-time thread) ----
+
+/// Travel to `floor` at `speed` (the drive's speed names; V4 unless the client asks otherwise).
+template <typename Speed>
+struct BasicTravelCommand {
+  std::size_t floor = 0;
+  Speed speed = Speed::V4;
+};
+struct StopCommand {};
+struct RelevelCommand {};
+struct InspectionCommand {
+  bool on = false;
+  Direction direction = Direction::None;
+};
+struct CallCommand {
+  bool add = true;
+  std::size_t floor = 0;
+};
+struct InputsCommand {
+  Inputs inputs;
+};
+/// The service is stopping: no new travel, the running one lands as `stop` does; `force` ends
+/// it at once (the drive's hardest stop: SCH001 drops every signal, USS coasts by OFF2).
+struct ShutdownCommand {
+  bool force = false;
+};
+/// A command with the caller's tag.
+template <typename Body>
+struct TaggedCommand {
+  std::uint32_t tag = 0;  ///< echoed in the reply; 0 = no reply wanted
+  Body body;
+};
+
+// ---- replies (real-time thread -> io thread) ----
+enum class ReplyCode : std::uint8_t { Ok, NotReady, Busy, BadRequest, Fault };
+struct CommandReply {
+  std::uint32_t tag = 0;
+  ReplyCode code = ReplyCode::Ok;
+  std::string_view detail;           ///< a static string
+  std::optional<std::size_t> floor;  ///< stop / relevel: where the car will stop
+};
+
+/// Why a command is refused: the reply's code and text.
+struct Refusal {
+  ReplyCode code = ReplyCode::NotReady;
+  std::string_view detail;  ///< a static string
+};
+
+inline constexpr std::size_t kMaxSnapshotCalls = 64;
+inline constexpr std::size_t kCommandQueueSize = 64;
+inline constexpr std::size_t kReplyQueueSize = 64;
+inline constexpr std::size_t kEventQueueSize = 256;
+
+/// The reply code of a refusal for a cause both drives' travels know; NotReady for the others.
+template <typename Cause>
+constexpr ReplyCode shared_cause_code(Cause cause) noexcept {
+  switch (cause) {
+    case Cause::SafetyChain:
+    case Cause::InputsLost:
+    case Cause::PositionLost:
+      return ReplyCode::Fault;
+    default:
+      return ReplyCode::NotReady;
+  }
+}
+
+/// The reply text of a refusal for a cause both drives' travels know.
+template <typename Cause>
+constexpr std::string_view shared_cause_text(Cause cause) noexcept {
+  switch (cause) {
+    case Cause::SafetyChain:
+      return "safety chain open";
+    case Cause::DoorsUnlocked:
+      return "doors not locked";
+    case Cause::InputsLost:
+      return "machine inputs lost";
+    case Cause::PositionLost:
+      return "car position unknown";
+    default:
+      return "not possible now";
+  }
+}
+
+/// What a controller's command handling needs besides its travel sequencer's own settings.
+struct ControllerCoreConfig {
+  LiftConfig lift;                          ///< level tolerance: status car.floor, "already there"
+  std::span<const std::int64_t> floors_mm;  ///< strictly increasing levels (config `floors`)
+  MonoTime inputs_timeout{};                ///< inputs.timeout_ms
+  MonoTime inspection_hold{};               ///< travel.inspection_hold_ms
+  MonoTime start{};                         ///< when the controller was made
+};
+
+template <typename Types>
+class ControllerCore {
+ public:
+  // ---- io thread ----
+  bool post(const typename Types::Command& command) noexcept { return commands_.try_push(command); }
+  bool poll_reply(typename Types::Reply& out) noexcept { return replies_.try_pop(out); }
+  bool poll_event(typename Types::Event& out) noexcept { return events_.try_pop(out); }
+  typename Types::Snapshot snapshot() noexcept { return snapshot_.read(); }
+  /// Events lost because a queue was full: the controller's to the io thread or the travel's own
+  /// (stats cycle.dropped_events).
+  std::uint64_t dropped_events() const noexcept {
+    return dropped_events_.load(std::memory_order_relaxed) +
+           travel_dropped_.load(std::memory_order_relaxed);
+  }
+
+  /// Direct access for single-threaded tests.
+  const typename Types::Travel& travel() const noexcept { return travel_; }
+
+ protected:
+  /// Throws std::invalid_argument on a floor table the lift model refuses (empty, too long, not
+  /// strictly increasing).
+  template <typename TravelConfig>
+  ControllerCore(const ControllerCoreConfig& config, const TravelConfig& travel_config)
+      : travel_(travel_config),
+        lift_(config.lift),
+        level_tolerance_mm_(config.lift.level_tolerance_mm),
+        inputs_timeout_(config.inputs_timeout),
+        inspection_hold_(config.inspection_hold),
+        start_at_(config.start) {
+    if (!lift_.set_floors(config.floors_mm)) {
+      throw std::invalid_argument("floors: need 2 or more strictly increasing levels");
+    }
+  }
+  ~ControllerCore() = default;
+  ControllerCore(const ControllerCore&) = delete;
+  ControllerCore& operator=(const ControllerCore&) = delete;
+
+  // ---- queues (real-time thread) ----
+  bool next_command(typename Types::Command& out) noexcept { return commands_.try_pop(out); }
+  void reply(std::uint32_t tag, ReplyCode code, std::string_view detail = {},
+             std::optional<std::size_t> floor = std::nullopt) noexcept {
+    if (tag == 0) return;
+    typename Types::Reply r;
+    r.tag = tag;
+    r.code = code;
+    r.detail = detail;
+    r.floor = floor;
+    push_reply(r);
+  }
+  void push_reply(const typename Types::Reply& r) noexcept {
+    (void)replies_.try_push(r);  // as deep as the command queue
+  }
+  void push_event(const typename Types::Event& event) noexcept {
+    if (!events_.try_push(event)) dropped_events_.fetch_add(1, std::memory_order_relaxed);
+  }
+  void publish_snapshot(const typename Types::Snapshot& s) noexcept { snapshot_.publish(s); }
+
+  // ---- inputs ----
+
+  /// The provider's last inputs (valid while fresh) with the API's inspection and its buttons
+  /// held for inspection_hold after the last inspection command.
+  Inputs current_inputs(MonoTime now) const noexcept {
+    Inputs in = provider_inputs_;
+    in.valid = inputs_seen_ && now - inputs_at_ <= inputs_timeout_;
+    if (api_inspection_) {
+      in.inspection = true;
+      const bool held = now <= api_hold_until_;
+      in.button_up = in.button_up || (held && api_direction_ == Direction::Up);
+      in.button_down = in.button_down || (held && api_direction_ == Direction::Down);
+    }
+    return in;
+  }
+  /// After start, the link, the inputs and the position get two input timeouts before they count
+  /// as lost (as the DCP lift).
+  bool start_grace_over(MonoTime now) const noexcept {
+    return now - start_at_ > inputs_timeout_ * 2;
+  }
+
+  // ---- commands every lift handles alike ----
+
+  void handle_shared(std::uint32_t tag, const InputsCommand& body,
+                     typename Types::Input& in) noexcept {
+    provider_inputs_ = body.inputs;
+    inputs_at_ = in.now;
+    inputs_seen_ = true;
+    reply(tag, ReplyCode::Ok);
+  }
+  void handle_shared(std::uint32_t tag, const ShutdownCommand& body,
+                     typename Types::Input& in) noexcept {
+    shutting_down_ = true;
+    lift_.calls().clear();
+    if (body.force) {
+      travel_.abort(Types::Cause::Shutdown, in.now);
+    } else {
+      (void)travel_.stop(lift_.floors(), in);
+    }
+    reply(tag, ReplyCode::Ok);
+  }
+  void handle_shared(std::uint32_t tag, const StopCommand&, typename Types::Input& in) noexcept {
+    lift_.calls().clear();
+    const auto floor = travel_.stop(lift_.floors(), in);
+    reply(tag, ReplyCode::Ok, {}, floor);
+  }
+  void handle_shared(std::uint32_t tag, const InspectionCommand& body,
+                     typename Types::Input& in) noexcept {
+    api_inspection_ = body.on;
+    api_direction_ = body.on ? body.direction : Direction::None;
+    api_hold_until_ = in.now + inspection_hold_;
+    reply(tag, ReplyCode::Ok);
+  }
+  void handle_shared(std::uint32_t tag, const CallCommand& body, typename Types::Input&) noexcept {
+    if (body.add) {
+      if (shutting_down_) return reply(tag, ReplyCode::NotReady, "the service is stopping");
+      switch (lift_.add_call(body.floor)) {
+        case CallError::None:
+          return reply(tag, ReplyCode::Ok);
+        case CallError::NoSuchFloor:
+          return reply(tag, ReplyCode::BadRequest, "no such floor in this installation");
+        default:
+          return reply(tag, ReplyCode::Busy, "the calls queue is full");
+      }
+    }
+    if (!lift_.cancel_call(body.floor)) {
+      return reply(tag, ReplyCode::BadRequest, "that floor is not in the calls queue");
+    }
+    reply(tag, ReplyCode::Ok);
+  }
+
+  /// The travel command's gates in order (stopping, floor, the drive's own check, inspection,
+  /// a run in progress, already there), then `start()` (the travel's start_travel; its Cause
+  /// refusal is answered through `code_for` / `text_for`). `drive_gate()` answers an optional
+  /// Refusal of the drive (e.g. a speed without setpoint). True when it started.
+  template <typename DriveGate, typename Start, typename CodeFor, typename TextFor>
+  bool handle_travel(std::uint32_t tag, const typename Types::TravelCommand& body,
+                     const typename Types::Input& in, DriveGate drive_gate, Start start,
+                     CodeFor code_for, TextFor text_for) noexcept {
+    if (shutting_down_) return refuse(tag, ReplyCode::NotReady, "the service is stopping");
+    if (body.floor >= lift_.floors().size()) {
+      return refuse(tag, ReplyCode::BadRequest, "no such floor in this installation");
+    }
+    if (const std::optional<Refusal> refusal = drive_gate()) {
+      return refuse(tag, refusal->code, refusal->detail);
+    }
+    if (in.inputs.inspection) return refuse(tag, ReplyCode::NotReady, "inspection is on");
+    if (travel_.busy()) return refuse(tag, ReplyCode::Busy, "a travel is running");
+    if (at_level(in, body.floor)) {
+      return refuse(tag, ReplyCode::NotReady, "the car is already at that level");
+    }
+    const typename Types::Cause why = start();
+    if (why != Types::Cause::None) return refuse(tag, code_for(why), text_for(why));
+    reply(tag, ReplyCode::Ok);
+    return true;
+  }
+  /// The first gates of a relevel command: not while stopping, not while a run is in progress.
+  /// True when refused (answered).
+  bool relevel_refused(std::uint32_t tag) noexcept {
+    if (shutting_down_) return !refuse(tag, ReplyCode::NotReady, "the service is stopping");
+    if (travel_.busy()) return !refuse(tag, ReplyCode::Busy, "a travel is running");
+    return false;
+  }
+
+  // ---- each step ----
+
+  /// The current floor is the one the car last stopped at; at start, the nearest to the first
+  /// position known.
+  void locate_car(const typename Types::Input& in) noexcept {
+    if (place_known_ || !in.position_mm) return;
+    if (const auto nearest = lift_.floors().nearest(*in.position_mm)) {
+      travel_.set_current_floor(*nearest);
+      place_known_ = true;
+    }
+  }
+  /// Inspection (the car-roof switch, or the API's): hold-to-run with the buttons; a travel or
+  /// relevelling running when it comes on ends with `abort_cause`. `inspect(direction)` hands the
+  /// wanted direction to the travel (None: stand still).
+  template <typename Inspect>
+  void follow_inspection(const typename Types::Input& in, typename Types::Cause abort_cause,
+                         Inspect inspect) noexcept {
+    if (in.inputs.inspection) {
+      if (travel_.kind() == Types::TravelKind::Travel ||
+          travel_.kind() == Types::TravelKind::Relevel) {
+        travel_.abort(abort_cause, in.now);
+      }
+      const Direction d = in.inputs.button_up == in.inputs.button_down
+                              ? Direction::None
+                              : (in.inputs.button_up ? Direction::Up : Direction::Down);
+      inspect(shutting_down_ ? Direction::None : d);
+    } else if (travel_.kind() == Types::TravelKind::Inspection) {
+      inspect(Direction::None);
+    }
+  }
+  /// Forwards the travel's events; a finished travel to the first call's floor serves that call.
+  void drain_travel(MonoTime now) noexcept {
+    typename Types::TravelEvent t;
+    while (travel_.poll_event(t)) {
+      typename Types::Event e;
+      e.kind = Types::Event::Kind::Travel;
+      e.at = now;
+      e.travel = t;
+      push_event(e);
+      if (t.type == Types::TravelEvent::Type::Finished && t.kind == Types::TravelKind::Travel) {
+        const auto front = lift_.calls().front();
+        if (front && *front == t.floor) {
+          lift_.calls().pop_front();
+          call_served(t.floor, now);
+        }
+      }
+    }
+    travel_dropped_.store(travel_.dropped_events(), std::memory_order_relaxed);
+  }
+  /// The floor of the first call to travel to now, if any: none while a run is in progress or
+  /// inspection is on; a call to the floor the car is at is served at once.
+  std::optional<std::size_t> next_call(const typename Types::Input& in) noexcept {
+    if (travel_.busy() || in.inputs.inspection) return std::nullopt;
+    const auto front = lift_.calls().front();
+    if (!front) return std::nullopt;
+    const std::size_t floor = *front;
+    if (at_level(in, floor)) {
+      lift_.calls().pop_front();  // already there
+      call_served(floor, in.now);
+      return std::nullopt;
+    }
+    return floor;
+  }
+  /// Records a fault starting or ending, and reports the change once.
+  void set_fault(FaultCode code, bool active, MonoTime now) noexcept {
+    const auto i = static_cast<std::size_t>(code);
+    if (faults_[i] == active) return;
+    faults_[i] = active;
+    if (active) fault_since_[i] = now;
+    typename Types::Event e;
+    e.kind = active ? Types::Event::Kind::FaultRaised : Types::Event::Kind::FaultCleared;
+    e.at = now;
+    e.fault = code;
+    push_event(e);
+  }
+  /// The snapshot fields every lift has: the car, the travel, the inputs, the calls, the faults.
+  void fill_lift_snapshot(typename Types::Snapshot& s, MonoTime now,
+                          const Inputs& inputs) const noexcept {
+    s.at = now;
+    s.steps = steps_;
+    s.position_mm = lift_.position_mm();
+    s.floor = lift_.current_floor();
+    s.travel_kind = travel_.kind();
+    s.phase = travel_.phase();
+    s.direction = travel_.direction();
+    s.target_floor = travel_.target();
+    s.inputs = inputs;
+    s.call_count = std::min(lift_.calls().size(), kMaxSnapshotCalls);
+    for (std::size_t i = 0; i < s.call_count; ++i) {
+      s.calls[i] = static_cast<std::uint8_t>(lift_.calls().at(i));
+    }
+    s.faults = faults_;
+    s.fault_since = fault_since_;
+    s.shutting_down = shutting_down_;
+  }
+
+  typename Types::Travel travel_;
+  LiftModel lift_;
+  bool shutting_down_ = false;
+  std::uint64_t steps_ = 0;
+
+ private:
+  /// Answers a refusal; false (nothing started).
+  bool refuse(std::uint32_t tag, ReplyCode code, std::string_view detail) noexcept {
+    reply(tag, code, detail);
+    return false;
+  }
+  /// The car is within the level tolerance of `floor` (by position).
+  bool at_level(const typename Types::Input& in, std::size_t floor) const noexcept {
+    return in.position_mm && std::llabs(*in.position_mm - lift_.floors().level_mm(floor)) <=
+                                 static_cast<std::int64_t>(level_tolerance_mm_);
+  }
+  void call_served(std::size_t floor, MonoTime now) noexcept {
+    typename Types::Event served;
+    served.kind = Types::Event::Kind::CallServed;
+    served.at = now;
+    served.floor = floor;
+    push_event(served);
+  }
+
+  std::uint32_t level_tolerance_mm_;
+  MonoTime inputs_timeout_;
+  MonoTime inspection_hold_;
+  MonoTime start_at_;
+
+  rt::SpscQueue<typename Types::Command, kCommandQueueSize> commands_;
+  rt::SpscQueue<typename Types::Reply, kReplyQueueSize> replies_;
+  rt::SpscQueue<typename Types::Event, kEventQueueSize> events_;
+  rt::Snapshot<typename Types::Snapshot> snapshot_;
+  std::atomic<std::uint64_t> dropped_events_{0};
+  std::atomic<std::uint64_t> travel_dropped_{0};  ///< the travel's own count, copied each step
+
+  // Real-time-thread state.
+  Inputs provider_inputs_{};
+  MonoTime inputs_at_{};
+  bool inputs_seen_ = false;
+  bool api_inspection_ = false;
+  Direction api_direction_ = Direction::None;
+  MonoTime api_hold_until_{};
+  bool place_known_ = false;  ///< the travel was told the floor the car stands at
+  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults_{};
+  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since_{};
+};
+
+}  // namespace liftd::lift

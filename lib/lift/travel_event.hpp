@@ -1,0 +1,46 @@
+// What the SCH001 and USS travel sequencers (lib/sch001/hydraulic_travel,
+// lib/uss/drive/lift_travel) report to their controller: a run started, finished or was aborted,
+// queued on the real-time thread until the controller drains it after the step.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "common/fixed_queue.hpp"
+#include "common/mono_time.hpp"
+#include "lift/inputs.hpp"
+
+namespace liftd::lift {
+
+/// One event of a run of kind `Kind` (the travel's TravelKind) ending for a `Cause`.
+template <typename Kind, typename Cause>
+struct BasicTravelEvent {
+  enum class Type : std::uint8_t { Started, Finished, Aborted };
+  Type type = Type::Started;
+  Kind kind = Kind::None;
+  Direction direction = Direction::None;
+  std::size_t floor = 0;  ///< target (started) or where it ended (finished)
+  Cause cause = Cause::None;
+  MonoTime at{};
+};
+
+/// A travel's events until the controller polls them; a full queue drops and counts.
+template <typename Event>
+class TravelEventQueue {
+ public:
+  void push(const Event& event) noexcept { (void)events_.push(event); }
+  /// The next event, if any.
+  bool poll(Event& out) noexcept {
+    const auto event = events_.pop();
+    if (!event) return false;
+    out = *event;
+    return true;
+  }
+  /// Events lost because the queue was full.
+  std::uint64_t dropped() const noexcept { return events_.dropped(); }
+
+ private:
+  FixedQueue<Event, 16> events_;
+};
+
+}  // namespace liftd::lift

@@ -1,0 +1,346 @@
+// The shared command plumbing of the SCH001 and USS controllers (lift/controller_core.hpp) and
+// the travel sequencers' shared helpers (lift/gate.hpp, lift/floors.hpp, lift/travel_event.hpp),
+// on a stub travel: the order of a travel command's gates, calls, inputs and inspection, faults.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <optional>
+#include <type_traits>
+#include <variant>
+#include <vector>
+
+#include "lift/controller_core.hpp"
+#include "lift/gate.hpp"
+#include "lift/travel_event.hpp"
+
+namespace liftd::lift {
+namespace {
+
+using std::chrono::milliseconds;
+
+enum class StubCause : std::uint8_t {
+  None,
+  SafetyChain,
+  DoorsUnlocked,
+  InputsLost,
+  PositionLost,
+  Shutdown,
+  Refused
+};
+enum class StubKind : std::uint8_t { None, Travel, Relevel, Inspection };
+enum class StubPhase : std::uint8_t { Idle, Run };
+enum class StubSpeed : std::uint8_t { V1, V4 };
+using StubEvent = BasicTravelEvent<StubKind, StubCause>;
+
+struct StubInput {
+  MonoTime now{};
+  std::optional<std::int64_t> position_mm;
+  Inputs inputs{};
+};
+
+/// A travel that starts when asked (or refuses with `refuse`), and lands when told.
+class StubTravel {
+ public:
+  explicit StubTravel(StubCause refuse) noexcept : refuse_(refuse) {}
+  StubKind kind() const noexcept { return kind_; }
+  StubPhase phase() const noexcept {
+    return kind_ == StubKind::None ? StubPhase::Idle : StubPhase::Run;
+  }
+  Direction direction() const noexcept { return Direction::None; }
+  std::optional<std::size_t> target() const noexcept {
+    return kind_ == StubKind::Travel ? std::optional<std::size_t>(target_) : std::nullopt;
+  }
+  bool busy() const noexcept { return kind_ != StubKind::None; }
+  void set_current_floor(std::size_t floor) noexcept { current_floor_ = floor; }
+  std::size_t current_floor() const noexcept { return current_floor_; }
+  StubCause start_travel(std::size_t floor, MonoTime now) noexcept {
+    if (refuse_ != StubCause::None) return refuse_;
+    kind_ = StubKind::Travel;
+    target_ = floor;
+    events_.push({StubEvent::Type::Started, kind_, Direction::Up, floor, StubCause::None, now});
+    return StubCause::None;
+  }
+  void land(MonoTime now) noexcept {
+    current_floor_ = target_;
+    events_.push({StubEvent::Type::Finished, kind_, Direction::Up, target_, StubCause::None, now});
+    kind_ = StubKind::None;
+  }
+  std::optional<std::size_t> stop(const FloorTable&, const StubInput&) noexcept {
+    return busy() ? std::optional<std::size_t>(target_) : std::nullopt;
+  }
+  void abort(StubCause cause, MonoTime now) noexcept {
+    if (kind_ == StubKind::None) return;
+    events_.push({StubEvent::Type::Aborted, kind_, Direction::None, current_floor_, cause, now});
+    kind_ = StubKind::None;
+  }
+  bool poll_event(StubEvent& out) noexcept { return events_.poll(out); }
+  std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
+
+  StubCause refuse_ = StubCause::None;
+
+ private:
+  StubKind kind_ = StubKind::None;
+  std::size_t target_ = 0;
+  std::size_t current_floor_ = 0;
+  TravelEventQueue<StubEvent> events_;
+};
+
+struct StubControllerEvent {
+  enum class Kind : std::uint8_t { Travel, FaultRaised, FaultCleared, CallServed };
+  Kind kind = Kind::Travel;
+  MonoTime at{};
+  StubEvent travel{};
+  FaultCode fault = FaultCode::LinkFault;
+  std::size_t floor = 0;
+};
+
+struct StubSnapshot {
+  MonoTime at{};
+  std::uint64_t steps = 0;
+  std::optional<std::int64_t> position_mm;
+  std::optional<std::size_t> floor;
+  StubKind travel_kind = StubKind::None;
+  StubPhase phase = StubPhase::Idle;
+  Direction direction = Direction::None;
+  std::optional<std::size_t> target_floor;
+  Inputs inputs{};
+  std::array<std::uint8_t, kMaxSnapshotCalls> calls{};
+  std::size_t call_count = 0;
+  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults{};
+  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
+  bool shutting_down = false;
+};
+
+using StubTravelCommand = BasicTravelCommand<StubSpeed>;
+using StubBody = std::variant<StubTravelCommand, StopCommand, InspectionCommand, CallCommand,
+                              InputsCommand, ShutdownCommand>;
+
+struct StubTypes {
+  using Command = TaggedCommand<StubBody>;
+  using Reply = CommandReply;
+  using Event = StubControllerEvent;
+  using Snapshot = StubSnapshot;
+  using Travel = StubTravel;
+  using TravelEvent = StubEvent;
+  using TravelKind = StubKind;
+  using TravelCommand = StubTravelCommand;
+  using Input = StubInput;
+  using Cause = StubCause;
+};
+
+const std::vector<std::int64_t> kLevels = {0, 3000, 6000, 9000};
+constexpr MonoTime kInputsTimeout = milliseconds(500);
+constexpr MonoTime kHold = milliseconds(300);
+
+ControllerCoreConfig core_config() {
+  ControllerCoreConfig c;
+  c.floors_mm = kLevels;
+  c.inputs_timeout = kInputsTimeout;
+  c.inspection_hold = kHold;
+  return c;
+}
+
+/// A controller of the stub travel: V1 has no setpoint (the drive's own gate).
+class StubController : public ControllerCore<StubTypes> {
+ public:
+  StubController() : ControllerCore(core_config(), StubCause::None) {}
+
+  void step(MonoTime now) {
+    ++steps_;
+    StubInput in = input(now);
+    StubTypes::Command command;
+    while (next_command(command)) {
+      std::visit(
+          [&](const auto& body) {
+            using T = std::decay_t<decltype(body)>;
+            if constexpr (std::is_same_v<T, StubTravelCommand>) {
+              (void)handle_travel(
+                  command.tag, body, in,
+                  [&]() -> std::optional<Refusal> {
+                    if (body.speed == StubSpeed::V1) {
+                      return Refusal{ReplyCode::BadRequest, "no V1"};
+                    }
+                    return std::nullopt;
+                  },
+                  [&] { return travel_.start_travel(body.floor, now); },
+                  shared_cause_code<StubCause>, shared_cause_text<StubCause>);
+            } else {
+              handle_shared(command.tag, body, in);
+            }
+          },
+          command.body);
+      in = input(now);
+    }
+    locate_car(in);
+    drain_travel(now);
+    if (!shutting_down_) {
+      if (const auto floor = next_call(in)) (void)travel_.start_travel(*floor, now);
+    }
+    drain_travel(now);
+    set_fault(FaultCode::InputsLost, !in.inputs.valid, now);
+    lift_.update(in.position_mm, Direction::None, std::nullopt);
+    StubSnapshot s;
+    fill_lift_snapshot(s, now, in.inputs);
+    publish_snapshot(s);
+  }
+  void land(MonoTime now) { travel_.land(now); }
+  void refuse_starts(StubCause cause) { travel_.refuse_ = cause; }
+
+  std::optional<std::int64_t> position_mm = 0;
+
+ private:
+  StubInput input(MonoTime now) const { return StubInput{now, position_mm, current_inputs(now)}; }
+};
+
+class ControllerCoreTest : public ::testing::Test {
+ protected:
+  CommandReply command(std::uint32_t tag, StubBody body) {
+    EXPECT_TRUE(controller.post({tag, body}));
+    controller.step(now);
+    CommandReply r;
+    EXPECT_TRUE(controller.poll_reply(r));
+    EXPECT_EQ(r.tag, tag);
+    return r;
+  }
+  std::vector<StubControllerEvent> events() {
+    std::vector<StubControllerEvent> out;
+    StubControllerEvent e;
+    while (controller.poll_event(e)) out.push_back(e);
+    return out;
+  }
+  void good_inputs() {
+    Inputs in;
+    in.safety_chain_closed = true;
+    in.doors_locked = true;
+    (void)command(100, InputsCommand{in});
+  }
+
+  StubController controller;
+  MonoTime now = milliseconds(1000);
+};
+
+TEST_F(ControllerCoreTest, TravelCommandGatesInOrder) {
+  good_inputs();
+  // Floor before the drive's gate before inspection before a running travel.
+  EXPECT_EQ(command(1, StubTravelCommand{9, StubSpeed::V1}).code, ReplyCode::BadRequest);
+  const CommandReply speed = command(2, StubTravelCommand{2, StubSpeed::V1});
+  EXPECT_EQ(speed.code, ReplyCode::BadRequest);
+  EXPECT_EQ(speed.detail, "no V1");
+  const CommandReply here = command(3, StubTravelCommand{0, StubSpeed::V4});
+  EXPECT_EQ(here.code, ReplyCode::NotReady);
+  EXPECT_EQ(here.detail, "the car is already at that level");
+  controller.refuse_starts(StubCause::SafetyChain);
+  const CommandReply refused = command(4, StubTravelCommand{2, StubSpeed::V4});
+  EXPECT_EQ(refused.code, ReplyCode::Fault);
+  EXPECT_EQ(refused.detail, "safety chain open");
+  controller.refuse_starts(StubCause::None);
+  EXPECT_EQ(command(5, StubTravelCommand{2, StubSpeed::V4}).code, ReplyCode::Ok);
+  EXPECT_EQ(command(6, StubTravelCommand{3, StubSpeed::V4}).code, ReplyCode::Busy);
+  EXPECT_EQ(command(7, InspectionCommand{true, Direction::Up}).code, ReplyCode::Ok);
+  EXPECT_EQ(command(8, StubTravelCommand{3, StubSpeed::V4}).detail, "inspection is on");
+  EXPECT_EQ(command(9, ShutdownCommand{false}).code, ReplyCode::Ok);
+  const CommandReply stopping = command(10, StubTravelCommand{9, StubSpeed::V1});
+  EXPECT_EQ(stopping.code, ReplyCode::NotReady);
+  EXPECT_EQ(stopping.detail, "the service is stopping");
+  EXPECT_TRUE(controller.snapshot().shutting_down);
+}
+
+TEST_F(ControllerCoreTest, CallsAreServedByTravelOrAtOnceWhenThere) {
+  good_inputs();
+  EXPECT_EQ(command(1, CallCommand{true, 0}).code, ReplyCode::Ok);  // the car is at floor 0
+  EXPECT_EQ(command(2, CallCommand{true, 2}).code, ReplyCode::Ok);
+  EXPECT_EQ(command(3, CallCommand{true, 7}).code, ReplyCode::BadRequest);
+  EXPECT_EQ(command(4, CallCommand{false, 3}).code, ReplyCode::BadRequest);
+  std::vector<StubControllerEvent> ev = events();
+  ASSERT_FALSE(ev.empty());
+  bool served_here = false;
+  for (const auto& e : ev) {
+    served_here = served_here || (e.kind == StubControllerEvent::Kind::CallServed && e.floor == 0);
+  }
+  EXPECT_TRUE(served_here);
+  const StubSnapshot moving = controller.snapshot();
+  EXPECT_EQ(moving.travel_kind, StubKind::Travel);
+  EXPECT_EQ(moving.target_floor, 2U);
+  ASSERT_EQ(moving.call_count, 1U);
+  EXPECT_EQ(moving.calls[0], 2U);
+
+  controller.land(now);
+  controller.step(now);
+  ev = events();
+  ASSERT_EQ(ev.size(), 2U);
+  EXPECT_EQ(ev[0].kind, StubControllerEvent::Kind::Travel);
+  EXPECT_EQ(ev[0].travel.type, StubEvent::Type::Finished);
+  EXPECT_EQ(ev[1].kind, StubControllerEvent::Kind::CallServed);
+  EXPECT_EQ(ev[1].floor, 2U);
+  EXPECT_EQ(controller.snapshot().call_count, 0U);
+}
+
+TEST_F(ControllerCoreTest, InputsGoStaleAndInspectionButtonsAreHeld) {
+  controller.step(now);
+  EXPECT_FALSE(controller.snapshot().inputs.valid);
+  good_inputs();
+  EXPECT_TRUE(controller.snapshot().inputs.valid);
+  (void)command(1, InspectionCommand{true, Direction::Down});
+  StubSnapshot s = controller.snapshot();
+  EXPECT_TRUE(s.inputs.inspection);
+  EXPECT_TRUE(s.inputs.button_down);
+  EXPECT_FALSE(s.inputs.button_up);
+  now += kHold + milliseconds(1);
+  controller.step(now);
+  s = controller.snapshot();
+  EXPECT_TRUE(s.inputs.inspection);  // on until switched off; the button is released
+  EXPECT_FALSE(s.inputs.button_down);
+  now += kInputsTimeout;
+  controller.step(now);
+  EXPECT_FALSE(controller.snapshot().inputs.valid);
+}
+
+TEST_F(ControllerCoreTest, AFaultIsReportedOnceWhenItStartsAndOnceWhenItEnds) {
+  controller.step(now);
+  controller.step(now);
+  std::vector<StubControllerEvent> ev = events();
+  ASSERT_EQ(ev.size(), 1U);
+  EXPECT_EQ(ev[0].kind, StubControllerEvent::Kind::FaultRaised);
+  EXPECT_EQ(ev[0].fault, FaultCode::InputsLost);
+  const auto i = static_cast<std::size_t>(FaultCode::InputsLost);
+  EXPECT_TRUE(controller.snapshot().faults[i]);
+  EXPECT_EQ(controller.snapshot().fault_since[i], now);
+  good_inputs();
+  ev = events();
+  ASSERT_EQ(ev.size(), 1U);
+  EXPECT_EQ(ev[0].kind, StubControllerEvent::Kind::FaultCleared);
+}
+
+TEST(TravelHelpers, DistanceAheadAndTerminalLevels) {
+  EXPECT_EQ(distance_ahead(1000, 3000, Direction::Up), 2000);
+  EXPECT_EQ(distance_ahead(1000, 3000, Direction::Down), -2000);
+  FloorTable floors;
+  ASSERT_TRUE(floors.assign(kLevels));
+  EXPECT_TRUE(at_terminal_level(floors, Direction::Up, 9000));
+  EXPECT_FALSE(at_terminal_level(floors, Direction::Up, 8999));
+  EXPECT_TRUE(at_terminal_level(floors, Direction::Down, -1));
+  EXPECT_FALSE(at_terminal_level(floors, Direction::None, 9000));
+  EXPECT_FALSE(at_terminal_level(FloorTable{}, Direction::Up, 0));
+}
+
+TEST(TravelHelpers, MachineNeedsAndRefusalCauses) {
+  const MachineNeeds travel = run_needs(StubKind::Travel, true, true);
+  EXPECT_TRUE(travel.doors_locked);
+  EXPECT_FALSE(travel.door_bridge_allowed);
+  EXPECT_TRUE(travel.position);
+  const MachineNeeds relevel = run_needs(StubKind::Relevel, true, false);
+  EXPECT_TRUE(relevel.door_bridge_allowed);
+  EXPECT_FALSE(relevel.position);
+  const MachineNeeds inspection = run_needs(StubKind::Inspection, true, true);
+  EXPECT_FALSE(inspection.doors_locked);
+  EXPECT_FALSE(inspection.position);
+  EXPECT_EQ(refusal_cause<StubCause>(MachineRefusal::SafetyChainOpen), StubCause::SafetyChain);
+  EXPECT_EQ(refusal_cause<StubCause>(MachineRefusal::DoorsNotLocked), StubCause::DoorsUnlocked);
+  EXPECT_EQ(refusal_cause<StubCause>(MachineRefusal::None), StubCause::None);
+  EXPECT_EQ(shared_cause_code(StubCause::InputsLost), ReplyCode::Fault);
+  EXPECT_EQ(shared_cause_code(StubCause::DoorsUnlocked), ReplyCode::NotReady);
+  EXPECT_EQ(shared_cause_text(StubCause::Refused), "not possible now");
+}
+
+}  // namespace
+}  // namespace liftd::lift
