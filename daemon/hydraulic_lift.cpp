@@ -18,8 +18,6 @@ namespace {
 using namespace std::chrono_literals;
 using api::Result;
 
-constexpr auto kCardReplyGrace = 3s;  // the CAN thread answers within a tick; this catches a stall
-constexpr auto kCardShutdownGrace = 300ms;  // after a forced end: three answers without a signal
 constexpr auto kRejectLogInterval = 10s;  // rejected card frames are journalled at most this often
 constexpr double kSinkMmPerS = 2.0;       // `sim sink`: a leaking valve or cooling oil
 
@@ -280,40 +278,13 @@ nlohmann::json SimulatedCard::state_json_locked() const {
 
 // ---- the backend ----
 
-Sch001Backend::Sch001Backend(const config::Config& config, sch001::Sch001Controller& controller,
-                             rt::CanRunner& runner, lift::PositionFeed* position_feed,
-                             SimulatedCard* sim)
-    : config_(config),
-      controller_(controller),
-      runner_(runner),
-      sim_(sim),
-      inputs_(config, position_feed, sim != nullptr),
-      mono_at_start_(mono_now()),
-      wall_at_start_(std::chrono::system_clock::now()) {}
-
-std::chrono::system_clock::time_point Sch001Backend::wall_time(MonoTime at) const {
-  return wall_at_start_ +
-         std::chrono::duration_cast<std::chrono::system_clock::duration>(at - mono_at_start_);
-}
-
-void Sch001Backend::not_offered(api::Responder& done) {
-  done(Result::fail(api::ErrorCode::NotOffered, "not offered by drive kind \"sch001\""));
-}
-
 api::StatusSnapshot Sch001Backend::status() {
   const sch001::ControllerSnapshot s = controller_.snapshot();
-  api::StatusSnapshot out;
-  out.drive_kind = drive::Kind::Sch001;
-  if (!s.endpoint_up || s.silent) {
-    out.link = s.heard || s.silent ? api::LinkState::Fault : api::LinkState::Down;
-  } else {
-    out.link = s.heard ? api::LinkState::Up : api::LinkState::Init;
-  }
-  out.faults = active_faults(
-      s.faults, s.fault_since, [](lift::FaultCode code) { return sch001::fault_text(code); },
-      [this](MonoTime at) { return wall_time(at); });
-  out.drive_state = drive::state_of(out.link == api::LinkState::Up,
-                                    s.travel_kind != sch001::TravelKind::None, !out.faults.empty());
+  const api::LinkState link =
+      !s.endpoint_up || s.silent
+          ? (s.heard || s.silent ? api::LinkState::Fault : api::LinkState::Down)
+          : (s.heard ? api::LinkState::Up : api::LinkState::Init);
+  api::StatusSnapshot out = neutral_status(s, link);
   nlohmann::json d = nlohmann::json::object();
   d["card"] = s.card ? card_json(*s.card, s.single_unit) : nlohmann::json(nullptr);
   d["timeout_enabled"] = s.timeout_enabled;
@@ -323,15 +294,7 @@ api::StatusSnapshot Sch001Backend::status() {
   d["motor_on"] = s.motor_on;
   d["phase"] = std::string(sch001::to_string(s.phase));
   out.details = std::move(d);
-  out.position_mm = s.position_mm;
-  if (s.floor) out.floor = static_cast<int>(*s.floor);
-  if (s.travel_kind == sch001::TravelKind::None && s.floor) out.next_possible_stop = out.floor;
   out.contactors_on = s.motor_on;
-  out.travel_state = std::string(sch001::to_string(s.travel_kind));
-  out.travel_direction = direction_name(s.direction);
-  if (s.target_floor) out.target_floor = static_cast<int>(*s.target_floor);
-  for (std::size_t i = 0; i < s.call_count; ++i) out.calls.push_back(s.calls[i]);
-  out.rt = rt_info(runner_.thread_status(), config_.rt.priority);
   return out;
 }
 
@@ -374,37 +337,6 @@ std::vector<api::TraceEntry> Sch001Backend::trace(std::size_t max_entries) {
   return out;
 }
 
-nlohmann::json Sch001Backend::config() {
-  return config::to_json(config_);
-}
-
-void Sch001Backend::send(sch001::CommandBody body, api::Responder done) {
-  (void)post_command<sch001::ControllerCommand>(controller_, pending_, std::move(body),
-                                                std::move(done), kCardReplyGrace, "CAN");
-}
-
-void Sch001Backend::poll(MonoTime now) {
-  sch001::CommandReply r;
-  while (controller_.poll_reply(r)) pending_.complete(r.tag, reply_result(r));
-  pending_.expire(now, "the CAN thread did not answer; see the journal");
-}
-
-void Sch001Backend::update_inputs(const api::InputUpdate& update, api::Responder done) {
-  done(inputs_.take(update, [this](const lift::Inputs& now) { send_inputs(now); }));
-}
-
-void Sch001Backend::simulated_inputs(const lift::Inputs& sample) {
-  inputs_.take_sample(sample, [this](const lift::Inputs& now) { send_inputs(now); });
-}
-
-void Sch001Backend::send_inputs(const lift::Inputs& inputs) {
-  (void)controller_.post(sch001::ControllerCommand{0, sch001::InputsCommand{inputs}});
-}
-
-bool Sch001Backend::send_shutdown(bool force) {
-  return controller_.post(sch001::ControllerCommand{0, sch001::ShutdownCommand{force}});
-}
-
 void Sch001Backend::travel(const api::TravelArgs& args, api::Responder done) {
   sch001::TravelCommand cmd;
   cmd.floor = static_cast<std::size_t>(args.floor);
@@ -415,53 +347,10 @@ void Sch001Backend::travel(const api::TravelArgs& args, api::Responder done) {
   send(cmd, std::move(done));
 }
 
-void Sch001Backend::stop(api::Responder done) {
-  send(sch001::StopCommand{}, std::move(done));
-}
-
-void Sch001Backend::relevel(api::Responder done) {
-  send(sch001::RelevelCommand{}, std::move(done));
-}
-
-void Sch001Backend::inspection(bool on, const std::string& direction, api::Responder done) {
-  sch001::InspectionCommand cmd;
-  cmd.on = on;
-  cmd.direction = direction_of(direction);
-  send(cmd, std::move(done));
-}
-
-void Sch001Backend::calls(const std::string& action, std::optional<int> floor,
-                          api::Responder done) {
-  if (action == "list") {
-    done(Result::ok({{"calls", calls_list(controller_.snapshot())}}));
-    return;
-  }
-  sch001::CallCommand cmd;
-  cmd.add = action == "add";
-  cmd.floor = static_cast<std::size_t>(floor.value_or(0));
-  send(cmd, std::move(done));
-}
-
-void Sch001Backend::sim(const api::SimRequest& request, api::Responder done) {
-  if (sim_ == nullptr) {
-    api::Backend::sim(request, std::move(done));
-    return;
-  }
-  done(sim_->apply(request, mono_now()));
-}
-
 // ---- the lift ----
 
 HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool simulate)
-    : daemon_(daemon),
-      config_(config),
-      simulate_(simulate),
-      socket_path_(config.api.socket),
-      poll_timer_(daemon.io(), kPollPeriod),
-      publisher_(config.api.state_rate_hz),
-      wind_down_(
-          daemon, [this](bool force) { return backend_->send_shutdown(force); }, kShutdownDeadline,
-          kCardShutdownGrace) {
+    : ControllerLift(daemon, config, simulate) {
   rt::CanRunnerConfig rc;
   rc.endpoint = config.can.interface;
   const sch001::ControllerConfig cc = sch001_controller_config(config);
@@ -488,9 +377,7 @@ HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool 
     rc.ids.push_back(encoder_->format().id);
     position = encoder_.get();
   } else {
-    position_feed_ =
-        std::make_unique<lift::PositionFeed>(std::chrono::milliseconds(config.inputs.timeout_ms));
-    position = position_feed_.get();
+    position = &make_position_feed();
   }
   controller_ = std::make_unique<sch001::Sch001Controller>(cc, *position, mono_now());
   rt::CanEngine* engine = controller_.get();
@@ -500,30 +387,17 @@ HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool 
   }
   runner_ = std::make_unique<rt::CanRunner>(rc, *engine);
   if (controller_end) runner_->adopt(std::move(*controller_end));
-  backend_ = std::make_unique<Sch001Backend>(
-      config, *controller_, *runner_,
-      config.position.source == config::PositionSource::api ? position_feed_.get() : nullptr,
-      sim_.get());
-  server_ = std::make_unique<api::Server>(daemon.io(), *backend_, api_server_config(config),
-                                          api_log_sink());
-  if (sim_) {
-    daemon.add_component({"sim", [this] { return sim_->start(); }, [this] { sim_->stop(); }});
-  }
-  daemon.add_component({"sch001", [this] { return start_runner(); }, [this] { stop_runner(); },
-                        [this](std::function<void()> done) { wind_down(std::move(done)); }});
-  register_api(daemon, *server_);
-  daemon.set_progress_probe(progress_probe([this] { return runner_->progress(); }));
-  daemon.set_running_status(simulate_ ? "simulated hydraulic lift running; API on " + socket_path_
-                                      : "SCH001 card link starting on " + config.can.interface);
+  register_parts(std::make_unique<Sch001Backend>(config, *controller_, *runner_,
+                                                 api_position_feed(), sim_.get()),
+                 simulate_ ? "simulated hydraulic lift running; API on " + socket_path()
+                           : "SCH001 card link starting on " + config.can.interface);
 }
 
 HydraulicLift::~HydraulicLift() {
-  if (server_) server_->stop();
-  stop_runner();
-  if (sim_) sim_->stop();
+  shut_down();
 }
 
-void HydraulicLift::check_interface() const {
+void HydraulicLift::before_start() {
   const std::string& name = config_.can.interface;
   if (simulate_ || name.rfind("unix:", 0) == 0) return;
   const can::InterfaceInfo info = can::query_interface(name);
@@ -552,41 +426,12 @@ void HydraulicLift::check_interface() const {
   }
 }
 
-bool HydraulicLift::start_runner() {
-  check_interface();
-  const int error = runner_->start();
-  if (error != 0) {
-    log::event(log::Level::error, "sch001", "can_start_failed", {{"errno", std::to_string(error)}},
-               std::string("cannot start the CAN thread: ") + std::strerror(error));
-    return false;
-  }
-  if (!accept_rt_thread(config_, runner_->thread_status(), simulate_, "CAN")) {
-    runner_->stop();
-    return false;
-  }
+void HydraulicLift::journal_started() {
   log::event(log::Level::info, "sch001", "can_started", {{"interface", runner_->config().endpoint}},
              "SCH001 card link running on " + runner_->config().endpoint);
-  poll_timer_.start([this] { poll(); });
-  return true;
 }
 
-void HydraulicLift::stop_runner() {
-  if (!poll_timer_.running()) return;
-  poll_timer_.stop();
-  runner_->stop();
-  poll();  // the last events
-}
-
-void HydraulicLift::poll() {
-  const MonoTime now = mono_now();
-  if (sim_ && now - last_sim_inputs_ >= kSimInputsPeriod) {
-    backend_->simulated_inputs(sim_->inputs(now));
-    last_sim_inputs_ = now;
-    sim_->log_violations();
-  }
-  backend_->poll(now);
-  sch001::ControllerEvent event;
-  while (controller_->poll_event(event)) handle_event(event);
+void HydraulicLift::after_events(MonoTime now) {
   // Rejected card frames: counted always, journalled at most every 10 s with what came.
   const sch001::ControllerSnapshot s = controller_->snapshot();
   const auto rejected = [](const sch001::CardLinkCounters& c) {
@@ -608,9 +453,6 @@ void HydraulicLift::poll() {
     logged_counters_ = s.counters;
     last_reject_log_ = now;
   }
-  publisher_.publish(*server_, backend_->status(), now);
-  const sch001::ControllerSnapshot rest = controller_->snapshot();
-  wind_down_.check({rest.shutting_down, rest.quiesced, rest.floor, rest.position_mm}, now);
 }
 
 void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
@@ -644,9 +486,6 @@ void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
                      "P2 overpressure)");
       break;
     }
-    case Kind::Travel:
-      report_travel(*server_, event.travel, *controller_);
-      break;
     case Kind::BusError:
       log::event(event.bus_error.is_fault() ? log::Level::error : log::Level::warn, "sch001",
                  "can_error", {{"error", event.bus_error.describe()}},
@@ -663,24 +502,13 @@ void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
                        " failed: " + runner_->last_error() + "; no travel command; reopening");
       }
       break;
+    case Kind::Travel:
     case Kind::FaultRaised:
     case Kind::FaultCleared:
-      report_fault(*server_, event.fault, sch001::fault_text(event.fault),
-                   event.kind == Kind::FaultRaised);
-      break;
     case Kind::CallServed:
-      report_call_served(*server_, event.floor);
+      report_lift_event(event);
       break;
   }
-}
-
-void HydraulicLift::wind_down(std::function<void()> done) {
-  if (!poll_timer_.running()) {
-    done();
-    return;
-  }
-  wind_down_.start(std::move(done), controller_->snapshot().travel_kind != sch001::TravelKind::None,
-                   mono_now());
 }
 
 }  // namespace liftd::daemon

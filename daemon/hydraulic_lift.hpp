@@ -16,6 +16,7 @@
 #include "api/server.hpp"
 #include "can/socket.hpp"
 #include "config/config.hpp"
+#include "daemon/controller_lift.hpp"
 #include "daemon/daemon.hpp"
 #include "daemon/drives.hpp"
 #include "daemon/lift_common.hpp"
@@ -68,88 +69,66 @@ class SimulatedCard {
   std::thread thread_;
 };
 
-/// api::Backend over the SCH001 controller.
-class Sch001Backend final : public api::Backend {
- public:
-  Sch001Backend(const config::Config& config, sch001::Sch001Controller& controller,
-                rt::CanRunner& runner, lift::PositionFeed* position_feed, SimulatedCard* sim);
+/// The SCH001 card's lift as controller_lift.hpp names its parts.
+struct Sch001Drive {
+  using Controller = sch001::Sch001Controller;
+  using Runner = rt::CanRunner;
+  using Simulator = SimulatedCard;
+  using Snapshot = sch001::ControllerSnapshot;
+  using Command = sch001::ControllerCommand;
+  using CommandReply = sch001::CommandReply;
+  using Event = sch001::ControllerEvent;
+  using TravelKind = sch001::TravelKind;
+  using StopCommand = sch001::StopCommand;
+  using RelevelCommand = sch001::RelevelCommand;
+  using InspectionCommand = sch001::InspectionCommand;
+  using CallCommand = sch001::CallCommand;
+  using InputsCommand = sch001::InputsCommand;
+  using ShutdownCommand = sch001::ShutdownCommand;
+  static constexpr drive::Kind kKind = drive::Kind::Sch001;
+  static constexpr std::string_view kName = "sch001";
+  static constexpr std::string_view kThread = "CAN";
+  static constexpr std::string_view kStartFailedEvent = "can_start_failed";
+  /// The CAN thread answers within a tick; this catches a stall.
+  static constexpr std::chrono::nanoseconds kReplyGrace = std::chrono::seconds(3);
+  /// After a forced end: three answers without a signal.
+  static constexpr std::chrono::nanoseconds kShutdownGrace = std::chrono::milliseconds(300);
+  static std::string_view fault_text(lift::FaultCode code) noexcept {
+    return sch001::fault_text(code);
+  }
+};
 
-  drive::Kind drive_kind() const override { return drive::Kind::Sch001; }
+/// api::Backend over the SCH001 controller.
+class Sch001Backend final : public ControllerBackend<Sch001Drive> {
+ public:
+  using ControllerBackend::ControllerBackend;
+
   api::StatusSnapshot status() override;
   api::StatsSnapshot stats() override;
   std::vector<api::TraceEntry> trace(std::size_t max_entries) override;
-  api::DisplaySnapshot display() override { return {}; }
-  nlohmann::json config() override;
-  // Not offered by this drive kind: the dispatcher refuses them before they get here.
-  void key(int, api::Responder done) override { not_offered(done); }
+  // Not offered by this drive kind: the dispatcher refuses it before it gets here.
   void drive_reset(api::Responder done) override { not_offered(done); }
-  void power(api::PowerSetting, api::Responder done) override { not_offered(done); }
-  void load(int, api::Responder done) override { not_offered(done); }
-  void update_inputs(const api::InputUpdate& update, api::Responder done) override;
   void travel(const api::TravelArgs& args, api::Responder done) override;
-  void stop(api::Responder done) override;
-  void relevel(api::Responder done) override;
-  void inspection(bool on, const std::string& direction, api::Responder done) override;
-  void calls(const std::string& action, std::optional<int> floor, api::Responder done) override;
-  void sim(const api::SimRequest& request, api::Responder done) override;
-
-  /// Io thread: replies to their clients, requests the CAN thread never answered time out.
-  void poll(MonoTime now);
-  /// A sample of the simulated machine's inputs (--simulate), sent on with the API's shaft
-  /// signals (MachineInputs).
-  void simulated_inputs(const lift::Inputs& sample);
-  bool send_shutdown(bool force);
-  std::chrono::system_clock::time_point wall_time(MonoTime at) const;
-
- private:
-  static void not_offered(api::Responder& done);
-  void send(sch001::CommandBody body, api::Responder done);
-  void send_inputs(const lift::Inputs& inputs);
-
-  const config::Config& config_;
-  sch001::Sch001Controller& controller_;
-  rt::CanRunner& runner_;
-  SimulatedCard* sim_;
-  MachineInputs inputs_;  ///< the API's and the simulated machine's inputs
-  PendingReplies pending_;
-  MonoTime mono_at_start_{};
-  std::chrono::system_clock::time_point wall_at_start_{};
 };
 
 /// The hydraulic lift as one piece, registered with the daemon.
-class HydraulicLift final : public LiftRunner {
+class HydraulicLift final : public ControllerLift<Sch001Drive> {
  public:
   HydraulicLift(Daemon& daemon, const config::Config& config, bool simulate);
   ~HydraulicLift() override;
-  const std::string& socket_path() const override { return socket_path_; }
 
  private:
   /// Warns when the CAN interface is missing, down or not at 125 kbit/s (card document 3a).
-  void check_interface() const;
-  bool start_runner();
-  void stop_runner();
-  void poll();
-  void handle_event(const sch001::ControllerEvent& event);
-  void wind_down(std::function<void()> done);
+  void before_start() override;
+  void journal_started() override;
+  void handle_event(const sch001::ControllerEvent& event) override;
+  /// Rejected card frames: counted always, journalled at most every kRejectLogInterval.
+  void after_events(MonoTime now) override;
 
-  Daemon& daemon_;
-  const config::Config& config_;
-  bool simulate_;
-  std::string socket_path_;
-  std::unique_ptr<SimulatedCard> sim_;
-  std::unique_ptr<lift::PositionFeed> position_feed_;
   std::unique_ptr<can::CanEncoder> encoder_;  ///< position.source "can"
-  std::unique_ptr<sch001::Sch001Controller> controller_;
-  std::unique_ptr<rt::EncoderTap> tap_;  ///< encoder frames to the encoder, the rest on
-  std::unique_ptr<rt::CanRunner> runner_;
-  std::unique_ptr<Sch001Backend> backend_;
-  std::unique_ptr<api::Server> server_;
-  PollTimer poll_timer_;
-  StatePublisher publisher_;
-  MonoTime last_sim_inputs_{};
+  std::unique_ptr<rt::EncoderTap> tap_;       ///< encoder frames to the encoder, the rest on
   sch001::CardLinkCounters logged_counters_{};
   MonoTime last_reject_log_{};
-  WindDown wind_down_;
 };
 
 }  // namespace liftd::daemon

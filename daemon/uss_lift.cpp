@@ -19,11 +19,7 @@ namespace {
 using namespace std::chrono_literals;
 using api::Result;
 
-// A parameter request may wait uss.pkw_repeat_limit polls of a long polling list; this only
-// catches a stalled USS thread.
-constexpr auto kUssReplyGrace = 30s;
-constexpr auto kUssShutdownGrace = 300ms;  // after a forced end: telegrams with OFF2 go out
-constexpr auto kSimSlice = 1ms;            // the simulated bus checks its reply times this often
+constexpr auto kSimSlice = 1ms;  // the simulated bus checks its reply times this often
 // The simulated drive's ramp, and the crawl it leaves before the level: its nominal speed is
 // sized so that the fastest speed, braked at this ramp from its configured deceleration point,
 // crawls this far (as the simulated DCP3 drive does).
@@ -358,41 +354,12 @@ nlohmann::json SimulatedUssBus::state_json_locked() const {
 
 // ---- the backend ----
 
-UssBackend::UssBackend(const config::Config& config, uss::UssController& controller,
-                       rt::UssRunner& runner, uss::Master& master,
-                       lift::PositionFeed* position_feed, SimulatedUssBus* sim)
-    : config_(config),
-      controller_(controller),
-      runner_(runner),
-      master_(master),
-      sim_(sim),
-      inputs_(config, position_feed, sim != nullptr),
-      mono_at_start_(mono_now()),
-      wall_at_start_(std::chrono::system_clock::now()) {}
-
-std::chrono::system_clock::time_point UssBackend::wall_time(MonoTime at) const {
-  return wall_at_start_ +
-         std::chrono::duration_cast<std::chrono::system_clock::duration>(at - mono_at_start_);
-}
-
-void UssBackend::not_offered(api::Responder& done) {
-  done(Result::fail(api::ErrorCode::NotOffered, "not offered by drive kind \"uss\""));
-}
-
 api::StatusSnapshot UssBackend::status() {
   const uss::ControllerSnapshot s = controller_.snapshot();
-  api::StatusSnapshot out;
-  out.drive_kind = drive::Kind::Uss;
-  if (!s.port_up || !s.drive_heard) {
-    out.link = s.drive_heard ? api::LinkState::Fault : api::LinkState::Down;
-  } else {
-    out.link = s.link_ok ? api::LinkState::Up : api::LinkState::Fault;
-  }
-  out.faults = active_faults(
-      s.faults, s.fault_since, [](lift::FaultCode code) { return uss::fault_text(code); },
-      [this](MonoTime at) { return wall_time(at); });
-  out.drive_state = drive::state_of(out.link == api::LinkState::Up,
-                                    s.travel_kind != uss::TravelKind::None, !out.faults.empty());
+  const api::LinkState link = !s.port_up || !s.drive_heard
+                                  ? (s.drive_heard ? api::LinkState::Fault : api::LinkState::Down)
+                                  : (s.link_ok ? api::LinkState::Up : api::LinkState::Fault);
+  api::StatusSnapshot out = neutral_status(s, link);
   nlohmann::json d = nlohmann::json::object();
   d["drive_address"] = s.drive_address;
   d["profile_state"] = std::string(uss::to_string(s.drive_state));
@@ -416,16 +383,8 @@ api::StatusSnapshot UssBackend::status() {
   }
   d["slaves"] = std::move(slaves);
   out.details = std::move(d);
-  out.position_mm = s.position_mm;
-  if (s.floor) out.floor = static_cast<int>(*s.floor);
-  if (s.travel_kind == uss::TravelKind::None && s.floor) out.next_possible_stop = out.floor;
   out.brake_open = s.brake_open;
   out.contactors_on = s.contactors_on;
-  out.travel_state = std::string(uss::to_string(s.travel_kind));
-  out.travel_direction = direction_name(s.direction);
-  if (s.target_floor) out.target_floor = static_cast<int>(*s.target_floor);
-  for (std::size_t i = 0; i < s.call_count; ++i) out.calls.push_back(s.calls[i]);
-  out.rt = rt_info(runner_.thread_status(), config_.rt.priority);
   return out;
 }
 
@@ -499,15 +458,6 @@ std::vector<api::TraceEntry> UssBackend::trace(std::size_t max_entries) {
     out.erase(out.begin(), out.end() - static_cast<std::ptrdiff_t>(max_entries));
   }
   return out;
-}
-
-nlohmann::json UssBackend::config() {
-  return config::to_json(config_);
-}
-
-void UssBackend::send(uss::CommandBody body, api::Responder done) {
-  (void)post_command<uss::ControllerCommand>(controller_, pending_, std::move(body),
-                                             std::move(done), kUssReplyGrace, "USS");
 }
 
 std::optional<uss::PkwLength> UssBackend::pkw_length(std::uint8_t address) const {
@@ -594,25 +544,9 @@ void UssBackend::poll(MonoTime now) {
     }
     pending_.complete(r.tag, reply_result(r));
   }
-  pending_.expire(now, "the USS thread did not answer; see the journal");
+  expire_unanswered(now);
   std::erase_if(parameter_requests_,
                 [this](const auto& entry) { return !pending_.waiting(entry.first); });
-}
-
-void UssBackend::update_inputs(const api::InputUpdate& update, api::Responder done) {
-  done(inputs_.take(update, [this](const lift::Inputs& now) { send_inputs(now); }));
-}
-
-void UssBackend::simulated_inputs(const lift::Inputs& sample) {
-  inputs_.take_sample(sample, [this](const lift::Inputs& now) { send_inputs(now); });
-}
-
-void UssBackend::send_inputs(const lift::Inputs& inputs) {
-  (void)controller_.post(uss::ControllerCommand{0, uss::InputsCommand{inputs}});
-}
-
-bool UssBackend::send_shutdown(bool force) {
-  return controller_.post(uss::ControllerCommand{0, uss::ShutdownCommand{force}});
 }
 
 void UssBackend::travel(const api::TravelArgs& args, api::Responder done) {
@@ -633,14 +567,6 @@ void UssBackend::travel(const api::TravelArgs& args, api::Responder done) {
   send(cmd, std::move(done));
 }
 
-void UssBackend::stop(api::Responder done) {
-  send(uss::StopCommand{}, std::move(done));
-}
-
-void UssBackend::relevel(api::Responder done) {
-  send(uss::RelevelCommand{}, std::move(done));
-}
-
 void UssBackend::drive_reset(api::Responder done) {
   // The result has the shape of the DCP drive's reset: {"reset": true, "detail": ...}.
   send(uss::DriveResetCommand{}, [done = std::move(done)](Result r) mutable {
@@ -655,24 +581,6 @@ void UssBackend::drive_reset(api::Responder done) {
     }
     done(Result::ok(std::move(v)));
   });
-}
-
-void UssBackend::inspection(bool on, const std::string& direction, api::Responder done) {
-  uss::InspectionCommand cmd;
-  cmd.on = on;
-  cmd.direction = direction_of(direction);
-  send(cmd, std::move(done));
-}
-
-void UssBackend::calls(const std::string& action, std::optional<int> floor, api::Responder done) {
-  if (action == "list") {
-    done(Result::ok({{"calls", calls_list(controller_.snapshot())}}));
-    return;
-  }
-  uss::CallCommand cmd;
-  cmd.add = action == "add";
-  cmd.floor = static_cast<std::size_t>(floor.value_or(0));
-  send(cmd, std::move(done));
 }
 
 void UssBackend::parameter(const api::ParameterArgs& args, api::Responder done) {
@@ -727,7 +635,7 @@ void UssBackend::parameter(const api::ParameterArgs& args, api::Responder done) 
   cmd.request = request;
   // The context must be there before the reply can come: kept under the request's tag.
   const std::uint32_t tag = post_command<uss::ControllerCommand>(
-      controller_, pending_, cmd, std::move(done), kUssReplyGrace, "USS");
+      controller_, pending_, cmd, std::move(done), UssDrive::kReplyGrace, UssDrive::kThread);
   if (tag != 0) parameter_requests_[tag] = ParameterContext{args, address, *length};
 }
 
@@ -743,26 +651,10 @@ void UssBackend::mirror(std::optional<int> address, api::Responder done) {
   send(uss::MirrorCommand{a}, std::move(done));
 }
 
-void UssBackend::sim(const api::SimRequest& request, api::Responder done) {
-  if (sim_ == nullptr) {
-    api::Backend::sim(request, std::move(done));
-    return;
-  }
-  done(sim_->apply(request, mono_now()));
-}
-
 // ---- the lift ----
 
 UssLift::UssLift(Daemon& daemon, const config::Config& config, bool simulate)
-    : daemon_(daemon),
-      config_(config),
-      simulate_(simulate),
-      socket_path_(config.api.socket),
-      poll_timer_(daemon.io(), kPollPeriod),
-      publisher_(config.api.state_rate_hz, {"actual"}),
-      wind_down_(
-          daemon, [this](bool force) { return backend_->send_shutdown(force); }, kShutdownDeadline,
-          kUssShutdownGrace) {
+    : ControllerLift(daemon, config, simulate, {"actual"}) {
   rt::UssRunnerConfig rc;
   rc.device_path = config.drive.device;
   rc.serial = rt::uss_serial_settings(static_cast<std::uint32_t>(config.uss.baud));
@@ -780,48 +672,23 @@ UssLift::UssLift(Daemon& daemon, const config::Config& config, bool simulate)
     rc.serial.rs485 = io::Rs485Mode::Off;  // a pseudo-terminal has no RS485 mode
     position = &sim_->position();
   } else {
-    position_feed_ =
-        std::make_unique<lift::PositionFeed>(std::chrono::milliseconds(config.inputs.timeout_ms));
-    position = position_feed_.get();
+    position = &make_position_feed();
   }
   master_ = std::make_unique<uss::Master>(uss_master_config(config));
   controller_ = std::make_unique<uss::UssController>(uss_controller_config(config), *master_,
                                                      *position, mono_now());
   runner_ = std::make_unique<rt::UssRunner>(rc, *master_, *controller_);
-  backend_ = std::make_unique<UssBackend>(
-      config, *controller_, *runner_, *master_,
-      config.position.source == config::PositionSource::api ? position_feed_.get() : nullptr,
-      sim_.get());
-  server_ = std::make_unique<api::Server>(daemon.io(), *backend_, api_server_config(config),
-                                          api_log_sink());
-  if (sim_) {
-    daemon.add_component({"sim", [this] { return sim_->start(); }, [this] { sim_->stop(); }});
-  }
-  daemon.add_component({"uss", [this] { return start_runner(); }, [this] { stop_runner(); },
-                        [this](std::function<void()> done) { wind_down(std::move(done)); }});
-  register_api(daemon, *server_);
-  daemon.set_progress_probe(progress_probe([this] { return runner_->progress(); }));
-  daemon.set_running_status(simulate_ ? "simulated USS lift running; API on " + socket_path_
-                                      : "USS master starting on " + config.drive.device);
+  register_parts(std::make_unique<UssBackend>(config, *controller_, *runner_, *master_,
+                                              api_position_feed(), sim_.get()),
+                 simulate_ ? "simulated USS lift running; API on " + socket_path()
+                           : "USS master starting on " + config.drive.device);
 }
 
 UssLift::~UssLift() {
-  if (server_) server_->stop();
-  stop_runner();
-  if (sim_) sim_->stop();
+  shut_down();
 }
 
-bool UssLift::start_runner() {
-  const int error = runner_->start();
-  if (error != 0) {
-    log::event(log::Level::error, "uss", "uss_start_failed", {{"errno", std::to_string(error)}},
-               std::string("cannot start the USS thread: ") + std::strerror(error));
-    return false;
-  }
-  if (!accept_rt_thread(config_, runner_->thread_status(), simulate_, "USS")) {
-    runner_->stop();
-    return false;
-  }
+void UssLift::journal_started() {
   // The cycle the polling list should take by the spec's timing rules (USS A 5.1.1, A 6).
   const auto expected =
       std::chrono::duration_cast<std::chrono::microseconds>(master_->expected_cycle_time()).count();
@@ -834,32 +701,6 @@ bool UssLift::start_runner() {
                  std::to_string(master_->config().polling_list.size()) +
                  " telegram(s) per pass: expected cycle time " + std::to_string(expected) +
                  " us (start pauses, telegrams, reply delays)");
-  poll_timer_.start([this] { poll(); });
-  return true;
-}
-
-void UssLift::stop_runner() {
-  if (!poll_timer_.running()) return;
-  poll_timer_.stop();
-  runner_->stop();
-  poll();  // the last events
-}
-
-void UssLift::poll() {
-  const MonoTime now = mono_now();
-  if (sim_ && now - last_sim_inputs_ >= kSimInputsPeriod) {
-    backend_->simulated_inputs(sim_->inputs(now));
-    last_sim_inputs_ = now;
-    sim_->log_violations();
-  }
-  backend_->poll(now);
-  rt::CycleEvent cycle_event;
-  while (runner_->poll_event(cycle_event)) journal_port_event(cycle_event);
-  uss::ControllerEvent event;
-  while (controller_->poll_event(event)) handle_event(event);
-  publisher_.publish(*server_, backend_->status(), now);
-  const uss::ControllerSnapshot rest = controller_->snapshot();
-  wind_down_.check({rest.shutting_down, rest.quiesced, rest.floor, rest.position_mm}, now);
 }
 
 void UssLift::handle_event(const uss::ControllerEvent& event) {
@@ -930,26 +771,12 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
       break;
     }
     case Kind::Travel:
-      report_travel(*server_, event.travel, *controller_);
-      break;
     case Kind::FaultRaised:
     case Kind::FaultCleared:
-      report_fault(*server_, event.fault, uss::fault_text(event.fault),
-                   event.kind == Kind::FaultRaised);
-      break;
     case Kind::CallServed:
-      report_call_served(*server_, event.floor);
+      report_lift_event(event);
       break;
   }
-}
-
-void UssLift::wind_down(std::function<void()> done) {
-  if (!poll_timer_.running()) {
-    done();
-    return;
-  }
-  wind_down_.start(std::move(done), controller_->snapshot().travel_kind != uss::TravelKind::None,
-                   mono_now());
 }
 
 }  // namespace liftd::daemon

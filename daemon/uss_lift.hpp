@@ -19,6 +19,7 @@
 #include "api/backend.hpp"
 #include "api/server.hpp"
 #include "config/config.hpp"
+#include "daemon/controller_lift.hpp"
 #include "daemon/daemon.hpp"
 #include "daemon/drives.hpp"
 #include "daemon/lift_common.hpp"
@@ -83,40 +84,54 @@ class SimulatedUssBus {
   std::thread thread_;
 };
 
+/// The USS lift as controller_lift.hpp names its parts.
+struct UssDrive {
+  using Controller = uss::UssController;
+  using Runner = rt::UssRunner;
+  using Simulator = SimulatedUssBus;
+  using Snapshot = uss::ControllerSnapshot;
+  using Command = uss::ControllerCommand;
+  using CommandReply = uss::CommandReply;
+  using Event = uss::ControllerEvent;
+  using TravelKind = uss::TravelKind;
+  using StopCommand = uss::StopCommand;
+  using RelevelCommand = uss::RelevelCommand;
+  using InspectionCommand = uss::InspectionCommand;
+  using CallCommand = uss::CallCommand;
+  using InputsCommand = uss::InputsCommand;
+  using ShutdownCommand = uss::ShutdownCommand;
+  static constexpr drive::Kind kKind = drive::Kind::Uss;
+  static constexpr std::string_view kName = "uss";
+  static constexpr std::string_view kThread = "USS";
+  static constexpr std::string_view kStartFailedEvent = "uss_start_failed";
+  /// A parameter request may wait uss.pkw_repeat_limit polls of a long polling list; this only
+  /// catches a stalled USS thread.
+  static constexpr std::chrono::nanoseconds kReplyGrace = std::chrono::seconds(30);
+  /// After a forced end: telegrams with OFF2 go out.
+  static constexpr std::chrono::nanoseconds kShutdownGrace = std::chrono::milliseconds(300);
+  static std::string_view fault_text(lift::FaultCode code) noexcept {
+    return uss::fault_text(code);
+  }
+};
+
 /// api::Backend over the USS lift controller.
-class UssBackend final : public api::Backend {
+class UssBackend final : public ControllerBackend<UssDrive> {
  public:
   UssBackend(const config::Config& config, uss::UssController& controller, rt::UssRunner& runner,
-             uss::Master& master, lift::PositionFeed* position_feed, SimulatedUssBus* sim);
+             uss::Master& master, lift::PositionFeed* position_feed, SimulatedUssBus* sim)
+      : ControllerBackend(config, controller, runner, position_feed, sim), master_(master) {}
 
-  drive::Kind drive_kind() const override { return drive::Kind::Uss; }
   api::StatusSnapshot status() override;
   api::StatsSnapshot stats() override;
   std::vector<api::TraceEntry> trace(std::size_t max_entries) override;
-  api::DisplaySnapshot display() override { return {}; }
-  nlohmann::json config() override;
-  // Not offered by this drive kind: the dispatcher refuses them before they get here.
-  void key(int, api::Responder done) override { not_offered(done); }
-  void power(api::PowerSetting, api::Responder done) override { not_offered(done); }
-  void load(int, api::Responder done) override { not_offered(done); }
   void drive_reset(api::Responder done) override;
-  void update_inputs(const api::InputUpdate& update, api::Responder done) override;
   void travel(const api::TravelArgs& args, api::Responder done) override;
-  void stop(api::Responder done) override;
-  void relevel(api::Responder done) override;
-  void inspection(bool on, const std::string& direction, api::Responder done) override;
-  void calls(const std::string& action, std::optional<int> floor, api::Responder done) override;
-  void sim(const api::SimRequest& request, api::Responder done) override;
   void parameter(const api::ParameterArgs& args, api::Responder done) override;
   void mirror(std::optional<int> address, api::Responder done) override;
 
-  /// Io thread: replies to their clients, requests the USS thread never answered time out.
-  void poll(MonoTime now);
-  /// A sample of the simulated machine's inputs (--simulate), sent on with the API's shaft
-  /// signals (MachineInputs).
-  void simulated_inputs(const lift::Inputs& sample);
-  bool send_shutdown(bool force);
-  std::chrono::system_clock::time_point wall_time(MonoTime at) const;
+  /// Io thread: replies to their clients (a parameter or mirror request's with its result),
+  /// requests the USS thread never answered time out.
+  void poll(MonoTime now) override;
 
  private:
   /// What a reply must turn into: the parameter request's arguments for its result.
@@ -125,54 +140,25 @@ class UssBackend final : public api::Backend {
     std::uint8_t address = 0;
     uss::PkwLength length = uss::PkwLength::Four;
   };
-  static void not_offered(api::Responder& done);
-  void send(uss::CommandBody body, api::Responder done);
-  void send_inputs(const lift::Inputs& inputs);
   /// The configured slave at `address`: its PKW length, or nullopt when it is not on the bus.
   std::optional<uss::PkwLength> pkw_length(std::uint8_t address) const;
   api::Result parameter_result(const ParameterContext& context, const uss::PkwResult& r) const;
 
-  const config::Config& config_;
-  uss::UssController& controller_;
-  rt::UssRunner& runner_;
   uss::Master& master_;  ///< its configuration only (the runner's thread owns the rest)
-  SimulatedUssBus* sim_;
-  MachineInputs inputs_;  ///< the API's and the simulated machine's inputs
-  PendingReplies pending_;
   std::map<std::uint32_t, ParameterContext> parameter_requests_;
-  MonoTime mono_at_start_{};
-  std::chrono::system_clock::time_point wall_at_start_{};
 };
 
 /// The USS lift as one piece, registered with the daemon.
-class UssLift final : public LiftRunner {
+class UssLift final : public ControllerLift<UssDrive> {
  public:
   UssLift(Daemon& daemon, const config::Config& config, bool simulate);
   ~UssLift() override;
-  const std::string& socket_path() const override { return socket_path_; }
 
  private:
-  bool start_runner();
-  void stop_runner();
-  void poll();
-  void handle_event(const uss::ControllerEvent& event);
-  void wind_down(std::function<void()> done);
+  void journal_started() override;
+  void handle_event(const uss::ControllerEvent& event) override;
 
-  Daemon& daemon_;
-  const config::Config& config_;
-  bool simulate_;
-  std::string socket_path_;
-  std::unique_ptr<SimulatedUssBus> sim_;
-  std::unique_ptr<lift::PositionFeed> position_feed_;
   std::unique_ptr<uss::Master> master_;
-  std::unique_ptr<uss::UssController> controller_;
-  std::unique_ptr<rt::UssRunner> runner_;
-  std::unique_ptr<UssBackend> backend_;
-  std::unique_ptr<api::Server> server_;
-  PollTimer poll_timer_;
-  StatePublisher publisher_;
-  MonoTime last_sim_inputs_{};
-  WindDown wind_down_;
 };
 
 }  // namespace liftd::daemon

@@ -1,0 +1,344 @@
+// The io-thread side of a lift whose controller runs on a real-time thread of its own behind
+// lock-free queues (SCH001 on the CAN runner, USS on the USS runner), written once for both:
+// the API backend's drive-neutral commands and `status` fields, and the lift's start and stop,
+// its io-thread poll and its service-stop wind-down. What only one drive has (its link and
+// events, its status details, stats and trace) stays in hydraulic_lift.* and uss_lift.*.
+//
+// `Drive` names the parts of one drive kind (see Sch001Drive, UssDrive):
+//   Controller, Runner, Simulator, Snapshot, Command, CommandReply, Event, TravelKind,
+//   StopCommand, RelevelCommand, InspectionCommand, CallCommand, InputsCommand, ShutdownCommand;
+//   kKind, kName (drive.kind, journal and daemon component), kThread (as the journal names the
+//   thread), kStartFailedEvent, kReplyGrace, kShutdownGrace, fault_text().
+#pragma once
+
+#include <chrono>
+#include <cstring>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <asio.hpp>
+
+#include "api/backend.hpp"
+#include "api/server.hpp"
+#include "config/config.hpp"
+#include "daemon/daemon.hpp"
+#include "daemon/drives.hpp"
+#include "daemon/lift_common.hpp"
+#include "daemon/lift_core.hpp"
+#include "drive/drive.hpp"
+#include "lift/position_source.hpp"
+#include "log/log.hpp"
+
+namespace liftd::daemon {
+
+/// api::Backend over a controller on a real-time thread: what every such drive answers alike.
+/// A drive's backend adds status(), stats(), trace(), travel() and drive_reset().
+template <typename Drive>
+class ControllerBackend : public api::Backend {
+ public:
+  using Controller = typename Drive::Controller;
+  using Runner = typename Drive::Runner;
+  using Simulator = typename Drive::Simulator;
+
+  ControllerBackend(const config::Config& config, Controller& controller, Runner& runner,
+                    lift::PositionFeed* position_feed, Simulator* sim)
+      : config_(config),
+        controller_(controller),
+        runner_(runner),
+        sim_(sim),
+        inputs_(config, position_feed, sim != nullptr),
+        mono_at_start_(mono_now()),
+        wall_at_start_(std::chrono::system_clock::now()) {}
+
+  drive::Kind drive_kind() const override { return Drive::kKind; }
+  api::DisplaySnapshot display() override { return {}; }
+  nlohmann::json config() override { return config::to_json(config_); }
+  // Not offered by these drive kinds: the dispatcher refuses them before they get here.
+  void key(int, api::Responder done) override { not_offered(done); }
+  void power(api::PowerSetting, api::Responder done) override { not_offered(done); }
+  void load(int, api::Responder done) override { not_offered(done); }
+
+  void update_inputs(const api::InputUpdate& update, api::Responder done) override {
+    done(inputs_.take(update, [this](const lift::Inputs& now) { send_inputs(now); }));
+  }
+  void stop(api::Responder done) override { send(typename Drive::StopCommand{}, std::move(done)); }
+  void relevel(api::Responder done) override {
+    send(typename Drive::RelevelCommand{}, std::move(done));
+  }
+  void inspection(bool on, const std::string& direction, api::Responder done) override {
+    typename Drive::InspectionCommand cmd;
+    cmd.on = on;
+    cmd.direction = direction_of(direction);
+    send(cmd, std::move(done));
+  }
+  void calls(const std::string& action, std::optional<int> floor, api::Responder done) override {
+    if (action == "list") {
+      done(api::Result::ok({{"calls", calls_list(controller_.snapshot())}}));
+      return;
+    }
+    typename Drive::CallCommand cmd;
+    cmd.add = action == "add";
+    cmd.floor = static_cast<std::size_t>(floor.value_or(0));
+    send(cmd, std::move(done));
+  }
+  void sim(const api::SimRequest& request, api::Responder done) override {
+    if (sim_ == nullptr) {
+      api::Backend::sim(request, std::move(done));
+      return;
+    }
+    done(sim_->apply(request, mono_now()));
+  }
+
+  /// Io thread: replies to their clients, requests the controller's thread never answered time
+  /// out.
+  virtual void poll(MonoTime now) {
+    typename Drive::CommandReply r;
+    while (controller_.poll_reply(r)) pending_.complete(r.tag, reply_result(r));
+    expire_unanswered(now);
+  }
+  /// A sample of the simulated machine's inputs (--simulate), sent on with the API's shaft
+  /// signals (MachineInputs).
+  void simulated_inputs(const lift::Inputs& sample) {
+    inputs_.take_sample(sample, [this](const lift::Inputs& now) { send_inputs(now); });
+  }
+  bool send_shutdown(bool force) {
+    return controller_.post(typename Drive::Command{0, typename Drive::ShutdownCommand{force}});
+  }
+  std::chrono::system_clock::time_point wall_time(MonoTime at) const {
+    return wall_at_start_ +
+           std::chrono::duration_cast<std::chrono::system_clock::duration>(at - mono_at_start_);
+  }
+
+ protected:
+  static void not_offered(api::Responder& done) {
+    done(api::Result::fail(api::ErrorCode::NotOffered,
+                           "not offered by drive kind \"" + std::string(Drive::kName) + "\""));
+  }
+  template <typename Body>
+  void send(Body&& body, api::Responder done) {
+    (void)post_command<typename Drive::Command>(controller_, pending_, std::forward<Body>(body),
+                                                std::move(done), Drive::kReplyGrace,
+                                                Drive::kThread);
+  }
+  /// Fails the requests the controller's thread did not answer in Drive::kReplyGrace.
+  void expire_unanswered(MonoTime now) {
+    pending_.expire(
+        now, "the " + std::string(Drive::kThread) + " thread did not answer; see the journal");
+  }
+  /// The drive-neutral fields of `status` from the controller's snapshot, with the link as the
+  /// drive reads it: faults and drive state, where the car is, the travel, the calls, status.rt.
+  api::StatusSnapshot neutral_status(const typename Drive::Snapshot& s, api::LinkState link) const {
+    using TravelKind = typename Drive::TravelKind;
+    api::StatusSnapshot out;
+    out.drive_kind = Drive::kKind;
+    out.link = link;
+    out.faults = active_faults(
+        s.faults, s.fault_since, [](lift::FaultCode code) { return Drive::fault_text(code); },
+        [this](MonoTime at) { return wall_time(at); });
+    out.drive_state = drive::state_of(out.link == api::LinkState::Up,
+                                      s.travel_kind != TravelKind::None, !out.faults.empty());
+    out.position_mm = s.position_mm;
+    if (s.floor) out.floor = static_cast<int>(*s.floor);
+    if (s.travel_kind == TravelKind::None && s.floor) out.next_possible_stop = out.floor;
+    out.travel_state = std::string(to_string(s.travel_kind));
+    out.travel_direction = direction_name(s.direction);
+    if (s.target_floor) out.target_floor = static_cast<int>(*s.target_floor);
+    for (std::size_t i = 0; i < s.call_count; ++i) out.calls.push_back(s.calls[i]);
+    out.rt = rt_info(runner_.thread_status(), config_.rt.priority);
+    return out;
+  }
+
+  const config::Config& config_;
+  Controller& controller_;
+  Runner& runner_;
+  Simulator* sim_;
+  MachineInputs inputs_;  ///< the API's and the simulated machine's inputs
+  PendingReplies pending_;
+
+ private:
+  void send_inputs(const lift::Inputs& inputs) {
+    (void)controller_.post(typename Drive::Command{0, typename Drive::InputsCommand{inputs}});
+  }
+
+  MonoTime mono_at_start_{};
+  std::chrono::system_clock::time_point wall_at_start_{};
+};
+
+/// The lift as one piece over a controller on a real-time thread, registered with the daemon:
+/// the simulator (--simulate), the controller, its runner, the backend and the API server. A
+/// drive's lift makes the simulator, the controller and the runner in its constructor, then
+/// calls register_parts(); its destructor calls shut_down().
+template <typename Drive>
+class ControllerLift : public LiftRunner {
+ public:
+  using Backend = ControllerBackend<Drive>;
+
+  const std::string& socket_path() const override { return socket_path_; }
+
+ protected:
+  /// `continuous`: the status details that change while moving, published at the state rate.
+  ControllerLift(Daemon& daemon, const config::Config& config, bool simulate,
+                 std::vector<std::string> continuous = {})
+      : daemon_(daemon),
+        config_(config),
+        simulate_(simulate),
+        socket_path_(config.api.socket),
+        poll_timer_(daemon.io(), kPollPeriod),
+        publisher_(config.api.state_rate_hz, std::move(continuous)),
+        wind_down_(
+            daemon, [this](bool force) { return backend_->send_shutdown(force); },
+            kShutdownDeadline, Drive::kShutdownGrace) {}
+
+  /// The position the API's `inputs` carry (position.source "api"), made as the car's position.
+  const lift::PositionSource& make_position_feed() {
+    position_feed_ =
+        std::make_unique<lift::PositionFeed>(std::chrono::milliseconds(config_.inputs.timeout_ms));
+    return *position_feed_;
+  }
+  /// The feed the backend hands the API's positions: for position.source "api" only.
+  lift::PositionFeed* api_position_feed() const {
+    return config_.position.source == config::PositionSource::api ? position_feed_.get() : nullptr;
+  }
+
+  /// Once the simulator, the controller and the runner are made: the API server over `backend`,
+  /// the daemon's components (the simulator, the thread as Drive::kName, the API), the watchdog
+  /// probe and the status line while running.
+  void register_parts(std::unique_ptr<Backend> backend, const std::string& running_status) {
+    backend_ = std::move(backend);
+    server_ = std::make_unique<api::Server>(daemon_.io(), *backend_, api_server_config(config_),
+                                            api_log_sink());
+    if (sim_) {
+      daemon_.add_component({"sim", [this] { return sim_->start(); }, [this] { sim_->stop(); }});
+    }
+    daemon_.add_component({std::string(Drive::kName), [this] { return start_runner(); },
+                           [this] { stop_runner(); },
+                           [this](std::function<void()> done) { wind_down(std::move(done)); }});
+    register_api(daemon_, *server_);
+    daemon_.set_progress_probe(progress_probe([this] { return runner_->progress(); }));
+    daemon_.set_running_status(running_status);
+  }
+
+  /// Stops the API, the thread (journalling its last events) and the simulator, and frees the
+  /// parts in the reverse order of their making: called by the drive's lift's destructor, while
+  /// its handle_event() and the parts it made first (the USS master, the CAN encoder) are there.
+  void shut_down() {
+    if (server_) server_->stop();
+    stop_runner();
+    if (sim_) sim_->stop();
+    server_.reset();
+    backend_.reset();
+    runner_.reset();
+    controller_.reset();
+  }
+
+  /// Before the thread starts (the hydraulic lift checks its CAN interface).
+  virtual void before_start() {}
+  /// Journals the thread's link once it runs.
+  virtual void journal_started() = 0;
+  /// An event of the controller; the drive-neutral ones go to report_lift_event().
+  virtual void handle_event(const typename Drive::Event& event) = 0;
+  /// Every poll, after the controller's events: what only this drive watches.
+  virtual void after_events(MonoTime) {}
+
+  /// Journals and publishes the events every such controller reports alike: a travel, a fault
+  /// raised or cleared, a served call.
+  void report_lift_event(const typename Drive::Event& event) {
+    using Kind = typename Drive::Event::Kind;
+    switch (event.kind) {
+      case Kind::Travel:
+        report_travel(*server_, event.travel, *controller_);
+        break;
+      case Kind::FaultRaised:
+      case Kind::FaultCleared:
+        report_fault(*server_, event.fault, Drive::fault_text(event.fault),
+                     event.kind == Kind::FaultRaised);
+        break;
+      case Kind::CallServed:
+        report_call_served(*server_, event.floor);
+        break;
+      default:  // the drive's own events: handle_event()
+        break;
+    }
+  }
+
+  Daemon& daemon_;
+  const config::Config& config_;
+  bool simulate_;
+  std::unique_ptr<typename Drive::Simulator> sim_;
+  std::unique_ptr<lift::PositionFeed> position_feed_;
+  std::unique_ptr<typename Drive::Controller> controller_;
+  std::unique_ptr<typename Drive::Runner> runner_;
+  std::unique_ptr<Backend> backend_;
+  std::unique_ptr<api::Server> server_;
+
+ private:
+  bool start_runner() {
+    before_start();
+    const int error = runner_->start();
+    if (error != 0) {
+      log::event(
+          log::Level::error, Drive::kName, Drive::kStartFailedEvent,
+          {{"errno", std::to_string(error)}},
+          "cannot start the " + std::string(Drive::kThread) + " thread: " + std::strerror(error));
+      return false;
+    }
+    if (!accept_rt_thread(config_, runner_->thread_status(), simulate_, Drive::kThread)) {
+      runner_->stop();
+      return false;
+    }
+    journal_started();
+    poll_timer_.start([this] { poll(); });
+    return true;
+  }
+
+  void stop_runner() {
+    if (!poll_timer_.running()) return;
+    poll_timer_.stop();
+    runner_->stop();
+    poll();  // the last events
+  }
+
+  /// The io thread's step every kPollPeriod: the simulated machine's inputs every
+  /// kSimInputsPeriod, the controller's replies and events (and the runner's own, where it has
+  /// them), the `state` event, the wind-down's check.
+  void poll() {
+    const MonoTime now = mono_now();
+    if (sim_ && now - last_sim_inputs_ >= kSimInputsPeriod) {
+      backend_->simulated_inputs(sim_->inputs(now));
+      last_sim_inputs_ = now;
+      sim_->log_violations();
+    }
+    backend_->poll(now);
+    if constexpr (requires(typename Drive::Runner & r, rt::CycleEvent & e) { r.poll_event(e); }) {
+      rt::CycleEvent cycle_event;
+      while (runner_->poll_event(cycle_event)) journal_port_event(cycle_event);
+    }
+    typename Drive::Event event;
+    while (controller_->poll_event(event)) handle_event(event);
+    after_events(now);
+    publisher_.publish(*server_, backend_->status(), now);
+    const typename Drive::Snapshot rest = controller_->snapshot();
+    wind_down_.check({rest.shutting_down, rest.quiesced, rest.floor, rest.position_mm}, now);
+  }
+
+  void wind_down(std::function<void()> done) {
+    if (!poll_timer_.running()) {
+      done();
+      return;
+    }
+    wind_down_.start(std::move(done),
+                     controller_->snapshot().travel_kind != Drive::TravelKind::None, mono_now());
+  }
+
+  std::string socket_path_;
+  PollTimer poll_timer_;
+  StatePublisher publisher_;
+  MonoTime last_sim_inputs_{};
+  WindDown wind_down_;
+};
+
+}  // namespace liftd::daemon
