@@ -127,9 +127,9 @@ sim::CardSimConfig card_sim_config(const config::Config& c) {
 }  // namespace
 
 SimulatedCard::SimulatedCard(const config::Config& config, can::CanSocket card_end)
-    : socket_(std::move(card_end)),
-      card_(card_sim_config(config), mono_now()),
-      board_(config, mono_now()) {
+    : SimulatorThread(config),
+      socket_(std::move(card_end)),
+      card_(card_sim_config(config), mono_now()) {
   encoder_.set(std::llround(card_.state().position_mm));
 }
 
@@ -138,17 +138,14 @@ SimulatedCard::~SimulatedCard() {
 }
 
 bool SimulatedCard::start() {
-  stop_.store(false);
-  thread_ = std::thread([this] { loop(); });
+  start_thread([this] { loop(); });
   log::event(log::Level::info, "sim", "sim_started", {{"device", "socketpair"}},
              "simulated SCH001 card answering on a CAN socketpair");
   return true;
 }
 
 void SimulatedCard::stop() {
-  if (!thread_.joinable()) return;
-  stop_.store(true);
-  thread_.join();
+  if (!join_thread()) return;
   log_violations();
   std::lock_guard<std::mutex> lock(mutex_);
   log::event(log::Level::info, "sim", "sim_stopped",
@@ -161,7 +158,7 @@ void SimulatedCard::stop() {
 }
 
 void SimulatedCard::loop() {
-  while (!stop_.load()) {
+  while (!stopping()) {
     pollfd p{socket_.fd(), POLLIN, 0};
     (void)::poll(&p, 1, 5);
     const MonoTime now = mono_now();
@@ -181,15 +178,8 @@ void SimulatedCard::loop() {
       bus_off_ = false;
     }
     if (const auto frame = card_.poll(now)) (void)socket_.write(*frame);
-    const auto& s = card_.state();
-    encoder_.set(std::llround(s.position_mm));
-    board_.io().set_car(s.velocity_mps != 0.0, s.position_mm, now);
+    car_moved(card_.state().position_mm, card_.state().velocity_mps != 0.0, now);
   }
-}
-
-lift::Inputs SimulatedCard::inputs(MonoTime now) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return board_.io().inputs(now);
 }
 
 void SimulatedCard::log_violations() {

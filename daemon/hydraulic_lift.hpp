@@ -36,19 +36,13 @@ sch001::ControllerConfig sch001_controller_config(const config::Config& config);
 
 /// The simulated card and hydraulic car (liftd --simulate, drive.kind "sch001") on its own
 /// thread, speaking CAN frames over one end of a socketpair; the simulated I/O board.
-class SimulatedCard {
+class SimulatedCard final : public SimulatorThread {
  public:
   SimulatedCard(const config::Config& config, can::CanSocket card_end);
   ~SimulatedCard();
-  SimulatedCard(const SimulatedCard&) = delete;
-  SimulatedCard& operator=(const SimulatedCard&) = delete;
 
   bool start();
   void stop();
-  /// The simulated encoder on the car (lock-free).
-  const lift::PositionSource& position() const { return encoder_; }
-  /// The simulated I/O board's inputs now (io thread).
-  lift::Inputs inputs(MonoTime now);
   /// A `sim` request; the result is state_json() after it.
   api::Result apply(const api::SimRequest& request, MonoTime now);
   nlohmann::json state_json() const;
@@ -60,13 +54,8 @@ class SimulatedCard {
   nlohmann::json state_json_locked() const;  ///< state_json() with mutex_ held
 
   can::CanSocket socket_;
-  mutable std::mutex mutex_;  ///< guards card_, board_ and bus_off_ (the simulator's thread and io)
-  sim::Sch001CardSim card_;
-  SimulatedBoard board_;
-  SimulatedEncoder encoder_;
-  bool bus_off_ = false;  ///< inject one bus-off error frame (then back to normal)
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
+  sim::Sch001CardSim card_;  ///< guarded by mutex_
+  bool bus_off_ = false;     ///< inject one bus-off error frame (then back to normal; mutex_)
 };
 
 /// The SCH001 card's lift as controller_lift.hpp names its parts.

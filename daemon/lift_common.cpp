@@ -1,5 +1,6 @@
 #include "daemon/lift_common.hpp"
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <vector>
@@ -151,6 +152,28 @@ std::string action_name(const api::SimRequest& request) {
 }
 
 }  // namespace
+
+lift::Inputs SimulatorThread::inputs(MonoTime now) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return board_.io().inputs(now);
+}
+
+void SimulatorThread::start_thread(std::function<void()> loop) {
+  stop_.store(false);
+  thread_ = std::thread(std::move(loop));
+}
+
+bool SimulatorThread::join_thread() {
+  if (!thread_.joinable()) return false;
+  stop_.store(true);
+  thread_.join();
+  return true;
+}
+
+void SimulatorThread::car_moved(double position_mm, bool moving, MonoTime now) {
+  encoder_.set(std::llround(position_mm));
+  board_.io().set_car(moving, position_mm, now);
+}
 
 SimulatedBoard::SimulatedBoard(const config::Config& config, MonoTime now)
     : io_(board_config(config), now) {}

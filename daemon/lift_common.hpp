@@ -5,9 +5,12 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <thread>
 
 #include "api/server.hpp"
 #include "can/encoder.hpp"
@@ -100,6 +103,38 @@ class SimulatedBoard {
   sim::SimulatedIo io_;
   bool chain_open_ = false;  ///< injected safety chain opening
   bool obstructed_ = false;  ///< injected door obstruction
+};
+/// What the simulated card and the simulated USS bus share: the simulator's own thread, the
+/// simulated I/O board and encoder its car moves, and the mutex under which that thread and the
+/// io thread share the simulator and the board. A simulator's destructor stops its thread.
+class SimulatorThread {
+ public:
+  SimulatorThread(const SimulatorThread&) = delete;
+  SimulatorThread& operator=(const SimulatorThread&) = delete;
+
+  /// The simulated encoder on the car (lock-free).
+  const lift::PositionSource& position() const { return encoder_; }
+  /// The simulated I/O board's inputs now (io thread).
+  lift::Inputs inputs(MonoTime now);
+
+ protected:
+  explicit SimulatorThread(const config::Config& config) : board_(config, mono_now()) {}
+  ~SimulatorThread() = default;
+  /// Runs `loop` on the simulator's thread; `loop` returns once stopping() is true.
+  void start_thread(std::function<void()> loop);
+  /// Ends the simulator's thread: false when it was not running.
+  bool join_thread();
+  bool stopping() const noexcept { return stop_.load(); }
+  /// The simulated car is at `position_mm`, `moving` or not (simulator's thread, mutex_ held).
+  void car_moved(double position_mm, bool moving, MonoTime now);
+
+  mutable std::mutex mutex_;  ///< guards the simulator and board_ (its thread and the io thread)
+  SimulatedBoard board_;
+  SimulatedEncoder encoder_;
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
 };
 /// `sim` with an action of another drive kind's simulator: bad_request, naming the action and
 /// this lift's kind.

@@ -130,10 +130,10 @@ nlohmann::json word_bits(std::uint16_t word, const std::array<std::string_view, 
 // ---- the simulated bus ----
 
 SimulatedUssBus::SimulatedUssBus(const config::Config& config)
-    : baud_(static_cast<std::uint32_t>(config.uss.baud)),
+    : SimulatorThread(config),
+      baud_(static_cast<std::uint32_t>(config.uss.baud)),
       drive_address_(static_cast<std::uint8_t>(config.uss.drive_address)),
-      priority_(std::max(1, config.rt.priority - 1)),
-      board_(config, mono_now()) {
+      priority_(std::max(1, config.rt.priority - 1)) {
   auto pair = io::PtyPair::create(rt::uss_serial_settings(baud_), true);
   if (!pair) throw std::runtime_error("simulated USS bus: " + pair.error().message());
   pty_ = std::make_unique<io::PtyPair>(std::move(pair).value());
@@ -173,8 +173,7 @@ SimulatedUssBus::~SimulatedUssBus() {
 }
 
 bool SimulatedUssBus::start() {
-  stop_.store(false);
-  thread_ = std::thread([this] { loop(); });
+  start_thread([this] { loop(); });
   log::event(log::Level::info, "sim", "sim_started", {{"device", device_path()}},
              "simulated USS bus (" + std::to_string(bus_->slaves().size()) +
                  " slave(s)) answering on " + device_path());
@@ -182,9 +181,7 @@ bool SimulatedUssBus::start() {
 }
 
 void SimulatedUssBus::stop() {
-  if (!thread_.joinable()) return;
-  stop_.store(true);
-  thread_.join();
+  if (!join_thread()) return;
   log_violations();
   std::lock_guard<std::mutex> lock(mutex_);
   std::uint64_t violations = 0;
@@ -204,7 +201,7 @@ void SimulatedUssBus::loop() {
   param.sched_priority = priority_;
   (void)::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &param);
   std::array<std::uint8_t, 512> buffer{};
-  while (!stop_.load()) {
+  while (!stopping()) {
     const timespec slice{0, std::chrono::nanoseconds(kSimSlice).count()};
     pollfd p{port_.fd(), POLLIN, 0};
     (void)::ppoll(&p, 1, &slice, nullptr);
@@ -227,14 +224,7 @@ void SimulatedUssBus::serve(MonoTime now) {
     (void)port_.write_frame(reply.view());
     bus_->reply_sent(now);
   }
-  const double mm = drive().position_mm();
-  encoder_.set(std::llround(mm));
-  board_.io().set_car(drive().velocity_mps() != 0.0, mm, now);
-}
-
-lift::Inputs SimulatedUssBus::inputs(MonoTime now) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return board_.io().inputs(now);
+  car_moved(drive().position_mm(), drive().velocity_mps() != 0.0, now);
 }
 
 void SimulatedUssBus::log_violations() {

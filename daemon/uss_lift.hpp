@@ -42,22 +42,16 @@ uss::UssControllerConfig uss_controller_config(const config::Config& config);
 /// The simulated USS bus (liftd --simulate, drive.kind "uss") on its own thread: one simulated
 /// slave per configured address (the drive moves a car; the others only answer), speaking 8E1
 /// telegrams on the master end of a pseudo-terminal; the simulated I/O board.
-class SimulatedUssBus {
+class SimulatedUssBus final : public SimulatorThread {
  public:
   /// Creates the pseudo-terminal; throws std::runtime_error when it cannot.
   explicit SimulatedUssBus(const config::Config& config);
   ~SimulatedUssBus();
-  SimulatedUssBus(const SimulatedUssBus&) = delete;
-  SimulatedUssBus& operator=(const SimulatedUssBus&) = delete;
 
   /// The device the master opens (the pseudo-terminal's slave end).
   const std::string& device_path() const { return pty_->slave_path(); }
   bool start();
   void stop();
-  /// The simulated encoder on the car (lock-free).
-  const lift::PositionSource& position() const { return encoder_; }
-  /// The simulated I/O board's inputs now (io thread).
-  lift::Inputs inputs(MonoTime now);
   /// A `sim` request; the result is state_json() after it.
   api::Result apply(const api::SimRequest& request, MonoTime now);
   nlohmann::json state_json() const;
@@ -76,12 +70,7 @@ class SimulatedUssBus {
   int priority_;  ///< SCHED_FIFO priority of the bus thread, one below the master's
   std::unique_ptr<io::PtyPair> pty_;
   io::SerialPort port_;                  ///< the pseudo-terminal's master end
-  mutable std::mutex mutex_;             ///< guards bus_ and board_ (sim thread and io)
-  std::unique_ptr<sim::UssBusSim> bus_;  ///< one simulated slave per configured address
-  SimulatedBoard board_;
-  SimulatedEncoder encoder_;
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
+  std::unique_ptr<sim::UssBusSim> bus_;  ///< one simulated slave per configured address (mutex_)
 };
 
 /// The USS lift as controller_lift.hpp names its parts.
