@@ -837,8 +837,10 @@ void DriveSim::on_remaining_distance(std::uint16_t raw, MonoTime now) noexcept {
     // speed; once a target came from a moving car, each reading at a lower speed is the better
     // one and the drive follows it, so the readings converge on the level as the car slows.
     // A target read at rest (the start of a travel) is exact and stays. A correction while
-    // the car already brakes may need a slightly harder ramp (at most the fast-stop ramp).
-    if (!saturated && st.v_mps < target_read_at_mps_) {
+    // the car already brakes may need a slightly harder ramp (at most the fast-stop ramp). A
+    // reading of 0 (the master sees the car on or past its level) says no more than that the
+    // lag is there: never a target behind the car.
+    if (!saturated && word != 0 && st.v_mps < target_read_at_mps_) {
       target_s_m_ = implied_m;
       target_read_at_mps_ = st.v_mps;
       const double t0 = std::max(seconds(now), motion_start_s_);

@@ -156,7 +156,7 @@ TEST(ServiceStop, SigtermDuringATravelLandsTheCarThenExits) {
   ASSERT_TRUE(std::regex_search(log, m, summary)) << log;
   EXPECT_TRUE(m[1] == "idle" || m[1] == "finished") << m[0];
   const double position = std::stod(m[2]);
-  EXPECT_NEAR(position, level_mm(nearest_floor(position)), kLandingMm) << m[0];
+  EXPECT_NEAR(position, level_mm(nearest_floor(position)), kLandingMm) << m[0] << log;
   EXPECT_EQ(m[3], "no fault") << m[0];
   EXPECT_EQ(m[4], "0") << m[0];
 }

@@ -272,6 +272,37 @@ TEST(SimTravel, Dcp4NearerLevelReadLateIsRefinedAsTheCarSlowsAndLandsOnTheLevel)
   EXPECT_NEAR(m.sim.position_mm(), 9000.0, 1.0);
 }
 
+class NearerLevelWithMeasuringLag : public ::testing::TestWithParam<int> {};
+
+TEST_P(NearerLevelWithMeasuringLag, EveryFrameLateByTheLagStillLandsOnTheLevel) {
+  // A service stop as liftd makes it: a DCP4 travel to 15 m is cut short to the next possible
+  // level (6 m) while the car still speeds up, and every frame reaches the drive GetParam() ms
+  // after the master measured the car (the thread hand-offs of a loaded machine). DCP 3.5.3.4:
+  // the drive follows the remaining distance onto the level; the readings' lag shrinks with the
+  // speed, and a reading of 0 near the level must not make it stop behind the car.
+  const auto lag = std::chrono::milliseconds(GetParam());
+  Harness m;
+  m.init();
+  m.cycle(cmd::kSpeed, kV4);
+  double target = 15000.0;
+  bool shortened = false;
+  for (int i = 0; i < 4000; ++i) {
+    m.sim.advance(m.now + 15ms - lag);
+    const double rd = std::clamp(target - m.sim.position_mm(), 0.0, 32767.0);
+    const Cycle c = m.cycle(cmd::kDecel, static_cast<std::uint16_t>(std::lround(rd)));
+    if (!shortened && m.sim.position_mm() > 1570.0) {
+      target = 6000.0;
+      shortened = true;
+    }
+    if (shortened && c.velocity_mps == 0.0 && !has(c.status, sb::kBrakeOpen)) break;
+  }
+  EXPECT_EQ(m.sim.counters().shortened, 1U);
+  EXPECT_EQ(m.sim.counters().implausible, 0U);
+  EXPECT_NEAR(m.sim.position_mm(), 6000.0, 2.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(LagMs, NearerLevelWithMeasuringLag, ::testing::Values(0, 5, 10, 20, 30));
+
 TEST(SimTravel, StopMessageAtSpeedIsAViolationAndAnEmergencyStop) {
   // DCP 3.5.3.2: stop mode 0001 "During deceleration" only; DCP 11.1.1 d: B2 "remains
   // activated until the lift car comes to the level".
