@@ -13,6 +13,7 @@
 
 #include "common/mono_time.hpp"
 #include "io/serial_port.hpp"
+#include "rt/cycle_event.hpp"
 #include "rt/flight_recorder.hpp"
 #include "rt/histogram.hpp"
 #include "rt/rt_thread.hpp"
@@ -97,29 +98,6 @@ constexpr WakeDecision decide_wake(std::chrono::nanoseconds lateness,
   const auto p = period.count() > 0 ? period.count() : 1;
   return WakeDecision{false, false, static_cast<std::uint64_t>(lateness.count() / p) + 1};
 }
-
-/// Kinds of events the cycle reports to the non-real-time side.
-enum class CycleEventKind : std::uint8_t {
-  ThreadStatus,    ///< real-time wishes refused at start (text in describe())
-  PortOpened,      ///< device opened (error_number: RS485/low-latency notes in text)
-  PortOpenFailed,  ///< open failed; will retry (text names device, call and errno)
-  PortLost,        ///< device lost (error_number = errno)
-  SkipRunStarted,  ///< a run of skipped cycles began: `count` skipped, `lateness` of the wake
-  SkipRunEnded,    ///< the run ended (a cycle was sent): `count` skipped in all, worst `lateness`
-};
-
-/// One event. Plain data so it can cross the SPSC queue without allocation.
-struct CycleEvent {
-  CycleEventKind kind = CycleEventKind::PortLost;  ///< what happened
-  MonoTime time{};                                 ///< when
-  int error_number = 0;                            ///< errno where relevant
-  std::uint64_t count = 0;                         ///< e.g. skipped cycles
-  std::chrono::nanoseconds lateness{0};            ///< skip runs: wake-up lateness
-  std::array<char, 240> text{};                    ///< message (filled off the cycle thread)
-};
-
-/// A readable line for an event (for the log).
-std::string describe(const CycleEvent& event);
 
 /// Counters of the cycle, copied out by stats().
 struct CycleCounters {

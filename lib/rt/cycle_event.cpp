@@ -1,0 +1,32 @@
+#include "rt/cycle_event.hpp"
+
+#include <cstring>
+
+namespace liftd::rt {
+
+std::string describe(const CycleEvent& event) {
+  const std::string text(event.text.data());
+  switch (event.kind) {
+    case CycleEventKind::ThreadStatus:
+      return "cycle thread: " + text;
+    case CycleEventKind::PortOpened:
+      return "serial port opened: " + text;
+    case CycleEventKind::PortOpenFailed:
+      return "serial port open failed, retrying: " + text;
+    case CycleEventKind::PortLost:
+      return "serial port lost (" +
+             std::string(event.error_number != 0 ? std::strerror(event.error_number) : "hang-up") +
+             "), reopening";
+    case CycleEventKind::SkipRunStarted:
+      return "cycle overrun: woke " + std::to_string(event.lateness.count() / 1000) +
+             " us late, beyond the send window; " + std::to_string(event.count) +
+             " cycle(s) skipped";
+    case CycleEventKind::SkipRunEnded:
+      return "cycle overrun ended: " + std::to_string(event.count) +
+             " cycle(s) skipped in the run, worst wake-up " +
+             std::to_string(event.lateness.count() / 1000) + " us late";
+  }
+  return "unknown cycle event";
+}
+
+}  // namespace liftd::rt
