@@ -6,16 +6,12 @@
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
-#include <cstring>
 #include <ctime>
 #include <stdexcept>
-#include <string_view>
 #include <utility>
 
 namespace liftd::rt {
 namespace {
-
-constexpr auto kKeeperTick = std::chrono::milliseconds(5);  // keeper's polling interval
 
 timespec to_timespec(MonoTime t) noexcept {
   constexpr std::int64_t kNsPerS = 1'000'000'000;
@@ -27,12 +23,6 @@ void sleep_until(MonoTime when) noexcept {
   const timespec ts = to_timespec(when);
   while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
   }
-}
-
-void set_text(CycleEvent& event, std::string_view text) noexcept {
-  const std::size_t n = std::min(text.size(), event.text.size() - 1);
-  std::copy_n(text.data(), n, event.text.data());
-  event.text[n] = '\0';
 }
 
 std::size_t recorder_capacity(const CycleConfig& config) {
@@ -48,7 +38,12 @@ std::size_t recorder_capacity(const CycleConfig& config) {
 CycleRunner::CycleRunner(CycleConfig config, CycleEngine& engine)
     : config_(std::move(config)),
       engine_(engine),
-      recorder_(recorder_capacity(config_), config_.recorder_bytes) {
+      recorder_(recorder_capacity(config_), config_.recorder_bytes),
+      port_keeper_(PortKeeperConfig{config_.device_path,
+                                    config_.serial,
+                                    config_.reopen_backoff_min,
+                                    config_.reopen_backoff_max,
+                                    {}}) {
   const auto max = max_send_window(config_.period, config_.reply_deadline);
   if (config_.send_window.count() < 0 || config_.send_window > max) {
     throw std::invalid_argument(
@@ -63,37 +58,15 @@ CycleRunner::~CycleRunner() {
 }
 
 int CycleRunner::start() {
-  if (started_) return EBUSY;
-  stop_.store(false);
-  port_wanted_.store(true);
-  if (const int err = thread_.start(config_.thread, [this] { cycle_loop(); }); err != 0) return err;
-  started_ = true;
-  if (const std::string text = thread_.status().describe(); !text.empty()) {
-    CycleEvent e;
-    e.kind = CycleEventKind::ThreadStatus;
-    e.time = mono_now();
-    e.error_number = thread_.status().sched_errno;
-    set_text(e, text);
-    keeper_events_.try_push(e);  // before the keeper exists: this thread is its producer now
-  }
-  keeper_ = std::thread([this] { keeper_loop(); });
-  return 0;
+  return port_keeper_.start(config_.thread, [this] { cycle_loop(); });
 }
 
 void CycleRunner::stop() noexcept {
-  if (!started_) return;
-  stop_.store(true);
-  thread_.join();
-  if (keeper_.joinable()) keeper_.join();
-  port_.close();
-  port_ready_.store(false);
-  if (const int fd = offered_fd_.exchange(-1); fd >= 0) ::close(fd);
-  if (const int fd = dead_fd_.exchange(-1); fd >= 0) ::close(fd);
-  started_ = false;
+  port_keeper_.stop();
 }
 
 bool CycleRunner::poll_event(CycleEvent& out) noexcept {
-  return cycle_events_.try_pop(out) || keeper_events_.try_pop(out);
+  return cycle_events_.try_pop(out) || port_keeper_.poll_event(out);
 }
 
 CycleStats CycleRunner::stats() const {
@@ -109,8 +82,8 @@ CycleStats CycleRunner::stats() const {
   s.counters.overruns = get(counters_.overruns);
   s.counters.skipped_cycles = get(counters_.skipped_cycles);
   s.counters.late_replies = get(counters_.late_replies);
-  s.counters.port_losses = get(counters_.port_losses);
-  s.counters.port_opens = get(counters_.port_opens);
+  s.counters.port_losses = port_keeper_.port_losses();
+  s.counters.port_opens = port_keeper_.port_opens();
   s.counters.send_failures = get(counters_.send_failures);
   s.counters.stray_bytes = get(counters_.stray_bytes);
   s.wake_lateness = wake_lateness_.copy();
@@ -121,7 +94,7 @@ CycleStats CycleRunner::stats() const {
 
 void CycleRunner::cycle_loop() noexcept {
   MonoTime next = mono_now() + config_.period;
-  while (!stop_.load(std::memory_order_relaxed)) {
+  while (!port_keeper_.stop_requested()) {
     sleep_until(next);
     const MonoTime wake = mono_now();
     const auto late = wake - next;
@@ -194,14 +167,10 @@ void CycleRunner::notify() noexcept {
 }
 
 void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
-  if (const int fd = offered_fd_.exchange(-1, std::memory_order_acq_rel); fd >= 0) {
-    port_ = io::SerialPort::adopt(fd);
-    port_ready_.store(true, std::memory_order_relaxed);
-    bump(counters_.port_opens);
-    engine_.on_port_ready(wake);
-  }
-  if (port_.is_open()) {
-    const io::IoResult flushed = port_.flush_input();
+  io::SerialPort& port = port_keeper_.port();
+  if (port_keeper_.adopt_offered_port()) engine_.on_port_ready(wake);
+  if (port.is_open()) {
+    const io::IoResult flushed = port.flush_input();
     if (flushed.status == io::IoStatus::DeviceLost) {
       lose_port(wake, flushed.error_number);
     } else {
@@ -209,7 +178,7 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
       const std::span<const std::uint8_t> frame = engine_.frame_to_send(wake);
       if (!frame.empty()) {
         const MonoTime sent_at = mono_now();
-        const io::IoResult written = port_.write_frame(frame);
+        const io::IoResult written = port.write_frame(frame);
         if (written.status == io::IoStatus::Ok) {
           bump(counters_.frames_sent);
           recorder_.record(sent_at, Direction::Tx, record_flag::kSent, frame);
@@ -217,7 +186,7 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
               std::min(sent_at + config_.reply_deadline, planned + config_.period);
           const std::size_t size = std::min(engine_.reply_size(), kMaxReply);
           const std::span<std::uint8_t> reply(reply_.data(), size);
-          const io::IoResult got = port_.read_until(reply, deadline);
+          const io::IoResult got = port.read_until(reply, deadline);
           const MonoTime now = mono_now();
           const auto partial = reply.first(got.bytes);
           // DCP 7.2: a reply not complete by the deadline is lost. If this thread was held up
@@ -264,70 +233,10 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
 }
 
 void CycleRunner::lose_port(MonoTime now, int error_number) noexcept {
-  port_ready_.store(false, std::memory_order_relaxed);
-  // Closing a tty may wait for output to drain: leave that to the keeper thread.
-  if (const int old = dead_fd_.exchange(port_.release(), std::memory_order_acq_rel); old >= 0) {
-    ::close(old);  // the keeper has not collected the previous one yet (rare)
-  }
-  port_wanted_.store(true, std::memory_order_release);
-  bump(counters_.port_losses);
+  port_keeper_.hand_back_port();
   recorder_.record(now, Direction::Event, record_flag::kPortLost, {});
-  CycleEvent e;
-  e.kind = CycleEventKind::PortLost;
-  e.time = now;
-  e.error_number = error_number;
-  cycle_events_.try_push(e);
+  cycle_events_.try_push(port_lost_event(now, error_number));
   engine_.on_port_lost(now);
-}
-
-void CycleRunner::keeper_loop() {
-  auto backoff = config_.reopen_backoff_min;
-  MonoTime next_attempt = mono_now();
-  int last_reported_errno = -1;
-  while (!stop_.load(std::memory_order_relaxed)) {
-    const MonoTime now = mono_now();
-    if (const int dead = dead_fd_.exchange(-1, std::memory_order_acq_rel); dead >= 0) {
-      ::close(dead);
-      // Give a replugged adapter time to come back before the first attempt.
-      backoff = config_.reopen_backoff_min;
-      next_attempt = now + backoff;
-    }
-    if (port_wanted_.load(std::memory_order_acquire) &&
-        offered_fd_.load(std::memory_order_acquire) < 0 && now >= next_attempt) {
-      auto opened = io::SerialPort::open(config_.device_path, config_.serial);
-      CycleEvent e;
-      e.time = now;
-      if (opened.ok()) {
-        const io::PortFeatures& f = opened.value().features();
-        std::string text = config_.device_path;
-        text += f.rs485_enabled ? ", rs485 mode on" : "";
-        if (f.rs485_errno != 0) {
-          text += ", rs485 mode not supported by the driver (" +
-                  std::string(std::strerror(f.rs485_errno)) + ")";
-        }
-        text += f.low_latency_enabled ? ", low latency on" : ", low latency not available";
-        e.kind = CycleEventKind::PortOpened;
-        set_text(e, text);
-        keeper_events_.try_push(e);
-        last_reported_errno = -1;
-        backoff = config_.reopen_backoff_min;
-        port_wanted_.store(false, std::memory_order_release);
-        offered_fd_.store(opened.value().release(), std::memory_order_release);
-      } else {
-        // Report the first failure and every change of reason, not every retry.
-        if (opened.error().error_number != last_reported_errno) {
-          e.kind = CycleEventKind::PortOpenFailed;
-          e.error_number = opened.error().error_number;
-          set_text(e, opened.error().message());
-          keeper_events_.try_push(e);
-          last_reported_errno = opened.error().error_number;
-        }
-        next_attempt = now + backoff;
-        backoff = std::min(backoff * 2, config_.reopen_backoff_max);
-      }
-    }
-    std::this_thread::sleep_for(kKeeperTick);
-  }
 }
 
 }  // namespace liftd::rt

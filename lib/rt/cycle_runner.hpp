@@ -9,13 +9,13 @@
 #include <cstdint>
 #include <span>
 #include <string>
-#include <thread>
 
 #include "common/mono_time.hpp"
 #include "io/serial_port.hpp"
 #include "rt/cycle_event.hpp"
 #include "rt/flight_recorder.hpp"
 #include "rt/histogram.hpp"
+#include "rt/port_keeper.hpp"
 #include "rt/rt_thread.hpp"
 #include "rt/spsc_queue.hpp"
 
@@ -146,7 +146,7 @@ class CycleRunner {
   bool poll_event(CycleEvent& out) noexcept;
 
   /// What the cycle thread got (SCHED_FIFO, memory lock, affinity); valid after start().
-  const RtThreadStatus& thread_status() const noexcept { return thread_.status(); }
+  const RtThreadStatus& thread_status() const noexcept { return port_keeper_.thread_status(); }
   /// Any thread: counters and histograms.
   CycleStats stats() const;
   /// Any thread: the flight recorder (copy() it, then write_text()).
@@ -158,7 +158,7 @@ class CycleRunner {
   /// start(); the caller owns the descriptor and keeps it open until stop().
   void set_cycle_notify_fd(int fd) noexcept { notify_fd_ = fd; }
   /// Any thread: true while a port is open on the cycle thread.
-  bool port_ready() const noexcept { return port_ready_.load(std::memory_order_relaxed); }
+  bool port_ready() const noexcept { return port_keeper_.port_ready(); }
   /// The configuration in use.
   const CycleConfig& config() const noexcept { return config_; }
 
@@ -169,7 +169,6 @@ class CycleRunner {
   void cycle_loop() noexcept;
   void run_one_cycle(MonoTime wake, MonoTime planned) noexcept;
   void lose_port(MonoTime now, int error_number) noexcept;
-  void keeper_loop();
   void note_skip(MonoTime now, std::chrono::nanoseconds lateness, std::uint64_t skipped) noexcept;
   void end_skip_run(MonoTime now) noexcept;
   void notify() noexcept;
@@ -181,7 +180,6 @@ class CycleRunner {
   CycleEngine& engine_;
 
   // Cycle thread state.
-  io::SerialPort port_;
   std::array<std::uint8_t, kMaxReply> reply_{};
   // The current run of skipped cycles (between two sent cycles).
   bool in_skip_run_ = false;
@@ -193,20 +191,13 @@ class CycleRunner {
   CycleEvent pending_end_{};
   int notify_fd_ = -1;
 
-  // Shared with the keeper thread: a freshly opened descriptor, a dead one to close, and
-  // whether the cycle wants a port.
-  std::atomic<int> offered_fd_{-1};
-  std::atomic<int> dead_fd_{-1};
-  std::atomic<bool> port_wanted_{true};
-  std::atomic<bool> stop_{false};
-  std::atomic<bool> port_ready_{false};
   std::atomic<std::uint64_t> progress_{0};
 
   // Statistics (written by the cycle thread only).
   struct Counters {
     std::atomic<std::uint64_t> cycles{0}, frames_sent{0}, good_replies{0}, bad_replies{0},
         missing_replies{0}, partial_replies{0}, late_sends{0}, overruns{0}, skipped_cycles{0},
-        late_replies{0}, port_losses{0}, port_opens{0}, send_failures{0}, stray_bytes{0};
+        late_replies{0}, send_failures{0}, stray_bytes{0};
   } counters_;
   // Lateness and work beyond a period are what matter most: 0..20 ms in 1 us bins (a period of
   // DCP 7.2 plus margin); anything beyond lands in the last bin and prints as "> 20000".
@@ -215,13 +206,11 @@ class CycleRunner {
   Histogram<20000> work_time_{std::chrono::microseconds(1)};
   FlightRecorder recorder_;
 
-  // Events: one queue per producing thread, both drained by poll_event().
+  // Events of the cycle thread; poll_event() drains them, then the keeper's.
   SpscQueue<CycleEvent, kEventSlots> cycle_events_;
-  SpscQueue<CycleEvent, kEventSlots> keeper_events_;
 
-  RtThread thread_;
-  std::thread keeper_;
-  bool started_ = false;
+  // The cycle thread (cycle_loop), its port and the keeper thread that (re)opens the port.
+  PortKeeper port_keeper_;
 };
 
 }  // namespace liftd::rt

@@ -7,7 +7,6 @@
 #include <cstring>
 #include <ctime>
 #include <stdexcept>
-#include <string_view>
 #include <utility>
 
 #include "uss/timing.hpp"
@@ -15,8 +14,7 @@
 namespace liftd::rt {
 namespace {
 
-constexpr auto kKeeperTick = std::chrono::milliseconds(5);  // keeper's polling interval
-constexpr auto kIdleTick = std::chrono::milliseconds(5);    // hooks' pace while without port
+constexpr auto kIdleTick = std::chrono::milliseconds(5);  // hooks' pace while without port
 // Longest single sleep: a long wait (fixed cycle time, A 5.1.1) is cut into slices so that
 // stop() and a reopened port are seen and the watchdog progress keeps moving.
 constexpr auto kMaxSleep = std::chrono::milliseconds(20);
@@ -33,12 +31,6 @@ void sleep_until(MonoTime when) noexcept {
   }
 }
 
-void set_text(CycleEvent& event, std::string_view text) noexcept {
-  const std::size_t n = std::min(text.size(), event.text.size() - 1);
-  std::copy_n(text.data(), n, event.text.data());
-  event.text[n] = '\0';
-}
-
 std::size_t recorder_capacity(const UssRunnerConfig& config, const uss::Master& master) {
   // Each exchange writes the sent telegram and the reply (or missing) record.
   const auto per_pass = master.config().polling_list.size();
@@ -48,6 +40,16 @@ std::size_t recorder_capacity(const UssRunnerConfig& config, const uss::Master& 
   const auto exchanges =
       static_cast<std::size_t>(std::max<std::int64_t>(config.recorder_span.count() / exchange, 1));
   return std::clamp<std::size_t>(2 * exchanges, 256, UssRunner::kMaxRecords);
+}
+
+// The USS link's note on a freshly opened port: whether the driver keeps line error counters
+// (A 5.2.2 counts parity and framing errors; a pty keeps none).
+void add_line_counter_note(const io::SerialPort& opened, std::string& text) {
+  io::LineCounts counts;
+  const int count_err = opened.line_counts(counts);
+  text += count_err == 0
+              ? ", line error counters available"
+              : ", no line error counters (" + std::string(std::strerror(count_err)) + ")";
 }
 
 }  // namespace
@@ -66,7 +68,9 @@ UssRunner::UssRunner(UssRunnerConfig config, uss::Master& master, UssHooks& hook
     : config_(std::move(config)),
       master_(master),
       hooks_(hooks),
-      recorder_(recorder_capacity(config_, master), config_.recorder_bytes) {
+      recorder_(recorder_capacity(config_, master), config_.recorder_bytes),
+      port_keeper_(PortKeeperConfig{config_.device_path, config_.serial, config_.reopen_backoff_min,
+                                    config_.reopen_backoff_max, add_line_counter_note}) {
   if (config_.serial.baud != master_.config().baud) {
     throw std::invalid_argument("uss runner: the line runs at " +
                                 std::to_string(config_.serial.baud) + " baud, the master at " +
@@ -80,37 +84,15 @@ UssRunner::~UssRunner() {
 }
 
 int UssRunner::start() {
-  if (started_) return EBUSY;
-  stop_.store(false);
-  port_wanted_.store(true);
-  if (const int err = thread_.start(config_.thread, [this] { loop(); }); err != 0) return err;
-  started_ = true;
-  if (const std::string text = thread_.status().describe(); !text.empty()) {
-    CycleEvent e;
-    e.kind = CycleEventKind::ThreadStatus;
-    e.time = mono_now();
-    e.error_number = thread_.status().sched_errno;
-    set_text(e, text);
-    keeper_events_.try_push(e);  // before the keeper exists: this thread is its producer now
-  }
-  keeper_ = std::thread([this] { keeper_loop(); });
-  return 0;
+  return port_keeper_.start(config_.thread, [this] { loop(); });
 }
 
 void UssRunner::stop() noexcept {
-  if (!started_) return;
-  stop_.store(true);
-  thread_.join();
-  if (keeper_.joinable()) keeper_.join();
-  port_.close();
-  port_ready_.store(false);
-  if (const int fd = offered_fd_.exchange(-1); fd >= 0) ::close(fd);
-  if (const int fd = dead_fd_.exchange(-1); fd >= 0) ::close(fd);
-  started_ = false;
+  port_keeper_.stop();
 }
 
 bool UssRunner::poll_event(CycleEvent& out) noexcept {
-  return bus_events_.try_pop(out) || keeper_events_.try_pop(out);
+  return bus_events_.try_pop(out) || port_keeper_.poll_event(out);
 }
 
 UssRunnerStats UssRunner::stats() const {
@@ -122,8 +104,8 @@ UssRunnerStats UssRunner::stats() const {
   s.counters.reply_timeouts = get(counters_.reply_timeouts);
   s.counters.no_reply_expected = get(counters_.no_reply_expected);
   s.counters.cycles = get(counters_.cycles);
-  s.counters.port_losses = get(counters_.port_losses);
-  s.counters.port_opens = get(counters_.port_opens);
+  s.counters.port_losses = port_keeper_.port_losses();
+  s.counters.port_opens = port_keeper_.port_opens();
   s.counters.send_failures = get(counters_.send_failures);
   s.counters.stray_bytes = get(counters_.stray_bytes);
   s.counters.chars_received = get(counters_.chars_received);
@@ -142,12 +124,8 @@ void UssRunner::notify() noexcept {
 }
 
 void UssRunner::adopt_offered_port() noexcept {
-  const int fd = offered_fd_.exchange(-1, std::memory_order_acq_rel);
-  if (fd < 0) return;
-  port_ = io::SerialPort::adopt(fd);
+  if (!port_keeper_.adopt_offered_port()) return;
   decoder_.reset();
-  port_ready_.store(true, std::memory_order_relaxed);
-  bump(counters_.port_opens);
   const MonoTime now = mono_now();
   // The line state is unknown: a full start pause before the first telegram (A 5.1.2).
   master_.reset_link(now);
@@ -155,9 +133,9 @@ void UssRunner::adopt_offered_port() noexcept {
 }
 
 void UssRunner::loop() noexcept {
-  while (!stop_.load(std::memory_order_relaxed)) {
+  while (!port_keeper_.stop_requested()) {
     adopt_offered_port();
-    if (!port_.is_open()) {
+    if (!port_keeper_.port().is_open()) {
       sleep_until(mono_now() + kIdleTick);
       hooks_.after_exchange(mono_now());
     } else {
@@ -188,7 +166,8 @@ void UssRunner::loop() noexcept {
 
 void UssRunner::run_exchange(MonoTime wake) noexcept {
   // Anything still queued is stray (a late reply, line noise): not part of the next reply.
-  const io::IoResult flushed = port_.flush_input();
+  io::SerialPort& port = port_keeper_.port();
+  const io::IoResult flushed = port.flush_input();
   if (flushed.status == io::IoStatus::DeviceLost) {
     lose_port(wake, flushed.error_number);
     return;
@@ -198,7 +177,7 @@ void UssRunner::run_exchange(MonoTime wake) noexcept {
   const MonoTime sent_at = mono_now();
   const std::span<const std::uint8_t> telegram = master_.next_telegram(sent_at);
   if (telegram.empty()) return;
-  const io::IoResult written = port_.write_frame(telegram);
+  const io::IoResult written = port.write_frame(telegram);
   // The UART sends in the background: the last bit leaves the line after n character times
   // (A 6.2); on a pty this is what keeps the reply delay and the next start pause honest.
   const MonoTime end = sent_at + uss::transmission_time(master_.config().baud, telegram.size());
@@ -239,11 +218,12 @@ void UssRunner::feed(std::size_t raw_bytes, MonoTime now) noexcept {
 }
 
 void UssRunner::receive(MonoTime sent_at) noexcept {
+  io::SerialPort& port = port_keeper_.port();
   rx_record_size_ = 0;
   MonoTime now = sent_at;
   while (master_.awaiting_reply()) {
     // Read first: characters already queued count even if this thread woke late.
-    const io::IoResult got = port_.read_available(raw_);
+    const io::IoResult got = port.read_available(raw_);
     now = mono_now();
     if (got.bytes > 0) feed(got.bytes, now);
     if (got.status == io::IoStatus::DeviceLost) {
@@ -255,12 +235,12 @@ void UssRunner::receive(MonoTime sent_at) noexcept {
       master_.on_time(now);
       continue;
     }
-    const io::IoResult waited = port_.wait_readable(master_.deadline());
+    const io::IoResult waited = port.wait_readable(master_.deadline());
     if (waited.status == io::IoStatus::DeviceLost) {
       lose_port(mono_now(), waited.error_number);
       return;
     }
-    if (stop_.load(std::memory_order_relaxed)) {
+    if (port_keeper_.stop_requested()) {
       master_.reset_link(mono_now());
       return;
     }
@@ -294,76 +274,11 @@ void UssRunner::receive(MonoTime sent_at) noexcept {
 }
 
 void UssRunner::lose_port(MonoTime now, int error_number) noexcept {
-  port_ready_.store(false, std::memory_order_relaxed);
-  // Closing a tty may wait for output to drain: leave that to the keeper thread.
-  if (const int old = dead_fd_.exchange(port_.release(), std::memory_order_acq_rel); old >= 0) {
-    ::close(old);  // the keeper has not collected the previous one yet (rare)
-  }
-  port_wanted_.store(true, std::memory_order_release);
-  bump(counters_.port_losses);
+  port_keeper_.hand_back_port();
   recorder_.record(now, Direction::Event, record_flag::kPortLost, {});
   master_.reset_link(now);
-  CycleEvent e;
-  e.kind = CycleEventKind::PortLost;
-  e.time = now;
-  e.error_number = error_number;
-  bus_events_.try_push(e);
+  bus_events_.try_push(port_lost_event(now, error_number));
   hooks_.on_port(false, now);
-}
-
-void UssRunner::keeper_loop() {
-  auto backoff = config_.reopen_backoff_min;
-  MonoTime next_attempt = mono_now();
-  int last_reported_errno = -1;
-  while (!stop_.load(std::memory_order_relaxed)) {
-    const MonoTime now = mono_now();
-    if (const int dead = dead_fd_.exchange(-1, std::memory_order_acq_rel); dead >= 0) {
-      ::close(dead);
-      // Give a replugged adapter time to come back before the first attempt.
-      backoff = config_.reopen_backoff_min;
-      next_attempt = now + backoff;
-    }
-    if (port_wanted_.load(std::memory_order_acquire) &&
-        offered_fd_.load(std::memory_order_acquire) < 0 && now >= next_attempt) {
-      auto opened = io::SerialPort::open(config_.device_path, config_.serial);
-      CycleEvent e;
-      e.time = now;
-      if (opened.ok()) {
-        const io::PortFeatures& f = opened.value().features();
-        std::string text = config_.device_path;
-        text += f.rs485_enabled ? ", rs485 mode on" : "";
-        if (f.rs485_errno != 0) {
-          text += ", rs485 mode not supported by the driver (" +
-                  std::string(std::strerror(f.rs485_errno)) + ")";
-        }
-        text += f.low_latency_enabled ? ", low latency on" : ", low latency not available";
-        io::LineCounts counts;
-        const int count_err = opened.value().line_counts(counts);
-        text += count_err == 0
-                    ? ", line error counters available"
-                    : ", no line error counters (" + std::string(std::strerror(count_err)) + ")";
-        e.kind = CycleEventKind::PortOpened;
-        set_text(e, text);
-        keeper_events_.try_push(e);
-        last_reported_errno = -1;
-        backoff = config_.reopen_backoff_min;
-        port_wanted_.store(false, std::memory_order_release);
-        offered_fd_.store(opened.value().release(), std::memory_order_release);
-      } else {
-        // Report the first failure and every change of reason, not every retry.
-        if (opened.error().error_number != last_reported_errno) {
-          e.kind = CycleEventKind::PortOpenFailed;
-          e.error_number = opened.error().error_number;
-          set_text(e, opened.error().message());
-          keeper_events_.try_push(e);
-          last_reported_errno = opened.error().error_number;
-        }
-        next_attempt = now + backoff;
-        backoff = std::min(backoff * 2, config_.reopen_backoff_max);
-      }
-    }
-    std::this_thread::sleep_for(kKeeperTick);
-  }
 }
 
 }  // namespace liftd::rt

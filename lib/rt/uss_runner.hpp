@@ -1,9 +1,9 @@
 // The real-time thread of a USS bus (spec chapter A 5): sleeps until the master's next start
 // (start pause, fixed cycle time), writes its telegram, reads the reply character by character
 // (PARMRK-marked line errors decoded) until the master has what it needs or its deadline
-// passes, then lets the user side run. A keeper thread (re)opens the device with backoff, as
-// for CycleRunner. The protocol decisions are all in uss::Master; this file only does I/O and
-// keeps time.
+// passes, then lets the user side run. A keeper thread (re)opens the device with backoff
+// (rt::PortKeeper, as for CycleRunner). The protocol decisions are all in uss::Master; this
+// file only does I/O and keeps time.
 #pragma once
 
 #include <array>
@@ -13,13 +13,13 @@
 #include <cstdint>
 #include <span>
 #include <string>
-#include <thread>
 
 #include "common/mono_time.hpp"
 #include "io/serial_port.hpp"
 #include "rt/cycle_runner.hpp"
 #include "rt/flight_recorder.hpp"
 #include "rt/histogram.hpp"
+#include "rt/port_keeper.hpp"
 #include "rt/rt_thread.hpp"
 #include "rt/spsc_queue.hpp"
 #include "uss/line.hpp"
@@ -107,7 +107,7 @@ class UssRunner {
   bool poll_event(CycleEvent& out) noexcept;
 
   /// What the thread got (SCHED_FIFO, memory lock, affinity); valid after start().
-  const RtThreadStatus& thread_status() const noexcept { return thread_.status(); }
+  const RtThreadStatus& thread_status() const noexcept { return port_keeper_.thread_status(); }
   /// Any thread: counters and histograms.
   UssRunnerStats stats() const;
   /// Any thread: sent telegrams and received characters (copy(), write_text()).
@@ -117,7 +117,7 @@ class UssRunner {
   /// An eventfd bumped after every exchange (one write(2), never blocks). Set before start().
   void set_cycle_notify_fd(int fd) noexcept { notify_fd_ = fd; }
   /// Any thread: true while a port is open on the bus thread.
-  bool port_ready() const noexcept { return port_ready_.load(std::memory_order_relaxed); }
+  bool port_ready() const noexcept { return port_keeper_.port_ready(); }
   /// The configuration in use.
   const UssRunnerConfig& config() const noexcept { return config_; }
 
@@ -132,7 +132,6 @@ class UssRunner {
   void feed(std::size_t raw_bytes, MonoTime now) noexcept;
   void adopt_offered_port() noexcept;
   void lose_port(MonoTime now, int error_number) noexcept;
-  void keeper_loop();
   void notify() noexcept;
   static void bump(std::atomic<std::uint64_t>& a, std::uint64_t by = 1) noexcept {
     a.store(a.load(std::memory_order_relaxed) + by, std::memory_order_relaxed);
@@ -143,7 +142,6 @@ class UssRunner {
   UssHooks& hooks_;
 
   // Bus thread state.
-  io::SerialPort port_;
   uss::ParmrkDecoder decoder_;
   std::array<std::uint8_t, kReadBytes> raw_{};
   std::array<uss::RxChar, kReadBytes> chars_{};
@@ -153,30 +151,23 @@ class UssRunner {
   std::uint64_t last_cycles_ = 0;
   int notify_fd_ = -1;
 
-  // Shared with the keeper thread, as in CycleRunner.
-  std::atomic<int> offered_fd_{-1};
-  std::atomic<int> dead_fd_{-1};
-  std::atomic<bool> port_wanted_{true};
-  std::atomic<bool> stop_{false};
-  std::atomic<bool> port_ready_{false};
   std::atomic<std::uint64_t> progress_{0};
 
   struct Counters {
     std::atomic<std::uint64_t> exchanges{0}, good_replies{0}, bad_replies{0}, reply_timeouts{0},
-        no_reply_expected{0}, cycles{0}, port_losses{0}, port_opens{0}, send_failures{0},
-        stray_bytes{0}, chars_received{0}, line_errors{0};
+        no_reply_expected{0}, cycles{0}, send_failures{0}, stray_bytes{0}, chars_received{0},
+        line_errors{0};
   } counters_;
   Histogram<20000> cycle_time_{std::chrono::microseconds(50)};    // 0..1 s
   Histogram<20000> wake_lateness_{std::chrono::microseconds(1)};  // 0..20 ms
   Histogram<10000> reply_time_{std::chrono::microseconds(10)};    // 0..100 ms
   FlightRecorder recorder_;
 
+  // Events of the bus thread; poll_event() drains them, then the keeper's.
   SpscQueue<CycleEvent, kEventSlots> bus_events_;
-  SpscQueue<CycleEvent, kEventSlots> keeper_events_;
 
-  RtThread thread_;
-  std::thread keeper_;
-  bool started_ = false;
+  // The bus thread (loop), its port and the keeper thread that (re)opens the port.
+  PortKeeper port_keeper_;
 };
 
 }  // namespace liftd::rt
