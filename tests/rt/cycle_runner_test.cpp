@@ -20,15 +20,20 @@
 #include "fake_responder.hpp"
 #include "fault_proxy.hpp"
 #include "io/pty.hpp"
+#include "pty_device.hpp"
 
 namespace liftd::rt {
 namespace {
 
 using std::chrono::milliseconds;
+using testing::DeviceLink;
+using testing::drain;
 using testing::EchoEngine;
 using testing::FakeResponder;
 using testing::Fault;
 using testing::FaultProxy;
+using testing::make_pty;
+using testing::wait_for;
 
 constexpr int kTestPriority = 20;  // SCHED_FIFO where permitted; normal scheduling otherwise
 
@@ -42,56 +47,11 @@ CycleConfig test_config(const std::string& path) {
   return c;
 }
 
-bool wait_for(const std::function<bool()>& done, milliseconds timeout) {
-  const MonoTime end = mono_now() + timeout;
-  while (mono_now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(milliseconds(5));
-  }
-  return done();
-}
-
-std::vector<CycleEvent> drain(CycleRunner& runner) {
-  std::vector<CycleEvent> events;
-  CycleEvent e;
-  while (runner.poll_event(e)) events.push_back(e);
-  return events;
-}
-
 std::size_t count_kind(const std::vector<CycleEvent>& events, CycleEventKind kind) {
   std::size_t n = 0;
   for (const auto& e : events) n += e.kind == kind ? 1 : 0;
   return n;
 }
-
-io::PtyPair make_pty() {
-  auto pty = io::PtyPair::create();
-  if (!pty.ok()) ADD_FAILURE() << pty.error().message();
-  return std::move(pty).value();
-}
-
-// A directory with a symlink standing for a udev name (/dev/serial/by-id/...), so a test can
-// point the "device" at a new pty, as a replugged USB adapter would reappear.
-class DeviceLink {
- public:
-  DeviceLink()
-      : dir_(std::filesystem::temp_directory_path() /
-             ("liftd-rt-" + std::to_string(getpid()) + "-" + std::to_string(counter_++))) {
-    std::filesystem::create_directories(dir_);
-  }
-  ~DeviceLink() { std::filesystem::remove_all(dir_); }
-  std::string path() const { return (dir_ / "tty").string(); }
-  void point_to(const std::string& target) {
-    const auto tmp = dir_ / "tty.new";
-    std::filesystem::remove(tmp);
-    std::filesystem::create_symlink(target, tmp);
-    std::filesystem::rename(tmp, dir_ / "tty");  // atomic replace
-  }
-
- private:
-  static inline int counter_ = 0;
-  std::filesystem::path dir_;
-};
 
 TEST(RtCycle, LongRunAccountsForEveryWakeUpAndKeepsTheFifteenMsGrid) {
   // 1000 cycles (15 s) with the recorder sized to hold all of them. How many replies arrive
