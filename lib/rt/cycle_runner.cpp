@@ -3,27 +3,13 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cstdint>
 #include <cstdio>
-#include <ctime>
 #include <stdexcept>
 #include <utility>
 
 namespace liftd::rt {
 namespace {
-
-timespec to_timespec(MonoTime t) noexcept {
-  constexpr std::int64_t kNsPerS = 1'000'000'000;
-  const auto ns = t.count();
-  return timespec{static_cast<time_t>(ns / kNsPerS), static_cast<long>(ns % kNsPerS)};
-}
-
-void sleep_until(MonoTime when) noexcept {
-  const timespec ts = to_timespec(when);
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-  }
-}
 
 std::size_t recorder_capacity(const CycleConfig& config) {
   const auto period = std::max<std::int64_t>(config.period.count(), 1);

@@ -4,7 +4,9 @@
 #include <sys/mman.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
+#include <ctime>
 #include <utility>
 
 namespace liftd::rt {
@@ -134,6 +136,14 @@ void* RtThread::trampoline(void* self) noexcept {
   }
   thread->body_();
   return nullptr;
+}
+
+void sleep_until(MonoTime when) noexcept {
+  constexpr std::int64_t kNsPerS = 1'000'000'000;
+  const auto ns = when.count();
+  const timespec ts{static_cast<time_t>(ns / kNsPerS), static_cast<long>(ns % kNsPerS)};
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
 }
 
 }  // namespace liftd::rt

@@ -1,5 +1,6 @@
 // Starting a real-time thread: SCHED_FIFO set in the thread attributes, memory locked, stack
-// prefaulted, optional CPU affinity; each refusal is recorded, never fatal.
+// prefaulted, optional CPU affinity; each refusal is recorded, never fatal. And the absolute
+// sleep the real-time loops keep their time with.
 #pragma once
 
 #include <pthread.h>
@@ -7,6 +8,8 @@
 #include <cstddef>
 #include <functional>
 #include <string>
+
+#include "common/mono_time.hpp"
 
 namespace liftd::rt {
 
@@ -62,5 +65,10 @@ class RtThread {
   RtThreadStatus status_{};
   std::function<void()> body_;
 };
+
+/// Sleeps until the monotonic time `when`. The deadline is absolute, so a periodic loop's
+/// wake-up lateness does not add up from one sleep to the next; a signal does not cut the sleep
+/// short. No allocation, no lock: for the real-time loops.
+void sleep_until(MonoTime when) noexcept;
 
 }  // namespace liftd::rt

@@ -3,9 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cstring>
-#include <ctime>
 #include <stdexcept>
 #include <utility>
 
@@ -18,18 +16,6 @@ constexpr auto kIdleTick = std::chrono::milliseconds(5);  // hooks' pace while w
 // Longest single sleep: a long wait (fixed cycle time, A 5.1.1) is cut into slices so that
 // stop() and a reopened port are seen and the watchdog progress keeps moving.
 constexpr auto kMaxSleep = std::chrono::milliseconds(20);
-
-timespec to_timespec(MonoTime t) noexcept {
-  constexpr std::int64_t kNsPerS = 1'000'000'000;
-  const auto ns = t.count();
-  return timespec{static_cast<time_t>(ns / kNsPerS), static_cast<long>(ns % kNsPerS)};
-}
-
-void sleep_until(MonoTime when) noexcept {
-  const timespec ts = to_timespec(when);
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-  }
-}
 
 std::size_t recorder_capacity(const UssRunnerConfig& config, const uss::Master& master) {
   // Each exchange writes the sent telegram and the reply (or missing) record.
