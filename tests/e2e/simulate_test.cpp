@@ -163,11 +163,11 @@ TEST_F(SimulateTest, CallsAreServedInOrder) {
   ASSERT_TRUE(control.call({{"cmd", "calls"}, {"action", "add"}, {"floor", 1}})["ok"].get<bool>());
   const json first = watcher.wait_event(
       "call_served", [](const json&) { return true; }, 60s);
-  ASSERT_FALSE(first.is_null());
+  ASSERT_FALSE(first.is_null()) << daemon_->err();
   EXPECT_EQ(first["data"]["floor"], 4);
   const json second = watcher.wait_event(
       "call_served", [](const json&) { return true; }, 60s);
-  ASSERT_FALSE(second.is_null());
+  ASSERT_FALSE(second.is_null()) << daemon_->err();
   EXPECT_EQ(second["data"]["floor"], 1);
 }
 
