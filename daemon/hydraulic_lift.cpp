@@ -2,9 +2,14 @@
 
 #include <poll.h>
 
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <stdexcept>
 
 #include "api/commands.hpp"
@@ -19,7 +24,10 @@ using namespace std::chrono_literals;
 using api::Result;
 
 constexpr auto kRejectLogInterval = 10s;  // rejected card frames are journalled at most this often
-constexpr double kSinkMmPerS = 2.0;       // `sim sink`: a leaking valve or cooling oil
+// Card status changes and error frames: this many lines in full per interval, then a count.
+constexpr std::uint64_t kBurstLines = 5;
+constexpr auto kBurstInterval = 10s;
+constexpr double kSinkMmPerS = 2.0;  // `sim sink`: a leaking valve or cooling oil
 
 }  // namespace
 
@@ -126,21 +134,30 @@ sim::CardSimConfig card_sim_config(const config::Config& c) {
 
 }  // namespace
 
-SimulatedCard::SimulatedCard(const config::Config& config, can::CanSocket card_end)
+SimulatedCard::SimulatedCard(const config::Config& config, const std::string& socket_path)
     : SimulatorThread(config),
-      socket_(std::move(card_end)),
+      socket_path_(socket_path),
       card_(card_sim_config(config), mono_now()) {
+  auto listener = can::listen_unix(socket_path);
+  if (!listener) {
+    throw std::runtime_error("simulated SCH001 card: " + listener.error().what + ": " +
+                             std::strerror(listener.error().code));
+  }
+  listener_ = listener.value();
   encoder_.set(std::llround(card_.state().position_mm));
 }
 
 SimulatedCard::~SimulatedCard() {
   stop();
+  peer_.reset();
+  if (listener_ >= 0) ::close(listener_);
+  ::unlink(socket_path_.c_str());
 }
 
 bool SimulatedCard::start() {
   start_thread([this] { loop(); });
-  log::event(log::Level::info, "sim", "sim_started", {{"device", "socketpair"}},
-             "simulated SCH001 card answering on a CAN socketpair");
+  log::event(log::Level::info, "sim", "sim_started", {{"device", socket_path_}},
+             "simulated SCH001 card listening on " + socket_path_);
   return true;
 }
 
@@ -159,25 +176,46 @@ void SimulatedCard::stop() {
 
 void SimulatedCard::loop() {
   while (!stopping()) {
-    pollfd p{socket_.fd(), POLLIN, 0};
-    (void)::poll(&p, 1, 5);
+    std::array<pollfd, 2> fds{};
+    fds[0] = {listener_, POLLIN, 0};
+    fds[1] = {peer_ ? peer_->fd() : -1, POLLIN, 0};
+    (void)::poll(fds.data(), fds.size(), 5);
     const MonoTime now = mono_now();
+    if ((fds[0].revents & POLLIN) != 0) {  // the controller (re)connects: the newest counts
+      const int fd = ::accept4(listener_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+      if (fd >= 0) peer_.emplace(can::CanSocket::adopt(fd));
+    }
     std::lock_guard<std::mutex> lock(mutex_);
-    for (int i = 0; i < 16; ++i) {
-      const can::Received r = socket_.read();
+    if (drop_) {  // `sim card_reconnect`: the card's connection drops; the controller reopens
+      drop_ = false;
+      peer_.reset();
+      card_.connection_lost();
+    }
+    for (int i = 0; peer_ && i < 16; ++i) {
+      const can::Received r = peer_->read();
       if (r.kind == can::Received::Kind::Frame) {
         card_.on_frame(r.frame, now);
-      } else {
+      } else if (r.kind == can::Received::Kind::Closed || r.kind == can::Received::Kind::Failed) {
+        peer_.reset();
+        card_.connection_lost();
+      } else if (r.kind != can::Received::Kind::Error) {
         break;
       }
     }
-    if (bus_off_) {
+    if (bus_off_ && peer_) {
       can::ErrorReport report;
       report.bus_off = true;
-      (void)socket_.write_error(report);
+      (void)peer_->write_error(report);
       bus_off_ = false;
     }
-    if (const auto frame = card_.poll(now)) (void)socket_.write(*frame);
+    // The car moves whether or not a controller is connected; the card talks only to one.
+    if (const auto frame = card_.poll(now)) {
+      if (peer_) {
+        (void)peer_->write(*frame);
+      } else {
+        card_.connection_lost();
+      }
+    }
     car_moved(card_.state().position_mm, card_.state().velocity_mps != 0.0, now);
   }
 }
@@ -218,6 +256,9 @@ api::Result SimulatedCard::apply(const api::SimRequest& request, MonoTime now) {
       break;
     case SimAction::BusOff:
       bus_off_ = true;
+      break;
+    case SimAction::CardReconnect:
+      drop_ = true;
       break;
     case SimAction::ColdOil:
       card_.set_cold_oil(request.on);
@@ -270,9 +311,11 @@ nlohmann::json SimulatedCard::state_json_locked() const {
 
 api::StatusSnapshot Sch001Backend::status() {
   const sch001::ControllerSnapshot s = controller_.snapshot();
+  // After any (re)open the card's status is unknown: init until its first frame there.
   const api::LinkState link =
       !s.endpoint_up || s.silent
-          ? (s.heard || s.silent ? api::LinkState::Fault : api::LinkState::Down)
+          ? (s.ever_heard || s.silent || s.endpoint_lost ? api::LinkState::Fault
+                                                         : api::LinkState::Down)
           : (s.heard ? api::LinkState::Up : api::LinkState::Init);
   api::StatusSnapshot out = neutral_status(s, link);
   nlohmann::json d = nlohmann::json::object();
@@ -283,6 +326,8 @@ api::StatusSnapshot Sch001Backend::status() {
   d["destination_floor"] = s.destination_floor_sent;
   d["motor_on"] = s.motor_on;
   d["phase"] = std::string(sch001::to_string(s.phase));
+  d["send_failing"] = s.send_failing;
+  d["foreign_sender"] = s.foreign_sender;
   out.details = std::move(d);
   out.contactors_on = s.motor_on;
   return out;
@@ -340,26 +385,27 @@ void Sch001Backend::travel(const api::TravelArgs& args, api::Responder done) {
 // ---- the lift ----
 
 HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool simulate)
-    : ControllerLift(daemon, config, simulate) {
+    : ControllerLift(daemon, config, simulate),
+      card_status_lines_(kBurstLines, kBurstInterval),
+      bus_error_lines_(kBurstLines, kBurstInterval) {
   rt::CanRunnerConfig rc;
   rc.endpoint = config.can.interface;
   const sch001::ControllerConfig cc = sch001_controller_config(config);
-  rc.ids = {cc.link.ids.from_card};
+  // Our own identifier too: nobody else may send on it (card document 1.6), so a frame there
+  // is another node commanding the card, counted and reported (the socket never hands us our
+  // own frames).
+  rc.ids = {cc.link.ids.from_card, cc.link.ids.to_card};
   rc.rt.priority = config.rt.priority;
   rc.rt.cpu = config.rt.cpu;
   rc.rt.lock_memory = config.rt.lock_memory;
-  std::optional<can::CanSocket> controller_end;
   const lift::PositionSource* position = nullptr;
   if (simulate_) {
-    auto pair = can::CanSocket::pair();
-    if (!pair) {
-      throw std::runtime_error("simulated SCH001 card: " + pair.error().what + ": " +
-                               std::strerror(pair.error().code));
-    }
-    controller_end.emplace(std::move(pair.value().first));
-    sim_ = std::make_unique<SimulatedCard>(config, std::move(pair.value().second));
+    // Beside the API socket, in the daemon's own runtime directory.
+    const std::string card_socket =
+        (std::filesystem::path(config.api.socket).parent_path() / "sch001-card.sock").string();
+    sim_ = std::make_unique<SimulatedCard>(config, card_socket);
     position = &sim_->position();
-    rc.endpoint = "socketpair";
+    rc.endpoint = "unix:" + card_socket;
   } else if (config.position.source == config::PositionSource::can) {
     // The encoder on the card's bus: its frames are read by the same runner.
     encoder_ = std::make_unique<can::CanEncoder>(
@@ -376,7 +422,6 @@ HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool 
     engine = tap_.get();
   }
   runner_ = std::make_unique<rt::CanRunner>(rc, *engine);
-  if (controller_end) runner_->adopt(std::move(*controller_end));
   register_parts(std::make_unique<Sch001Backend>(config, *controller_, *runner_,
                                                  api_position_feed(), sim_.get()),
                  simulate_ ? "simulated hydraulic lift running; API on " + socket_path()
@@ -422,8 +467,11 @@ void HydraulicLift::journal_started() {
 }
 
 void HydraulicLift::after_events(MonoTime now) {
-  // Rejected card frames: counted always, journalled at most every 10 s with what came.
   const sch001::ControllerSnapshot s = controller_->snapshot();
+  journal_card_status(s, now);
+  journal_bus_errors(s, now);
+  journal_link_conditions(s);
+  // Rejected card frames: counted always, journalled at most every 10 s with what came.
   const auto rejected = [](const sch001::CardLinkCounters& c) {
     return c.wrong_length + c.unknown_first_byte + c.own_id;
   };
@@ -445,16 +493,113 @@ void HydraulicLift::after_events(MonoTime now) {
   }
 }
 
+void HydraulicLift::journal_card_status(const sch001::ControllerSnapshot& s, MonoTime now) {
+  const std::uint64_t changes = card_status_lines_.growth(s.status_changes);
+  if (s.card && card_status_lines_.admit(changes, now)) {
+    const std::string on = card_text(*s.card, s.single_unit);
+    // ERR or RDY = 0 forbid every travel signal (3d, 3e): the catalog's card_fault.
+    const bool fault = s.card->err || !s.card->rdy;
+    log::event(
+        fault || s.card->t1 || s.card->p1 || s.card->p2 ? log::Level::warn : log::Level::info,
+        "sch001", fault ? "card_fault" : "card_status", {{"relays", on}},
+        "SCH001 card status: " + on +
+            " (ERR fault, RDY ready, T1 oil temperature, P1 minimum/maximum pressure, "
+            "P2 overpressure)" +
+            (changes > 1 ? "; " + std::to_string(changes) + " changes since the last poll"
+                         : std::string()));
+  }
+  if (const auto n = card_status_lines_.suppressed(now)) {
+    log::event(log::Level::warn, "sch001", "card_status_flapping",
+               {{"changes", std::to_string(*n)},
+                {"relays", s.card ? card_text(*s.card, s.single_unit) : "unknown"}},
+               "SCH001 card status changed " + std::to_string(*n) + " more times in the last " +
+                   std::to_string(kBurstInterval.count()) + " s without a line each; now: " +
+                   (s.card ? card_text(*s.card, s.single_unit) : "unknown"));
+  }
+}
+
+void HydraulicLift::journal_bus_errors(const sch001::ControllerSnapshot& s, MonoTime now) {
+  const std::uint64_t frames = bus_error_lines_.growth(s.bus_errors);
+  if (bus_error_lines_.admit(frames, now)) {
+    const can::ErrorReport& e = s.last_bus_error;
+    log::event(
+        e.is_fault() ? log::Level::error : log::Level::warn, "sch001", "can_error",
+        {{"error", e.describe()}, {"frames", std::to_string(frames)}},
+        "CAN error frame: " + e.describe() +
+            (frames > 1 ? " (" + std::to_string(frames) + " since the last poll)" : std::string()));
+  }
+  if (const auto n = bus_error_lines_.suppressed(now)) {
+    log::event(log::Level::warn, "sch001", "can_errors_suppressed",
+               {{"frames", std::to_string(*n)}, {"last", s.last_bus_error.describe()}},
+               std::to_string(*n) + " more CAN error frames in the last " +
+                   std::to_string(kBurstInterval.count()) +
+                   " s without a line each; the last: " + s.last_bus_error.describe());
+  }
+}
+
+void HydraulicLift::journal_link_conditions(const sch001::ControllerSnapshot& s) {
+  // Each once when it begins and once when it ends (the link fault carries the rest).
+  if (s.foreign_sender != foreign_sender_logged_) {
+    foreign_sender_logged_ = s.foreign_sender;
+    log::event(s.foreign_sender ? log::Level::error : log::Level::info, "sch001",
+               s.foreign_sender ? "own_id_in_use" : "own_id_free", {},
+               s.foreign_sender
+                   ? "another node sends on liftd's CAN identifier: it commands the SCH001 card "
+                     "beside liftd (card document 1.6: the card's 96 identifiers are for it "
+                     "alone); check the bus wiring and the other nodes' addresses; no travel "
+                     "command goes out"
+                   : "no frame on liftd's CAN identifier for 10 s");
+  }
+  if (s.send_failing != send_failing_logged_) {
+    send_failing_logged_ = s.send_failing;
+    log::event(s.send_failing ? log::Level::error : log::Level::info, "sch001",
+               s.send_failing ? "can_send_failing" : "can_send_ok", {},
+               s.send_failing ? "answers to the SCH001 card cannot be sent (the CAN socket's "
+                                "queue stays full: is anything taking our frames?)"
+                              : "answers to the SCH001 card go out again");
+  }
+}
+
+void HydraulicLift::journal_endpoint(bool up, MonoTime now) {
+  const std::string& endpoint = runner_->config().endpoint;
+  if (!up) {
+    if (lost_since_) {  // the same episode: the reopened endpoint failed again
+      ++lost_failures_;
+      log::event(log::Level::debug, "sch001", "can_lost_again", {{"error", runner_->last_error()}},
+                 "CAN endpoint " + endpoint + " failed again: " + runner_->last_error());
+      return;
+    }
+    lost_since_ = now;
+    lost_failures_ = 1;
+    log::event(log::Level::error, "sch001", "can_lost", {{"error", runner_->last_error()}},
+               "CAN endpoint " + endpoint + " failed: " + runner_->last_error() +
+                   "; no travel command; reopening (100 ms, doubling up to 5 s) until the card "
+                   "is heard again");
+    return;
+  }
+  log::event(lost_since_ ? log::Level::debug : log::Level::info, "sch001", "can_open",
+             {{"interface", endpoint}}, "CAN endpoint " + endpoint + " open");
+}
+
 void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
   using Kind = sch001::ControllerEvent::Kind;
   switch (event.kind) {
     case Kind::Link: {
       const char* state = event.link == sch001::LinkChange::Silent ? "fault" : "up";
-      const std::string text =
+      std::string text =
           event.link == sch001::LinkChange::FirstHeard ? "first frame from the SCH001 card"
           : event.link == sch001::LinkChange::Silent
               ? "no frame from the SCH001 card for 10 s (card document 3f): no travel command"
               : "the SCH001 card is heard again";
+      if (event.link == sch001::LinkChange::FirstHeard && lost_since_) {
+        const auto lasted =
+            std::chrono::duration_cast<std::chrono::milliseconds>(event.at - *lost_since_);
+        text = "the SCH001 card is heard again on a reopened CAN endpoint, " +
+               std::to_string(lasted.count()) + " ms and " + std::to_string(lost_failures_) +
+               " endpoint failure(s) after it was lost";
+        lost_since_.reset();
+        lost_failures_ = 0;
+      }
       // A silent card is one of the card faults the journal catalog explains (card_fault).
       const bool silent = event.link == sch001::LinkChange::Silent;
       log::event(silent ? log::Level::warn : log::Level::info, "sch001",
@@ -463,34 +608,8 @@ void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
       server_->publish("link", {{"kind", "state changed"}, {"state", state}, {"detail", text}});
       break;
     }
-    case Kind::Card: {
-      const sch001::ControllerSnapshot s = controller_->snapshot();
-      const std::string on = card_text(event.card, s.single_unit);
-      // ERR or RDY = 0 forbid every travel signal (3d, 3e): the catalog's card_fault.
-      const bool fault = event.card.err || !event.card.rdy;
-      log::event(fault || event.card.t1 || event.card.p1 || event.card.p2 ? log::Level::warn
-                                                                          : log::Level::info,
-                 "sch001", fault ? "card_fault" : "card_status", {{"relays", on}},
-                 "SCH001 card status: " + on +
-                     " (ERR fault, RDY ready, T1 oil temperature, P1 minimum/maximum pressure, "
-                     "P2 overpressure)");
-      break;
-    }
-    case Kind::BusError:
-      log::event(event.bus_error.is_fault() ? log::Level::error : log::Level::warn, "sch001",
-                 "can_error", {{"error", event.bus_error.describe()}},
-                 "CAN error frame: " + event.bus_error.describe());
-      break;
     case Kind::Endpoint:
-      if (event.endpoint_up) {
-        log::event(log::Level::info, "sch001", "can_open",
-                   {{"interface", runner_->config().endpoint}},
-                   "CAN endpoint " + runner_->config().endpoint + " open");
-      } else {
-        log::event(log::Level::error, "sch001", "can_lost", {{"error", runner_->last_error()}},
-                   "CAN endpoint " + runner_->config().endpoint +
-                       " failed: " + runner_->last_error() + "; no travel command; reopening");
-      }
+      journal_endpoint(event.endpoint_up, event.at);
       break;
     case Kind::Travel:
     case Kind::FaultRaised:

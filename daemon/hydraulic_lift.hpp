@@ -22,6 +22,7 @@
 #include "daemon/lift_common.hpp"
 #include "daemon/lift_core.hpp"
 #include "lift/position_source.hpp"
+#include "log/throttle.hpp"
 #include "rt/can_runner.hpp"
 #include "rt/encoder_tap.hpp"
 #include "sch001/controller.hpp"
@@ -35,10 +36,13 @@ namespace liftd::daemon {
 sch001::ControllerConfig sch001_controller_config(const config::Config& config);
 
 /// The simulated card and hydraulic car (liftd --simulate, drive.kind "sch001") on its own
-/// thread, speaking CAN frames over one end of a socketpair; the simulated I/O board.
+/// thread, listening for the controller on a Unix socket as `sch001-sim --socket` does (liftd
+/// opens it as can.interface "unix:PATH", and reopens it as it would a real bus); the
+/// simulated I/O board.
 class SimulatedCard final : public SimulatorThread {
  public:
-  SimulatedCard(const config::Config& config, can::CanSocket card_end);
+  /// Listens on `socket_path` (replacing a stale file); throws std::runtime_error if it cannot.
+  SimulatedCard(const config::Config& config, const std::string& socket_path);
   ~SimulatedCard();
 
   bool start();
@@ -53,9 +57,12 @@ class SimulatedCard final : public SimulatorThread {
   void loop();
   nlohmann::json state_json_locked() const;  ///< state_json() with mutex_ held
 
-  can::CanSocket socket_;
-  sim::Sch001CardSim card_;  ///< guarded by mutex_
-  bool bus_off_ = false;     ///< inject one bus-off error frame (then back to normal; mutex_)
+  std::string socket_path_;
+  int listener_ = -1;
+  std::optional<can::CanSocket> peer_;  ///< the controller's connection (simulator's thread)
+  sim::Sch001CardSim card_;             ///< guarded by mutex_
+  bool bus_off_ = false;  ///< inject one bus-off error frame (then back to normal; mutex_)
+  bool drop_ = false;     ///< close the controller's connection once (mutex_)
 };
 
 /// The SCH001 card's lift as controller_lift.hpp names its parts.
@@ -111,13 +118,25 @@ class HydraulicLift final : public ControllerLift<Sch001Drive> {
   void before_start() override;
   void journal_started() override;
   void handle_event(const sch001::ControllerEvent& event) override;
-  /// Rejected card frames: counted always, journalled at most every kRejectLogInterval.
+  /// What the controller counts instead of queueing (card status changes, error frames,
+  /// frames on our identifier, rejected frames, failed sends), journalled through throttles.
   void after_events(MonoTime now) override;
+  void journal_card_status(const sch001::ControllerSnapshot& s, MonoTime now);
+  void journal_bus_errors(const sch001::ControllerSnapshot& s, MonoTime now);
+  void journal_link_conditions(const sch001::ControllerSnapshot& s);
+  void journal_endpoint(bool up, MonoTime now);
 
   std::unique_ptr<can::CanEncoder> encoder_;  ///< position.source "can"
   std::unique_ptr<rt::EncoderTap> tap_;       ///< encoder frames to the encoder, the rest on
   sch001::CardLinkCounters logged_counters_{};
   MonoTime last_reject_log_{};
+  log::Throttle card_status_lines_;
+  log::Throttle bus_error_lines_;
+  bool foreign_sender_logged_ = false;
+  bool send_failing_logged_ = false;
+  /// A lost endpoint: from its first failure until the card is heard on a new one.
+  std::optional<MonoTime> lost_since_;
+  std::uint64_t lost_failures_ = 0;
 };
 
 }  // namespace liftd::daemon

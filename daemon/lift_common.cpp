@@ -1,8 +1,12 @@
 #include "daemon/lift_common.hpp"
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
+#include <stdexcept>
 #include <vector>
 
 #include "log/log.hpp"
@@ -11,14 +15,35 @@
 namespace liftd::daemon {
 namespace {
 
-// The API socket systemd passed (socket activation, FileDescriptorName=api), or -1: then the
-// server creates it as without systemd. Other passed descriptors are closed.
+// The API socket systemd passed (socket activation, FileDescriptorName=api), or -1 when systemd
+// passed none: then the server creates it as without systemd. Other passed descriptors are
+// closed. Throws when systemd passed sockets but none that liftd can serve on api.socket: liftd
+// must neither listen where no client looks nor create (and later unlink) a socket file beside
+// the one the socket unit owns.
 int take_listen_fd(const std::string& socket_path) {
   const std::vector<service::ListenFd> fds = service::listen_fds_from_environment();
   if (fds.empty()) return -1;
   const int fd = service::pick_listen_fd(fds, "api");
   service::close_unused_listen_fds(fds, fd);
-  if (fd < 0) return -1;
+  if (fd < 0) {
+    std::string names;
+    for (const auto& f : fds) names += (names.empty() ? "\"" : ", \"") + f.name + "\"";
+    throw std::runtime_error(
+        "systemd passed " + std::to_string(fds.size()) + " socket(s) (" + names +
+        ") but none is a listening Unix stream socket named \"api\" (FileDescriptorName=api in "
+        "liftd.socket), and liftd does not create its own socket beside the socket unit's: fix "
+        "liftd.socket so that it passes one socket for the API");
+  }
+  const std::optional<std::string> bound = service::unix_socket_path(fd);
+  if (!bound || *bound != socket_path) {
+    ::close(fd);
+    throw std::runtime_error("the API socket systemd passed is bound to " +
+                             (bound ? (bound->empty() ? "no path (unnamed)" : *bound)
+                                    : std::string("an unknown address")) +
+                             " but api.socket is " + socket_path +
+                             ": clients would look where nothing listens; make ListenStream= in "
+                             "liftd.socket and api.socket in the configuration the same path");
+  }
   log::event(log::Level::info, "api", "socket_passed", {{"socket", socket_path}},
              "using the API socket systemd passed (socket activation); connections wait in its "
              "queue while liftd restarts");

@@ -152,8 +152,9 @@ api::Result reply_result(const Reply& r) {
   return api::Result::fail(code, std::string(r.detail));
 }
 
-/// Posts `body` to a controller's command queue under a new tag of `pending`; a full queue
-/// answers `busy` at once. Returns the tag (0 when refused).
+/// Posts `body` to a controller's command queue under a new tag of `pending`. A full queue, or
+/// as many replies owed as the controller's reply queue holds, answers `busy` at once: nothing
+/// was queued, so nothing took effect. Returns the tag (0 when refused).
 template <typename Command, typename Controller, typename Body>
 std::uint32_t post_command(Controller& controller, PendingReplies& pending, Body&& body,
                            api::Responder done, std::chrono::nanoseconds grace,
@@ -162,7 +163,8 @@ std::uint32_t post_command(Controller& controller, PendingReplies& pending, Body
   if (!controller.post(Command{tag, std::forward<Body>(body)})) {
     pending.complete(tag, api::Result::fail(api::ErrorCode::Busy,
                                             "the " + std::string(thread) +
-                                                " thread's command queue is full; try again"));
+                                                " thread has as many requests as it can take; "
+                                                "nothing was done, try again"));
     return 0;
   }
   return tag;

@@ -189,6 +189,7 @@ api::Result SimulatedLift::apply(const api::SimRequest& request, MonoTime now) {
     case SimAction::Pressure:
     case SimAction::Overpressure:
     case SimAction::CardSilence:
+    case SimAction::CardReconnect:
     case SimAction::BusOff:
     case SimAction::ColdOil:
     case SimAction::Sink:

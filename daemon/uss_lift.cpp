@@ -306,6 +306,7 @@ api::Result SimulatedUssBus::apply(const api::SimRequest& request, MonoTime now)
     case SimAction::Pressure:
     case SimAction::Overpressure:
     case SimAction::CardSilence:
+    case SimAction::CardReconnect:
     case SimAction::BusOff:
     case SimAction::ColdOil:
     case SimAction::Sink:
@@ -749,6 +750,8 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
                                       : " did not come back unchanged in time (USS A 5.3)"));
       break;
     case Kind::DriveState: {
+      last_drive_state_ = event.drive_state;
+      if (!drive_state_lines_.admit(1, event.at)) break;
       // A drive that reports a fault is the catalog's uss_slave_fault.
       const bool fault = event.drive_state == uss::ProfileState::Fault;
       log::event(fault ? log::Level::warn : log::Level::info, "uss",
@@ -766,6 +769,17 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
     case Kind::CallServed:
       report_lift_event(event);
       break;
+  }
+}
+
+void UssLift::after_events(MonoTime now) {
+  if (const auto n = drive_state_lines_.suppressed(now)) {
+    log::event(log::Level::warn, "uss", "drive_state_flapping",
+               {{"changes", std::to_string(*n)},
+                {"state", std::string(uss::to_string(last_drive_state_))}},
+               "USS drive state changed " + std::to_string(*n) +
+                   " more times in the last 10 s without a line each; now: " +
+                   std::string(uss::to_string(last_drive_state_)));
   }
 }
 

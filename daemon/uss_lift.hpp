@@ -26,6 +26,7 @@
 #include "daemon/lift_core.hpp"
 #include "io/pty.hpp"
 #include "lift/position_source.hpp"
+#include "log/throttle.hpp"
 #include "rt/uss_runner.hpp"
 #include "sim/sim_io.hpp"
 #include "sim/uss_slave_sim.hpp"
@@ -146,8 +147,13 @@ class UssLift final : public ControllerLift<UssDrive> {
  private:
   void journal_started() override;
   void handle_event(const uss::ControllerEvent& event) override;
+  /// The count of drive state lines the throttle held back, once its interval ends.
+  void after_events(MonoTime now) override;
 
   std::unique_ptr<uss::Master> master_;
+  /// A status word flapping at the bus's rate: at most a few lines per interval, then a count.
+  log::Throttle drive_state_lines_{5, std::chrono::seconds(10)};
+  uss::ProfileState last_drive_state_{};
 };
 
 }  // namespace liftd::daemon

@@ -43,6 +43,12 @@ soak_seconds=${LIFTD_SOAK_SECONDS:-60}
 if [ "$soak_seconds" != 0 ]; then
   echo "=== fault soak: $soak_seconds s ==="
   timed "soak" tools/soak --seconds "$soak_seconds" --seed 1
+  # The hydraulic and USS lifts under attack (floods, card reconnects, fault flaps): shorter,
+  # each scenario still runs several times.
+  controller_seconds=$(( soak_seconds * 2 / 3 ))
+  echo "=== attack soak, hydraulic and USS: $controller_seconds s each ==="
+  timed "soak sch001" tools/soak --kind sch001 --seconds "$controller_seconds" --seed 1
+  timed "soak uss" tools/soak --kind uss --seconds "$controller_seconds" --seed 1
 fi
 [ "${LIFTD_SKIP_ASAN:-0}" = 1 ] || run_preset asan -LE slow
 if [ "${LIFTD_SKIP_FUZZ:-0}" != 1 ]; then

@@ -214,13 +214,15 @@ enum class SimAction : std::uint8_t {
   BusOff,          ///< one CAN bus-off error frame reaches the controller
   ColdOil,         ///< cold oil: every speed of the unit is lower (on/off)
   Sink,            ///< the car at rest sinks 2 mm/s (leaking valve, cooling oil) on/off
+  CardReconnect,   ///< the card's CAN connection drops once; the controller reopens it
 };
 /// Wire names of SimAction, in enum order.
-inline constexpr std::array<std::string_view, 20> kSimActions = {
+inline constexpr std::array<std::string_view, 21> kSimActions = {
     "general_fault",  "advance_warning",   "not_ready",     "reply_fault",     "clear_reply_faults",
     "drift",          "safety_chain_open", "door_reversal", "open_doors",      "close_doors",
     "obstruct_doors", "channel_fault",     "refuse_target", "oil_temperature", "pressure",
-    "overpressure",   "card_silence",      "bus_off",       "cold_oil",        "sink"};
+    "overpressure",   "card_silence",      "bus_off",       "cold_oil",        "sink",
+    "card_reconnect"};
 
 /// A fault on the simulated drive's communication channel (DCP 5), the real-time bytes intact.
 enum class SimChannelFault : std::uint8_t {

@@ -137,10 +137,17 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
     arm_timer();
   }
 
-  /// Takes new settings: access from the server's current policy, the idle timeout.
+  /// Takes new settings: access from the server's current policy, the idle timeout. A watcher
+  /// that may no longer read is told why and its stream ends.
   void settings_changed() {
     if (closed_) return;
     peer_.access = server_->policy_.access_for(peer_.uid, groups_);
+    if (watching_ && !peer_.access.allows(Access::Read)) {
+      const nlohmann::json why = {{"reason", "read access revoked by a configuration reload"}};
+      enqueue(std::make_shared<const std::string>(event_line("watch_ended", why)), false);
+      set_watching(false);
+      server_->log_(LogLevel::Info, describe() + ": watch ended, read access revoked");
+    }
     arm_timer();
   }
 
@@ -165,24 +172,33 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
   }
 
   /// Queues a line. Replies are always queued: reading pauses while the queue is full, so they
-  /// stay bounded. An event that does not fit drops the watcher (it has fallen behind).
+  /// stay bounded. An event that does not fit is not queued but counted: once the watcher has
+  /// taken half its queue, a `missed` event with the count comes before the next event, so it
+  /// knows to read `status` again. A watcher that takes nothing at all is closed as a stalled
+  /// reader.
   void enqueue(std::shared_ptr<const std::string> line, bool is_event) {
     if (closed_) return;
     const ServerConfig& cfg = server_->config_;
-    if (is_event && (queue_.size() + 1 > cfg.write_queue_max_messages ||
-                     queued_bytes_ + line->size() > cfg.write_queue_max_bytes)) {
-      ++server_->counters_.dropped;
-      server_->log_(LogLevel::Warn, describe() +
-                                        " dropped: it does not read its events fast "
-                                        "enough (" +
-                                        std::to_string(queue_.size()) + " lines, " +
-                                        std::to_string(queued_bytes_) + " bytes queued)");
-      close("write queue full");
-      return;
+    if (is_event) {
+      const bool room = missed_ == 0 ? queue_.size() + 1 <= cfg.write_queue_max_messages &&
+                                           queued_bytes_ + line->size() <= cfg.write_queue_max_bytes
+                                     : drained();
+      if (!room) {
+        ++server_->counters_.missed_events;
+        if (missed_++ == 0) {
+          server_->log_(LogLevel::Warn, describe() + " does not read its events fast enough (" +
+                                            std::to_string(queue_.size()) + " lines, " +
+                                            std::to_string(queued_bytes_) +
+                                            " bytes queued): events counted, not sent");
+        }
+        return;
+      }
+      if (missed_ != 0) {
+        const std::uint64_t missed = std::exchange(missed_, 0);
+        push_line(std::make_shared<const std::string>(event_line("missed", {{"count", missed}})));
+      }
     }
-    queued_bytes_ += line->size();
-    queue_.push_back(std::move(line));
-    if (!writing_) write_next();
+    push_line(std::move(line));
   }
 
   void set_watching(bool enable) override {
@@ -201,6 +217,12 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
   std::size_t requests_in_flight() const override { return in_flight_; }
 
  private:
+  void push_line(std::shared_ptr<const std::string> line) {
+    queued_bytes_ += line->size();
+    queue_.push_back(std::move(line));
+    if (!writing_) write_next();
+  }
+
   std::string describe() const {
     return "api client #" + std::to_string(id_) + " (pid " + std::to_string(peer_.pid) + ", uid " +
            std::to_string(peer_.uid) + ")";
@@ -453,6 +475,7 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
   bool paused_ = false;     // requests wait in pending_ until the write queue drains
   bool peer_done_ = false;  // the client half-closed: no more requests will come
   bool watching_ = false;
+  std::uint64_t missed_ = 0;  // events not sent since the queue was full
   bool closing_ = false;
   bool closed_ = false;
   SteadyClock::time_point last_request_;
@@ -726,9 +749,11 @@ ServerCounters Server::counters() const {
 }
 
 nlohmann::json to_json(const ServerCounters& c) {
-  return {{"clients", c.clients},   {"watchers", c.watchers}, {"connections", c.connections},
-          {"rejected", c.rejected}, {"requests", c.requests}, {"errors", c.errors},
-          {"dropped", c.dropped},   {"timeouts", c.timeouts}, {"events", c.events}};
+  return {{"clients", c.clients},         {"watchers", c.watchers},
+          {"connections", c.connections}, {"rejected", c.rejected},
+          {"requests", c.requests},       {"errors", c.errors},
+          {"dropped", c.dropped},         {"timeouts", c.timeouts},
+          {"events", c.events},           {"missed_events", c.missed_events}};
 }
 
 }  // namespace liftd::api

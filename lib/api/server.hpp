@@ -59,15 +59,16 @@ using LogFn = std::function<void(LogLevel level, std::string_view message)>;
 
 /// Counters the server keeps (also reported by `stats` as "api").
 struct ServerCounters {
-  std::uint64_t connections = 0;  ///< connections accepted since start
-  std::uint64_t rejected = 0;     ///< connections refused (limits, no credentials)
-  std::uint64_t requests = 0;     ///< request lines handled
-  std::uint64_t errors = 0;       ///< replies with ok:false
-  std::uint64_t dropped = 0;      ///< clients dropped: a watcher behind, or a stalled reader
-  std::uint64_t timeouts = 0;     ///< clients closed by the idle or partial-line timeout
-  std::uint64_t events = 0;       ///< events published
-  std::size_t clients = 0;        ///< clients connected now
-  std::size_t watchers = 0;       ///< clients watching now
+  std::uint64_t connections = 0;    ///< connections accepted since start
+  std::uint64_t rejected = 0;       ///< connections refused (limits, no credentials)
+  std::uint64_t requests = 0;       ///< request lines handled
+  std::uint64_t errors = 0;         ///< replies with ok:false
+  std::uint64_t dropped = 0;        ///< clients dropped: a stalled reader
+  std::uint64_t missed_events = 0;  ///< events not sent to a watcher that fell behind
+  std::uint64_t timeouts = 0;       ///< clients closed by the idle or partial-line timeout
+  std::uint64_t events = 0;         ///< events published
+  std::size_t clients = 0;          ///< clients connected now
+  std::size_t watchers = 0;         ///< clients watching now
 };
 
 /// The API server.

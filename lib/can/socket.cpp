@@ -4,6 +4,7 @@
 #include <linux/can/error.h>
 #include <linux/can/raw.h>
 #include <net/if.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
@@ -212,7 +213,14 @@ Received CanSocket::read() noexcept {
     return out;
   }
   if (n == 0) {
-    out.kind = Received::Kind::Closed;
+    // SOCK_SEQPACKET: 0 is the peer's end of file, or an empty record, which is a record (a
+    // malformed one) and no reason to drop the connection. Only a peer that hung up with
+    // nothing more queued has closed it.
+    if (peer_closed()) {
+      out.kind = Received::Kind::Closed;
+      return out;
+    }
+    ++drops_.malformed;
     return out;
   }
   // MSG_TRUNC: n is the packet's real size, so a longer record (CAN FD, garbage) is seen.
@@ -239,6 +247,13 @@ Received CanSocket::read() noexcept {
   out.kind = Received::Kind::Frame;
   out.frame = make_frame(id, std::span<const std::uint8_t>(data.data(), record.len));
   return out;
+}
+
+bool CanSocket::peer_closed() const noexcept {
+  pollfd p{fd_, POLLRDHUP, 0};
+  if (::poll(&p, 1, 0) <= 0 || (p.revents & (POLLHUP | POLLRDHUP)) == 0) return false;
+  char byte = 0;
+  return ::recv(fd_, &byte, sizeof byte, MSG_DONTWAIT | MSG_PEEK | MSG_TRUNC) <= 0;
 }
 
 int CanSocket::send_record(std::uint32_t can_id, std::span<const std::uint8_t> data) noexcept {

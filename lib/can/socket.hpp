@@ -73,9 +73,10 @@ struct Received {
 
 /// Records read but not passed on.
 struct DropCounters {
-  std::uint64_t filtered = 0;   ///< data frames with an identifier outside the filter
-  std::uint64_t malformed = 0;  ///< records that are not one struct can_frame, or length > 8
-  std::uint64_t extended = 0;   ///< 29-bit or remote frames (the protocols here use neither)
+  std::uint64_t filtered = 0;  ///< data frames with an identifier outside the filter
+  std::uint64_t malformed =
+      0;  ///< records that are not one struct can_frame (empty ones too), or length > 8
+  std::uint64_t extended = 0;  ///< 29-bit or remote frames (the protocols here use neither)
 };
 
 /// A non-blocking CAN endpoint. Move-only; closes its descriptor.
@@ -113,6 +114,8 @@ class CanSocket {
   CanSocket(int fd, std::vector<std::uint32_t> ids) noexcept : fd_(fd), ids_(std::move(ids)) {}
   int send_record(std::uint32_t can_id, std::span<const std::uint8_t> data) noexcept;
   bool wanted(std::uint32_t id) const noexcept;
+  /// The peer hung up and nothing more is queued (a read of 0 bytes was its end of file).
+  bool peer_closed() const noexcept;
 
   int fd_ = -1;
   std::vector<std::uint32_t> ids_;

@@ -132,8 +132,27 @@ template <typename Types>
 class ControllerCore {
  public:
   // ---- io thread ----
-  bool post(const typename Types::Command& command) noexcept { return commands_.try_push(command); }
-  bool poll_reply(typename Types::Reply& out) noexcept { return replies_.try_pop(out); }
+  /// Queues a command; false (nothing queued) when the queue is full or when kReplyQueueSize
+  /// replies are owed already: every command with a tag gets exactly one reply, so the replies
+  /// owed never exceed the reply queue and none is ever dropped.
+  bool post(const typename Types::Command& command) noexcept {
+    const bool wants_reply = command.tag != 0;
+    if (wants_reply && replies_owed_ >= kReplyQueueSize) return false;
+    if (!commands_.try_push(command)) return false;
+    if (wants_reply) ++replies_owed_;
+    return true;
+  }
+  bool poll_reply(typename Types::Reply& out) noexcept {
+    if (!replies_.try_pop(out)) return false;
+    if (replies_owed_ > 0) --replies_owed_;
+    return true;
+  }
+  /// Replies owed for commands posted and not yet polled.
+  std::size_t replies_owed() const noexcept { return replies_owed_; }
+  /// Replies the real-time thread could not queue: 0 unless a command was answered twice.
+  std::uint64_t lost_replies() const noexcept {
+    return lost_replies_.load(std::memory_order_relaxed);
+  }
   bool poll_event(typename Types::Event& out) noexcept { return events_.try_pop(out); }
   typename Types::Snapshot snapshot() noexcept { return snapshot_.read(); }
   /// Events lost because a queue was full: the controller's to the io thread or the travel's own
@@ -178,7 +197,8 @@ class ControllerCore {
     push_reply(r);
   }
   void push_reply(const typename Types::Reply& r) noexcept {
-    (void)replies_.try_push(r);  // as deep as the command queue
+    // post() never lets more replies be owed than the queue holds.
+    if (!replies_.try_push(r)) lost_replies_.fetch_add(1, std::memory_order_relaxed);
   }
   void push_event(const typename Types::Event& event) noexcept {
     if (!events_.try_push(event)) dropped_events_.fetch_add(1, std::memory_order_relaxed);
@@ -246,7 +266,9 @@ class ControllerCore {
           return reply(tag, ReplyCode::Ok);
         case CallError::NoSuchFloor:
           return reply(tag, ReplyCode::BadRequest, "no such floor in this installation");
-        default:
+        case CallError::AlreadyQueued:  // as the DCP lift answers it (docs/api.md `calls`)
+          return reply(tag, ReplyCode::Ok, "already queued");
+        case CallError::Full:
           return reply(tag, ReplyCode::Busy, "the calls queue is full");
       }
     }
@@ -352,17 +374,21 @@ class ControllerCore {
     }
     return floor;
   }
-  /// Records a fault starting or ending, and reports the change once.
+  /// Records a fault starting or ending (the controllers call it for each code every step) and
+  /// tells the io thread every transition it was not told yet. A transition whose event does not
+  /// fit waits for a later step; a fault that came and went meanwhile is still told as one raise
+  /// and one clear. So the journal never shows a clear without its raise, two raises in a row,
+  /// or nothing of a short fault, whatever the load.
   void set_fault(FaultCode code, bool active, MonoTime now) noexcept {
     const auto i = static_cast<std::size_t>(code);
-    if (faults_[i] == active) return;
-    faults_[i] = active;
-    if (active) fault_since_[i] = now;
-    typename Types::Event e;
-    e.kind = active ? Types::Event::Kind::FaultRaised : Types::Event::Kind::FaultCleared;
-    e.at = now;
-    e.fault = code;
-    push_event(e);
+    if (faults_[i] != active) {
+      faults_[i] = active;
+      if (active) {
+        fault_since_[i] = now;
+        ++fault_raises_[i];
+      }
+    }
+    report_fault(i, now);
   }
   /// The snapshot fields every lift has: the car, the travel, the inputs, the calls, the faults.
   void fill_lift_snapshot(typename Types::Snapshot& s, MonoTime now,
@@ -391,6 +417,26 @@ class ControllerCore {
   std::uint64_t steps_ = 0;
 
  private:
+  void report_fault(std::size_t i, MonoTime now) noexcept {
+    for (;;) {
+      const bool raise_owed = fault_raises_[i] != fault_raises_told_[i];
+      bool raise;
+      if (!fault_told_[i] && raise_owed) {
+        raise = true;
+      } else if (fault_told_[i] && (!faults_[i] || raise_owed)) {
+        raise = false;  // ended, or ended and came again: the clear first
+      } else {
+        return;  // the io thread knows the truth
+      }
+      typename Types::Event e;
+      e.kind = raise ? Types::Event::Kind::FaultRaised : Types::Event::Kind::FaultCleared;
+      e.at = now;
+      e.fault = static_cast<FaultCode>(i);
+      if (!events_.try_push(e)) return;  // not lost: told at a later step
+      fault_told_[i] = raise;
+      if (raise) fault_raises_told_[i] = fault_raises_[i];  // missed repeats told as one
+    }
+  }
   /// Answers a refusal; false (nothing started).
   bool refuse(std::uint32_t tag, ReplyCode code, std::string_view detail) noexcept {
     reply(tag, code, detail);
@@ -431,6 +477,11 @@ class ControllerCore {
   bool place_known_ = false;  ///< the travel was told the floor the car stands at
   std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults_{};
   std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since_{};
+  std::array<std::uint64_t, static_cast<std::size_t>(FaultCode::kCount)> fault_raises_{};
+  std::array<std::uint64_t, static_cast<std::size_t>(FaultCode::kCount)> fault_raises_told_{};
+  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> fault_told_{};
+  std::atomic<std::uint64_t> lost_replies_{0};
+  std::size_t replies_owed_ = 0;  ///< io thread only
 };
 
 }  // namespace liftd::lift

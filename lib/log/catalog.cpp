@@ -43,6 +43,7 @@ constexpr std::array kCatalog = {
                  "inputs_lost"},
     // The SCH001 hydraulic card and the USS drive: their drivers log these event names.
     CatalogEntry{"card_fault", "747a03af540d46ba85f3190021b6809f", "card_fault", "", ""},
+    CatalogEntry{"can_own_id_in_use", "2f12340309554c1dbc6ad2ed1abc8d9c", "own_id_in_use", "", ""},
     CatalogEntry{"uss_slave_fault", "dce538ec71c248bebd75a1de4dcdb397", "uss_slave_fault", "", ""},
 };
 

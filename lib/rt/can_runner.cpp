@@ -81,18 +81,25 @@ bool CanRunner::open_endpoint(MonoTime now) {
       std::lock_guard<std::mutex> lock(error_mutex_);
       last_error_ = opened.error().what + ": " + std::strerror(opened.error().code);
     }
-    reopen_delay_ = std::min(
-        config_.reopen_max, reopen_delay_ == MonoTime{} ? config_.reopen_first : reopen_delay_ * 2);
-    reopen_at_ = now + reopen_delay_;
+    schedule_reopen(now);
     return false;
   }
   socket_.emplace(std::move(opened.value()));
   if (ever_opened_) reopens_.fetch_add(1, std::memory_order_relaxed);
   ever_opened_ = true;
-  reopen_delay_ = MonoTime{};
+  // The backoff is not reset here: a CAN interface that is down still binds, and fails only
+  // at the first read (ENETDOWN). It starts again from reopen_first once a record arrives.
   engine_.on_endpoint(true, now);
   recorder_.record(now, Direction::Event, 0, {});
   return true;
+}
+
+void CanRunner::schedule_reopen(MonoTime now) noexcept {
+  // reopen_first, doubling up to reopen_max while the endpoint fails again before carrying a
+  // record: one failing interface is tried a few times a minute, not ten times a second.
+  reopen_delay_ = std::min(config_.reopen_max,
+                           reopen_delay_ == MonoTime{} ? config_.reopen_first : reopen_delay_ * 2);
+  reopen_at_ = now + reopen_delay_;
 }
 
 void CanRunner::close_endpoint(MonoTime now, int error, const char* what) {
@@ -103,8 +110,7 @@ void CanRunner::close_endpoint(MonoTime now, int error, const char* what) {
   socket_.reset();
   engine_.on_endpoint(false, now);
   recorder_.record(now, Direction::Event, record_flag::kPortLost, {});
-  reopen_delay_ = config_.reopen_first;
-  reopen_at_ = now + reopen_delay_;
+  schedule_reopen(now);
 }
 
 void CanRunner::loop() {
@@ -133,6 +139,9 @@ void CanRunner::loop() {
       now = mono_now();
       if (r.kind == can::Received::Kind::Nothing) break;
       handled = true;
+      if (r.kind != can::Received::Kind::Closed && r.kind != can::Received::Kind::Failed) {
+        reopen_delay_ = MonoTime{};  // the endpoint carries records: a new failure starts over
+      }
       if (r.kind == can::Received::Kind::Closed || r.kind == can::Received::Kind::Failed) {
         close_endpoint(now, r.errno_value,
                        r.kind == can::Received::Kind::Closed ? "the CAN peer closed the connection"
@@ -149,6 +158,7 @@ void CanRunner::loop() {
       record(now, Direction::Rx, record_flag::kReply, r.frame);
       if (const auto answer = engine_.on_frame(r.frame, now)) {
         const int error = socket_->write(*answer);
+        engine_.on_sent(error == 0, now);
         if (error == 0) {
           frames_sent_.fetch_add(1, std::memory_order_relaxed);
           record(now, Direction::Tx, record_flag::kSent, *answer);

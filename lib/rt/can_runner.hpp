@@ -33,6 +33,9 @@ class CanEngine {
   virtual void on_endpoint(bool up, MonoTime now) noexcept = 0;
   /// Called on every wake-up, at least every tick period.
   virtual void on_tick(MonoTime now) noexcept = 0;
+  /// The answer on_frame() returned went out (`delivered`) or could not be sent (the socket's
+  /// queue was full: nobody takes our frames).
+  virtual void on_sent(bool /*delivered*/, MonoTime /*now*/) noexcept {}
 };
 
 struct CanRunnerConfig {
@@ -87,6 +90,7 @@ class CanRunner {
   void loop();
   bool open_endpoint(MonoTime now);
   void close_endpoint(MonoTime now, int error, const char* what);
+  void schedule_reopen(MonoTime now) noexcept;
   void record(MonoTime now, Direction direction, std::uint8_t flags, const can::Frame& frame);
   void notify() noexcept;
 

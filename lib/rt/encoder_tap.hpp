@@ -28,6 +28,9 @@ class EncoderTap final : public CanEngine {
   void on_tick(MonoTime now) noexcept override {
     if (inner_ != nullptr) inner_->on_tick(now);
   }
+  void on_sent(bool delivered, MonoTime now) noexcept override {
+    if (inner_ != nullptr) inner_->on_sent(delivered, now);
+  }
 
  private:
   can::CanEncoder& encoder_;

@@ -18,8 +18,17 @@ LinkChange CardLink::heard_at(MonoTime now) noexcept {
   if (!heard_) change = LinkChange::FirstHeard;
   if (silent_) change = LinkChange::Recovered;
   heard_ = true;
+  ever_heard_ = true;
   silent_ = false;
   return change;
+}
+
+void CardLink::endpoint_reopened(MonoTime now) noexcept {
+  status_.reset();
+  heard_ = false;
+  silent_ = false;
+  timeout_enabled_ = true;
+  last_heard_ = now;
 }
 
 FrameResult CardLink::on_frame(const can::Frame& frame, MonoTime now) noexcept {

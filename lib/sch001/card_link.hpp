@@ -40,7 +40,7 @@ struct CardLinkCounters {
 /// What happened to the link state in one call, for the caller's events and journal.
 enum class LinkChange : std::uint8_t {
   None,
-  FirstHeard,  ///< the first frame from the card since start
+  FirstHeard,  ///< the first frame from the card on this endpoint (since start or a reopen)
   Silent,      ///< 10 s without information from the card while the timeout is enabled
   Recovered,   ///< a frame from the card after Silent
 };
@@ -62,6 +62,11 @@ class CardLink {
   FrameResult on_frame(const can::Frame& frame, MonoTime now) noexcept;
   /// Timeout supervision: call often (every few 10 ms). Returns Silent once when it trips.
   LinkChange on_tick(MonoTime now) noexcept;
+  /// The CAN endpoint was opened again at `now` (after a failure, or a new peer on `unix:`):
+  /// what the card said on the old one is void. No status, not heard, our timeout enabled and
+  /// running from now (3f: on whenever the controller is on; only a card heard on this
+  /// endpoint may switch it off), until a frame from the card arrives on the new endpoint.
+  void endpoint_reopened(MonoTime now) noexcept;
 
   /// The command the next answer carries. Its bits go out only while travel_allowed().
   void set_command(const Command& command) noexcept { command_ = command; }
@@ -75,8 +80,10 @@ class CardLink {
   bool unit_signals_valid() const noexcept { return config_.single_unit; }
   /// Our timeout is enabled (on at start; only the card turns it off, 3f).
   bool timeout_enabled() const noexcept { return timeout_enabled_; }
-  /// Heard at least once.
+  /// Heard on the current endpoint (since start, or since endpoint_reopened()).
   bool heard() const noexcept { return heard_; }
+  /// Heard at least once since start, on any endpoint.
+  bool ever_heard() const noexcept { return ever_heard_; }
   /// Silent for the timeout while it was enabled, and not heard since.
   bool silent() const noexcept { return silent_; }
   /// When the card was last heard (or the start time before that).
@@ -93,6 +100,7 @@ class CardLink {
   MonoTime last_heard_;
   bool timeout_enabled_ = true;
   bool heard_ = false;
+  bool ever_heard_ = false;
   bool silent_ = false;
   CardLinkCounters counters_{};
 };

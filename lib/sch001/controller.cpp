@@ -20,8 +20,10 @@ constexpr std::int64_t kRelevelZoneMm = 150;
 std::string_view fault_text(FaultCode code) noexcept {
   switch (code) {
     case FaultCode::LinkFault:
-      return "SCH001 link fault: no frame from the card for 10 s (card document 3f), or the CAN "
-             "bus or socket failed; no travel command goes out";
+      return "SCH001 link fault: no frame from the card for 10 s (card document 3f), the CAN "
+             "bus or socket failed and the card is not heard again, our answers cannot be sent, "
+             "or another node sends on liftd's identifier (card document 1.6); no travel "
+             "command goes out";
     case FaultCode::DriveFault:
       return "the SCH001 card reports ERR: no travel command may go out (card document 3d)";
     case FaultCode::SafetyChain:
@@ -61,22 +63,37 @@ std::optional<can::Frame> Sch001Controller::on_frame(const can::Frame& frame,
     e.link = r.change;
     push_event(e);
   }
-  if (r.status_changed && link_.status()) {
-    ControllerEvent e;
-    e.kind = ControllerEvent::Kind::Card;
-    e.at = now;
-    e.card = *link_.status();
-    push_event(e);
-  }
+  if (r.status_changed) ++status_changes_;
+  // Card document 1.6: no other node may use the card's identifiers. One that sends on ours
+  // commands the card beside us: a wiring or set-up fault, never a frame to act on.
+  if (frame.id == link_.ids().to_card) own_id_at_ = now;
+  if (link_.heard()) endpoint_lost_ = false;                  // the card is heard on this endpoint
   if (frame.id == link_.ids().from_card) bus_fault_ = false;  // the bus carries frames again
-  if (r.answer && r.answer->length == kCommandFrameLength) {
-    bits_sent_ = CommandBits::from_byte(r.answer->data[1]);
-    current_sent_ = r.answer->data[2];
-    destination_sent_ = r.answer->data[3];
-  }
+  answer_ = r.answer;
   // The sequencing sees the new status at once (the answer already obeyed it: 3d, 3e).
   step(now);
   return r.answer;
+}
+
+void Sch001Controller::on_sent(bool delivered, MonoTime now) noexcept {
+  // on_frame() stepped already: step again only when the link fault comes or goes.
+  const bool was_failing = send_failures_ >= kSendFailuresForFault;
+  if (delivered) {
+    send_failures_ = 0;
+    if (answer_ && answer_->length == kCommandFrameLength) {
+      bits_sent_ = CommandBits::from_byte(answer_->data[1]);
+      current_sent_ = answer_->data[2];
+      destination_sent_ = answer_->data[3];
+    }
+  } else if (send_failures_ < kSendFailuresForFault) {
+    ++send_failures_;
+  }
+  answer_.reset();
+  if (was_failing != (send_failures_ >= kSendFailuresForFault)) {
+    step(now);
+  } else {
+    publish(now);
+  }
 }
 
 void Sch001Controller::on_bus_error(const can::ErrorReport& report, MonoTime now) noexcept {
@@ -84,18 +101,21 @@ void Sch001Controller::on_bus_error(const can::ErrorReport& report, MonoTime now
   last_bus_error_ = report;
   if (report.is_fault()) bus_fault_ = true;
   if (report.restarted || report.back_to_active) bus_fault_ = false;
-  ControllerEvent e;
-  e.kind = ControllerEvent::Kind::BusError;
-  e.at = now;
-  e.bus_error = report;
-  push_event(e);
   step(now);
 }
 
 void Sch001Controller::on_endpoint(bool up, MonoTime now) noexcept {
   endpoint_up_ = up;
-  endpoint_failed_ = !up;
-  if (up) bus_fault_ = false;
+  if (up) {
+    // Whatever the card said on the old endpoint is void: link init, no travel bit, travels
+    // refused, until its first frame on this one (card document 3d, 3e).
+    link_.endpoint_reopened(now);
+    bus_fault_ = false;
+    send_failures_ = 0;
+    bits_sent_ = CommandBits{};
+  } else {
+    endpoint_lost_ = true;
+  }
   ControllerEvent e;
   e.kind = ControllerEvent::Kind::Endpoint;
   e.at = now;
@@ -125,12 +145,14 @@ TickInput Sch001Controller::build_input(MonoTime now) noexcept {
   in.card_allows_travel = link_.travel_allowed();
   in.card_error = link_.status() && link_.status()->err;
   in.card_silent = link_.silent();
-  in.bus_ok = endpoint_up_ && !bus_fault_;
+  in.bus_ok =
+      endpoint_up_ && !bus_fault_ && send_failures_ < kSendFailuresForFault && !foreign_sender_;
   return in;
 }
 
 void Sch001Controller::step(MonoTime now) noexcept {
   ++steps_;
+  foreign_sender_ = own_id_at_ && now - *own_id_at_ < kCardTimeout;
   TickInput in = build_input(now);
   ControllerCommand command;
   while (next_command(command)) {
@@ -243,9 +265,12 @@ void Sch001Controller::maybe_relevel(TickInput& in) noexcept {
 
 void Sch001Controller::update_faults(const TickInput& in, MonoTime now) noexcept {
   const bool started = start_grace_over(now);
-  // A failed endpoint is a fault at once; one that has not opened yet after the start grace.
+  // A failed endpoint is a fault at once, until the card is heard on a new one (one episode,
+  // one raise and one clear); one that has not opened yet after the start grace.
   set_fault(FaultCode::LinkFault,
-            in.card_silent || bus_fault_ || endpoint_failed_ || (started && !endpoint_up_), now);
+            in.card_silent || bus_fault_ || send_failures_ >= kSendFailuresForFault ||
+                foreign_sender_ || endpoint_lost_ || (started && !endpoint_up_),
+            now);
   set_fault(FaultCode::DriveFault, in.card_error && !in.card_silent, now);
   set_fault(FaultCode::InputsLost, started && !in.inputs.valid, now);
   set_fault(FaultCode::SafetyChain, in.inputs.valid && !in.inputs.safety_chain_closed, now);
@@ -257,7 +282,12 @@ void Sch001Controller::publish(MonoTime now) noexcept {
   fill_lift_snapshot(s, now, build_input(now).inputs);
   s.endpoint_up = endpoint_up_ && !bus_fault_;
   s.heard = link_.heard();
+  s.ever_heard = link_.ever_heard();
+  s.endpoint_lost = endpoint_lost_;
   s.silent = link_.silent();
+  s.send_failing = send_failures_ >= kSendFailuresForFault;
+  s.foreign_sender = foreign_sender_;
+  s.status_changes = status_changes_;
   s.timeout_enabled = link_.timeout_enabled();
   s.card = link_.status();
   s.single_unit = link_.unit_signals_valid();

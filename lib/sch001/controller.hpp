@@ -72,12 +72,13 @@ using lift::FaultCode;
 /// One line of explanation for a technician, in the card's terms.
 std::string_view fault_text(FaultCode code) noexcept;
 
+/// What the io thread must hear of, one event each. What can come at the bus's rate (the card's
+/// status changes, error frames, frames on our identifier) is counted in the snapshot instead:
+/// a flood of those must never push a travel or fault event out of the queue.
 struct ControllerEvent {
   enum class Kind : std::uint8_t {
     Link,          ///< `link`: first heard, silent, recovered
-    Card,          ///< the card's status byte changed (`card`)
     Travel,        ///< `travel`
-    BusError,      ///< `bus_error`: an error frame or a failed endpoint
     Endpoint,      ///< `endpoint_up`: the CAN endpoint opened or failed
     FaultRaised,   ///< `fault`
     FaultCleared,  ///< `fault`
@@ -86,13 +87,15 @@ struct ControllerEvent {
   Kind kind = Kind::Link;
   MonoTime at{};
   LinkChange link = LinkChange::None;
-  CardStatus card{};
   TravelEvent travel{};
-  can::ErrorReport bus_error{};
   bool endpoint_up = false;
   FaultCode fault = FaultCode::LinkFault;
   std::size_t floor = 0;
 };
+
+/// Card document 3c: the card sends its status every 100 ms and each one is answered; this many
+/// answers in a row that could not be sent (nobody takes our frames) are a link fault.
+inline constexpr std::uint32_t kSendFailuresForFault = 3;
 
 using lift::kMaxSnapshotCalls;
 
@@ -100,16 +103,21 @@ using lift::kMaxSnapshotCalls;
 struct ControllerSnapshot {
   MonoTime at{};
   std::uint64_t steps = 0;
-  bool endpoint_up = false;  ///< the CAN endpoint is open and working
-  bool heard = false;        ///< the card was heard since start
-  bool silent = false;       ///< the card timed out (3f)
+  bool endpoint_up = false;     ///< the CAN endpoint is open and working
+  bool heard = false;           ///< the card was heard on the current endpoint
+  bool ever_heard = false;      ///< the card was heard since start
+  bool endpoint_lost = false;   ///< the endpoint failed; the card is not heard on a new one yet
+  bool silent = false;          ///< the card timed out (3f)
+  bool send_failing = false;    ///< kSendFailuresForFault answers in a row could not be sent
+  bool foreign_sender = false;  ///< another node sent on our identifier in the last 10 s (1.6)
+  std::uint64_t status_changes = 0;  ///< the card's status byte changed (journal: card_status)
   bool timeout_enabled = true;
   std::optional<CardStatus> card;
   bool single_unit = true;
   CardLinkCounters counters{};
   std::uint64_t bus_errors = 0;
   can::ErrorReport last_bus_error{};
-  CommandBits bits_sent{};  ///< the command byte of the last answer
+  CommandBits bits_sent{};  ///< the command byte of the last answer that went out
   std::uint8_t current_floor_sent = 0;
   std::uint8_t destination_floor_sent = 0;
   bool motor_on = false;
@@ -160,6 +168,7 @@ class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore
   void on_bus_error(const can::ErrorReport& report, MonoTime now) noexcept override;
   void on_endpoint(bool up, MonoTime now) noexcept override;
   void on_tick(MonoTime now) noexcept override;
+  void on_sent(bool delivered, MonoTime now) noexcept override;
 
   /// Direct access for single-threaded tests (and travel()).
   const CardLink& link() const noexcept { return link_; }
@@ -181,9 +190,14 @@ class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore
 
   // CAN-thread state.
   bool endpoint_up_ = false;
-  bool endpoint_failed_ = false;  ///< the endpoint failed and has not reopened
-  bool bus_fault_ = false;        ///< an error frame said bus-off, error passive, no ACK, ...
-  CommandBits bits_sent_{};       ///< of the last answer
+  bool endpoint_lost_ = false;  ///< the endpoint failed; the card is not heard on a new one yet
+  bool bus_fault_ = false;      ///< an error frame said bus-off, error passive, no ACK, ...
+  std::uint32_t send_failures_ = 0;    ///< answers in a row that could not be sent
+  std::optional<MonoTime> own_id_at_;  ///< the last frame another node sent on our identifier
+  bool foreign_sender_ = false;        ///< within kCardTimeout of own_id_at_
+  std::uint64_t status_changes_ = 0;
+  std::optional<can::Frame> answer_;  ///< the last answer, until on_sent() says it went out
+  CommandBits bits_sent_{};           ///< of the last answer that went out
   std::uint8_t current_sent_ = 0;
   std::uint8_t destination_sent_ = 0;
   TickOutput last_output_{};

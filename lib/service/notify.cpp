@@ -3,10 +3,12 @@
 #include "service/notify.hpp"
 
 #include <sys/socket.h>
+#include <sys/un.h>
 #include <systemd/sd-daemon.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstddef>
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
@@ -117,6 +119,19 @@ int pick_listen_fd(const std::vector<ListenFd>& fds, std::string_view name) {
   // in systemd and "unknown" in systemd-socket-activate: take it when it is the only one.
   if (fds.size() == 1 && usable(fds.front().fd)) return fds.front().fd;
   return -1;
+}
+
+std::optional<std::string> unix_socket_path(int fd) {
+  sockaddr_un address{};
+  socklen_t length = sizeof address;
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-reinterpret-cast): the sockets API
+  if (::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) != 0 ||
+      address.sun_family != AF_UNIX) {
+    return std::nullopt;
+  }
+  const std::size_t offset = offsetof(sockaddr_un, sun_path);
+  if (length <= offset || address.sun_path[0] == '\0') return std::string();  // unnamed, abstract
+  return std::string(address.sun_path, strnlen(address.sun_path, length - offset));
 }
 
 void close_unused_listen_fds(const std::vector<ListenFd>& fds, int keep) {

@@ -73,6 +73,10 @@ std::vector<ListenFd> listen_fds_from_environment();
 /// the caller's to close (close_unused_listen_fds).
 int pick_listen_fd(const std::vector<ListenFd>& fds, std::string_view name);
 
+/// The path a Unix socket is bound to: "" for an unnamed (or abstract) one, nullopt when `fd` is
+/// not a Unix socket.
+std::optional<std::string> unix_socket_path(int fd);
+
 /// Closes every passed descriptor except `keep`, logging each one it closes.
 void close_unused_listen_fds(const std::vector<ListenFd>& fds, int keep);
 

@@ -78,6 +78,9 @@ class Sch001CardSim {
   void set_p1(bool on) noexcept { state_.status.p1 = on; }
   void set_p2(bool on) noexcept { state_.status.p2 = on; }
   void set_silent(bool on) noexcept { state_.silent = on; }
+  /// The connection to the controller went away (or none was there when poll() sent): a status
+  /// frame that never reached a controller is owed no answer (3c).
+  void connection_lost() noexcept { answer_owed_ = false; }
   void set_cold_oil(bool on) noexcept { state_.cold_oil = on; }
   void set_sink(double mm_per_s) noexcept { state_.sink_mm_per_s = mm_per_s; }
   /// Moves the stationary car (a drift); ignored while it moves.

@@ -123,6 +123,58 @@ ChildResult run_as(const std::string& path, uid_t uid, gid_t gid, std::vector<gi
   return result;
 }
 
+/// A socket connected by a child running as uid/gid/groups, handed back over SCM_RIGHTS: the
+/// server sees the child's credentials, the test talks through it. -1 on failure.
+int connect_as(const std::string& path, uid_t uid, gid_t gid, std::vector<gid_t> groups) {
+  int pair[2];
+  if (::socketpair(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0, pair) != 0) return -1;
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (::setgroups(groups.size(), groups.data()) != 0 || ::setgid(gid) != 0 ||
+        ::setuid(uid) != 0) {
+      ::_exit(3);
+    }
+    const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+    if (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) ::_exit(4);
+    char byte = 'x';
+    iovec iov{&byte, 1};
+    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
+    msghdr msg{};
+    msg.msg_iov = &iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = control;
+    msg.msg_controllen = sizeof control;
+    cmsghdr* c = CMSG_FIRSTHDR(&msg);
+    c->cmsg_level = SOL_SOCKET;
+    c->cmsg_type = SCM_RIGHTS;
+    c->cmsg_len = CMSG_LEN(sizeof(int));
+    std::memcpy(CMSG_DATA(c), &fd, sizeof fd);
+    ::_exit(::sendmsg(pair[1], &msg, 0) == 1 ? 0 : 5);
+  }
+  ::close(pair[1]);
+  char byte = 0;
+  iovec iov{&byte, 1};
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
+  msghdr msg{};
+  msg.msg_iov = &iov;
+  msg.msg_iovlen = 1;
+  msg.msg_control = control;
+  msg.msg_controllen = sizeof control;
+  int fd = -1;
+  if (::recvmsg(pair[0], &msg, 0) == 1) {
+    if (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr && c->cmsg_type == SCM_RIGHTS) {
+      std::memcpy(&fd, CMSG_DATA(c), sizeof fd);
+    }
+  }
+  ::close(pair[0]);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return fd;
+}
+
 class ApiAccess : public ServerFixture {
  protected:
   void SetUp() override {
@@ -198,6 +250,27 @@ TEST_F(ApiAccess, SocketBelongsToTheConfiguredGroup) {
   struct stat st {};
   ASSERT_EQ(::stat(socket_path().c_str(), &st), 0);
   EXPECT_EQ(st.st_gid, socket_gid_);
+}
+
+TEST_F(ApiAccess, AReloadThatTakesReadAccessAwayEndsTheWatchStreamSayingWhy) {
+  Client reader(connect_as(socket_path(), kNobody, socket_gid_, {socket_gid_}));
+  ASSERT_TRUE(reader.connected());
+  ASSERT_TRUE(reader.read_hello());
+  ASSERT_EQ(reader.call({{"cmd", "watch"}, {"enable", true}}).at("ok"), true);
+  ASSERT_TRUE(reader.read_json());  // the state event
+  ServerConfig next = default_config();
+  next.socket_group = "nogroup";
+  next.read_group = "users";  // nobody in nogroup only: no read access any more
+  next.control_group = "users";
+  on_io([&] { server_->reconfigure(next); });
+  const auto ended = reader.read_json();
+  ASSERT_TRUE(ended);
+  EXPECT_EQ(ended->at("event"), "watch_ended");
+  EXPECT_NE(ended->at("data").at("reason").get<std::string>().find("revoked"), std::string::npos);
+  on_io([this] { server_->publish("fault", {{"code", "x"}}); });
+  EXPECT_FALSE(reader.read_line(200ms)) << "events still reach a user without read access";
+  EXPECT_EQ(reader.call({{"cmd", "status"}}).at("error").at("code"), "forbidden");
+  EXPECT_EQ(counters().watchers, 0U);
 }
 
 }  // namespace

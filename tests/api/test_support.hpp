@@ -40,6 +40,8 @@ class Client {
       fd_ = -1;
     }
   }
+  /// Takes a connected socket (e.g. one a child connected as another user).
+  explicit Client(int connected_fd) : fd_(connected_fd) {}
   ~Client() {
     if (fd_ >= 0) ::close(fd_);
   }

@@ -3,7 +3,14 @@
 // socketpair reach the position source through a CAN runner (the same read path as SocketCAN).
 #include <gtest/gtest.h>
 
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
 #include <chrono>
+#include <filesystem>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -120,6 +127,54 @@ TEST(CanEncoder, FramesReachItThroughACanRunner) {
   EXPECT_TRUE(stale);
   runner.stop();
   EXPECT_GE(runner.counters().frames_received, 1U);
+}
+
+/// Counts what a CAN runner tells its engine.
+class CountingEngine final : public rt::CanEngine {
+ public:
+  std::optional<Frame> on_frame(const Frame&, MonoTime) noexcept override { return std::nullopt; }
+  void on_bus_error(const ErrorReport&, MonoTime) noexcept override {}
+  void on_endpoint(bool up, MonoTime) noexcept override { (up ? opened : failed).fetch_add(1); }
+  void on_tick(MonoTime) noexcept override {}
+  std::atomic<int> opened{0};
+  std::atomic<int> failed{0};
+};
+
+TEST(CanRunnerReopen, BacksOffWhileTheEndpointFailsRightAfterOpening) {
+  // Like a CAN interface that is down (bind succeeds, the first read fails with ENETDOWN): a
+  // listener that takes each connection and closes it at once. The runner must keep doubling
+  // its wait (100, 200, 400, 800 ms ...), not start again at 100 ms after each good open.
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("liftd-can-reopen-" + std::to_string(::getpid())))
+          .string();
+  auto listener = listen_unix(path);
+  ASSERT_TRUE(listener) << listener.error().what;
+  std::atomic<bool> done{false};
+  std::thread closer([&] {
+    while (!done) {
+      pollfd p{listener.value(), POLLIN, 0};
+      if (::poll(&p, 1, 10) == 1) ::close(::accept4(listener.value(), nullptr, nullptr, 0));
+    }
+  });
+  CountingEngine engine;
+  rt::CanRunnerConfig config;
+  config.endpoint = "unix:" + path;
+  config.rt.priority = 0;
+  config.rt.lock_memory = false;
+  rt::CanRunner runner(config, engine);
+  ASSERT_EQ(runner.start(), 0);
+  // Wait for the failures a fixed 100 ms retry would reach in about 1 s, or 2.5 s.
+  const MonoTime until = mono_now() + 2500ms;
+  while (mono_now() < until && engine.failed < 10) std::this_thread::sleep_for(10ms);
+  runner.stop();
+  done = true;
+  closer.join();
+  ::close(listener.value());
+  ::unlink(path.c_str());
+  // In 2.5 s with doubling: opens at about 0, 0.1, 0.3, 0.7 and 1.5 s (a loaded machine only
+  // makes it fewer). Without doubling: 10 failures in about 1 s.
+  EXPECT_GE(engine.failed, 2);
+  EXPECT_LE(engine.failed, 6) << "the reopen backoff started over after each open";
 }
 
 }  // namespace

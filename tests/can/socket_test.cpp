@@ -67,6 +67,29 @@ TEST(CanSocketPair, TellsWhenThePeerCloses) {
   EXPECT_NE(a.write(make_frame(0x551, Bytes{1})), 0) << "writing to a closed peer fails";
 }
 
+TEST(CanSocketPair, AnEmptyRecordIsARecordNotTheEndOfTheConnection) {
+  int fds[2];
+  ASSERT_EQ(::socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0, fds), 0);
+  CanSocket reader = CanSocket::adopt(fds[0], {0x581});
+  ASSERT_EQ(::send(fds[1], "", 0, 0), 0);
+  ASSERT_EQ(::send(fds[1], "", 0, 0), 0);
+  can_frame cf{};
+  cf.can_id = 0x581;
+  cf.len = 2;
+  cf.data[0] = 0x61;
+  cf.data[1] = 0x02;
+  ASSERT_EQ(::send(fds[1], &cf, sizeof cf, 0), static_cast<ssize_t>(sizeof cf));
+  // Two empty records (counted as malformed, the connection kept), then the frame.
+  const Received r = read_one(reader);
+  ASSERT_EQ(r.kind, Received::Kind::Frame) << "an empty record was taken for end of file";
+  EXPECT_EQ(r.frame, make_frame(0x581, Bytes{0x61, 0x02}));
+  EXPECT_EQ(reader.drops().malformed, 2U);
+  // An empty record and then the peer's close: the connection ends.
+  ASSERT_EQ(::send(fds[1], "", 0, 0), 0);
+  ::close(fds[1]);
+  EXPECT_EQ(read_one(reader).kind, Received::Kind::Closed);
+}
+
 TEST(CanSocketPair, DropsWhatIsNotAWantedClassicFrame) {
   int fds[2];
   ASSERT_EQ(::socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0, fds), 0);

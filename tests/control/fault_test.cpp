@@ -149,6 +149,26 @@ TEST(FaultRecovery, LinkComesBackAndTravelsAgain) {
   EXPECT_NEAR(rig.sim.position_mm(), 0.0, 2.0);
 }
 
+TEST(FaultRecovery, AReopenedPortStartsNothingOnTheStatusFromBeforeTheLoss) {
+  Rig rig;
+  ASSERT_TRUE(rig.warm_up());
+  ASSERT_TRUE(rig.link_up());
+  // The serial port is lost and opened again; the drive behind it stays silent. Its last status
+  // (S0 = 1) is from the old port: no travel may start on it (DCP 7.3: the link is in fault
+  // until good replies come, then the handshake runs again).
+  rig.controller.on_port_lost(rig.now);
+  rig.controller.on_port_ready(rig.now);
+  rig.drop_replies = true;
+  const std::size_t before = rig.frames.size();
+  const CommandReply r = rig.command(TravelCommand{2, std::nullopt, std::nullopt, false});
+  EXPECT_NE(r.code, ReplyCode::Ok) << r.detail;
+  rig.run(300ms);
+  for (std::size_t i = before; i < rig.frames.size(); ++i) {
+    EXPECT_EQ(rig.frames[i][0] & 0x01, 0) << "drive enable (B0) in frame " << i;
+  }
+  EXPECT_EQ(rig.raised(FaultCode::LinkFault), 1U);
+}
+
 TEST(FaultRecovery, RefusesTravelWhileS3AndNamesIt) {
   Rig rig;
   ASSERT_TRUE(rig.warm_up());

@@ -374,6 +374,61 @@ TEST(DaemonSocketActivation, AClientConnectingDuringARestartIsQueuedNotRefused) 
   EXPECT_TRUE(exists(socket));  // systemd's file: liftd never removes it
 }
 
+TEST(DaemonSocketActivation, RefusesPassedSocketsItCannotServeAndLeavesTheirFilesAlone) {
+  const std::string activate = "/usr/bin/systemd-socket-activate";
+  if (::access(activate.c_str(), X_OK) != 0) {
+    GTEST_SKIP() << activate << " is not installed (Debian package systemd)";
+  }
+  struct Case {
+    const char* what;
+    std::vector<std::string> listen;  // paths under the test's directory, in order
+    std::vector<std::string> names;   // --fdname (empty: none)
+    std::vector<std::string> said;    // in liftd's error
+  };
+  const std::vector<Case> cases = {
+      {"a socket bound elsewhere than api.socket",
+       {"other.sock"},
+       {"api"},
+       {"/other.sock", "but api.socket is", "/api.sock", "ListenStream="}},
+      {"two unnamed sockets", {"one.sock", "two.sock"}, {}, {"passed 2 socket(s)", "\"api\""}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    TestSocket notify;
+    const std::string config = write_sim_config(notify.dir(), "info");
+    std::vector<std::string> args = {activate};
+    for (const auto& path : c.listen) args.push_back("--listen=" + notify.dir() + "/" + path);
+    for (const auto& name : c.names) args.push_back("--fdname=" + name);
+    args.push_back("-E");
+    args.push_back("RUNTIME_DIRECTORY=" + notify.dir());
+    for (const auto& variable : base_env()) {
+      if (!starts_with(variable, "PATH=")) {
+        args.push_back("-E");
+        args.push_back(variable);
+      }
+    }
+    args.push_back("/bin/sh");
+    args.push_back("-c");
+    args.push_back("LISTEN_PID=$$ exec " + kLiftd + " --simulate --config " + config);
+    Process manager(args, base_env(), notify.dir(), "manager");
+    const std::string first = notify.dir() + "/" + c.listen.front();
+    const auto end = std::chrono::steady_clock::now() + kStartupLimit;
+    while (!exists(first) && std::chrono::steady_clock::now() < end) {
+      std::this_thread::sleep_for(10ms);
+    }
+    ASSERT_TRUE(exists(first)) << manager.err();
+    testing::ApiClient trigger(first);  // systemd-socket-activate starts liftd on a connection
+    const auto code = manager.wait(kStartupLimit);
+    ASSERT_TRUE(code.has_value()) << "liftd ran on sockets it cannot serve";
+    EXPECT_NE(*code, 0);
+    for (const auto& text : c.said) EXPECT_THAT(manager.err(), HasSubstr(text));
+    for (const auto& path : c.listen) {
+      EXPECT_TRUE(exists(notify.dir() + "/" + path)) << "liftd removed systemd's " << path;
+    }
+    EXPECT_FALSE(exists(notify.dir() + "/api.sock")) << "liftd made a socket of its own";
+  }
+}
+
 TEST(DaemonReload, SighupAppliesWhatItCanAndNamesWhatNeedsARestart) {
   TestSocket notify;
   const std::string config = write_sim_config(notify.dir(), "info");

@@ -174,6 +174,8 @@ class Lift {
   const std::string& setup_error() const { return error_; }
   /// The watching client (replies and every event).
   Client& api() { return *client_; }
+  /// The API socket's path (for more clients).
+  const std::string& socket() const { return socket_; }
   /// The daemon's stderr so far (for failure messages).
   std::string log() const { return daemon_->err(); }
   /// Sends `signal_number` to the daemon and waits for it to exit: its exit code, or nullopt

@@ -1,7 +1,7 @@
 // The hydraulic lift end to end: `liftd --simulate` with drive.kind "sch001" as a process, the
-// controller and the simulated SCH001 card on the two ends of a CAN socketpair, driven through
-// the API. Every fault ends the travel at once, reported once, and no travel command goes out
-// in any frame after it (card document 3d, 3e).
+// controller and the simulated SCH001 card on a Unix socket in its runtime directory, driven
+// through the API. Every fault ends the travel at once, reported once, and no travel command goes
+// out in any frame after it (card document 3d, 3e).
 #include <gtest/gtest.h>
 
 #include "e2e/harness.hpp"
@@ -199,6 +199,45 @@ TEST_F(HydraulicTest, BusOffMidTravelEndsIt) {
   start_long_travel();
   ASSERT_TRUE(lift_->call({{"cmd", "sim"}, {"action", "bus_off"}}).value("ok", false));
   expect_ended_by("bus_fault");
+}
+
+TEST_F(HydraulicTest, AReconnectedSilentCardIsUnknownUntilItSpeaksAgain) {
+  ASSERT_TRUE(lift_->call({{"cmd", "sim"}, {"action", "card_silence"}}).value("ok", false));
+  ASSERT_TRUE(lift_->call({{"cmd", "sim"}, {"action", "card_reconnect"}}).value("ok", false));
+  json s;
+  for (int i = 0; i < 100; ++i) {
+    s = lift_->status();
+    if (s["link"]["state"] == "init") break;
+    lift_->api().drain(50ms);
+  }
+  EXPECT_EQ(s["link"]["state"], "init") << s.dump();
+  EXPECT_NE(s["drive"]["state"], "ready") << s.dump();
+  EXPECT_TRUE(s["sch001"]["card"].is_null()) << "the old connection's status was kept";
+  const json refused = lift_->call({{"cmd", "travel"}, {"floor", 2}});
+  EXPECT_EQ(refused["error"]["code"], "not_ready") << refused.dump();
+  const std::int64_t silent_since = mono_us();
+  ASSERT_TRUE(
+      lift_->call({{"cmd", "sim"}, {"action", "card_silence"}, {"on", false}}).value("ok", false));
+  for (int i = 0; i < 100 && lift_->status()["drive"]["state"] != "ready"; ++i) {
+    lift_->api().drain(50ms);
+  }
+  EXPECT_EQ(lift_->status()["link"]["state"], "up");
+  // The first answers on the new connection carry no travel bit, and the loss was one fault.
+  const json trace = lift_->call({{"cmd", "trace"}, {"count", 20}});
+  for (const auto& f : trace["result"]["frames"]) {
+    if (f["t_us"].get<std::int64_t>() >= silent_since) {
+      EXPECT_EQ(command_byte(f), 0) << f.dump();
+    }
+  }
+  EXPECT_EQ(
+      lift_->count_events(
+          "fault", [](const json& d) { return d["code"] == "link_fault" && d["active"] == true; }),
+      1);
+  EXPECT_EQ(
+      lift_->count_events(
+          "fault", [](const json& d) { return d["code"] == "link_fault" && d["active"] == false; }),
+      1);
+  travel_to(2);
 }
 
 // The card simulator as a process of its own on a Unix socket (can.interface "unix:PATH"), the

@@ -281,6 +281,7 @@ TEST(Catalog, EventAndFieldPickTheMessageId) {
       {"fault_raised", {{"code", "inputs_lost"}}, "inputs_lost"},
       {"fault_raised", {}, ""},
       {"card_fault", {}, "card_fault"},
+      {"own_id_in_use", {}, "can_own_id_in_use"},
       {"uss_slave_fault", {}, "uss_slave_fault"},
       {"travel_finished", {}, ""},
       {"", {}, ""},

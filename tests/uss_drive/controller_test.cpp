@@ -122,6 +122,35 @@ TEST(UssController, ReplyFailuresEndTheTravelAtTheConfiguredCount) {
   EXPECT_EQ(bus.travel_events().size(), 2U) << "reported once";
 }
 
+TEST(UssController, AfterALostPortOldStatusWordsStartNothingAndTheLossIsOneFault) {
+  Bus bus;
+  ASSERT_EQ(bus.controller.snapshot().faults[static_cast<std::size_t>(FaultCode::LinkFault)],
+            false);
+  // The port goes away and is reopened three times (a flaky adapter); the drive stays silent.
+  bus.drive_answers = false;
+  for (int i = 0; i < 3; ++i) {
+    bus.master.reset_link(bus.now);  // what the runner does on a loss and on a reopen
+    bus.controller.on_port(false, bus.now);
+    bus.now += milliseconds(200);
+    bus.master.reset_link(bus.now);
+    bus.controller.on_port(true, bus.now);
+    bus.exchange();
+  }
+  EXPECT_EQ(bus.controller.snapshot().zsw, 0) << "a status word from before the loss is read";
+  const CommandReply refused = bus.command(7, TravelCommand{2, SpeedName::V4});
+  EXPECT_NE(refused.code, ReplyCode::Ok) << refused.detail;
+  EXPECT_EQ(bus.count(ControllerEvent::Kind::FaultRaised, FaultCode::LinkFault), 1);
+  EXPECT_EQ(bus.count(ControllerEvent::Kind::FaultCleared, FaultCode::LinkFault), 0)
+      << "a reopen without an answer ended the fault";
+  // The drive answers on the new port: the fault ends once, a travel may start.
+  bus.drive_answers = true;
+  bus.exchange();
+  bus.exchange();
+  EXPECT_EQ(bus.count(ControllerEvent::Kind::FaultCleared, FaultCode::LinkFault), 1);
+  ASSERT_TRUE(bus.run_until([&] { return bus.stw_sent.back() == 0x047E; }, 2000));
+  EXPECT_EQ(bus.command(8, TravelCommand{2, SpeedName::V4}).code, ReplyCode::Ok);
+}
+
 TEST(UssController, DriveFaultEndsTheTravelAndDriveResetAcknowledgesOnARisingEdge) {
   Bus bus;
   bus.post(1, TravelCommand{3, SpeedName::V4});

@@ -799,5 +799,25 @@ TEST(UssMasterLink, ResetLinkDropsTheExchangeAndRestartsTheStartPause) {
   EXPECT_EQ(bus.master.slave(5).failures, 0U) << "a lost port is not the slave's fault";
 }
 
+TEST(UssMasterLink, AfterALostPortTheSlavesStatusWordsAreVoidUntilTheyAnswerAgain) {
+  Bus bus(one_slave());
+  const std::vector<std::uint16_t> out = {stw::kOn | stw::kNoOff2 | stw::kNoOff3, 0x2000};
+  bus.master.set_pzd(5, out);
+  bus.send();
+  bus.reply(idle_reply(5, PkwLength::Three, {0x0637, 0x1FFF}));
+  ASSERT_EQ(bus.master.slave(5).pzd_in_count, 2);
+  ASSERT_TRUE(bus.master.slave(5).responding);
+  bus.master.reset_link(bus.t + 1ms);  // the port went away and came back
+  const SlaveState& s = bus.master.slave(5);
+  EXPECT_EQ(s.pzd_in_count, 0) << "a status word from before the loss would still be read";
+  EXPECT_EQ(s.pzd_in[0], 0);
+  EXPECT_FALSE(s.responding);
+  EXPECT_TRUE(s.heard) << "heard once since start stays true";
+  bus.send();
+  bus.reply(idle_reply(5, PkwLength::Three, {0x0237, 0}));
+  EXPECT_EQ(bus.master.slave(5).pzd_in_count, 2);
+  EXPECT_EQ(bus.master.slave(5).pzd_in[0], 0x0237);
+}
+
 }  // namespace
 }  // namespace liftd::uss

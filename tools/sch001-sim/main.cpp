@@ -213,6 +213,9 @@ int main(int argc, char** argv) {
   }
   std::fflush(stdout);
   MonoTime last_status = mono_now();
+  // A failed interface is tried again this often (what liftd survives, the card survives too).
+  constexpr auto kReopenPeriod = std::chrono::milliseconds(200);
+  MonoTime reopen_at{};
   std::string pending_line;
   while (g_stop == 0) {
     pollfd fds[3] = {
@@ -248,11 +251,27 @@ int main(int argc, char** argv) {
       }
       if (r.kind == liftd::can::Received::Kind::Closed ||
           r.kind == liftd::can::Received::Kind::Failed) {
-        std::printf("sch001-sim: controller gone\n");
+        if (listener >= 0) {
+          std::printf("sch001-sim: controller gone\n");
+        } else {  // the interface went down or away: a card on the bus waits for it
+          std::printf("sch001-sim: %s failed (%s); reopening\n", interface.c_str(),
+                      std::strerror(r.errno_value));
+          reopen_at = now + kReopenPeriod;
+        }
         std::fflush(stdout);
         peer.reset();
       }
       break;
+    }
+    if (!peer && listener < 0 && now >= reopen_at) {
+      auto s = liftd::can::CanSocket::open(interface, {config.ids.to_card});
+      if (s) {
+        peer.emplace(std::move(s.value()));
+        std::printf("sch001-sim: %s open again\n", interface.c_str());
+        std::fflush(stdout);
+      } else {
+        reopen_at = now + kReopenPeriod;
+      }
     }
     if (peer) {  // the card talks only when a controller is there to answer
       if (const auto frame = card.poll(now)) (void)peer->write(*frame);

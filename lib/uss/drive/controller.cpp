@@ -75,7 +75,9 @@ void UssController::after_exchange(MonoTime now) noexcept {
 
 void UssController::on_port(bool up, MonoTime now) noexcept {
   port_up_ = up;
-  port_failed_ = !up;
+  // A lost port stays a link fault until the drive answers on the reopened one (update_faults):
+  // one episode, one raise and one clear, however often the port is reopened meanwhile.
+  if (!up) port_failed_ = true;
   ControllerEvent e;
   e.kind = ControllerEvent::Kind::Port;
   e.at = now;
@@ -344,6 +346,7 @@ void UssController::update_faults(const DriveInput& in, MonoTime now) noexcept {
   const bool started = start_grace_over(now);
   const SlaveState& s = master_.slave(config_.drive_address);
   const bool failing = s.heard && s.consecutive_failures >= config_.link_fault_replies;
+  if (port_failed_ && port_up_ && s.responding) port_failed_ = false;  // heard on the new port
   // A lost port or a drive missing its replies is a fault at once; a port not open or a drive
   // not heard yet after the start grace.
   set_fault(FaultCode::LinkFault, port_failed_ || failing || (started && (!port_up_ || !s.heard)),

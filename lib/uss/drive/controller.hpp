@@ -238,7 +238,7 @@ class UssController final : public rt::UssHooks, public lift::ControllerCore<Uss
 
   // USS-thread state.
   bool port_up_ = false;
-  bool port_failed_ = false;  ///< the port was lost and has not reopened
+  bool port_failed_ = false;  ///< the port was lost; the drive has not answered on a new one yet
   DriveOutput last_output_{};
   std::int16_t setpoint_raw_ = 0;
   ProfileState last_state_ = ProfileState::NotReadyToSwitchOn;

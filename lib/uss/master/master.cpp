@@ -341,6 +341,14 @@ void Master::reset_link(MonoTime now) noexcept {
   }
   rx_.restart();
   line_free_ = now;
+  // What the slaves answered before is void: the line (or the device behind it) may be another
+  // now. A slave's process data (its status word, C 5.1) counts again only once it answers.
+  for (Slot& slot : slots_) {
+    slot.state.responding = false;
+    slot.state.pzd_in = {};
+    slot.state.pzd_in_count = 0;
+    slot.state.consecutive_failures = 0;
+  }
 }
 
 void Master::finish_reply(MonoTime at) noexcept {

@@ -256,8 +256,9 @@ class Master {
   /// Time supervision: ends the exchange once now >= deadline().
   void on_time(MonoTime now) noexcept;
   /// The port (re)opened or went away: an exchange in progress is dropped (its PKW poll is not
-  /// counted, a mirror or special waiting for its reply fails) and the line counts as quiet from
-  /// `now`, so the next telegram keeps a full start pause.
+  /// counted, a mirror or special waiting for its reply fails), the line counts as quiet from
+  /// `now`, so the next telegram keeps a full start pause, and every slave's process data from
+  /// before is void (not responding, no PZD) until it answers again.
   void reset_link(MonoTime now) noexcept;
   /// How the last exchange ended.
   ExchangeOutcome last_outcome() const noexcept { return last_outcome_; }

@@ -1,0 +1,260 @@
+// The SCH001 controller under attack, with a fake clock: a reopened CAN endpoint voids the old
+// card status (no travel on a stale RDY), no reply is ever lost to a full queue, fault raises and
+// clears stay paired when the event queue overflows, a lost endpoint is one fault however often
+// it is reopened, and the link faults the card document implies (another node on our
+// identifier, answers that cannot be sent) stop every travel command.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <vector>
+
+#include "sch001/controller.hpp"
+
+namespace liftd::sch001 {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr std::uint8_t kReady = 0x02;
+
+class StillCar final : public lift::PositionSource {
+ public:
+  std::optional<std::int64_t> position_mm(MonoTime) const noexcept override { return mm; }
+  std::optional<std::int64_t> mm = 0;
+};
+
+class Sch001ControllerTest : public ::testing::Test {
+ protected:
+  Sch001ControllerTest() : controller_(make_config(), position_, MonoTime{}) {
+    controller_.on_endpoint(true, now_);
+    send_inputs();
+  }
+  static ControllerConfig make_config() {
+    ControllerConfig config;
+    config.floors_mm = {0, 3000, 6000, 9000};
+    config.hydraulic.star_delta_ms = 200;
+    return config;
+  }
+  void send_inputs(bool chain_closed = true) {
+    lift::Inputs in;
+    in.valid = in.doors_closed = in.doors_locked = true;
+    in.safety_chain_closed = chain_closed;
+    ASSERT_TRUE(controller_.post({0, InputsCommand{in}}));
+  }
+  /// The card's status frame at the current time; the answer's command byte.
+  std::uint8_t status(std::uint8_t byte = kReady) {
+    const std::array<std::uint8_t, 2> bytes = {kStatusFrame, byte};
+    const auto answer = controller_.on_frame(can::make_frame(0x581, bytes), now_);
+    EXPECT_TRUE(answer);
+    if (!answer) return 0xFF;
+    controller_.on_sent(true, now_);
+    return answer->data[1];
+  }
+  /// 100 ms of the card's life: ticks and one status frame.
+  std::uint8_t run_100ms(std::uint8_t byte = kReady) {
+    for (int i = 0; i < 9; ++i) {
+      now_ += 10ms;
+      controller_.on_tick(now_);
+    }
+    now_ += 10ms;
+    send_inputs();
+    return status(byte);
+  }
+  std::vector<CommandReply> replies() {
+    std::vector<CommandReply> out;
+    CommandReply r;
+    while (controller_.poll_reply(r)) out.push_back(r);
+    return out;
+  }
+  std::vector<ControllerEvent> events() {
+    std::vector<ControllerEvent> out;
+    ControllerEvent e;
+    while (controller_.poll_event(e)) out.push_back(e);
+    return out;
+  }
+  int count(const std::vector<ControllerEvent>& es, ControllerEvent::Kind kind, FaultCode code) {
+    int n = 0;
+    for (const auto& e : es) n += e.kind == kind && e.fault == code;
+    return n;
+  }
+  /// The reply to one command posted now.
+  CommandReply ask(const CommandBody& body) {
+    (void)replies();
+    EXPECT_TRUE(controller_.post({++tag_, body}));
+    now_ += 10ms;
+    controller_.on_tick(now_);
+    const auto got = replies();
+    EXPECT_EQ(got.size(), 1U);
+    return got.empty() ? CommandReply{} : got.front();
+  }
+
+  StillCar position_;
+  Sch001Controller controller_;
+  MonoTime now_{};
+  std::uint32_t tag_ = 0;
+};
+
+TEST_F(Sch001ControllerTest, AReopenedEndpointVoidsTheOldCardStatus) {
+  for (int i = 0; i < 5; ++i) run_100ms();
+  ASSERT_TRUE(controller_.snapshot().heard);
+  // The card's connection drops and the endpoint reopens to a silent peer.
+  controller_.on_endpoint(false, now_);
+  now_ += 100ms;
+  controller_.on_endpoint(true, now_);
+  for (int i = 0; i < 10; ++i) {
+    now_ += 10ms;
+    controller_.on_tick(now_);
+  }
+  const ControllerSnapshot s = controller_.snapshot();
+  EXPECT_FALSE(s.heard) << "the old connection's status was kept";
+  EXPECT_FALSE(s.card.has_value());
+  const CommandReply r = ask(TravelCommand{2, Speed::Fast});
+  EXPECT_EQ(r.code, ReplyCode::NotReady) << r.detail;
+  // The new peer's first status (RDY) is answered without any travel bit: nothing was started.
+  EXPECT_EQ(status(kReady), 0x00);
+}
+
+TEST_F(Sch001ControllerTest, ALostEndpointIsOneFaultHoweverOftenItIsReopened) {
+  for (int i = 0; i < 5; ++i) run_100ms();
+  (void)events();
+  for (int i = 0; i < 20; ++i) {  // an interface that is down: opens, then fails at once
+    controller_.on_endpoint(false, now_);
+    now_ += 100ms;
+    controller_.on_endpoint(true, now_);
+    now_ += 10ms;
+    controller_.on_tick(now_);
+  }
+  auto es = events();
+  EXPECT_EQ(count(es, ControllerEvent::Kind::FaultRaised, FaultCode::LinkFault), 1);
+  EXPECT_EQ(count(es, ControllerEvent::Kind::FaultCleared, FaultCode::LinkFault), 0);
+  EXPECT_TRUE(controller_.snapshot().endpoint_lost);
+  run_100ms();  // the card is heard on the new endpoint
+  es = events();
+  EXPECT_EQ(count(es, ControllerEvent::Kind::FaultCleared, FaultCode::LinkFault), 1);
+  EXPECT_FALSE(controller_.snapshot().endpoint_lost);
+}
+
+TEST_F(Sch001ControllerTest, NoReplyIsLostWhenCommandsComeFasterThanRepliesAreRead) {
+  run_100ms();
+  // Clients pipeline calls while the io thread does not read replies: every command the
+  // controller took gets its reply; the rest are refused before they are queued.
+  int accepted = 0;
+  int refused = 0;
+  std::map<std::uint32_t, int> answered;
+  for (int round = 0; round < 40; ++round) {
+    for (int i = 0; i < 20; ++i) {
+      const bool add = (i % 2) == 0;
+      if (controller_.post({++tag_, CallCommand{add, static_cast<std::size_t>(1 + i % 3)}})) {
+        ++accepted;
+      } else {
+        ++refused;
+      }
+    }
+    now_ += 10ms;
+    controller_.on_tick(now_);
+    if (round % 8 == 7) {
+      for (const auto& r : replies()) ++answered[r.tag];
+    }
+  }
+  now_ += 10ms;
+  controller_.on_tick(now_);
+  for (const auto& r : replies()) ++answered[r.tag];
+  EXPECT_GT(refused, 0) << "the test never filled the queues";
+  EXPECT_EQ(static_cast<int>(answered.size()), accepted);
+  for (const auto& [tag, n] : answered) EXPECT_EQ(n, 1) << "tag " << tag;
+  EXPECT_EQ(controller_.lost_replies(), 0U);
+  EXPECT_EQ(controller_.replies_owed(), 0U);
+}
+
+TEST_F(Sch001ControllerTest, ACallToAFloorAlreadyQueuedIsOkAsOnEveryLift) {
+  run_100ms();
+  ASSERT_EQ(ask(CallCommand{true, 2}).code, ReplyCode::Ok);
+  const CommandReply again = ask(CallCommand{true, 2});
+  EXPECT_EQ(again.code, ReplyCode::Ok) << again.detail;
+  EXPECT_EQ(again.detail, "already queued");
+}
+
+TEST_F(Sch001ControllerTest, FaultRaisesAndClearsStayPairedWhenTheEventQueueOverflows) {
+  run_100ms();
+  (void)events();
+  // The safety chain flaps 1000 times while nobody reads events.
+  for (int i = 0; i < 1000; ++i) {
+    send_inputs(i % 2 == 1);
+    now_ += 1ms;
+    controller_.on_tick(now_);
+  }
+  send_inputs(false);  // ends open
+  now_ += 1ms;
+  controller_.on_tick(now_);
+  // Drain as the io thread would, with the controller stepping between polls.
+  std::vector<ControllerEvent> all;
+  for (int i = 0; i < 50; ++i) {
+    const auto es = events();
+    all.insert(all.end(), es.begin(), es.end());
+    now_ += 1ms;
+    send_inputs(false);
+    controller_.on_tick(now_);
+  }
+  bool active = false;
+  int raises = 0;
+  for (const auto& e : all) {
+    if (e.fault != FaultCode::SafetyChain) continue;
+    if (e.kind == ControllerEvent::Kind::FaultRaised) {
+      EXPECT_FALSE(active) << "raised twice in a row";
+      active = true;
+      ++raises;
+    } else if (e.kind == ControllerEvent::Kind::FaultCleared) {
+      EXPECT_TRUE(active) << "cleared without a raise";
+      active = false;
+    }
+  }
+  EXPECT_GE(raises, 1);
+  EXPECT_TRUE(active) << "the last report must be the truth: the chain is open";
+}
+
+TEST_F(Sch001ControllerTest, AnotherNodeOnOurIdentifierStopsTravelCommands) {
+  run_100ms();
+  const CommandReply started = ask(TravelCommand{2, Speed::Fast});
+  ASSERT_EQ(started.code, ReplyCode::Ok) << started.detail;
+  std::uint8_t bits = 0;
+  for (int i = 0; i < 5; ++i) bits = run_100ms();
+  ASSERT_NE(bits, 0) << "the travel should be running";
+  (void)events();
+  // A frame on 0x551, our identifier (card document 1.6).
+  const std::array<std::uint8_t, 4> foreign = {0x68, 0x01, 0x00, 0x03};
+  EXPECT_FALSE(controller_.on_frame(can::make_frame(0x551, foreign), now_));
+  EXPECT_EQ(run_100ms(), 0x00) << "travel bits while another node commands the card";
+  EXPECT_TRUE(controller_.snapshot().foreign_sender);
+  EXPECT_EQ(count(events(), ControllerEvent::Kind::FaultRaised, FaultCode::LinkFault), 1);
+  EXPECT_EQ(controller_.snapshot().counters.own_id, 1U);
+  for (int i = 0; i < 100; ++i) run_100ms();  // 10 s without another such frame
+  EXPECT_FALSE(controller_.snapshot().foreign_sender);
+  EXPECT_EQ(count(events(), ControllerEvent::Kind::FaultCleared, FaultCode::LinkFault), 1);
+}
+
+TEST_F(Sch001ControllerTest, AnswersThatCannotBeSentAreALinkFaultAndNotShownAsSent) {
+  run_100ms();
+  ASSERT_EQ(ask(TravelCommand{2, Speed::Fast}).code, ReplyCode::Ok);
+  for (int i = 0; i < 5; ++i) run_100ms();
+  const CommandBits delivered = controller_.snapshot().bits_sent;
+  ASSERT_TRUE(delivered.any());
+  (void)events();
+  // Nobody takes our frames: each answer fails to go out.
+  for (std::uint32_t i = 0; i < kSendFailuresForFault; ++i) {
+    now_ += 100ms;
+    const std::array<std::uint8_t, 2> bytes = {kStatusFrame, kReady};
+    ASSERT_TRUE(controller_.on_frame(can::make_frame(0x581, bytes), now_));
+    controller_.on_sent(false, now_);
+  }
+  const ControllerSnapshot s = controller_.snapshot();
+  EXPECT_TRUE(s.send_failing);
+  EXPECT_EQ(s.bits_sent, delivered) << "status shows bits that were never delivered";
+  const auto es = events();
+  EXPECT_EQ(count(es, ControllerEvent::Kind::FaultRaised, FaultCode::LinkFault), 1);
+  EXPECT_EQ(controller_.snapshot().travel_kind, TravelKind::None) << "the travel went on";
+  EXPECT_EQ(status(kReady), 0x00);  // delivered again: no travel bit
+  EXPECT_FALSE(controller_.snapshot().send_failing);
+}
+
+}  // namespace
+}  // namespace liftd::sch001
