@@ -2,9 +2,13 @@
 // binary and count calls made on the cycle thread while counting is switched on.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <atomic>
 #include <cstdlib>
+#include <filesystem>
 #include <new>
+#include <string>
 #include <thread>
 
 #include "echo_engine.hpp"
@@ -59,9 +63,17 @@ TEST(RtCycleAlloc, NoAllocationOnTheCycleThreadAfterWarmUpNorAfterDeviceLoss) {
   ASSERT_TRUE(pty.ok());
   testing::FakeResponder responder(pty.value().master_fd(), std::chrono::microseconds(1500));
   ASSERT_EQ(responder.start(), 0);
+  // The runner opens the pty through a name of this test's own: once the pty is gone, its
+  // /dev/pts number is free for the next pty any other test on the machine creates, and a
+  // runner retrying that number would find a device again (a second "loss" that is not this
+  // test's). The name is removed before the pty goes, so every retry fails as it should.
+  const std::filesystem::path device = std::filesystem::temp_directory_path() /
+                                       ("liftd-alloc-test-" + std::to_string(::getpid()) + "-port");
+  std::filesystem::remove(device);
+  std::filesystem::create_symlink(pty.value().slave_path(), device);
   CountingEngine engine(50);
   CycleConfig config;
-  config.device_path = pty.value().slave_path();
+  config.device_path = device.string();
   config.thread.priority = 20;
   config.thread.lock_memory = false;
   // The spec's largest send window (DCP 7.2: 1.375 ms, the default): late wake-ups on a busy
@@ -82,9 +94,23 @@ TEST(RtCycleAlloc, NoAllocationOnTheCycleThreadAfterWarmUpNorAfterDeviceLoss) {
   EXPECT_EQ(heap_hooks::news.load(), 0U) << "operator new calls on the cycle thread";
 
   // Device loss: the loss path and the cycles without a port must not allocate either.
+  std::filesystem::remove(device);
   responder.stop();
   pty.value().close();
-  std::this_thread::sleep_for(milliseconds(300));
+  // Waits for the loss, then for 20 more cycles without a port (the retry path), however long
+  // a loaded machine takes for them.
+  const auto wait_for = [&](auto condition) {
+    for (int i = 0; i < 2000 && !condition(); ++i) std::this_thread::sleep_for(milliseconds(5));
+    return condition();
+  };
+  ASSERT_TRUE(wait_for([&] { return runner.stats().counters.port_losses >= 1; }));
+  const auto periods = [&] {
+    const CycleCounters c = runner.stats().counters;
+    return c.cycles + c.skipped_cycles;  // run or skipped: each a pass of the loss path
+  };
+  const std::uint64_t at_loss = periods();
+  ASSERT_TRUE(wait_for([&] { return periods() >= at_loss + 20; }))
+      << "the cycle goes on without its port";
   EXPECT_EQ(runner.stats().counters.port_losses, 1U);
   const std::uint64_t mallocs = heap_hooks::mallocs.load();
   const std::uint64_t news = heap_hooks::news.load();
