@@ -173,8 +173,8 @@ struct Verdict {
       << " unanswered, " << extra_answers << " extra answers; " << refused_statuses
       << " with ERR or without RDY, " << travel_bit_breaks << " answered with a travel bit";
     if (!l.empty()) {
-      o << "; answer latency p50 " << l[l.size() / 2] / 1000.0 << " ms, max " << l.back() / 1000.0
-        << " ms";
+      o << "; answer latency p50 " << static_cast<double>(l[l.size() / 2]) / 1000.0 << " ms, max "
+        << static_cast<double>(l.back()) / 1000.0 << " ms";
     }
     return o.str();
   }
@@ -241,39 +241,58 @@ class Machine {
  public:
   Machine(const std::string& api_socket, std::function<std::optional<double>()> position)
       : api_socket_(api_socket), position_(std::move(position)) {
-    thread_ = std::thread([this] { run(); });
+    encoder_thread_ = std::thread([this] { encoder(); });
+    inputs_thread_ = std::thread([this] { inputs(); });
   }
   ~Machine() {
     stop_ = true;
-    thread_.join();
+    encoder_thread_.join();
+    inputs_thread_.join();
   }
   /// Stops or resumes the encoder's frames.
   void encoder_silent(bool silent) { silent_ = silent; }
   /// The newest position sent.
   double last_mm() const { return last_mm_.load(); }
+  /// The longest time between two encoder frames sent (the guest's scheduling, for messages).
+  std::string feed() const {
+    return "encoder frames sent: " + std::to_string(sent_.load()) + ", longest gap " +
+           std::to_string(max_gap_ms_.load()) + " ms, failed writes " +
+           std::to_string(failed_.load());
+  }
 
  private:
-  void run() {
+  void encoder() {
     auto bus = can::CanSocket::open(can_interface(), {});
-    std::unique_ptr<Client> api;
-    auto next_inputs = Clock::now();
+    auto last = Clock::now();
     while (!stop_) {
       if (const auto mm = position_()) {
         last_mm_ = *mm;
-        if (bus && !silent_) (void)bus.value().write(encoder_frame(*mm));
-      }
-      if (Clock::now() >= next_inputs) {
-        if (!api || !api->connected()) api = std::make_unique<Client>(api_socket_);
-        if (api->connected()) {
-          (void)api->call({{"cmd", "inputs"},
-                           {"safety_chain", true},
-                           {"doors_closed", true},
-                           {"doors_locked", true}},
-                          1s);
+        if (bus && !silent_) {
+          if (bus.value().write(encoder_frame(*mm)) == 0) {
+            const auto now = Clock::now();
+            const auto gap = std::chrono::duration_cast<std::chrono::milliseconds>(now - last);
+            if (sent_.fetch_add(1) > 0 && gap.count() > max_gap_ms_) max_gap_ms_ = gap.count();
+            last = now;
+          } else {
+            ++failed_;
+          }
         }
-        next_inputs = Clock::now() + 100ms;
       }
       std::this_thread::sleep_for(10ms);
+    }
+  }
+  void inputs() {
+    std::unique_ptr<Client> api;
+    while (!stop_) {
+      if (!api || !api->connected()) api = std::make_unique<Client>(api_socket_);
+      if (api->connected()) {
+        (void)api->call({{"cmd", "inputs"},
+                         {"safety_chain", true},
+                         {"doors_closed", true},
+                         {"doors_locked", true}},
+                        1s);
+      }
+      std::this_thread::sleep_for(100ms);
     }
   }
 
@@ -282,7 +301,10 @@ class Machine {
   std::atomic<bool> stop_{false};
   std::atomic<bool> silent_{false};
   std::atomic<double> last_mm_{0.0};
-  std::thread thread_;
+  std::atomic<std::uint64_t> sent_{0}, failed_{0};
+  std::atomic<std::int64_t> max_gap_ms_{0};
+  std::thread encoder_thread_;
+  std::thread inputs_thread_;
 };
 
 /// `liftd --config FILE` (no --simulate) and a watching client.
@@ -319,6 +341,18 @@ class Daemon {
         }
       }
       std::this_thread::sleep_for(100ms);
+    }
+    return false;
+  }
+  /// Waits until no fault is active, resetting the ones the start left (the machine inputs
+  /// arrive only once the API listens, and a slow start may see them late: inputs_lost).
+  bool wait_no_faults(std::chrono::seconds limit = 20s) {
+    const auto end = Clock::now() + limit;
+    while (Clock::now() < end) {
+      const json s = status();
+      if (s.is_object() && s["faults"].is_array() && s["faults"].empty()) return true;
+      (void)call({{"cmd", "reset"}});
+      client_->drain(300ms);
     }
     return false;
   }
@@ -375,6 +409,7 @@ class HydraulicOnVcan : public ::testing::Test {
     machine_ = std::make_unique<Machine>(daemon_->socket(), [this] { return card_position(); });
     ASSERT_TRUE(daemon_->wait_up([](const json& s) { return s["car"]["floor"] == 0; }))
         << daemon_->log() << card_->out();
+    ASSERT_TRUE(daemon_->wait_no_faults()) << daemon_->status().dump() << daemon_->log();
     start_us_ = bus_now_us();
   }
   void TearDown() override {
@@ -424,12 +459,27 @@ class HydraulicOnVcan : public ::testing::Test {
     return std::stoi(out.substr(start + 1, at - start - 1));
   }
 
+  /// Requests a travel, waiting while liftd says not_ready (the machine inputs and the
+  /// encoder's first frames reach it from this test's threads, after start or a fault): the
+  /// reply it finally gave.
+  json request_travel(int floor) {
+    json r;
+    const auto end = Clock::now() + 15s;
+    do {
+      r = daemon_->call({{"cmd", "travel"}, {"floor", floor}});
+      if (r.value("ok", false) || r["error"]["code"] != "not_ready") break;
+      daemon_->api().drain(100ms);
+    } while (Clock::now() < end);
+    return r;
+  }
   void travel_to(int floor) {
-    const json r = daemon_->call({{"cmd", "travel"}, {"floor", floor}});
+    const json r = request_travel(floor);
     ASSERT_TRUE(r.value("ok", false)) << r.dump() << daemon_->log();
     const json end = daemon_->wait_travel_end(60s);
     ASSERT_TRUE(end.is_object()) << "no end of travel to " << floor << "\n" << daemon_->log();
-    ASSERT_EQ(end["data"]["event"], "finished") << end.dump() << daemon_->log();
+    ASSERT_EQ(end["data"]["event"], "finished") << end.dump() << "\n"
+                                                << machine_->feed() << "\n"
+                                                << daemon_->log();
     const json s = daemon_->status();
     EXPECT_EQ(s["car"]["floor"], floor) << s.dump();
     // The position reaches liftd through this test's encoder thread (10 ms steps, coarse in
@@ -437,7 +487,8 @@ class HydraulicOnVcan : public ::testing::Test {
     EXPECT_NEAR(s["car"]["position_mm"].get<double>(), 1200.0 * floor, 30.0);
   }
   void start_long_travel() {
-    ASSERT_TRUE(daemon_->call({{"cmd", "travel"}, {"floor", 2}}).value("ok", false));
+    const json r = request_travel(2);
+    ASSERT_TRUE(r.value("ok", false)) << r.dump() << daemon_->log();
     const auto end = Clock::now() + 30s;
     while (Clock::now() < end && machine_->last_mm() < 300) daemon_->api().drain(30ms);
     ASSERT_GE(machine_->last_mm(), 300) << daemon_->log();
@@ -447,7 +498,9 @@ class HydraulicOnVcan : public ::testing::Test {
     const json end = daemon_->wait_travel_end(limit);
     ASSERT_TRUE(end.is_object()) << daemon_->log();
     EXPECT_EQ(end["data"]["event"], "aborted") << end.dump();
-    EXPECT_EQ(end["data"]["cause"], cause) << end.dump();
+    EXPECT_EQ(end["data"]["cause"], cause) << end.dump() << "\n"
+                                           << machine_->feed() << "\n"
+                                           << daemon_->log();
     daemon_->api().drain(500ms);
     EXPECT_EQ(
         daemon_->count_events("travel", [](const json& d) { return d["event"] == "aborted"; }), 1);
@@ -491,6 +544,7 @@ TEST_F(HydraulicOnVcan, EveryFloorToEveryFloorUpAndDown) {
 
 TEST_F(HydraulicOnVcan, RdyDroppingMidTravelEndsIt) {
   start_long_travel();
+  if (HasFatalFailure()) return;
   card_command("rdy off");
   expect_aborted("drive_not_ready");
   daemon_->api().drain(1s);  // several more status frames without RDY
@@ -500,6 +554,7 @@ TEST_F(HydraulicOnVcan, RdyDroppingMidTravelEndsIt) {
 
 TEST_F(HydraulicOnVcan, ErrMidTravelEndsItAndIsAFault) {
   start_long_travel();
+  if (HasFatalFailure()) return;
   card_command("err on");
   expect_aborted("drive_fault");
   EXPECT_EQ(daemon_->call({{"cmd", "travel"}, {"floor", 0}})["error"]["code"], "fault");
@@ -510,6 +565,7 @@ TEST_F(HydraulicOnVcan, ErrMidTravelEndsItAndIsAFault) {
 
 TEST_F(HydraulicOnVcan, CardSilenceMidTravelEndsItAndTheLinkRecovers) {
   start_long_travel();
+  if (HasFatalFailure()) return;
   card_command("silence on");
   expect_aborted("card_silent", 20s);
   EXPECT_EQ(daemon_->status()["link"]["state"], "fault");
@@ -522,9 +578,14 @@ TEST_F(HydraulicOnVcan, CardSilenceMidTravelEndsItAndTheLinkRecovers) {
 // The interface goes down mid-travel and comes back. Expected: the travel ends (the link is
 // lost), liftd reopens the interface, refuses travel until the card's first status frame, and
 // a travel runs again; the card simulator survives it; the bus shows no rule broken.
-// Needs the CAN endpoint's ENETDOWN handling and sch001-sim's reopen (issue 24).
+// FAILS ON PURPOSE until issue 24 lands: today's sch001-sim drops its socket on the first
+// ENETDOWN and never reopens it (the card falls silent for good: the travel after the interface
+// came back ends "card_silent"), and liftd reopens the interface every 100 ms while it is down,
+// raising and clearing link_fault each time, instead of backing off. The test is the point: it
+// is what the fix must pass.
 TEST_F(HydraulicOnVcan, InterfaceDownAndUpMidTravel) {
   start_long_travel();
+  if (HasFatalFailure()) return;
   const std::string name = can_interface();
   ASSERT_EQ(std::system(("ip link set " + name + " down").c_str()), 0);
   const json end = daemon_->wait_travel_end(20s);
@@ -552,6 +613,7 @@ TEST_F(HydraulicOnVcan, FloodOnOtherIdentifiersAndOnTheCardsIdentifier) {
     liftd::testing::Process high({"/usr/bin/cangen", name, "-g", "1", "-I", "7FF", "-L", "8"},
                                  daemon_env(), dir_.string(), "cangen-high");
     travel_to(2);
+    if (HasFatalFailure()) return;
     low.signal(SIGTERM);
     high.signal(SIGTERM);
     (void)low.wait(5s);
@@ -560,7 +622,7 @@ TEST_F(HydraulicOnVcan, FloodOnOtherIdentifiersAndOnTheCardsIdentifier) {
   liftd::testing::Process card_id(
       {"/usr/bin/cangen", name, "-g", "1", "-I", "581", "-L", "2", "-D", "0000"}, daemon_env(),
       dir_.string(), "cangen-card-id");
-  const json r = daemon_->call({{"cmd", "travel"}, {"floor", 0}});
+  const json r = request_travel(0);
   ASSERT_TRUE(r.value("ok", false)) << r.dump();
   const json end = daemon_->wait_travel_end(60s);
   card_id.signal(SIGTERM);
@@ -589,7 +651,13 @@ TEST(DcpOnVcanEncoder, TravelsOnThePositionFromTheBus) {
   const std::string slave = pty.slave_path();
   sim::RunnerOptions o;
   o.fd = pty.take_master().release();
-  sim::SerialDriveRunner drive({}, o);
+  sim::DriveConfig drive_config;
+  // The drive's DCP 7.3 supervision (10 missing frames, 150 ms) is tested on the host, where the
+  // cycle runs on a real-time thread. Inside user-mode Linux the whole guest is one process of
+  // the host, which a busy host holds back for 100 ms and more: the drive here allows a second
+  // of silence, so that what this test judges is the position from the bus.
+  drive_config.link_timeout_frames = 66;
+  sim::SerialDriveRunner drive(drive_config, o);
   ASSERT_TRUE(drive.start()) << drive.last_error();
   json config = {{"drive", {{"device", slave}}},
                  {"can", {{"interface", can_interface()}}},
@@ -605,6 +673,7 @@ TEST(DcpOnVcanEncoder, TravelsOnThePositionFromTheBus) {
     });
     ASSERT_TRUE(daemon.wait_up([](const json& s) { return s["car"]["floor"] == 0; }))
         << daemon.log();
+    ASSERT_TRUE(daemon.wait_no_faults()) << daemon.status().dump() << daemon.log();
     for (int floor : {1, 0}) {
       const json r = daemon.call({{"cmd", "travel"}, {"floor", floor}});
       ASSERT_TRUE(r.value("ok", false)) << r.dump() << daemon.log();

@@ -63,11 +63,9 @@ TEST(RtCycleAlloc, NoAllocationOnTheCycleThreadAfterWarmUpNorAfterDeviceLoss) {
   // The runner opens the pty through a name of this test's own: once the pty is gone, its
   // /dev/pts number is free for the next pty any other test on the machine creates, and a
   // runner retrying that number would find a device again (a second "loss" that is not this
-  // test's). The name is removed before the pty goes, so every retry fails as it should.
-  const std::filesystem::path device = std::filesystem::temp_directory_path() /
-                                       ("liftd-alloc-test-" + std::to_string(::getpid()) + "-port");
-  std::filesystem::remove(device);
-  std::filesystem::create_symlink(pty.value().slave_path(), device);
+  // test's). The name points nowhere before the pty goes, so every retry fails as it should.
+  testing::DeviceLink device;
+  device.point_to(pty.value().slave_path());
   CountingEngine engine(50);
   CycleConfig config;
   config.device_path = device.path();
