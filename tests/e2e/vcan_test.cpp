@@ -226,6 +226,27 @@ Verdict judge(const std::vector<BusFrame>& frames, std::int64_t from_us = 0,
   return v;
 }
 
+/// The encoder's frames as candump saw them: how many, the longest gap and the largest step
+/// between two of them (for the message when liftd reports the position lost).
+std::string encoder_on_bus(const std::vector<BusFrame>& frames) {
+  std::int64_t last_t = -1, max_gap = 0, count = 0;
+  long last_v = 0, max_step = 0;
+  for (const BusFrame& f : frames) {
+    if (f.id != kEncoderId || f.data.size() < 4) continue;
+    const long v = static_cast<long>(f.data[0] | (f.data[1] << 8) | (f.data[2] << 16) |
+                                     (static_cast<std::uint32_t>(f.data[3]) << 24));
+    if (last_t >= 0) {
+      max_gap = std::max(max_gap, f.t_us - last_t);
+      max_step = std::max(max_step, std::abs(v - last_v));
+    }
+    last_t = f.t_us;
+    last_v = v;
+    ++count;
+  }
+  return "encoder on the bus: " + std::to_string(count) + " frames, longest gap " +
+         std::to_string(max_gap / 1000) + " ms, largest step " + std::to_string(max_step) + " mm";
+}
+
 /// Bus time (candump's wall-clock stamps) now, in microseconds.
 std::int64_t bus_now_us() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -344,6 +365,21 @@ class Daemon {
     }
     return false;
   }
+  /// Waits until liftd has the machine inputs from the test (safety chain closed) and a car
+  /// position (the encoder's frames).
+  bool wait_machine(std::chrono::seconds limit = 20s) {
+    const auto end = Clock::now() + limit;
+    while (Clock::now() < end) {
+      const json inputs = call({{"cmd", "inputs"}});
+      const json s = status();
+      if (inputs.is_object() && inputs["result"].value("safety_chain", false) && s.is_object() &&
+          s["car"]["position_mm"].is_number()) {
+        return true;
+      }
+      client_->drain(100ms);
+    }
+    return false;
+  }
   /// Waits until no fault is active, resetting the ones the start left (the machine inputs
   /// arrive only once the API listens, and a slow start may see them late: inputs_lost).
   bool wait_no_faults(std::chrono::seconds limit = 20s) {
@@ -409,10 +445,16 @@ class HydraulicOnVcan : public ::testing::Test {
     machine_ = std::make_unique<Machine>(daemon_->socket(), [this] { return card_position(); });
     ASSERT_TRUE(daemon_->wait_up([](const json& s) { return s["car"]["floor"] == 0; }))
         << daemon_->log() << card_->out();
+    ASSERT_TRUE(daemon_->wait_machine()) << daemon_->status().dump() << daemon_->log();
     ASSERT_TRUE(daemon_->wait_no_faults()) << daemon_->status().dump() << daemon_->log();
     start_us_ = bus_now_us();
   }
   void TearDown() override {
+    if (HasFailure() && candump_) {  // what the bus showed, whatever failed
+      const auto frames = candump_->frames();
+      std::printf("bus at the failure: %s; %s\n", judge(frames, start_us_).summary().c_str(),
+                  encoder_on_bus(frames).c_str());
+    }
     machine_.reset();
     daemon_.reset();
     if (card_) {
@@ -509,7 +551,7 @@ class HydraulicOnVcan : public ::testing::Test {
   Verdict judge_bus(int max_unanswered = 0) {
     const auto frames = candump_->frames();
     const Verdict v = judge(frames, start_us_);
-    std::printf("bus: %s\n", v.summary().c_str());
+    std::printf("bus: %s; %s\n", v.summary().c_str(), encoder_on_bus(frames).c_str());
     EXPECT_GT(v.statuses, 0) << candump_->log();
     EXPECT_EQ(v.travel_bit_breaks, 0)
         << "card document 3d/3e broken on the bus: " << (v.breaks.empty() ? "" : v.breaks.front())
@@ -673,6 +715,7 @@ TEST(DcpOnVcanEncoder, TravelsOnThePositionFromTheBus) {
     });
     ASSERT_TRUE(daemon.wait_up([](const json& s) { return s["car"]["floor"] == 0; }))
         << daemon.log();
+    ASSERT_TRUE(daemon.wait_machine()) << daemon.status().dump() << daemon.log();
     ASSERT_TRUE(daemon.wait_no_faults()) << daemon.status().dump() << daemon.log();
     for (int floor : {1, 0}) {
       const json r = daemon.call({{"cmd", "travel"}, {"floor", floor}});
