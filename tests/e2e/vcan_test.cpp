@@ -448,6 +448,10 @@ class HydraulicOnVcan : public ::testing::Test {
     ASSERT_TRUE(daemon_->wait_machine()) << daemon_->status().dump() << daemon_->log();
     ASSERT_TRUE(daemon_->wait_no_faults()) << daemon_->status().dump() << daemon_->log();
     start_us_ = bus_now_us();
+    // The card may have sent a status frame before liftd listened (it counts that one as
+    // unanswered): the test judges what happens from here.
+    (void)card_position();
+    violations_at_start_ = card_violations();
   }
   void TearDown() override {
     if (HasFailure() && candump_) {  // what the bus showed, whatever failed
@@ -571,6 +575,7 @@ class HydraulicOnVcan : public ::testing::Test {
   std::unique_ptr<Daemon> daemon_;
   std::unique_ptr<Machine> machine_;
   std::int64_t start_us_ = 0;
+  int violations_at_start_ = 0;
 };
 
 TEST_F(HydraulicOnVcan, EveryFloorToEveryFloorUpAndDown) {
@@ -581,7 +586,8 @@ TEST_F(HydraulicOnVcan, EveryFloorToEveryFloorUpAndDown) {
   EXPECT_EQ(daemon_->status()["drive"]["state"], "ready");
   const Verdict v = judge_bus();
   EXPECT_EQ(v.refused_statuses, 0);
-  EXPECT_EQ(card_violations(), 0) << card_->out();
+  (void)card_position();
+  EXPECT_EQ(card_violations(), violations_at_start_) << card_->out();
 }
 
 TEST_F(HydraulicOnVcan, RdyDroppingMidTravelEndsIt) {
