@@ -334,7 +334,11 @@ TEST(RtCycle, RecoversFromDeviceLossAndReappearanceWithoutRestart) {
   EXPECT_EQ(c.port_losses, 1U);
   EXPECT_EQ(c.port_opens, 2U);
   EXPECT_EQ(engine.ready_.load(), 2U);
-  EXPECT_EQ(engine.corrupt_.load(), 0U);  // late answers possible on a noisy machine
+  // The responder's thread runs at normal priority: on a loaded machine one of its answers may
+  // come after the reply deadline (counted missing) and run into the next cycle's reply window,
+  // which the engine then rejects. Nothing else corrupts a reply here: each rejected reply
+  // follows a missing one.
+  EXPECT_LE(engine.corrupt_.load(), c.missing_replies);
   const auto events = drain(runner);
   EXPECT_EQ(count_kind(events, CycleEventKind::PortOpened), 2U);
   EXPECT_EQ(count_kind(events, CycleEventKind::PortLost), 1U);
