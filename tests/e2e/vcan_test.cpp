@@ -705,6 +705,9 @@ TEST(DcpOnVcanEncoder, TravelsOnThePositionFromTheBus) {
   // the host, which a busy host holds back for 100 ms and more: the drive here allows a second
   // of silence, so that what this test judges is the position from the bus.
   drive_config.link_timeout_frames = 66;
+  // As in liftd --simulate: the drive's thread one step below the master's cycle (rt.priority
+  // 80), so that nothing else in the guest (candump, the encoder feed, ctest) delays a reply.
+  o.priority = 79;
   sim::SerialDriveRunner drive(drive_config, o);
   ASSERT_TRUE(drive.start()) << drive.last_error();
   json config = {{"drive", {{"device", slave}}},
