@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages liftd needs to build, test and run its demo.
 # Safe to run again: it only calls apt-get when something is missing.
+#   tools/install-deps.sh              build, test and demo
+#   tools/install-deps.sh --uml-can    what the real-SocketCAN stage needs besides (user-mode
+#                                      Linux, its module loader, ip, candump/cangen)
 set -euo pipefail
 
 packages=(
@@ -10,6 +13,9 @@ packages=(
   clang libclang-rt-14-dev clang-format
   python3 python3-jsonschema
 )
+if [ "${1:-}" = --uml-can ]; then
+  packages=(user-mode-linux kmod iproute2 can-utils)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

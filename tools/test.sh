@@ -4,13 +4,19 @@
 # end-to-end runs the sanitizers add nothing to), then runs each fuzz target briefly, and
 # prints how long each part took. Exits non-zero on any failure.
 #   tools/test.sh            everything
+#   tools/test.sh --under-load   only the default build's tests, while two CPU hogs and a disk
+#                            writer run beside them at normal priority (the suite must not
+#                            flake on a busy machine)
 #   LIFTD_SKIP_ASAN=1 ...    skip the sanitizer build (quicker local runs)
+#   LIFTD_SKIP_UML=1 ...     skip the real-SocketCAN stage (user-mode Linux, tools/uml/can-stage.sh)
 #   LIFTD_SKIP_FUZZ=1 ...    skip the fuzz targets
 #   LIFTD_SOAK_SECONDS=N     fault soak length after the default tests (default 60; 0 skips)
 #   LIFTD_JOBS=N, LIFTD_TEST_JOBS=M   build with N jobs (default: cores), run M tests at once
 #                            (default: N + 1)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+under_load=0
+[ "${1:-}" = --under-load ] && under_load=1
 
 tools/install-deps.sh
 jobs=${LIFTD_JOBS:-$(nproc)}
@@ -38,6 +44,27 @@ run_preset() {
   timed "$preset tests" ctest --preset "$preset" --parallel "$test_jobs" "$@"
 }
 
+if [ $under_load = 1 ]; then
+  echo "=== preset: default (built before the load starts) ==="
+  cmake --preset default >/dev/null
+  timed "default build" cmake --build --preset default --parallel "$jobs"
+  # Two CPU hogs and a disk writer at normal priority for as long as the tests run.
+  load_pids=()
+  stop_load() { kill "${load_pids[@]}" 2>/dev/null || true; wait "${load_pids[@]}" 2>/dev/null || true; rm -f build/under-load.tmp; }
+  trap stop_load EXIT
+  mkdir -p build
+  for _ in 1 2; do (while :; do :; done) & load_pids+=($!); done
+  (while :; do dd if=/dev/zero of=build/under-load.tmp bs=1M count=256 conv=fsync status=none; done) &
+  load_pids+=($!)
+  echo "=== under load: two CPU hogs and a disk writer (pids ${load_pids[*]}) ==="
+  timed "default tests" ctest --preset default --parallel "$test_jobs"
+  stop_load
+  trap - EXIT
+  echo "tools/test.sh --under-load: the default tests passed"
+  printf '  %s\n' "${timings[@]}"
+  exit 0
+fi
+
 run_preset default
 soak_seconds=${LIFTD_SOAK_SECONDS:-60}
 if [ "$soak_seconds" != 0 ]; then
@@ -50,7 +77,12 @@ if [ "$soak_seconds" != 0 ]; then
   timed "soak sch001" tools/soak --kind sch001 --seconds "$controller_seconds" --seed 1
   timed "soak uss" tools/soak --kind uss --seconds "$controller_seconds" --seed 1
 fi
-[ "${LIFTD_SKIP_ASAN:-0}" = 1 ] || run_preset asan -LE slow
+if [ "${LIFTD_SKIP_UML:-0}" != 1 ]; then
+  # The tests that need a kernel with AF_CAN (label "vcan"), inside user-mode Linux.
+  echo "=== real SocketCAN: user-mode Linux with vcan0 ==="
+  timed "uml can" tools/uml/can-stage.sh build
+fi
+[ "${LIFTD_SKIP_ASAN:-0}" = 1 ] || run_preset asan -LE 'slow|vcan'
 if [ "${LIFTD_SKIP_FUZZ:-0}" != 1 ]; then
   echo "=== preset: fuzz ==="
   cmake --preset fuzz >/dev/null

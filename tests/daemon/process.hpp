@@ -25,11 +25,20 @@ class Process {
   /// Starts `args[0]` with `args` and exactly the environment `env` ("KEY=value"); output goes
   /// to `<dir>/<name>.out` and `<dir>/<name>.err`.
   /// With `stderr_fd` >= 0 the child's stderr is that descriptor instead of the file.
+  /// With `stdin_pipe` the child's stdin is a pipe write_stdin() writes to (a simulator's
+  /// command line); otherwise it inherits the test's.
   Process(const std::vector<std::string>& args, const std::vector<std::string>& env,
-          const std::string& dir, const std::string& name = "child", int stderr_fd = -1)
+          const std::string& dir, const std::string& name = "child", int stderr_fd = -1,
+          bool stdin_pipe = false)
       : out_path_(dir + "/" + name + ".out"), err_path_(dir + "/" + name + ".err") {
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
+    int in[2] = {-1, -1};
+    if (stdin_pipe) {
+      if (::pipe2(in, O_CLOEXEC) != 0) throw std::runtime_error("pipe2 failed");
+      posix_spawn_file_actions_adddup2(&actions, in[0], 0);
+      stdin_fd_ = in[1];
+    }
     posix_spawn_file_actions_addopen(&actions, 1, out_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
                                      0644);
     if (stderr_fd >= 0) {
@@ -46,9 +55,11 @@ class Process {
     envp.push_back(nullptr);
     const int error = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), envp.data());
     posix_spawn_file_actions_destroy(&actions);
+    if (in[0] >= 0) ::close(in[0]);
     if (error != 0) throw std::runtime_error("posix_spawn failed for " + args[0]);
   }
   ~Process() {
+    if (stdin_fd_ >= 0) ::close(stdin_fd_);
     if (!status_) {
       ::kill(pid_, SIGKILL);
       int status = 0;
@@ -57,6 +68,12 @@ class Process {
   }
   Process(const Process&) = delete;
   Process& operator=(const Process&) = delete;
+
+  /// Writes `text` to the child's stdin pipe (see the constructor); false when that failed.
+  bool write_stdin(const std::string& text) {
+    if (stdin_fd_ < 0) return false;
+    return ::write(stdin_fd_, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+  }
 
   /// Sends a signal.
   void signal(int signal_number) { ::kill(pid_, signal_number); }
@@ -96,6 +113,7 @@ class Process {
   std::optional<int> status_;
   std::string out_path_;
   std::string err_path_;
+  int stdin_fd_ = -1;
 };
 
 }  // namespace liftd::testing

@@ -10,6 +10,7 @@
 #include "echo_engine.hpp"
 #include "fake_responder.hpp"
 #include "io/pty.hpp"
+#include "pty_device.hpp"
 #include "rt/cycle_runner.hpp"
 
 #include "support/heap_hooks.hpp"
@@ -59,9 +60,15 @@ TEST(RtCycleAlloc, NoAllocationOnTheCycleThreadAfterWarmUpNorAfterDeviceLoss) {
   ASSERT_TRUE(pty.ok());
   testing::FakeResponder responder(pty.value().master_fd(), std::chrono::microseconds(1500));
   ASSERT_EQ(responder.start(), 0);
+  // The runner opens the pty through a name of this test's own: once the pty is gone, its
+  // /dev/pts number is free for the next pty any other test on the machine creates, and a
+  // runner retrying that number would find a device again (a second "loss" that is not this
+  // test's). The name points nowhere before the pty goes, so every retry fails as it should.
+  testing::DeviceLink device;
+  device.point_to(pty.value().slave_path());
   CountingEngine engine(50);
   CycleConfig config;
-  config.device_path = pty.value().slave_path();
+  config.device_path = device.path();
   config.thread.priority = 20;
   config.thread.lock_memory = false;
   // The spec's largest send window (DCP 7.2: 1.375 ms, the default): late wake-ups on a busy
@@ -82,9 +89,21 @@ TEST(RtCycleAlloc, NoAllocationOnTheCycleThreadAfterWarmUpNorAfterDeviceLoss) {
   EXPECT_EQ(heap_hooks::news.load(), 0U) << "operator new calls on the cycle thread";
 
   // Device loss: the loss path and the cycles without a port must not allocate either.
+  device.point_to(device.path() + ".absent");
   responder.stop();
   pty.value().close();
-  std::this_thread::sleep_for(milliseconds(300));
+  // Waits for the loss, then for 20 more cycles without a port (the retry path), however long
+  // a loaded machine takes for them.
+  using testing::wait_for;
+  ASSERT_TRUE(
+      wait_for([&] { return runner.stats().counters.port_losses >= 1; }, milliseconds(10000)));
+  const auto periods = [&] {
+    const CycleCounters c = runner.stats().counters;
+    return c.cycles + c.skipped_cycles;  // run or skipped: each a pass of the loss path
+  };
+  const std::uint64_t at_loss = periods();
+  ASSERT_TRUE(wait_for([&] { return periods() >= at_loss + 20; }, milliseconds(10000)))
+      << "the cycle goes on without its port";
   EXPECT_EQ(runner.stats().counters.port_losses, 1U);
   const std::uint64_t mallocs = heap_hooks::mallocs.load();
   const std::uint64_t news = heap_hooks::news.load();

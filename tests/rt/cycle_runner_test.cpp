@@ -190,14 +190,14 @@ TEST(RtCycle, InjectedFaultsProduceTheExpectedCountsThenHangUpIsALoss) {
   ASSERT_TRUE(wait_for([&] { return proxy.requests() >= 600; }, milliseconds(20000)));
   proxy.heal();
   const std::uint64_t healed_at = proxy.requests();
-  ASSERT_TRUE(wait_for([&] { return proxy.requests() >= healed_at + 10; }, milliseconds(2000)));
+  ASSERT_TRUE(wait_for([&] { return proxy.requests() >= healed_at + 10; }, milliseconds(10000)));
 
   // Now the far end hangs up: close the pty master the runner's slave belongs to.
   proxy.stop();
   const CycleCounters before = runner.stats().counters;
   side_a.close();
   ASSERT_TRUE(
-      wait_for([&] { return runner.stats().counters.port_losses == 1; }, milliseconds(1000)));
+      wait_for([&] { return runner.stats().counters.port_losses == 1; }, milliseconds(10000)));
   std::this_thread::sleep_for(milliseconds(100));
   runner.stop();
   responder.stop();
@@ -305,12 +305,14 @@ TEST(RtCycle, RecoversFromDeviceLossAndReappearanceWithoutRestart) {
   EchoEngine engine;
   CycleRunner runner(test_config(link.path()), engine);
   ASSERT_EQ(runner.start(), 0);
-  ASSERT_TRUE(wait_for([&] { return engine.good_.load() >= 30; }, milliseconds(3000)));
+  ASSERT_TRUE(wait_for([&] { return engine.good_.load() >= 30; }, milliseconds(10000)));
 
-  // Unplug: the device and its node disappear.
+  // Unplug: the device and its node disappear. The name goes first: a retry must not find the
+  // old pty's /dev/pts number already taken by a pty another test on the machine created.
+  link.point_to(link.path() + ".absent");
   responder->stop();
   first->close();
-  ASSERT_TRUE(wait_for([&] { return engine.lost_.load() == 1; }, milliseconds(1000)));
+  ASSERT_TRUE(wait_for([&] { return engine.lost_.load() == 1; }, milliseconds(10000)));
   EXPECT_FALSE(runner.port_ready());
   const std::uint64_t sent_at_loss = runner.stats().counters.frames_sent;
   std::this_thread::sleep_for(milliseconds(150));
@@ -324,7 +326,7 @@ TEST(RtCycle, RecoversFromDeviceLossAndReappearanceWithoutRestart) {
   link.point_to(second.slave_path());
   const std::uint64_t good_before = engine.good_.load();
   ASSERT_TRUE(
-      wait_for([&] { return engine.good_.load() >= good_before + 30; }, milliseconds(5000)));
+      wait_for([&] { return engine.good_.load() >= good_before + 30; }, milliseconds(10000)));
   runner.stop();
   responder2.stop();
 
@@ -332,7 +334,11 @@ TEST(RtCycle, RecoversFromDeviceLossAndReappearanceWithoutRestart) {
   EXPECT_EQ(c.port_losses, 1U);
   EXPECT_EQ(c.port_opens, 2U);
   EXPECT_EQ(engine.ready_.load(), 2U);
-  EXPECT_EQ(engine.corrupt_.load(), 0U);  // late answers possible on a noisy machine
+  // The responder's thread runs at normal priority: on a loaded machine one of its answers may
+  // come after the reply deadline (counted missing) and run into the next cycle's reply window,
+  // which the engine then rejects. Nothing else corrupts a reply here: each rejected reply
+  // follows a missing one.
+  EXPECT_LE(engine.corrupt_.load(), c.missing_replies);
   const auto events = drain(runner);
   EXPECT_EQ(count_kind(events, CycleEventKind::PortOpened), 2U);
   EXPECT_EQ(count_kind(events, CycleEventKind::PortLost), 1U);
@@ -344,11 +350,12 @@ TEST(RtCycle, MissingDeviceAtStartIsRetriedNotFatal) {
   CycleConfig config = test_config(link.path());
   CycleRunner runner(config, engine);
   ASSERT_EQ(runner.start(), 0);
-  std::this_thread::sleep_for(milliseconds(250));
+  // The watchdog sees the cycle alive without a port: it goes on, however slowly a loaded
+  // machine runs it.
+  EXPECT_TRUE(wait_for([&] { return runner.progress() > 5U && engine.after_.load() > 5U; },
+                       milliseconds(10000)));
   EXPECT_FALSE(runner.port_ready());
   EXPECT_EQ(runner.stats().counters.frames_sent, 0U);
-  EXPECT_GT(runner.progress(), 5U);  // the watchdog sees the cycle alive without a port
-  EXPECT_GT(engine.after_.load(), 5U);
   auto events = drain(runner);
   ASSERT_EQ(count_kind(events, CycleEventKind::PortOpenFailed),
             1U);  // reported once, not per retry
@@ -383,7 +390,7 @@ TEST(RtCycle, RefusedRealTimeSchedulingIsReportedOnceAndTheCycleStillRuns) {
   CycleRunner runner(config, engine);
   ASSERT_EQ(runner.start(), 0);
   EXPECT_FALSE(runner.thread_status().realtime);
-  EXPECT_TRUE(wait_for([&] { return runner.progress() >= 3; }, milliseconds(1000)));
+  EXPECT_TRUE(wait_for([&] { return runner.progress() >= 3; }, milliseconds(10000)));
   runner.stop();
   const auto events = drain(runner);
   ASSERT_EQ(count_kind(events, CycleEventKind::ThreadStatus), 1U);
@@ -424,7 +431,7 @@ TEST(RtCycle, OverrunSkipsLateCyclesCountsThemAndReportsTheRun) {
   const CycleConfig config = test_config(pty.slave_path());
   CycleRunner runner(config, engine);
   ASSERT_EQ(runner.start(), 0);
-  ASSERT_TRUE(wait_for([&] { return runner.stats().counters.cycles >= 60; }, milliseconds(5000)));
+  ASSERT_TRUE(wait_for([&] { return runner.stats().counters.cycles >= 60; }, milliseconds(10000)));
   runner.stop();
   responder.stop();
   const CycleCounters c = runner.stats().counters;
@@ -473,7 +480,7 @@ TEST(RtCycle, ReplyAfterTheDeadlineCountsAsNoReply) {
   CycleRunner runner(test_config(pty.slave_path()), engine);
   ASSERT_EQ(runner.start(), 0);
   ASSERT_TRUE(
-      wait_for([&] { return runner.stats().counters.frames_sent >= 100; }, milliseconds(5000)));
+      wait_for([&] { return runner.stats().counters.frames_sent >= 100; }, milliseconds(10000)));
   runner.stop();
   responder.stop();
   const CycleCounters c = runner.stats().counters;

@@ -82,10 +82,10 @@ TEST(RtPortKeeper, OpensLosesAndReopensTheDevice) {
   ASSERT_EQ(keeper.start(normal_thread(), [&loop] { loop(); }), 0);
   EXPECT_EQ(keeper.start(normal_thread(), [] {}), EBUSY);
 
-  ASSERT_TRUE(wait_for([&] { return keeper.port_ready(); }, milliseconds(2000)));
+  ASSERT_TRUE(wait_for([&] { return keeper.port_ready(); }, milliseconds(10000)));
   EXPECT_EQ(keeper.port_opens(), 1U);
   send_byte(*first);
-  EXPECT_TRUE(wait_for([&] { return loop.bytes() == 1; }, milliseconds(1000)));
+  EXPECT_TRUE(wait_for([&] { return loop.bytes() == 1; }, milliseconds(10000)));
   auto events = drain(keeper);
   ASSERT_EQ(events.size(), 2U);
   EXPECT_EQ(events[0].kind, CycleEventKind::ThreadStatus);
@@ -99,7 +99,7 @@ TEST(RtPortKeeper, OpensLosesAndReopensTheDevice) {
   // number taken by another one), the far end hangs up, the port is lost and handed back.
   name.point_to(name.path() + ".absent");
   first.reset();
-  ASSERT_TRUE(wait_for([&] { return keeper.port_losses() == 1; }, milliseconds(1000)));
+  ASSERT_TRUE(wait_for([&] { return keeper.port_losses() == 1; }, milliseconds(10000)));
   EXPECT_FALSE(keeper.port_ready());
 
   // Several retries fail while the name points nowhere: reported once, not per retry.
@@ -114,10 +114,10 @@ TEST(RtPortKeeper, OpensLosesAndReopensTheDevice) {
   // A new device under the same name is opened and offered again.
   io::PtyPair second = make_pty();
   name.point_to(second.slave_path());
-  ASSERT_TRUE(wait_for([&] { return keeper.port_ready(); }, milliseconds(2000)));
+  ASSERT_TRUE(wait_for([&] { return keeper.port_ready(); }, milliseconds(10000)));
   EXPECT_EQ(keeper.port_opens(), 2U);
   send_byte(second);
-  EXPECT_TRUE(wait_for([&] { return loop.bytes() == 2; }, milliseconds(1000)));
+  EXPECT_TRUE(wait_for([&] { return loop.bytes() == 2; }, milliseconds(10000)));
   events = drain(keeper);
   ASSERT_EQ(events.size(), 1U);
   EXPECT_EQ(events[0].kind, CycleEventKind::PortOpened);

@@ -47,8 +47,10 @@ struct Master {
   liftd::io::SerialPort port;
   std::vector<std::uint8_t> channel_rx;
 
-  // Sends one frame and waits up to `wait` for a 6-byte reply; true if it decodes.
-  bool exchange(const liftd::dcp::MasterFrame& f, std::chrono::milliseconds wait = 14ms) {
+  // Sends one frame and waits up to `wait` for a 6-byte reply; true if it decodes. The tool
+  // answers within a millisecond or two; a loaded machine may take longer, and the test counts
+  // what the tool answered, so the master waits until the reply is certainly not coming.
+  bool exchange(const liftd::dcp::MasterFrame& f, std::chrono::milliseconds wait = 400ms) {
     const auto bytes = liftd::dcp::encode(f);
     if (port.write_frame(bytes).status != liftd::io::IoStatus::Ok) return false;
     std::array<std::uint8_t, 6> reply{};
@@ -65,6 +67,20 @@ struct Master {
   }
 };
 
+// Waits until the tool answers (it has started, opened the port and flushed it), however long
+// a loaded machine takes to start a process: idle frames until one reply decodes, then a flush.
+bool wait_answering(Master& m) {
+  const MonoTime until = liftd::mono_now() + 20s;
+  while (liftd::mono_now() < until) {
+    if (m.exchange(liftd::dcp::MasterFrame{}, 100ms)) {
+      std::this_thread::sleep_for(20ms);
+      (void)m.port.flush_input();
+      return true;
+    }
+  }
+  return false;
+}
+
 TEST(DcpDriveSimTool, AnswersFramesOverPtyAndCarriesTheChannel) {
   auto pair = liftd::io::PtyPair::create();
   ASSERT_TRUE(pair.ok()) << pair.error().message();
@@ -72,8 +88,7 @@ TEST(DcpDriveSimTool, AnswersFramesOverPtyAndCarriesTheChannel) {
   Master m{pair.value().take_master(), {}};
   DriveSimProcess sim(slave);
   ASSERT_TRUE(sim.ok());
-  std::this_thread::sleep_for(500ms);  // let it open and flush the port
-  (void)m.port.flush_input();
+  ASSERT_TRUE(wait_answering(m)) << "the tool never answered";
 
   // An I0 message in the channel bytes, then idle.
   const std::string i0 = std::string("\x02\x1CI0LI0100010126DE\x03");
@@ -106,8 +121,7 @@ TEST(DcpDriveSimTool, ResynchronisesAfterATornFrame) {
   Master m{pair.value().take_master(), {}};
   DriveSimProcess sim(slave);
   ASSERT_TRUE(sim.ok());
-  std::this_thread::sleep_for(500ms);
-  (void)m.port.flush_input();
+  ASSERT_TRUE(wait_answering(m)) << "the tool never answered";
 
   int good = 0;
   for (int i = 0; i < 20; ++i) {

@@ -53,14 +53,16 @@ std::vector<std::uint8_t> telegram(std::uint8_t adr, std::vector<std::uint16_t> 
   return {out.begin(), out.begin() + static_cast<long>(n)};
 }
 
-// Sends a telegram and reads a reply of `expect` bytes within 20 ms (+ scheduling margin).
+// Sends a telegram and reads a reply of `expect` bytes. The tool answers after its 20 ms reply
+// delay; a loaded machine may take longer, and the test counts what the tool answered, so the
+// master waits until the reply is certainly not coming (a silent address costs this long).
 std::optional<std::vector<std::uint8_t>> exchange(liftd::io::SerialPort& port,
                                                   const std::vector<std::uint8_t>& t,
                                                   std::size_t expect) {
   std::this_thread::sleep_for(2ms);  // start pause and then some
   if (port.write_frame(t).status != liftd::io::IoStatus::Ok) return std::nullopt;
   std::vector<std::uint8_t> reply(expect);
-  const auto r = port.read_until(reply, liftd::mono_now() + 30ms);
+  const auto r = port.read_until(reply, liftd::mono_now() + 300ms);
   if (r.status != liftd::io::IoStatus::Ok) {
     std::this_thread::sleep_for(5ms);
     (void)port.flush_input();
@@ -76,7 +78,13 @@ TEST(UssDriveSimTool, AnswersItsSlavesOverAPty) {
   auto port = pair.value().take_master();
   SimProcess sim(slave);
   ASSERT_TRUE(sim.ok());
-  std::this_thread::sleep_for(500ms);
+  // Until the tool has started and opened the port, however long a loaded machine takes.
+  bool answering = false;
+  for (int i = 0; i < 60 && !answering; ++i) {
+    answering = exchange(port, telegram(1, {0x1034, 0, 0, 0, 0, 0}), 16).has_value();
+  }
+  ASSERT_TRUE(answering) << "the tool never answered";
+  std::this_thread::sleep_for(50ms);
   (void)port.flush_input();
 
   int good1 = 0, good3 = 0, silent2 = 0;
