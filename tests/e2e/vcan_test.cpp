@@ -637,12 +637,9 @@ TEST_F(HydraulicOnVcan, CardSilenceMidTravelEndsItAndTheLinkRecovers) {
 
 // The interface goes down mid-travel and comes back. Expected: the travel ends (the link is
 // lost), liftd reopens the interface, refuses travel until the card's first status frame, and
-// a travel runs again; the card simulator survives it; the bus shows no rule broken.
-// FAILS ON PURPOSE until issue 24 lands: today's sch001-sim drops its socket on the first
-// ENETDOWN and never reopens it (the card falls silent for good: the travel after the interface
-// came back ends "card_silent"), and liftd reopens the interface every 100 ms while it is down,
-// raising and clearing link_fault each time, instead of backing off. The test is the point: it
-// is what the fix must pass.
+// a travel runs again; the card simulator survives it; the bus shows no rule broken. The whole
+// episode is one link_fault (liftd backs off while the interface is down, and the fault ends
+// only once the card is heard again).
 TEST_F(HydraulicOnVcan, InterfaceDownAndUpMidTravel) {
   start_long_travel();
   if (HasFatalFailure()) return;
@@ -657,6 +654,11 @@ TEST_F(HydraulicOnVcan, InterfaceDownAndUpMidTravel) {
       << "no link after the interface came back\n"
       << daemon_->log() << "\ncard:\n"
       << card_->out();
+  EXPECT_EQ(daemon_->count_events("fault", [](const json& d) {
+    return d["code"] == "link_fault" && d["active"] == true;
+  }),
+            1)
+      << daemon_->log();
   travel_to(0);
   // The statuses around the interface going down may have gone unanswered; none may be
   // answered twice or with a forbidden travel bit.
@@ -691,6 +693,39 @@ TEST_F(HydraulicOnVcan, FloodOnOtherIdentifiersAndOnTheCardsIdentifier) {
   EXPECT_EQ(end["data"]["event"], "finished")
       << "frames on the card's identifier that are no status frame: " << end.dump() << "\n"
       << daemon_->log();
+  judge_bus();
+}
+
+// Another node sends on liftd's own identifier (0x551, the card's command identifier; card
+// document 1.6 reserves it): liftd reports it, withdraws its travel commands (a link fault, the
+// travel refused) and goes on 10 s after the last such frame.
+TEST_F(HydraulicOnVcan, AnotherNodeOnLiftdsIdentifierIsALinkFault) {
+  const std::string name = can_interface();
+  {
+    liftd::testing::Process foreign(
+        {"/usr/bin/cangen", name, "-g", "20", "-I", "551", "-L", "4", "-D", "68010003"},
+        daemon_env(), dir_.string(), "cangen-own-id");
+    json s;
+    for (int i = 0; i < 50; ++i) {
+      s = daemon_->status();
+      if (s["sch001"]["foreign_sender"] == true) break;
+      daemon_->api().drain(100ms);
+    }
+    EXPECT_EQ(s["sch001"]["foreign_sender"], true) << s.dump();
+    EXPECT_TRUE(std::any_of(s["faults"].begin(), s["faults"].end(),
+                            [](const json& f) { return f["code"] == "link_fault"; }))
+        << s.dump();
+    const json r = daemon_->call({{"cmd", "travel"}, {"floor", 2}});
+    EXPECT_FALSE(r.value("ok", true)) << r.dump();
+    foreign.signal(SIGTERM);
+    (void)foreign.wait(5s);
+  }
+  EXPECT_NE(daemon_->log().find("another node sends on liftd's CAN identifier"),
+            std::string::npos)
+      << daemon_->log();
+  ASSERT_TRUE(daemon_->wait_up([](const json& s) { return s["drive"]["state"] == "ready"; }, 30s))
+      << daemon_->log();
+  travel_to(2);
   judge_bus();
 }
 
