@@ -140,6 +140,8 @@ class UssRunner {
   UssRunnerConfig config_;
   uss::Master& master_;
   UssHooks& hooks_;
+  // How often the bus thread looks (TIOCINQ) for reply characters: one character time.
+  std::chrono::nanoseconds input_check_;
 
   // Bus thread state.
   uss::ParmrkDecoder decoder_;
@@ -148,6 +150,7 @@ class UssRunner {
   std::array<std::uint8_t, uss::kMaxTelegramBytes> rx_record_{};  // reply bytes for the recorder
   std::size_t rx_record_size_ = 0;
   MonoTime sent_end_{};
+  bool stray_possible_ = false;  // the last reply timed out or was bad: flush before sending
   std::uint64_t last_cycles_ = 0;
   int notify_fd_ = -1;
 
