@@ -77,9 +77,11 @@ struct UssRunnerCounters {
 /// A copy of the runner's statistics, taken on any thread.
 struct UssRunnerStats {
   UssRunnerCounters counters;
-  HistogramData cycle_time;     ///< master.last_cycle_time() per pass, 50 us bins up to 1 s
-  HistogramData wake_lateness;  ///< wake-up minus send_at(), 1 us bins up to 20 ms
-  HistogramData reply_time;     ///< end of our request to the end of the reply, 10 us bins
+  HistogramData cycle_time;  ///< master.last_cycle_time() per pass, 50 us bins up to 1 s
+  /// Wake-up minus send_at() of each sleep until send_at(), 1 us bins up to 20 ms (none when
+  /// send_at() had already passed, as after a reply timeout).
+  HistogramData wake_lateness;
+  HistogramData reply_time;  ///< end of our request to the end of the reply, 10 us bins
 };
 
 /// Runs a uss::Master on its own real-time thread, plus a helper thread that (re)opens the
