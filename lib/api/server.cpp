@@ -36,6 +36,11 @@ constexpr std::size_t kReadChunkBytes = 4096;
 constexpr std::chrono::seconds kFlushGrace{1};
 /// Pause before accepting again after accept() failed (e.g. out of file descriptors).
 constexpr std::chrono::milliseconds kAcceptRetry{100};
+/// Request lines of one client handled in one turn of the io thread. A client that pipelines
+/// more waits for its next turn behind everything else the io thread has queued (the other
+/// clients' turns, the cycle's wake-ups that carry the watchers' events), so every client gets
+/// a fair share and none holds the thread for a whole batch (issue 28).
+constexpr std::size_t kLinesPerTurn = 4;
 
 void default_log(LogLevel level, std::string_view message) {
   switch (level) {
@@ -269,7 +274,7 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
         process_lines();
         if (closed_) return;
       }
-      pending_.clear();
+      if (!turn_owed_) pending_.clear();  // else its next turn handles the rest
       close_if_done();
       if (!closed_) arm_timer();
       return;
@@ -283,7 +288,7 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
     pending_.append(chunk_.data(), n);
     process_lines();
     if (closed_) return;
-    if (!closing_ && !paused_) read_more();
+    if (!closing_ && !paused_ && !turn_owed_) read_more();
     arm_timer();
   }
 
@@ -291,6 +296,7 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
   void process_lines() {
     const std::size_t max_line = server_->config_.max_line_bytes;
     std::size_t start = 0;
+    std::size_t lines = 0;
     paused_ = false;
     while (!closed_ && !closing_) {
       if (backlogged()) {
@@ -300,6 +306,11 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
       }
       const std::size_t newline = pending_.find('\n', start);
       if (newline == std::string::npos) break;
+      if (lines++ == kLinesPerTurn) {
+        // Fair share: the rest waits for this client's next turn; reading waits with it.
+        owe_turn();
+        break;
+      }
       std::string_view line(pending_.data() + start, newline - start);
       start = newline + 1;
       if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
@@ -313,11 +324,29 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
     }
     if (closed_) return;
     pending_.erase(0, start);
-    if (!closing_ && !paused_ && pending_.size() > max_line) {
+    if (!closing_ && !paused_ && !turn_owed_ && pending_.size() > max_line) {
       fail_and_close(ErrorCode::TooLarge, too_large_message());
     }
     if (closed_) return;
     if (start > 0 && !pending_.empty()) partial_since_ = SteadyClock::now();
+  }
+
+  /// Queues this client's next turn behind the io thread's other work (once).
+  void owe_turn() {
+    if (turn_owed_) return;
+    turn_owed_ = true;
+    asio::post(server_->io_, [self = shared_from_this()] {
+      self->turn_owed_ = false;
+      if (self->closed_) return;
+      self->process_lines();
+      if (self->closed_) return;
+      if (self->peer_done_) {
+        self->close_if_done();
+      } else if (!self->paused_ && !self->turn_owed_ && !self->closing_) {
+        self->read_more();
+      }
+      if (!self->closed_) self->arm_timer();
+    });
   }
 
   /// After a line was written or a reply queued: resume a paused client once drained.
@@ -327,7 +356,7 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
     if (closed_) return;
     if (peer_done_) {
       close_if_done();
-    } else if (!paused_ && !closing_) {
+    } else if (!paused_ && !turn_owed_ && !closing_) {
       read_more();
     }
     if (!closed_) arm_timer();
@@ -335,7 +364,7 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
 
   /// Closes a half-closed client once nothing is owed to it any more.
   void close_if_done() {
-    if (closed_ || !peer_done_ || paused_) return;
+    if (closed_ || !peer_done_ || paused_ || turn_owed_) return;
     if (in_flight_ == 0 && queue_.empty() && !writing_) close("client finished (half-close)");
   }
 
@@ -402,7 +431,7 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
     const ServerConfig& cfg = server_->config_;
     if (closing_) return close_deadline_;
     if (writing_) return write_since_ + cfg.stalled_reader_timeout;
-    if (peer_done_ || paused_) return std::nullopt;
+    if (peer_done_ || paused_ || turn_owed_) return std::nullopt;
     if (!pending_.empty()) return partial_since_ + cfg.partial_line_timeout;
     if (cfg.idle_timeout.count() > 0 && !watching_ && in_flight_ == 0) {
       return last_request_ + cfg.idle_timeout;
@@ -473,6 +502,7 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
   bool writing_ = false;
   bool reading_ = false;    // an async read is outstanding
   bool paused_ = false;     // requests wait in pending_ until the write queue drains
+  bool turn_owed_ = false;  // more lines wait in pending_ for this client's next turn
   bool peer_done_ = false;  // the client half-closed: no more requests will come
   bool watching_ = false;
   std::uint64_t missed_ = 0;  // events not sent since the queue was full

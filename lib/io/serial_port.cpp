@@ -9,9 +9,11 @@
 #include <sys/ioctl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
+#include <ctime>
 #include <utility>
 
 namespace liftd::io {
@@ -88,6 +90,13 @@ bool is_device_lost_errno(int error_number) noexcept {
   // EPIPE/ESHUTDOWN: the driver tore the port down.
   return error_number == EIO || error_number == ENODEV || error_number == ENXIO ||
          error_number == EPIPE || error_number == ESHUTDOWN;
+}
+
+std::chrono::nanoseconds character_time(const SerialSettings& settings) noexcept {
+  const std::int64_t bits =
+      1 + settings.data_bits + (settings.parity != Parity::None ? 1 : 0) + settings.stop_bits;
+  const std::int64_t baud = settings.baud > 0 ? settings.baud : 1;
+  return std::chrono::nanoseconds(bits * 1'000'000'000 / baud);
 }
 
 int configure_tty(int fd, const SerialSettings& settings, const char** failed_call) noexcept {
@@ -319,6 +328,88 @@ IoResult SerialPort::read_until(std::span<std::uint8_t> buffer, MonoTime deadlin
     if (w.status != IoStatus::Ok) return IoResult{w.status, got, w.error_number};
   }
   return IoResult{IoStatus::Ok, got, 0};
+}
+
+IoResult SerialPort::input_queued() const noexcept {
+  int queued = 0;
+  // TIOCINQ (= FIONREAD): n_tty counts its read buffer under the termios lock; it neither
+  // flushes the flip-buffer work nor sleeps for input.
+  if (ioctl(fd_, TIOCINQ, &queued) != 0) return lost_or_error(errno, 0);
+  return IoResult{IoStatus::Ok, queued > 0 ? static_cast<std::size_t>(queued) : 0, 0};
+}
+
+IoResult SerialPort::read_queued(std::span<std::uint8_t> buffer) noexcept {
+  const IoResult queued = input_queued();
+  if (queued.status != IoStatus::Ok || queued.bytes == 0 || buffer.empty()) {
+    return IoResult{queued.status, 0, queued.error_number};
+  }
+  const std::size_t want = std::min(queued.bytes, buffer.size());
+  for (;;) {
+    // n_tty_read returns what it holds once it has one byte (VMIN 1): it never reaches its
+    // flush of the worker while the bytes asked for are there.
+    const ssize_t n = ::read(fd_, buffer.data(), want);
+    if (n > 0) return IoResult{IoStatus::Ok, static_cast<std::size_t>(n), 0};
+    if (n == 0) return IoResult{IoStatus::DeviceLost, 0, 0};  // EOF: hung up
+    if (errno == EINTR) continue;
+    if (errno == EAGAIN) return IoResult{IoStatus::Ok, 0, 0};
+    return lost_or_error(errno, 0);
+  }
+}
+
+IoResult SerialPort::wait_queued(MonoTime deadline, std::chrono::nanoseconds step) noexcept {
+  if (step.count() <= 0) step = std::chrono::microseconds(100);
+  for (;;) {
+    const IoResult queued = input_queued();
+    if (queued.status != IoStatus::Ok) return IoResult{queued.status, 0, queued.error_number};
+    if (queued.bytes > 0) return IoResult{IoStatus::Ok, 0, 0};
+    const MonoTime now = mono_now();
+    if (now >= deadline) return IoResult{IoStatus::Timeout, 0, 0};
+    const MonoTime next = std::min(deadline, now + step);
+    const timespec ts = to_timespec(next);
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+  }
+}
+
+IoResult SerialPort::read_queued_until(std::span<std::uint8_t> buffer, MonoTime deadline,
+                                       std::chrono::nanoseconds step) noexcept {
+  if (step.count() <= 0) step = std::chrono::microseconds(100);
+  std::size_t got = 0;
+  for (;;) {
+    // The time a look starts is the time its bytes are known to be there by.
+    const MonoTime look = mono_now();
+    const IoResult r = read_queued(buffer.subspan(got));
+    got += r.bytes;
+    if (r.status != IoStatus::Ok) return IoResult{r.status, got, r.error_number};
+    if (got == buffer.size()) {
+      // Complete, but only a look started by the deadline proves it was complete in time.
+      return IoResult{look <= deadline ? IoStatus::Ok : IoStatus::Timeout, got, 0};
+    }
+    if (r.bytes > 0) continue;  // more may be queued behind what the first look saw
+    if (look >= deadline) return IoResult{IoStatus::Timeout, got, 0};
+    const timespec ts = to_timespec(std::min(deadline, look + step));
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+  }
+}
+
+IoResult SerialPort::drain_queued() noexcept {
+  std::array<std::uint8_t, 64> sink{};
+  std::size_t dropped = 0;
+  for (;;) {
+    const IoResult r = read_queued(sink);
+    dropped += r.bytes;
+    if (r.status != IoStatus::Ok) return IoResult{r.status, dropped, r.error_number};
+    if (r.bytes == 0) return IoResult{IoStatus::Ok, dropped, 0};
+  }
+}
+
+IoResult SerialPort::flush_queued() noexcept {
+  const IoResult held = input_queued();
+  if (held.status != IoStatus::Ok) return IoResult{held.status, 0, held.error_number};
+  if (ioctl(fd_, TCFLSH, TCIFLUSH) != 0) return lost_or_error(errno, 0);
+  const IoResult rest = drain_queued();
+  return IoResult{rest.status, held.bytes + rest.bytes, rest.error_number};
 }
 
 IoResult SerialPort::flush_input() noexcept {

@@ -3,6 +3,7 @@
 // free and suitable for the real-time cycle.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -138,6 +139,48 @@ class SerialPort {
   /// Reads whatever is available now, without waiting (up to buffer.size()).
   IoResult read_available(std::span<std::uint8_t> buffer) noexcept;
 
+  // The real-time side reads through the four calls below. On Linux, read(2) and poll(2) on a
+  // tty whose line discipline holds no data call tty_buffer_flush_work(): they wait for the
+  // tty's flip-buffer work item, which a kernel worker at normal priority runs, so a real-time
+  // thread there waits for whatever normal threads fill the CPUs (priority inversion through
+  // the kernel; docs/architecture.md, "What the cycle may wait for"). TCFLSH takes the flip
+  // buffer's lock, which that worker holds while it delivers. These calls never do either: they
+  // ask TIOCINQ (FIONREAD) how much the line discipline holds and read only that, and they wait
+  // with absolute clock_nanosleep() between two looks. A byte that has not reached the line
+  // discipline by the deadline is not seen: for the protocol it is late (DCP 7.3, USS A 5.2.1).
+
+  /// Bytes the line discipline holds now (TIOCINQ), in `bytes`. Never waits for the flip-buffer
+  /// worker. DeviceLost on a hung-up tty (EIO), e.g. a pty whose master closed.
+  IoResult input_queued() const noexcept;
+
+  /// Reads what the line discipline already holds, at most buffer.size() bytes, without ever
+  /// entering read(2) with nothing queued. Ok with the count (0: nothing there).
+  IoResult read_queued(std::span<std::uint8_t> buffer) noexcept;
+
+  /// Waits until the line discipline holds input or `deadline` passes, looking every `step`
+  /// (absolute sleeps; the last look is at the deadline). Ok, Timeout or DeviceLost.
+  IoResult wait_queued(MonoTime deadline, std::chrono::nanoseconds step) noexcept;
+
+  /// read_until() through read_queued(): fills `buffer` from what the line discipline holds,
+  /// looking every `step` (absolute sleeps) until `deadline`. Ok when a look started by the
+  /// deadline completed it; Timeout otherwise, with the count (buffer.size() when it was complete
+  /// only at a look after the deadline: a late reply); DeviceLost on hang-up.
+  IoResult read_queued_until(std::span<std::uint8_t> buffer, MonoTime deadline,
+                             std::chrono::nanoseconds step) noexcept;
+
+  /// Reads away everything the line discipline holds (stray bytes before a new request);
+  /// `bytes` says how many. Unlike flush_input() no TCFLSH and no poll(2): bytes still in the
+  /// flip buffer are not dropped (they arrive later and make that reply bad or late, which
+  /// the link counts). DeviceLost on hang-up.
+  IoResult drain_queued() noexcept;
+
+  /// Discards input with TCFLSH (TCIFLUSH: the line discipline and the flip buffer, so bytes a
+  /// late reply left on their way are gone too), then drain_queued(); `bytes` counts what the
+  /// line discipline held. No read(2) or poll(2) of an empty tty, but TCFLSH takes the flip
+  /// buffer's lock, which the worker holds while it delivers: use it only where stray bytes
+  /// may be on their way (after a missing or bad reply), drain_queued() otherwise.
+  IoResult flush_queued() noexcept;
+
   /// Discards unread input (tcflush TCIFLUSH), then reads away anything still queued.
   /// `bytes` says how many were dropped. Reports DeviceLost when the device has gone.
   IoResult flush_input() noexcept;
@@ -162,6 +205,10 @@ class SerialPort {
   int fd_ = -1;
   PortFeatures features_{};
 };
+
+/// How long one character takes on the line: start bit, data bits, parity bit, stop bits at
+/// the baud rate (DCP 7.1: 10 bits at 38400 = 260 us; USS A 6.1: 11 bits).
+std::chrono::nanoseconds character_time(const SerialSettings& settings) noexcept;
 
 /// Sets raw mode and the line settings on any tty descriptor (used for both pty ends too).
 /// Returns 0 or an errno; `failed_call` names the call that failed.

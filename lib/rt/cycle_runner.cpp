@@ -24,6 +24,8 @@ std::size_t recorder_capacity(const CycleConfig& config) {
 CycleRunner::CycleRunner(CycleConfig config, CycleEngine& engine)
     : config_(std::move(config)),
       engine_(engine),
+      input_check_(config_.input_check_interval.count() > 0 ? config_.input_check_interval
+                                                            : io::character_time(config_.serial)),
       recorder_(recorder_capacity(config_), config_.recorder_bytes),
       port_keeper_(PortKeeperConfig{config_.device_path,
                                     config_.serial,
@@ -44,7 +46,9 @@ CycleRunner::~CycleRunner() {
 }
 
 int CycleRunner::start() {
-  return port_keeper_.start(config_.thread, [this] { cycle_loop(); });
+  RtThreadOptions options = config_.thread;
+  if (options.name.empty()) options.name = "liftd-cycle";  // ps -L, chrt -p, ftrace
+  return port_keeper_.start(options, [this] { cycle_loop(); });
 }
 
 void CycleRunner::stop() noexcept {
@@ -156,7 +160,13 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
   io::SerialPort& port = port_keeper_.port();
   if (port_keeper_.adopt_offered_port()) engine_.on_port_ready(wake);
   if (port.is_open()) {
-    const io::IoResult flushed = port.flush_input();
+    // Stray bytes (a reply after its deadline, noise) must not be taken for this frame's reply.
+    // After a good reply none can be on their way: read away what the line discipline holds.
+    // After a missing or bad one the rest of it may still sit in the flip buffer, where only
+    // TCFLSH reaches it; TCFLSH takes the flip buffer's lock, which the tty's worker holds while
+    // it delivers, so it is used only then (docs/architecture.md).
+    const io::IoResult flushed = stray_possible_ ? port.flush_queued() : port.drain_queued();
+    stray_possible_ = false;
     if (flushed.status == io::IoStatus::DeviceLost) {
       lose_port(wake, flushed.error_number);
     } else {
@@ -172,18 +182,23 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
               std::min(sent_at + config_.reply_deadline, planned + config_.period);
           const std::size_t size = std::min(engine_.reply_size(), kMaxReply);
           const std::span<std::uint8_t> reply(reply_.data(), size);
-          const io::IoResult got = port.read_until(reply, deadline);
+          // Never read(2) or poll(2) an empty tty: both wait for the flip-buffer worker, a
+          // normal-priority kernel thread (docs/architecture.md, "What the cycle may wait
+          // for"). Look at what the line discipline holds every character time instead.
+          const io::IoResult got = port.read_queued_until(reply, deadline, input_check_);
           const MonoTime now = mono_now();
           const auto partial = reply.first(got.bytes);
-          // DCP 7.2: a reply not complete by the deadline is lost. If this thread was held up
-          // and only saw the reply after the deadline, nobody can tell when it completed:
-          // count it as missing, never as a good reply.
-          const bool seen_late = got.status == io::IoStatus::Ok && now > deadline;
+          // DCP 7.2/7.3: a reply not complete by the deadline is lost. If only a look after the
+          // deadline found it complete (this thread was held up, or it came in the last
+          // character time), nobody can tell when it completed: count it as missing, never as
+          // a good reply.
+          const bool seen_late = got.status == io::IoStatus::Timeout && got.bytes == reply.size();
           if (seen_late) bump(counters_.late_replies);
           if (got.status == io::IoStatus::Ok && !seen_late) {
             reply_latency_.record(now - sent_at);
             const bool good = engine_.on_reply(reply, now);
             bump(good ? counters_.good_replies : counters_.bad_replies);
+            stray_possible_ = !good;
             recorder_.record(now, Direction::Rx,
                              good ? record_flag::kReply : record_flag::kReply | record_flag::kBad,
                              reply);
@@ -194,6 +209,7 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
             }
             lose_port(now, got.error_number);
           } else {
+            stray_possible_ = true;  // the reply (or its rest) may still be on its way
             bump(counters_.missing_replies);
             std::uint8_t flags = record_flag::kMissing;
             if (got.bytes > 0 && !seen_late) {

@@ -58,6 +58,10 @@ struct CycleConfig {
   /// reply deadline moves with it and still ends by the next planned start). Never above
   /// max_send_window(); the constructor refuses more.
   std::chrono::nanoseconds send_window = std::chrono::microseconds(1375);
+  /// How often the cycle looks (TIOCINQ) whether the reply has reached the line discipline
+  /// while it waits for it; 0 = one character time of `serial` (DCP 7.1: 10 bits at 38400 baud
+  /// = 260 us). The cycle never blocks in read(2) or poll(2) on the tty (docs/architecture.md).
+  std::chrono::nanoseconds input_check_interval{0};
   RtThreadOptions thread;  ///< SCHED_FIFO priority, memory locking, affinity
   std::chrono::nanoseconds reopen_backoff_min =
       std::chrono::milliseconds(100);  ///< first retry after a loss
@@ -178,9 +182,11 @@ class CycleRunner {
 
   CycleConfig config_;
   CycleEngine& engine_;
+  std::chrono::nanoseconds input_check_;  // config_.input_check_interval, resolved
 
   // Cycle thread state.
   std::array<std::uint8_t, kMaxReply> reply_{};
+  bool stray_possible_ = false;  // the last reply was missing or bad: flush before sending
   // The current run of skipped cycles (between two sent cycles).
   bool in_skip_run_ = false;
   bool skip_start_pending_ = false;  // its start event did not fit in the queue yet

@@ -131,6 +131,12 @@ void RtThread::join() noexcept {
 
 void* RtThread::trampoline(void* self) noexcept {
   auto* thread = static_cast<RtThread*>(self);
+  if (!thread->options_.name.empty()) {
+    // The kernel keeps 15 characters (TASK_COMM_LEN 16); a longer name is refused (ERANGE).
+    char name[16] = {};
+    thread->options_.name.copy(name, sizeof name - 1);
+    pthread_setname_np(pthread_self(), name);
+  }
   if (thread->options_.stack_prefault_bytes > 0) {
     prefault_recursive(thread->options_.stack_prefault_bytes);
   }

@@ -19,6 +19,9 @@ struct RtThreadOptions {
   int cpu = -1;             ///< pin to this CPU; -1 = no pinning
   bool lock_memory = true;  ///< mlockall(MCL_CURRENT | MCL_FUTURE) before starting
   std::size_t stack_prefault_bytes = 256 * 1024;  ///< stack touched before the body runs
+  /// Thread name (at most 15 characters, pthread_setname_np) for ps -L, chrt and ftrace;
+  /// empty = the process's name.
+  std::string name;
 };
 
 /// What the thread actually got. The *_errno fields say why a wish was refused.

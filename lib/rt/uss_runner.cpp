@@ -54,6 +54,7 @@ UssRunner::UssRunner(UssRunnerConfig config, uss::Master& master, UssHooks& hook
     : config_(std::move(config)),
       master_(master),
       hooks_(hooks),
+      input_check_(io::character_time(config_.serial)),
       recorder_(recorder_capacity(config_, master), config_.recorder_bytes),
       port_keeper_(PortKeeperConfig{config_.device_path, config_.serial, config_.reopen_backoff_min,
                                     config_.reopen_backoff_max, add_line_counter_note}) {
@@ -70,7 +71,9 @@ UssRunner::~UssRunner() {
 }
 
 int UssRunner::start() {
-  return port_keeper_.start(config_.thread, [this] { loop(); });
+  RtThreadOptions options = config_.thread;
+  if (options.name.empty()) options.name = "liftd-uss-bus";  // ps -L, chrt -p, ftrace
+  return port_keeper_.start(options, [this] { loop(); });
 }
 
 void UssRunner::stop() noexcept {
@@ -133,9 +136,14 @@ void UssRunner::loop() noexcept {
         progress_.fetch_add(1, std::memory_order_relaxed);
         continue;
       }
-      if (at > now) sleep_until(at);
+      if (at > now) {
+        sleep_until(at);
+        // Wake-up lateness of a sleep, as the reference loops measure it. After a reply
+        // timeout send_at() is already past (the line has been free since our request ended,
+        // A 5.1.2): sending at once is then the rule, not a late wake-up.
+        wake_lateness_.record(mono_now() - at);
+      }
       const MonoTime wake = mono_now();
-      wake_lateness_.record(wake - at);
       run_exchange(wake);
       const MonoTime done = mono_now();
       if (const std::uint64_t cycles = master_.cycles(); cycles != last_cycles_) {
@@ -152,8 +160,12 @@ void UssRunner::loop() noexcept {
 
 void UssRunner::run_exchange(MonoTime wake) noexcept {
   // Anything still queued is stray (a late reply, line noise): not part of the next reply.
+  // After a good reply it is only what the line discipline holds: read away. After a timeout or
+  // a bad reply the rest may sit in the flip buffer, where only TCFLSH reaches it; TCFLSH takes
+  // the flip buffer's lock, which the tty's worker holds while it delivers, so only then.
   io::SerialPort& port = port_keeper_.port();
-  const io::IoResult flushed = port.flush_input();
+  const io::IoResult flushed = stray_possible_ ? port.flush_queued() : port.drain_queued();
+  stray_possible_ = false;
   if (flushed.status == io::IoStatus::DeviceLost) {
     lose_port(wake, flushed.error_number);
     return;
@@ -208,8 +220,11 @@ void UssRunner::receive(MonoTime sent_at) noexcept {
   rx_record_size_ = 0;
   MonoTime now = sent_at;
   while (master_.awaiting_reply()) {
-    // Read first: characters already queued count even if this thread woke late.
-    const io::IoResult got = port.read_available(raw_);
+    // Read first: characters already queued count even if this thread woke late. Only what the
+    // line discipline holds: read(2) and poll(2) on an empty tty wait for the flip-buffer
+    // worker, a normal-priority kernel thread (docs/architecture.md, "What the cycle may wait
+    // for").
+    const io::IoResult got = port.read_queued(raw_);
     now = mono_now();
     if (got.bytes > 0) feed(got.bytes, now);
     if (got.status == io::IoStatus::DeviceLost) {
@@ -221,7 +236,8 @@ void UssRunner::receive(MonoTime sent_at) noexcept {
       master_.on_time(now);
       continue;
     }
-    const io::IoResult waited = port.wait_readable(master_.deadline());
+    // Look every character time (A 6.1): a character is stamped at most one late.
+    const io::IoResult waited = port.wait_queued(master_.deadline(), input_check_);
     if (waited.status == io::IoStatus::DeviceLost) {
       lose_port(mono_now(), waited.error_number);
       return;
@@ -232,6 +248,8 @@ void UssRunner::receive(MonoTime sent_at) noexcept {
     }
   }
   bump(counters_.exchanges);
+  stray_possible_ = master_.last_outcome() == uss::ExchangeOutcome::Timeout ||
+                    master_.last_outcome() == uss::ExchangeOutcome::BadReply;
   const std::span<const std::uint8_t> reply(rx_record_.data(), rx_record_size_);
   switch (master_.last_outcome()) {
     case uss::ExchangeOutcome::Reply:

@@ -77,9 +77,11 @@ struct UssRunnerCounters {
 /// A copy of the runner's statistics, taken on any thread.
 struct UssRunnerStats {
   UssRunnerCounters counters;
-  HistogramData cycle_time;     ///< master.last_cycle_time() per pass, 50 us bins up to 1 s
-  HistogramData wake_lateness;  ///< wake-up minus send_at(), 1 us bins up to 20 ms
-  HistogramData reply_time;     ///< end of our request to the end of the reply, 10 us bins
+  HistogramData cycle_time;  ///< master.last_cycle_time() per pass, 50 us bins up to 1 s
+  /// Wake-up minus send_at() of each sleep until send_at(), 1 us bins up to 20 ms (none when
+  /// send_at() had already passed, as after a reply timeout).
+  HistogramData wake_lateness;
+  HistogramData reply_time;  ///< end of our request to the end of the reply, 10 us bins
 };
 
 /// Runs a uss::Master on its own real-time thread, plus a helper thread that (re)opens the
@@ -140,6 +142,8 @@ class UssRunner {
   UssRunnerConfig config_;
   uss::Master& master_;
   UssHooks& hooks_;
+  // How often the bus thread looks (TIOCINQ) for reply characters: one character time.
+  std::chrono::nanoseconds input_check_;
 
   // Bus thread state.
   uss::ParmrkDecoder decoder_;
@@ -148,6 +152,7 @@ class UssRunner {
   std::array<std::uint8_t, uss::kMaxTelegramBytes> rx_record_{};  // reply bytes for the recorder
   std::size_t rx_record_size_ = 0;
   MonoTime sent_end_{};
+  bool stray_possible_ = false;  // the last reply timed out or was bad: flush before sending
   std::uint64_t last_cycles_ = 0;
   int notify_fd_ = -1;
 

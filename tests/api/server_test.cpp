@@ -3,7 +3,9 @@
 #include <sys/stat.h>
 #include <sys/un.h>
 
+#include <algorithm>
 #include <fstream>
+#include <future>
 #include <vector>
 
 #include "api/test_support.hpp"
@@ -97,6 +99,48 @@ TEST_F(ApiServer, AnswersPipelinedRequestsInOrderAndIgnoresBlankLines) {
     ASSERT_TRUE(reply);
     EXPECT_EQ(reply->at("id"), i);
   }
+}
+
+TEST_F(ApiServer, APipeliningClientTakesTurnsWithTheOthers) {
+  // Issue 28: one client's batch of requests must not hold the io thread while another waits.
+  // The io thread is held until both clients have written, so both are readable at once; the
+  // batch came first. The one request of the second client is handled after at most one turn
+  // of the first (a handful of lines), not after the whole batch.
+  start_server();
+  std::vector<std::string> order;  // io thread only
+  on_io([&] {
+    server_->dispatcher().add({"mark",
+                               Access::Read,
+                               {},
+                               "",
+                               [&order](const Call& call, Responder done) {
+                                 order.push_back(call.request.at("id").get<std::string>());
+                                 done(Result::ok());
+                               },
+                               kEveryDriveKind});
+  });
+  auto batcher = connect();
+  auto single = connect();
+  std::promise<void> release;
+  std::shared_future<void> released = release.get_future().share();
+  asio::post(io_, [released] { released.wait(); });
+  std::string batch;
+  for (int i = 0; i < 40; ++i)
+    batch += json{{"cmd", "mark"}, {"id", "a" + std::to_string(i)}}.dump() + "\n";
+  ASSERT_TRUE(batcher->send(batch));
+  ASSERT_TRUE(single->send(json{{"cmd", "mark"}, {"id", "b"}}.dump() + "\n"));
+  release.set_value();
+  const json reply = single->read_json().value_or(json());
+  EXPECT_EQ(reply.value("id", json()), "b");
+  for (int i = 0; i < 40; ++i) {
+    const auto r = batcher->read_json();
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->at("id"), "a" + std::to_string(i));  // its own order is kept
+  }
+  const auto seen = on_io([&] { return order; });
+  ASSERT_EQ(seen.size(), 41U);
+  const auto b_at = std::find(seen.begin(), seen.end(), "b") - seen.begin();
+  EXPECT_LE(b_at, 8) << "the second client waited behind " << b_at << " of the batch";
 }
 
 TEST_F(ApiServer, OversizedLineGetsTooLargeThenClose) {

@@ -197,6 +197,136 @@ TEST(IoSerialPort, HangUpIsReportedAsDeviceLostEverywhere) {
   EXPECT_EQ(port.value().wait_readable(mono_now() + milliseconds(200)).status,
             IoStatus::DeviceLost);
   EXPECT_EQ(port.value().write_frame(buf).status, IoStatus::DeviceLost);
+  // The real-time side's calls (issue 28) see it too: TIOCINQ on a hung-up tty answers EIO.
+  EXPECT_EQ(port.value().input_queued().status, IoStatus::DeviceLost);
+  EXPECT_EQ(port.value().read_queued(buf).status, IoStatus::DeviceLost);
+  EXPECT_EQ(port.value().wait_queued(mono_now() + milliseconds(200), milliseconds(1)).status,
+            IoStatus::DeviceLost);
+  EXPECT_EQ(
+      port.value().read_queued_until(buf, mono_now() + milliseconds(200), milliseconds(1)).status,
+      IoStatus::DeviceLost);
+  EXPECT_EQ(port.value().drain_queued().status, IoStatus::DeviceLost);
+  EXPECT_EQ(port.value().flush_queued().status, IoStatus::DeviceLost);
+}
+
+// The reads of the real-time threads (issue 28): they take only what the line discipline
+// already holds and wait with their own sleeps, never in read(2) or poll(2) on an empty tty
+// (which wait for the tty's normal-priority flip-buffer worker). A pty delivers through that
+// worker too, so each test first waits (up to 2 s, not a timing assumption) for the bytes.
+
+/// Waits until the port's line discipline holds `bytes` bytes (or 2 s passed).
+bool await_queued(SerialPort& port, std::size_t bytes) {
+  const MonoTime end = mono_now() + milliseconds(2000);
+  while (mono_now() < end) {
+    const IoResult q = port.input_queued();
+    if (q.status != IoStatus::Ok) return false;
+    if (q.bytes >= bytes) return true;
+    (void)port.wait_queued(end, milliseconds(1));
+    std::this_thread::sleep_for(milliseconds(1));
+  }
+  return false;
+}
+
+TEST(IoSerialPort, QueuedReadTakesOnlyWhatTheLineDisciplineHolds) {
+  PtyPair pty = make_pty();
+  auto port = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(port.ok());
+  std::array<std::uint8_t, 6> buf{};
+  // Nothing there: an empty answer, not a read(2) of an empty tty.
+  const IoResult empty = port.value().read_queued(buf);
+  EXPECT_EQ(empty.status, IoStatus::Ok);
+  EXPECT_EQ(empty.bytes, 0U);
+  EXPECT_EQ(port.value().input_queued().bytes, 0U);
+  const std::array<std::uint8_t, 4> sent{7, 8, 9, 10};
+  ASSERT_EQ(::write(pty.master_fd(), sent.data(), sent.size()), 4);
+  ASSERT_TRUE(await_queued(port.value(), 4));
+  EXPECT_EQ(port.value().input_queued().bytes, 4U);
+  const IoResult got = port.value().read_queued(buf);
+  EXPECT_EQ(got.status, IoStatus::Ok);
+  ASSERT_EQ(got.bytes, 4U);
+  EXPECT_EQ(buf[0], 7);
+  EXPECT_EQ(buf[3], 10);
+  EXPECT_EQ(port.value().input_queued().bytes, 0U);
+}
+
+TEST(IoSerialPort, QueuedReadUntilCollectsAReplyAsItArrives) {
+  PtyPair pty = make_pty();
+  auto port = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(port.ok());
+  const int master = pty.master_fd();
+  std::thread sender([master] {
+    for (std::uint8_t b = 1; b <= 6; ++b) {
+      (void)!::write(master, &b, 1);
+      std::this_thread::sleep_for(milliseconds(2));
+    }
+  });
+  std::array<std::uint8_t, 6> buf{};
+  const IoResult r =
+      port.value().read_queued_until(buf, mono_now() + milliseconds(2000), milliseconds(1));
+  sender.join();
+  EXPECT_EQ(r.status, IoStatus::Ok);
+  EXPECT_EQ(r.bytes, 6U);
+  EXPECT_EQ(buf, (std::array<std::uint8_t, 6>{1, 2, 3, 4, 5, 6}));
+}
+
+TEST(IoSerialPort, AReplyOnlySeenAfterItsDeadlineIsATimeoutWithItsBytes) {
+  // Legend: DCP 7.3 counts a reply not complete by the deadline as missing. A look after the
+  // deadline may still find it complete (the caller counts a late reply) or short (partial).
+  PtyPair pty = make_pty();
+  auto port = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(port.ok());
+  const std::array<std::uint8_t, 6> reply{1, 2, 3, 4, 5, 6};
+  std::array<std::uint8_t, 6> buf{};
+  ASSERT_EQ(::write(pty.master_fd(), reply.data(), 3), 3);
+  ASSERT_TRUE(await_queued(port.value(), 3));
+  const IoResult partial =
+      port.value().read_queued_until(buf, mono_now() - milliseconds(1), milliseconds(1));
+  EXPECT_EQ(partial.status, IoStatus::Timeout);
+  EXPECT_EQ(partial.bytes, 3U);
+  ASSERT_EQ(::write(pty.master_fd(), reply.data(), reply.size()), 6);
+  ASSERT_TRUE(await_queued(port.value(), 6));
+  const IoResult late =
+      port.value().read_queued_until(buf, mono_now() - milliseconds(1), milliseconds(1));
+  EXPECT_EQ(late.status, IoStatus::Timeout);
+  EXPECT_EQ(late.bytes, 6U);
+  // Nothing arrives: a timeout at the deadline, no bytes.
+  const IoResult none =
+      port.value().read_queued_until(buf, mono_now() + milliseconds(5), milliseconds(1));
+  EXPECT_EQ(none.status, IoStatus::Timeout);
+  EXPECT_EQ(none.bytes, 0U);
+}
+
+TEST(IoSerialPort, DrainQueuedReadsStrayBytesAwayAndCountsThem) {
+  PtyPair pty = make_pty();
+  auto port = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(port.ok());
+  EXPECT_EQ(port.value().drain_queued().bytes, 0U);
+  std::array<std::uint8_t, 100> junk{};
+  junk.fill(0x55);
+  ASSERT_EQ(::write(pty.master_fd(), junk.data(), junk.size()), 100);
+  ASSERT_TRUE(await_queued(port.value(), junk.size()));
+  const IoResult drained = port.value().drain_queued();
+  EXPECT_EQ(drained.status, IoStatus::Ok);
+  EXPECT_EQ(drained.bytes, 100U);  // more than one read's worth
+  EXPECT_EQ(port.value().input_queued().bytes, 0U);
+  // flush_queued (after a missing reply): TCFLSH, counting what the line discipline held.
+  ASSERT_EQ(::write(pty.master_fd(), junk.data(), 5), 5);
+  ASSERT_TRUE(await_queued(port.value(), 5));
+  const IoResult flushed = port.value().flush_queued();
+  EXPECT_EQ(flushed.status, IoStatus::Ok);
+  EXPECT_EQ(flushed.bytes, 5U);
+  EXPECT_EQ(port.value().input_queued().bytes, 0U);
+}
+
+TEST(IoSerialPort, CharacterTimeCountsStartDataParityAndStopBits) {
+  // Legend: DCP 7.1 38400 8N1 = 10 bits; USS A 6.1 8E1 = 11 bits, at 38400 and 187500 baud.
+  SerialSettings dcp;
+  EXPECT_EQ(character_time(dcp).count(), 10LL * 1'000'000'000 / 38400);
+  SerialSettings uss;
+  uss.parity = Parity::Even;
+  EXPECT_EQ(character_time(uss).count(), 11LL * 1'000'000'000 / 38400);
+  uss.baud = 187500;
+  EXPECT_EQ(character_time(uss).count(), 11LL * 1'000'000'000 / 187500);
 }
 
 TEST(IoSerialPort, DeviceLostErrnos) {
