@@ -112,9 +112,9 @@ as() { su -l "$1" -c "$2" 2>&1; }
 check "a user in liftd reads (liftctl status)" bash -c "su -l reader -c 'liftctl status' >/dev/null 2>&1"
 check "a user in liftd gets read access only" test "$(as reader 'python3 /usr/local/lib/stage/api.py access')" = "read"
 check "a user in liftd cannot travel (forbidden)" bash -c "! su -l reader -c 'liftctl travel 1' >/dev/null 2>&1"
-check "a user in liftd-control only controls (liftctl stop)" bash -c "su -l controller -c 'liftctl stop' >/dev/null 2>&1"
+check "a user only in liftd-control controls (liftctl stop)" bash -c "su -l controller -c 'liftctl stop' >/dev/null 2>&1"
 check "a user in liftd-control gets read and control" test "$(as controller 'python3 /usr/local/lib/stage/api.py access')" = "read,control"
-check "a user in liftd-io only sends inputs" test "$(as ioboard 'python3 /usr/local/lib/stage/api.py access')" = "read,inputs"
+check "a user only in liftd-io may send inputs" test "$(as ioboard 'python3 /usr/local/lib/stage/api.py access')" = "read,inputs"
 check "a user in none of them cannot connect (Permission denied)" \
   bash -c "su -l stranger -c 'python3 /usr/local/lib/stage/api.py access' 2>/dev/null | grep -qx 'connect: Permission denied'"
 check "liftctl tells a user in none of them: permission denied" bash -c "su -l stranger -c 'liftctl status' 2>&1 | grep -q 'permission denied'"
@@ -147,10 +147,12 @@ wait_for 30 link_up
 section "reload"
 pid=$(main_pid)
 cp $conf /root/liftd.json.orig
-set_key $conf 'c["log"]["level"] = "debug"; c["dcp"]["request_timeout_ms"] = 2500'
+# api.idle_timeout_s applies at once; dcp.request_timeout_ms waits for a restart. (Not
+# log.level debug: its flood would run into journald's rate limit and hide the events.)
+set_key $conf 'c["api"]["idle_timeout_s"] = 3600; c["dcp"]["request_timeout_ms"] = 2500'
 mark reload
 check "systemctl reload liftd with a valid file" systemctl reload liftd
-check "reload applied log.level (liftctl config)" bash -c "liftctl --json config | grep -q '\"level\": *\"debug\"'"
+check "reload applied api.idle_timeout_s (liftctl config)" bash -c "liftctl --json config | grep -q '\"idle_timeout_s\": *3600'"
 check "reload names the key that waits for a restart" \
   wait_for 10 jgrep reload request_timeout_ms -u liftd LIFTD_EVENT=reload_restart_needed
 set_key $conf 'c["rt"]["priority"] = 120'
@@ -160,7 +162,8 @@ check "reload of an invalid file is refused (reload_refused)" \
   wait_for 10 jgrep refused rt.priority -u liftd LIFTD_EVENT=reload_refused
 check "after a refused reload liftd runs on (same pid, status says so)" \
   bash -c "[ \$(systemctl show -p MainPID --value liftd) = $pid ] && systemctl status liftd | grep -q 'reload refused'"
-check "after a refused reload the old configuration stays (log.level debug)" bash -c "liftctl --json config | grep -q '\"level\": *\"debug\"'"
+check "after a refused reload the configuration in effect stays (api.idle_timeout_s 3600)" \
+  bash -c "liftctl --json config | grep -q '\"idle_timeout_s\": *3600'"
 cp /root/liftd.json.orig $conf
 systemctl reload liftd
 
@@ -214,7 +217,6 @@ cp $conf /root/liftd.json.orig
 set_key $conf 'c["dcp"]["link_falt_frames"] = 10'
 mark bad
 check "systemd's start limit is off for liftd" test "$(prop liftd StartLimitIntervalUSec)" = 0
-restarts=$(prop liftd NRestarts)
 check "liftd --check-config names the bad key (exit 2)" bash -c "liftd --check-config $conf 2>&1 | grep -q link_falt_frames; [ \${PIPESTATUS[0]} = 2 ]"
 check "systemctl restart liftd with a bad file fails" bash -c "! systemctl restart liftd"
 answers=0
@@ -228,7 +230,8 @@ check "clients get a clear error while the file is bad ($answers of 6)" test "$a
 check "liftd.socket stays active through the refused starts" bash -c "systemctl is-active -q liftd.socket && ! systemctl is-failed -q liftd.socket"
 check "journalctl -x explains the refused file" \
   jgrep bad 'answering the waiting clients with the error' -x -u liftd LIFTD_EVENT=config_invalid
-check "systemd did not restart the refused liftd on its own (NRestarts)" test "$(prop liftd NRestarts)" = "$restarts"
+check "systemd did not restart the refused liftd on its own (no \"Scheduled restart job\")" \
+  eval "! jgrep bad 'Scheduled restart job' -u liftd"
 cp /root/liftd.json.orig $conf
 check "liftd --check-config accepts the fixed file" liftd --check-config $conf
 check "fixed file + systemctl restart liftd recovers" systemctl restart liftd

@@ -20,7 +20,9 @@ import time
 RUN = "/run/stage"
 SIM = sys.argv[1] if len(sys.argv) > 1 else "/usr/bin/dcp-drive-sim"
 STATUS = re.compile(r"pos (-?[0-9.]+) mm v ([-+0-9.]+) m/s")
-position = [0.0]
+# The drive's newest position (mm), speed (m/s) and when its line was read: the position sent
+# is extrapolated to the moment of sending, as a position encoder would have it.
+position = [0.0, 0.0, time.monotonic()]
 
 
 def log(text):
@@ -33,7 +35,7 @@ def read_sim(sim):
         for line in sim.stdout:
             m = STATUS.search(line)
             if m:
-                position[0] = float(m.group(1))
+                position[:] = [float(m.group(1)), float(m.group(2)), time.monotonic()]
                 with open(f"{RUN}/sim.status.tmp", "w") as f:
                     f.write(line)
                 os.replace(f"{RUN}/sim.status.tmp", f"{RUN}/sim.status")
@@ -54,7 +56,7 @@ def main():
     os.makedirs(RUN, exist_ok=True)
     if not os.path.exists(f"{RUN}/sim.cmd"):
         os.mkfifo(f"{RUN}/sim.cmd")
-    sim = subprocess.Popen([SIM, "--device", "/dev/ttyS2", "--status", "0.02", "--reconnect"],
+    sim = subprocess.Popen([SIM, "--device", "/dev/ttyS2", "--status", "0.01", "--reconnect"],
                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, bufsize=1)
     threading.Thread(target=read_sim, args=(sim,), daemon=True).start()
     threading.Thread(target=forward_commands, args=(sim,), daemon=True).start()
@@ -84,8 +86,10 @@ def main():
                 conn = None
                 time.sleep(0.2)
                 continue
+        pos, speed, seen = position
+        now_mm = pos + speed * 1000.0 * (time.monotonic() - seen)
         request = ('{"cmd":"inputs","safety_chain":true,"doors_closed":true,"doors_locked":true,'
-                   f'"zone_level":false,"position_mm":{round(position[0])}}}\n')
+                   f'"zone_level":false,"position_mm":{round(now_mm)}}}\n')
         try:
             conn.send(request.encode())
             while True:
@@ -100,7 +104,7 @@ def main():
             conn = None
             if os.path.exists(f"{RUN}/io.pause-at-end"):
                 os.rename(f"{RUN}/io.pause-at-end", f"{RUN}/io.pause")
-        time.sleep(0.02)
+        time.sleep(0.01)
 
 
 main()
