@@ -30,12 +30,16 @@ wait_for() {
 }
 api() { python3 /usr/local/lib/stage/api.py "$@"; }
 field() { api get "$1" 2>/dev/null; }
-# The journal from a mark on: mark NAME; since NAME [journalctl args].
-mark() { eval "cursor_$1=\$(journalctl -n 1 --show-cursor -q -o cat | sed -n 's/^-- cursor: //p')"; }
+# The journal from a mark on: mark NAME; since NAME [journalctl args]. By time, not by cursor:
+# journalctl --after-cursor with field matches skips the first matching entry (systemd 252).
+mark() {
+  eval "mark_$1='$(date '+%Y-%m-%d %H:%M:%S.%6N')'"
+  sleep 0.01
+}
 since() {
-  local name=cursor_$1
+  local name=mark_$1
   shift
-  journalctl -q --no-pager --after-cursor="${!name}" "$@"
+  journalctl -q --no-pager --since="${!name}" "$@"
 }
 # jgrep MARK PATTERN [journalctl args]: the journal since MARK has a line matching PATTERN.
 jgrep() { since "$1" "${@:3}" | grep -q -- "$2"; }
