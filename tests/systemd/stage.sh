@@ -82,6 +82,9 @@ fails=$(grep -c '^FAIL - ' "$work/share/results.txt")
 if [ "$fails" != 0 ] || [ "$(cat "$work/share/guest.rc")" != 0 ]; then
   echo "--- guest log (tail)"
   tail -60 "$work/share/guest.log"
+  keep=/var/tmp/liftd-systemd-stage-failed
+  rm -rf "$keep" && cp -r "$work/share" "$keep" && rm -f "$keep"/*.deb &&
+    echo "--- the guest's log and journal are in $keep"
   took "$oks ok, $fails FAIL; preparation $prep s"
   exit 1
 fi

@@ -10,7 +10,12 @@ results=$share/results.txt
 : >"$results"
 t0=$SECONDS
 ok() { echo "ok - $*" | tee -a "$results"; }
-fail() { echo "FAIL - $*" | tee -a "$results"; }
+fail() {
+  echo "FAIL - $*" | tee -a "$results"
+  # For the log: what liftd and the I/O board said last.
+  journalctl -q --no-pager -u liftd -n 12 -o short-monotonic
+  tail -3 /run/stage/io.log 2>/dev/null
+}
 note() { echo "# $*" | tee -a "$results"; }
 section() { note "--- $* (at $((SECONDS - t0)) s)"; }
 # check NAME COMMAND...: ok when the command succeeds.
@@ -173,6 +178,7 @@ systemctl reload liftd
 
 # ---- a fault and the journal
 section "a fault and the journal"
+wait_for 30 link_up
 mark fault
 sim fault on
 check "a drive fault is raised" wait_for 10 jgrep fault . -u liftd LIFTD_EVENT=fault_raised LIFTD_CODE=drive_fault
@@ -297,3 +303,5 @@ check "systemctl stop with a stalled serial line ends liftd cleanly ($took s)" \
 check "... without waiting for the line (under 15 s of the tty's 30 s closing wait)" test $took -lt 15
 
 note "guest checks took $((SECONDS - t0)) s"
+# For a failed run: the whole journal, next to the results.
+grep -q '^FAIL' "$results" && journalctl -q --no-pager -o short-monotonic >$share/journal.txt

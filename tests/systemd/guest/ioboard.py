@@ -21,7 +21,7 @@ RUN = "/run/stage"
 SIM = sys.argv[1] if len(sys.argv) > 1 else "/usr/bin/dcp-drive-sim"
 STATUS = re.compile(r"pos (-?[0-9.]+) mm v ([-+0-9.]+) m/s")
 # The drive's newest position (mm), speed (m/s) and when its line was read: the position sent
-# is extrapolated to the moment of sending, as a position encoder would have it.
+# is extrapolated to the moment of sending (by at most 50 ms), as an encoder would have it.
 position = [0.0, 0.0, time.monotonic()]
 
 
@@ -87,7 +87,7 @@ def main():
                 time.sleep(0.2)
                 continue
         pos, speed, seen = position
-        now_mm = pos + speed * 1000.0 * (time.monotonic() - seen)
+        now_mm = pos + speed * 1000.0 * min(time.monotonic() - seen, 0.05)
         request = ('{"cmd":"inputs","safety_chain":true,"doors_closed":true,"doors_locked":true,'
                    f'"zone_level":false,"position_mm":{round(now_mm)}}}\n')
         try:
