@@ -2,6 +2,7 @@
 // watchdog.
 #include "service/notify.hpp"
 
+#include <fcntl.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <systemd/sd-daemon.h>
@@ -161,6 +162,10 @@ std::size_t answer_refused_start(int listen_fd, std::string_view message,
       json_string(message) + "}}\n";
   const auto deadline = std::chrono::steady_clock::now() + linger;
   std::size_t answered = 0;
+  // systemd passes a blocking socket: accept() would wait for the next client past the
+  // deadline (for ever, if none comes). The API's acceptor makes it non-blocking too.
+  const int flags = ::fcntl(listen_fd, F_GETFL);
+  if (flags >= 0 && (flags & O_NONBLOCK) == 0) ::fcntl(listen_fd, F_SETFL, flags | O_NONBLOCK);
   for (;;) {
     // Everyone waiting now, then whoever comes before the deadline.
     for (;;) {

@@ -147,14 +147,14 @@ TEST(ListenFds, PicksTheNamedListeningUnixStreamSocket) {
 }
 
 // A refused start on the socket systemd passed: the waiting client gets one error line and an
-// end of file, not a connection that hangs until the start limit takes the socket down.
+// end of file, not a connection that hangs until the start limit takes the socket down. And the
+// refused start ends at its deadline although the socket is blocking and nobody else comes.
 TEST(RefusedStart, AnswersEachWaitingClientWithOneErrorLine) {
   const int listening = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
   sockaddr_un address{};
   address.sun_family = AF_UNIX;  // autobind
   ASSERT_EQ(::bind(listening, reinterpret_cast<const sockaddr*>(&address), sizeof(sa_family_t)), 0);
-  ASSERT_EQ(::listen(listening, 4), 0);
-  ASSERT_EQ(::fcntl(listening, F_SETFL, O_NONBLOCK), 0);
+  ASSERT_EQ(::listen(listening, 4), 0);  // blocking, as systemd passes it
   sockaddr_un bound{};
   socklen_t length = sizeof bound;
   ASSERT_EQ(::getsockname(listening, reinterpret_cast<sockaddr*>(&bound), &length), 0);

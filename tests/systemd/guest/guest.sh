@@ -170,7 +170,7 @@ systemctl reload liftd
 check "reload of an invalid file is refused (reload_refused)" \
   wait_for 10 jgrep refused rt.priority -u liftd LIFTD_EVENT=reload_refused
 check "after a refused reload liftd runs on (same pid, status says so)" \
-  bash -c "[ \$(systemctl show -p MainPID --value liftd) = $pid ] && systemctl status liftd | grep -q 'reload refused'"
+  wait_for 10 bash -c "[ \$(systemctl show -p MainPID --value liftd) = $pid ] && systemctl status liftd | grep -q 'reload refused'"
 check "after a refused reload the configuration in effect stays (api.idle_timeout_s 3600)" \
   bash -c "liftctl --json config | grep -q '\"idle_timeout_s\": *3600'"
 cp /root/liftd.json.orig $conf
