@@ -61,7 +61,6 @@ def main():
     threading.Thread(target=read_sim, args=(sim,), daemon=True).start()
     threading.Thread(target=forward_commands, args=(sim,), daemon=True).start()
     conn = None
-    last_sent = 0.0
     while True:
         if os.path.exists(f"{RUN}/sim.stop"):
             sim.terminate()
@@ -89,13 +88,6 @@ def main():
                 continue
         pos, speed, seen = position
         now_mm = pos + speed * 1000.0 * min(time.monotonic() - seen, 0.05)
-        # Never backwards while moving: a late status line after an extrapolated value would
-        # make the remaining distance grow, which the drive refuses (DISTANCE IMPLAUSIBLE).
-        if speed > 0:
-            now_mm = max(now_mm, last_sent)
-        elif speed < 0:
-            now_mm = min(now_mm, last_sent)
-        last_sent = now_mm
         request = ('{"cmd":"inputs","safety_chain":true,"doors_closed":true,"doors_locked":true,'
                    f'"zone_level":false,"position_mm":{round(now_mm)}}}\n')
         try:
