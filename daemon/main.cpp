@@ -1,4 +1,6 @@
 // liftd entry point: command line, configuration, logging, then the daemon frame.
+#include <unistd.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -105,10 +107,39 @@ std::optional<std::string> realtime_refusal(const config::Config& cfg) {
   return status.describe();
 }
 
+// A start that ends with exit 2 while systemd holds the API socket (liftd.socket): the clients
+// waiting on it, and those that come within the next seconds, get one error line saying why
+// instead of waiting; and since they are answered, the socket does not start liftd again at once
+// for them (a client that reconnects continuously would otherwise run liftd into systemd's start
+// limit and take the socket down with it).
+void answer_clients_of_a_refused_start(const std::string& why) {
+  const auto fds = liftd::service::listen_fds_from_environment();
+  if (fds.empty()) return;
+  const int fd = liftd::service::pick_listen_fd(fds, "api");
+  liftd::service::close_unused_listen_fds(fds, fd);
+  if (fd < 0) return;
+  const std::size_t answered = liftd::service::answer_refused_start(
+      fd, "liftd is not running: " + why, liftd::service::kRefusedStartLinger);
+  ::close(fd);
+  if (answered > 0) {
+    log::event(log::Level::info, "daemon", "refused_start_answered",
+               {{"clients", std::to_string(answered)}},
+               "told " + std::to_string(answered) + " API client(s) why liftd is not running");
+  }
+}
+
 int run_daemon(const CommandLine& cl) {
   log::init({cl.log_level.value_or(log::Level::info), log::Backend::automatic, "liftd"});
   auto cfg = load_config(cl, true);
-  if (!cfg) return exit_code::kBadConfig;
+  if (!cfg) {
+    const std::string path =
+        cl.config_path.value_or(std::string(liftd::daemon::kDefaultConfigPath));
+    answer_clients_of_a_refused_start(
+        "it refused its configuration file " + path + " (liftd --check-config " + path +
+        " lists the problems); fix it, then: systemctl restart liftd");
+    log::flush();
+    return exit_code::kBadConfig;
+  }
   log::set_level(cl.log_level.value_or(to_log_level(cfg->log.level)));
   if (const auto refusal = realtime_refusal(*cfg)) {
     const std::string text =
@@ -122,6 +153,8 @@ int run_daemon(const CommandLine& cl) {
                {{"priority", std::to_string(cfg->rt.priority)}}, text);
     liftd::service::Notifier::from_environment().status("real-time scheduling refused: " +
                                                         *refusal);
+    answer_clients_of_a_refused_start("real-time scheduling refused (" + *refusal +
+                                      "); see journalctl -u liftd LIFTD_EVENT=realtime_refused");
     log::flush();
     return exit_code::kBadConfig;
   }

@@ -11,6 +11,8 @@
 #   LIFTD_SKIP_UML=1 ...     skip the real-SocketCAN stage (user-mode Linux, tools/uml/can-stage.sh)
 #   LIFTD_SKIP_FUZZ=1 ...    skip the fuzz targets
 #   LIFTD_SOAK_SECONDS=N     fault soak length after the default tests (default 60; 0 skips)
+#   LIFTD_SYSTEMD_STAGE=1 ... also run the systemd stage (tests/systemd/stage.sh: the package on
+#                            Debian 12 with systemd as PID 1 under user-mode Linux)
 #   LIFTD_JOBS=N, LIFTD_TEST_JOBS=M   build with N jobs (default: cores), run M tests at once
 #                            (default: N + 1)
 set -euo pipefail
@@ -81,6 +83,18 @@ if [ "${LIFTD_SKIP_UML:-0}" != 1 ]; then
   # The tests that need a kernel with AF_CAN (label "vcan"), inside user-mode Linux.
   echo "=== real SocketCAN: user-mode Linux with vcan0 ==="
   timed "uml can" tools/uml/can-stage.sh build
+fi
+# The installed service as an operator meets it: Debian 12 booted with systemd as PID 1 under
+# user-mode Linux (its root file system cached in /var/cache/liftd-uml; first run: + 3-4 min).
+# Run on request only for now (LIFTD_SYSTEMD_STAGE=1): its two landing checks depend on the
+# position the stage's I/O board feeds liftd from the drive simulator's status lines, up to 20 ms
+# old, and a car landed 7.3 mm off once (5 mm allowed) although liftd did what it was told.
+if [ "${LIFTD_SYSTEMD_STAGE:-0}" = 1 ]; then
+  echo "=== systemd stage ==="
+  timed "systemd stage" tests/systemd/stage.sh build
+else
+  echo "=== systemd stage: NOT RUN (on request only: LIFTD_SYSTEMD_STAGE=1 tools/test.sh, or"
+  echo "    tests/systemd/stage.sh build after a default build; see README, Tests) ==="
 fi
 [ "${LIFTD_SKIP_ASAN:-0}" = 1 ] || run_preset asan -LE 'slow|vcan'
 if [ "${LIFTD_SKIP_FUZZ:-0}" != 1 ]; then

@@ -12,8 +12,12 @@
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <condition_variable>
 #include <cstring>
 #include <ctime>
+#include <memory>
+#include <mutex>
+#include <thread>
 #include <utility>
 
 namespace liftd::io {
@@ -435,13 +439,50 @@ IoResult SerialPort::flush_input() noexcept {
 
 void SerialPort::close() noexcept {
   if (fd_ >= 0) {
-    ::close(fd_);
+    close_port_fd(fd_);
     fd_ = -1;
   }
 }
 
 int SerialPort::release() noexcept {
   return std::exchange(fd_, -1);
+}
+
+bool close_port_fd(int fd, std::chrono::milliseconds limit,
+                   const std::function<int(int)>& closer) noexcept {
+  if (fd < 0) return true;
+  // A hung-up or lost device refuses these; its close does not wait either.
+  ::ioctl(fd, TCFLSH, TCOFLUSH);
+  int pending = 0;
+  if (!closer && (::ioctl(fd, TIOCOUTQ, &pending) != 0 || pending <= 0)) {
+    ::close(fd);
+    return true;
+  }
+  struct Done {
+    std::mutex mutex;
+    std::condition_variable cv;
+    bool done = false;
+  };
+  try {
+    std::function<int(int)> close_fn = closer ? closer : [](int f) { return ::close(f); };
+    auto state = std::make_shared<Done>();
+    // The thread owns copies of everything it touches: it may outlive this call.
+    std::thread([fd, state, close_fn = std::move(close_fn)] {
+      close_fn(fd);
+      const std::lock_guard lock(state->mutex);
+      state->done = true;
+      state->cv.notify_all();
+    }).detach();
+    std::unique_lock lock(state->mutex);
+    return state->cv.wait_for(lock, limit, [&] { return state->done; });
+  } catch (...) {
+    if (closer) {
+      closer(fd);
+    } else {
+      ::close(fd);  // no thread to spare: close here, as before
+    }
+    return true;
+  }
 }
 
 }  // namespace liftd::io

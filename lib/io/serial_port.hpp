@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -193,7 +194,8 @@ class SerialPort {
   /// not kept by this driver, e.g. a pty; EBADF: closed).
   int line_counts(LineCounts& out) const noexcept { return read_line_counts(fd_, out); }
 
-  /// Closes the descriptor (no-op when closed). May block briefly while a real UART drains.
+  /// Closes the descriptor (no-op when closed) with close_port_fd(): output still pending is
+  /// discarded, and a close the line cannot finish is left behind after kPortCloseLimit.
   void close() noexcept;
 
   /// Gives the descriptor up without closing it; the port is closed afterwards.
@@ -216,5 +218,20 @@ int configure_tty(int fd, const SerialSettings& settings, const char** failed_ca
 
 /// Whether an errno from a read/write/ioctl means the device has gone away.
 bool is_device_lost_errno(int error_number) noexcept;
+
+/// How long close_port_fd() waits for a close that the kernel holds back because output cannot
+/// drain (the tty's closing_wait: 30 s by default, as long as systemd's stop timeout).
+inline constexpr std::chrono::milliseconds kPortCloseLimit{500};
+
+/// Closes a serial port descriptor without hanging on output the line cannot send (a stalled
+/// transceiver, a cable pulled mid-frame, flow control that never releases): pending output is
+/// discarded first (TCOFLUSH), which empties a UART's transmit buffer so close() has nothing to
+/// wait for. A driver whose flush cannot drop it (TIOCOUTQ still counts bytes) is closed on a
+/// helper thread, waited for at most `limit`, then left behind: the kernel ends that close
+/// after the port's closing_wait, or at once when the process exits. Returns false when it was
+/// left behind. `closer` stands for close(2) (tests put a close that blocks there). Not for the
+/// real-time thread (it may start a thread).
+bool close_port_fd(int fd, std::chrono::milliseconds limit = kPortCloseLimit,
+                   const std::function<int(int)>& closer = {}) noexcept;
 
 }  // namespace liftd::io

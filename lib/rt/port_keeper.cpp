@@ -50,10 +50,10 @@ void PortKeeper::stop() noexcept {
   stop_.store(true);
   rt_thread_.join();
   if (keeper_.joinable()) keeper_.join();
-  port_.close();
+  port_.close();  // never waits for output the line cannot drain (io::close_port_fd)
   port_ready_.store(false);
-  if (const int fd = offered_fd_.exchange(-1); fd >= 0) ::close(fd);
-  if (const int fd = dead_fd_.exchange(-1); fd >= 0) ::close(fd);
+  if (const int fd = offered_fd_.exchange(-1); fd >= 0) io::close_port_fd(fd);
+  if (const int fd = dead_fd_.exchange(-1); fd >= 0) io::close_port_fd(fd);
   started_ = false;
 }
 
@@ -96,7 +96,7 @@ void PortKeeper::keeper_loop() {
   while (!stop_.load(std::memory_order_relaxed)) {
     const MonoTime now = mono_now();
     if (const int dead = dead_fd_.exchange(-1, std::memory_order_acq_rel); dead >= 0) {
-      ::close(dead);
+      io::close_port_fd(dead);  // a stalled line must not hold the keeper (and stop()) 30 s
       // Give a replugged adapter time to come back before the first attempt.
       backoff = config_.reopen_backoff_min;
       next_attempt = now + backoff;

@@ -2,6 +2,8 @@
 // watchdog.
 #include "service/notify.hpp"
 
+#include <fcntl.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <systemd/sd-daemon.h>
@@ -9,6 +11,7 @@
 
 #include <cerrno>
 #include <cstddef>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
@@ -145,13 +148,81 @@ void close_unused_listen_fds(const std::vector<ListenFd>& fds, int keep) {
   }
 }
 
+namespace {
+
+std::string json_string(std::string_view text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\u%04x", static_cast<unsigned>(c));
+      out += escaped;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+std::size_t answer_refused_start(int listen_fd, std::string_view message,
+                                 std::chrono::milliseconds linger) {
+  if (listen_fd < 0) return 0;
+  const std::string line =
+      "{\"id\":null,\"ok\":false,\"error\":{\"code\":\"not_ready\",\"message\":" +
+      json_string(message) + "}}\n";
+  const auto deadline = std::chrono::steady_clock::now() + linger;
+  std::size_t answered = 0;
+  // systemd passes a blocking socket: accept() would wait for the next client past the
+  // deadline (for ever, if none comes). The API's acceptor makes it non-blocking too.
+  const int flags = ::fcntl(listen_fd, F_GETFL);
+  if (flags >= 0 && (flags & O_NONBLOCK) == 0) ::fcntl(listen_fd, F_SETFL, flags | O_NONBLOCK);
+  for (;;) {
+    // Everyone waiting now, then whoever comes before the deadline.
+    for (;;) {
+      const int client = ::accept4(listen_fd, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+      if (client < 0) {
+        if (errno == EINTR || errno == ECONNABORTED) continue;
+        break;  // EAGAIN: nobody waiting; anything else: nothing more to do with this socket
+      }
+      // One short line into an empty socket buffer: it fits, or the client is gone.
+      [[maybe_unused]] const ssize_t sent = ::send(client, line.data(), line.size(), MSG_NOSIGNAL);
+      // Whatever the client sent already is read and dropped: closing with it unread would
+      // reset the connection instead of ending it.
+      char sink[512];
+      while (::recv(client, sink, sizeof sink, MSG_DONTWAIT) > 0) {
+      }
+      ::shutdown(client, SHUT_RDWR);
+      ::close(client);
+      ++answered;
+    }
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) return answered;
+    pollfd pfd{listen_fd, POLLIN, 0};
+    if (::poll(&pfd, 1, static_cast<int>(left.count()) + 1) < 0 && errno != EINTR) {
+      return answered;
+    }
+  }
+}
+
 Watchdog::Watchdog(asio::io_context& io, Notifier& notifier, std::chrono::microseconds timeout,
                    Probe probe)
     : timer_(io), notifier_(notifier), period_(timeout / 2), probe_(std::move(probe)) {}
 
 void Watchdog::start() {
   running_ = true;
-  tick();
+  // The baseline, not a judgement: right after READY=1 the cycle may not have counted its first
+  // cycle yet, and a probe that compares with its previous answer (which starts at 0) would
+  // call that a stall (a false watchdog_withheld after a healthy start).
+  if (probe_) probe_();
+  notifier_.watchdog();
+  ++pings_sent_;
+  schedule();
 }
 
 void Watchdog::stop() {

@@ -80,18 +80,36 @@ std::optional<std::string> unix_socket_path(int fd);
 /// Closes every passed descriptor except `keep`, logging each one it closes.
 void close_unused_listen_fds(const std::vector<ListenFd>& fds, int keep);
 
+/// How long a start that liftd refuses keeps answering clients on the socket systemd passed
+/// (answer_refused_start) before it exits. It also paces the starts the socket makes for
+/// clients that keep connecting, to one per this interval (the unit's RestartSec=).
+inline constexpr std::chrono::milliseconds kRefusedStartLinger{2000};
+
+/// A start liftd refuses (its configuration, or real time this machine does not give) with the
+/// API socket passed by systemd: every client already waiting on `listen_fd`, and every one
+/// that connects within `linger`, gets one line {"id":null,"ok":false,"error":{"code":
+/// "not_ready","message":`message`}} and is closed. So the waiting clients learn why instead of
+/// waiting, and the socket does not start liftd again at once for them (which would end in
+/// systemd's start limit and a failed socket). Returns how many clients were answered.
+std::size_t answer_refused_start(int listen_fd, std::string_view message,
+                                 std::chrono::milliseconds linger);
+
 /// Sends WATCHDOG=1 every half timeout on an io_context, but only while the progress probe
 /// returns true; a stuck probe lets systemd's watchdog fire and restart the service.
 class Watchdog {
  public:
-  /// Decides whether the daemon is making progress; called once per period.
+  /// Decides whether the daemon made progress since the probe's previous call; called once at
+  /// start() (its answer then only sets the baseline) and once per period after it.
   using Probe = std::function<bool()>;
 
   /// A watchdog for `timeout` (WATCHDOG_USEC) that pings through `notifier`.
   Watchdog(asio::io_context& io, Notifier& notifier, std::chrono::microseconds timeout,
            Probe probe);
 
-  /// Starts pinging: one ping at once, then one every period().
+  /// Starts pinging: one ping at once, then one every period() while the probe reports
+  /// progress. The probe is asked at once only to take its baseline: the daemon has just
+  /// started (READY=1), and a cycle that has not yet counted its first cycle is no stall. The
+  /// first judgement comes one whole period later.
   void start();
   /// Stops pinging.
   void stop();

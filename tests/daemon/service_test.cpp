@@ -5,8 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
 #include <sys/socket.h>
 #include <sys/un.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
 
 #include "daemon/test_socket.hpp"
 
@@ -141,6 +146,44 @@ TEST(ListenFds, PicksTheNamedListeningUnixStreamSocket) {
   for (int fd : {listening, datagram, idle}) ::close(fd);
 }
 
+// A refused start on the socket systemd passed: the waiting client gets one error line and an
+// end of file, not a connection that hangs until the start limit takes the socket down. And the
+// refused start ends at its deadline although the socket is blocking and nobody else comes.
+TEST(RefusedStart, AnswersEachWaitingClientWithOneErrorLine) {
+  const int listening = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;  // autobind
+  ASSERT_EQ(::bind(listening, reinterpret_cast<const sockaddr*>(&address), sizeof(sa_family_t)), 0);
+  ASSERT_EQ(::listen(listening, 4), 0);  // blocking, as systemd passes it
+  sockaddr_un bound{};
+  socklen_t length = sizeof bound;
+  ASSERT_EQ(::getsockname(listening, reinterpret_cast<sockaddr*>(&bound), &length), 0);
+  std::vector<int> clients;
+  for (int i = 0; i < 2; ++i) {
+    const int c = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    ASSERT_EQ(::connect(c, reinterpret_cast<const sockaddr*>(&bound), length), 0);
+    clients.push_back(c);
+  }
+  // The first client already sent its request, as liftctl does.
+  const std::string request = "{\"cmd\":\"status\",\"id\":1}\n";
+  ASSERT_EQ(::send(clients[0], request.data(), request.size(), 0),
+            static_cast<ssize_t>(request.size()));
+  EXPECT_EQ(answer_refused_start(listening, "it refused \"x.json\"", 0ms), 2U);
+  for (const int c : clients) {
+    std::string got;
+    char buf[256];
+    ssize_t n;
+    while ((n = ::recv(c, buf, sizeof buf, 0)) > 0) got.append(buf, static_cast<std::size_t>(n));
+    EXPECT_EQ(n, 0) << std::strerror(errno);  // an orderly end, not a reset
+    EXPECT_EQ(got,
+              "{\"id\":null,\"ok\":false,\"error\":{\"code\":\"not_ready\",\"message\":"
+              "\"it refused \\\"x.json\\\"\"}}\n");
+    ::close(c);
+  }
+  EXPECT_EQ(answer_refused_start(listening, "none waiting", 0ms), 0U);
+  ::close(listening);
+}
+
 TEST(Watchdog, PeriodIsHalfTheTimeout) {
   asio::io_context io;
   Notifier notifier;
@@ -172,6 +215,60 @@ TEST(Watchdog, PingsOnlyWhileTheProbeReportsProgress) {
   io.run();  // the cancelled wait completes; nothing more is sent
   EXPECT_EQ(dog.pings_sent(), 5U);
   EXPECT_FALSE(socket.receive(50ms).has_value());
+}
+
+// The daemon's progress probes compare a cycle counter with its value at their previous call,
+// starting from 0. Right after READY=1 the cycle thread may not have counted its first cycle
+// yet: that is a healthy start, not a stall. The first judgement must cover a whole period.
+TEST(Watchdog, NoFalseAlarmWhenTheCycleHasNotCountedItsFirstCycleAtStart) {
+  TestSocket socket;
+  ScopedEnv env("NOTIFY_SOCKET", socket.path());
+  asio::io_context io;
+  Notifier notifier = Notifier::from_environment();
+  std::uint64_t cycles = 0;  // the cycle thread has not run yet
+  std::uint64_t last = 0;
+  int probes = 0;
+  Watchdog dog(io, notifier, 20ms, [&] {
+    ++probes;
+    const bool advanced = cycles != last;
+    last = cycles;
+    return advanced;
+  });
+  dog.start();
+  EXPECT_EQ(dog.pings_sent(), 1U);
+  EXPECT_EQ(dog.pings_withheld(), 0U);
+  EXPECT_EQ(probes, 1);  // the baseline was taken
+  EXPECT_EQ(socket.receive(2s), "WATCHDOG=1");
+  cycles = 166;  // one period of 15 ms cycles later
+  while (dog.pings_sent() + dog.pings_withheld() < 2) io.run_one();
+  EXPECT_EQ(dog.pings_sent(), 2U);
+  EXPECT_EQ(dog.pings_withheld(), 0U);
+  EXPECT_EQ(socket.receive(2s), "WATCHDOG=1");
+  // A cycle that never advances after the start is still caught one period later.
+  while (dog.pings_withheld() < 1) io.run_one();
+  EXPECT_EQ(dog.pings_sent(), 2U);
+  dog.stop();
+  io.run();
+}
+
+TEST(Watchdog, ACycleStuckFromTheStartIsCaughtAfterOnePeriod) {
+  TestSocket socket;
+  ScopedEnv env("NOTIFY_SOCKET", socket.path());
+  asio::io_context io;
+  Notifier notifier = Notifier::from_environment();
+  std::uint64_t last = 0;
+  const std::uint64_t cycles = 0;  // never advances
+  Watchdog dog(io, notifier, 20ms, [&] {
+    const bool advanced = cycles != last;
+    last = cycles;
+    return advanced;
+  });
+  dog.start();
+  while (dog.pings_sent() + dog.pings_withheld() < 2) io.run_one();
+  EXPECT_EQ(dog.pings_sent(), 1U);  // the start's ping only
+  EXPECT_EQ(dog.pings_withheld(), 1U);
+  dog.stop();
+  io.run();
 }
 
 }  // namespace

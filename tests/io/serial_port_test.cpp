@@ -7,10 +7,15 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <poll.h>
+
 #include <array>
+#include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <future>
 #include <thread>
+#include <vector>
 
 #include "io/pty.hpp"
 
@@ -333,6 +338,58 @@ TEST(IoSerialPort, DeviceLostErrnos) {
   for (int e : {EIO, ENODEV, ENXIO, EPIPE, ESHUTDOWN}) EXPECT_TRUE(is_device_lost_errno(e)) << e;
   for (int e : {EAGAIN, EINTR, EINVAL, EBADF}) EXPECT_FALSE(is_device_lost_errno(e)) << e;
   EXPECT_EQ(to_string(IoStatus::DeviceLost), "device-lost");
+}
+
+// A stalled line: the far end (the pty master) never reads, so the port's output backs up until
+// writes would block. Closing the port must drop what is still queued instead of leaving it to
+// drain (on a UART, close() waits up to the port's closing_wait, 30 s, for that).
+TEST(IoSerialPort, CloseDiscardsOutputALineThatDoesNotDrainStillHolds) {
+  PtyPair pty = make_pty();
+  auto opened = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(opened.ok());
+  SerialPort port = std::move(opened).value();
+  const std::vector<std::uint8_t> chunk(512, 0x55);
+  std::size_t written = 0;
+  for (int i = 0; i < 100000; ++i) {
+    const IoResult r = port.write_frame(chunk);
+    written += r.bytes;
+    if (r.status == IoStatus::WouldBlock) break;
+    ASSERT_EQ(r.status, IoStatus::Ok);
+  }
+  ASSERT_GT(written, 8192U) << "the line never filled";
+  port.close();
+  // Now the master reads what reached it: without the flush, every byte written.
+  std::size_t read = 0;
+  std::array<std::uint8_t, 4096> buf{};
+  for (;;) {
+    pollfd pfd{pty.master_fd(), POLLIN, 0};
+    if (::poll(&pfd, 1, 200) <= 0) break;
+    const ssize_t n = ::read(pty.master_fd(), buf.data(), buf.size());
+    if (n <= 0) break;
+    read += static_cast<std::size_t>(n);
+  }
+  EXPECT_LT(read, written) << "close() left all " << written << " queued bytes to drain";
+}
+
+TEST(IoSerialPort, ACloseThatCannotFinishIsLeftBehindAfterTheLimit) {
+  // The close stands in for a tty's close() waiting for output that never drains.
+  std::promise<void> release;
+  std::shared_future<void> released = release.get_future().share();
+  auto closed = std::make_shared<std::atomic<int>>(-1);
+  const auto stuck_close = [released, closed](int fd) {
+    released.wait();
+    closed->store(fd);
+    return 0;
+  };
+  EXPECT_FALSE(close_port_fd(1234, milliseconds(20), stuck_close));
+  EXPECT_EQ(closed->load(), -1);  // still waiting, on the helper thread
+  release.set_value();
+  while (closed->load() == -1) std::this_thread::sleep_for(milliseconds(1));
+  EXPECT_EQ(closed->load(), 1234);  // the descriptor is closed in the end
+  // A close that finishes is waited for.
+  EXPECT_TRUE(
+      close_port_fd(5678, milliseconds(60000), [closed](int fd) { return closed->store(fd), 0; }));
+  EXPECT_EQ(closed->load(), 5678);
 }
 
 TEST(IoPty, SlavePathIsAPtsDeviceAndReleaseKeepsItOpen) {

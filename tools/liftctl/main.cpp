@@ -108,8 +108,9 @@ class Connection {
       case EACCES:
       case EPERM:
         std::fprintf(stderr,
-                     "liftctl: permission denied on %s: your user must be in the group that owns "
-                     "the socket (see docs/api.md, access control)\n",
+                     "liftctl: permission denied on %s: your user must be in one of liftd's "
+                     "groups: liftd (read), liftd-control (control), liftd-io (inputs); see "
+                     "docs/operations.md, Users and groups\n",
                      path.c_str());
         break;
       default:

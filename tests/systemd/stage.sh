@@ -1,0 +1,95 @@
+#!/usr/bin/env bash
+# The systemd stage: the installed service as an operator meets it. Boots Debian 12 with systemd
+# as PID 1 under user-mode Linux (an ext4 image from build-rootfs.sh, cached), installs the
+# package built from BUILD with apt, and runs guest/guest.sh there: the service against a
+# simulated DCP drive on a serial line (UML lines ttyS1 and ttyS2 joined by a host socketpair),
+# restart, reload, faults in the journal, stop during a travel, group access, bad starts, the
+# watchdog, a stalled line. Each check prints "ok - ..." or "FAIL - ..."; exits 1 on any FAIL or
+# when the guest did not finish, 0 otherwise. Where user-mode Linux cannot run it says SKIPPED
+# and exits 0.
+#   tests/systemd/stage.sh [BUILD]        (default build; needs root for the image and apt)
+#   LIFTD_UML_CACHE=DIR                   where the root file system is cached (/var/cache/liftd-uml)
+#   LIFTD_STAGE_DEB=FILE                  install this package instead of one built from BUILD
+#                                         (e.g. an older version, to see which checks it fails)
+set -uo pipefail
+{  # read to the end before running: an edit while it runs cannot change what runs
+here=$(cd "$(dirname "$0")" && pwd)
+repo=$(cd "$here/../.." && pwd)
+build=$(cd "${1:-$repo/build}" && pwd)
+start=$SECONDS
+took() { echo "systemd stage: took $((SECONDS - start)) s${1:+ ($1)}"; }
+skip() {
+  echo "SKIPPED: systemd stage: $*"
+  echo "SKIPPED: systemd stage: $*" >&2
+  took
+  exit 0
+}
+die() {
+  echo "FAIL - systemd stage: $*"
+  took
+  exit 1
+}
+
+[ "$(id -u)" = 0 ] || skip "needs root (the root file system image, apt inside it)"
+"$repo/tools/install-uml-deps.sh" || die "cannot install user-mode-linux, mmdebstrap, e2fsprogs"
+# Can user-mode Linux run here? A kernel that boots prints its panic when init exits.
+probe=$(timeout 30 linux.uml mem=64M root=/dev/root rootfstype=hostfs rootflags=/ ro init=/bin/true \
+  con=null con0=null,fd:1 ssl=null 2>&1 | tr -d '\r')
+echo "$probe" | grep -q "Attempted to kill init" ||
+  skip "user-mode Linux does not boot on this machine: $(echo "$probe" | tail -3 | tr '\n' ' ')"
+kernel=$(echo "$probe" | sed -n 's/.*Linux version \([^ ]*\).*/\1/p' | head -1)
+
+image=$("$here/build-rootfs.sh") || die "no root file system image"
+work=$(mktemp -d /var/tmp/liftd-systemd-stage-XXXXXX)
+trap 'rm -rf "$work"' EXIT
+mkdir "$work/share"
+if [ -n "${LIFTD_STAGE_DEB:-}" ]; then
+  cp "$LIFTD_STAGE_DEB" "$work/share/liftd_stage_test.deb" || die "no $LIFTD_STAGE_DEB"
+else
+  (cd "$build" && cpack -G DEB -B "$work/deb" >"$work/cpack.log" 2>&1) ||
+    { cat "$work/cpack.log"; die "cpack failed"; }
+  cp "$work"/deb/liftd_*.deb "$work/share/" || die "no package"
+fi
+cp "$here"/guest/guest.sh "$here"/guest/api.py "$here"/guest/ioboard.py "$work/share/"
+cp --sparse=always "$image" "$work/root.img"
+prep=$((SECONDS - start))
+
+# Two serial lines joined on the host: liftd gets ttyS1, the simulated drive ttyS2.
+timeout 900 python3 - "$work/root.img" "$work/share" "$work/console.log" <<'PY'
+import socket, subprocess, sys
+image, share, console = sys.argv[1:4]
+liftd_end, drive_end = socket.socketpair()
+# Ahead of other work on the host (compilers): the guest runs liftd's 15 ms cycle, whose
+# wake-ups a starved guest misses (the drive link then fails and travels end short).
+args = ["nice", "-n", "-10", "linux.uml", "mem=1024M", f"ubd0={image}", "root=/dev/ubda", "rw",
+        "init=/lib/systemd/systemd", "con=null", "con0=null,fd:2", "ssl=null",
+        f"ssl1=fd:{liftd_end.fileno()}", f"ssl2=fd:{drive_end.fileno()}",
+        f"liftd.share={share}", "systemd.show_status=0", "quiet"]
+with open(console, "w") as out:
+    sys.exit(subprocess.run(args, stdin=subprocess.DEVNULL, stdout=out, stderr=out,
+                            pass_fds=(liftd_end.fileno(), drive_end.fileno())).returncode)
+PY
+rc=$?
+echo "systemd stage: kernel $kernel, image $(basename "$image")"
+cat "$work/share/results.txt" 2>/dev/null
+if [ ! -s "$work/share/guest.rc" ]; then
+  echo "--- guest log (tail)"
+  tail -40 "$work/share/guest.log" 2>/dev/null
+  echo "--- console (tail)"
+  tail -40 "$work/console.log"
+  die "the guest did not finish (user-mode Linux exit $rc)"
+fi
+oks=$(grep -c '^ok - ' "$work/share/results.txt")
+fails=$(grep -c '^FAIL - ' "$work/share/results.txt")
+if [ "$fails" != 0 ] || [ "$(cat "$work/share/guest.rc")" != 0 ]; then
+  echo "--- guest log (tail)"
+  tail -60 "$work/share/guest.log"
+  keep=/var/tmp/liftd-systemd-stage-failed
+  rm -rf "$keep" && cp -r "$work/share" "$keep" && rm -f "$keep"/*.deb &&
+    echo "--- the guest's log and journal are in $keep"
+  took "$oks ok, $fails FAIL; preparation $prep s"
+  exit 1
+fi
+took "$oks checks ok; preparation $prep s"
+exit 0
+}
