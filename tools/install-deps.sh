@@ -4,6 +4,9 @@
 #   tools/install-deps.sh              build, test and demo
 #   tools/install-deps.sh --uml-can    what the real-SocketCAN stage needs besides (user-mode
 #                                      Linux, its module loader, ip, candump/cangen)
+#   tools/install-deps.sh --uml-systemd  what the systemd stage needs besides (user-mode Linux,
+#                                      kmod, mmdebstrap and e2fsprogs for the Debian 12 root file
+#                                      system and its ext4 image)
 set -euo pipefail
 
 packages=(
@@ -13,9 +16,10 @@ packages=(
   clang libclang-rt-14-dev clang-format
   python3 python3-jsonschema
 )
-if [ "${1:-}" = --uml-can ]; then
-  packages=(user-mode-linux kmod iproute2 can-utils)
-fi
+case "${1:-}" in
+  --uml-can) packages=(user-mode-linux kmod iproute2 can-utils) ;;
+  --uml-systemd) packages=(user-mode-linux kmod iproute2 mmdebstrap e2fsprogs python3) ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do
@@ -27,5 +31,6 @@ echo "install-deps: installing ${missing[*]}" >&2
 sudo_cmd=()
 [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
 export DEBIAN_FRONTEND=noninteractive
-"${sudo_cmd[@]}" apt-get update -qq
-"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+"${sudo_cmd[@]}" apt-get -o DPkg::Lock::Timeout=600 update -qq
+"${sudo_cmd[@]}" apt-get -o DPkg::Lock::Timeout=600 install -y -qq --no-install-recommends \
+  "${missing[@]}"

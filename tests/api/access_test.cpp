@@ -62,6 +62,20 @@ struct ChildResult {
   std::vector<std::string> lines;  ///< greeting and reply lines
 };
 
+/// In a forked child: switches to uid/gid/groups (exits 3 if it cannot) and connects to `path`.
+/// The connected socket, or -errno. Only async-signal-safe calls.
+int child_connect(const std::string& path, uid_t uid, gid_t gid, const std::vector<gid_t>& groups) {
+  if (::setgroups(groups.size(), groups.data()) != 0 || ::setgid(gid) != 0 || ::setuid(uid) != 0) {
+    ::_exit(3);
+  }
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+  if (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) return -errno;
+  return fd;
+}
+
 /// Forks a child that switches to uid/gid/groups, connects, sends `requests` and reads one line
 /// per request plus the greeting. Only async-signal-safe calls in the child.
 ChildResult run_as(const std::string& path, uid_t uid, gid_t gid, std::vector<gid_t> groups,
@@ -75,16 +89,9 @@ ChildResult run_as(const std::string& path, uid_t uid, gid_t gid, std::vector<gi
   if (pid == 0) {
     ::close(pipe_fds[0]);
     const int out = pipe_fds[1];
-    if (::setgroups(groups.size(), groups.data()) != 0 || ::setgid(gid) != 0 ||
-        ::setuid(uid) != 0) {
-      ::_exit(3);
-    }
-    const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
-    if (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {
-      const int error = errno;
+    const int fd = child_connect(path, uid, gid, groups);
+    if (fd < 0) {
+      const int error = -fd;
       (void)!::write(out, &error, sizeof error);
       ::_exit(0);
     }
@@ -130,15 +137,8 @@ int connect_as(const std::string& path, uid_t uid, gid_t gid, std::vector<gid_t>
   if (::socketpair(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0, pair) != 0) return -1;
   const pid_t pid = ::fork();
   if (pid == 0) {
-    if (::setgroups(groups.size(), groups.data()) != 0 || ::setgid(gid) != 0 ||
-        ::setuid(uid) != 0) {
-      ::_exit(3);
-    }
-    const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
-    if (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) ::_exit(4);
+    const int fd = child_connect(path, uid, gid, groups);
+    if (fd < 0) ::_exit(4);
     char byte = 'x';
     iovec iov{&byte, 1};
     alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};

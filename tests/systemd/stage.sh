@@ -31,7 +31,7 @@ die() {
 }
 
 [ "$(id -u)" = 0 ] || skip "needs root (the root file system image, apt inside it)"
-"$repo/tools/install-uml-deps.sh" || die "cannot install user-mode-linux, mmdebstrap, e2fsprogs"
+"$repo/tools/install-deps.sh" --uml-systemd || die "cannot install user-mode-linux, mmdebstrap, e2fsprogs"
 # Can user-mode Linux run here? A kernel that boots prints its panic when init exits.
 probe=$(timeout 30 linux.uml mem=64M root=/dev/root rootfstype=hostfs rootflags=/ ro init=/bin/true \
   con=null con0=null,fd:1 ssl=null 2>&1 | tr -d '\r')
