@@ -304,4 +304,7 @@ check "... without waiting for the line (under 15 s of the tty's 30 s closing wa
 
 note "guest checks took $((SECONDS - t0)) s"
 # For a failed run: the whole journal, next to the results.
-grep -q '^FAIL' "$results" && journalctl -q --no-pager -o short-monotonic >$share/journal.txt
+if grep -q '^FAIL' "$results"; then
+  journalctl -q --no-pager -o short-monotonic >$share/journal.txt
+fi
+exit 0  # the checks' verdicts are in $results; the stage counts them
