@@ -94,7 +94,7 @@ printf '%-50s %12s   %s\n' "skipped cycles (late sends) in $((rounds * round_cyc
 printf '%-50s %12s   %s\n' "  reference loop wake-ups later than 1375 us" "$ref_beyond" "(the platform's share)"
 printf '%-50s %12s   %s\n' "CPU per cycle, DCP / echo engine (us: $dcp_cpu / $echo_cpu)" "$cpu_ratio" "<= 1.3"
 printf '%-50s %12s   %s\n' "  inside the engine's calls, us: DCP / echo" "$dcp_work / $echo_work" "(protocol work)"
-# Issue 28: under 8 and 32 API clients the cycle's (and the USS bus's) wake-up lateness p99 at
+# The real-time criterion: under 8 and 32 API clients the wake-up lateness p99 of the cycle (and the USS bus) at
 # most 1.1 x the reference loop's in the same window, no skipped cycle the reference does not
 # show, no missing reply, no link fault. api-load-bench prints one verdict line per link and load;
 # a MISS is marked at the end of the row, with liftd's own share (misses the reference link did

@@ -39,7 +39,7 @@ constexpr std::chrono::milliseconds kAcceptRetry{100};
 /// Request lines of one client handled in one turn of the io thread. A client that pipelines
 /// more waits for its next turn behind everything else the io thread has queued (the other
 /// clients' turns, the cycle's wake-ups that carry the watchers' events), so every client gets
-/// a fair share and none holds the thread for a whole batch (issue 28).
+/// a fair share and none holds the thread for a whole batch.
 constexpr std::size_t kLinesPerTurn = 4;
 
 void default_log(LogLevel level, std::string_view message) {

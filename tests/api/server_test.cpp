@@ -102,7 +102,7 @@ TEST_F(ApiServer, AnswersPipelinedRequestsInOrderAndIgnoresBlankLines) {
 }
 
 TEST_F(ApiServer, APipeliningClientTakesTurnsWithTheOthers) {
-  // Issue 28: one client's batch of requests must not hold the io thread while another waits.
+  // One client's batch of requests must not hold the io thread while another waits.
   // The io thread is held until both clients have written, so both are readable at once; the
   // batch came first. The one request of the second client is handled after at most one turn
   // of the first (a handful of lines), not after the whole batch.

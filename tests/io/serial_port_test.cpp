@@ -202,7 +202,7 @@ TEST(IoSerialPort, HangUpIsReportedAsDeviceLostEverywhere) {
   EXPECT_EQ(port.value().wait_readable(mono_now() + milliseconds(200)).status,
             IoStatus::DeviceLost);
   EXPECT_EQ(port.value().write_frame(buf).status, IoStatus::DeviceLost);
-  // The real-time side's calls (issue 28) see it too: TIOCINQ on a hung-up tty answers EIO.
+  // The real-time side's calls see it too: TIOCINQ on a hung-up tty answers EIO.
   EXPECT_EQ(port.value().input_queued().status, IoStatus::DeviceLost);
   EXPECT_EQ(port.value().read_queued(buf).status, IoStatus::DeviceLost);
   EXPECT_EQ(port.value().wait_queued(mono_now() + milliseconds(200), milliseconds(1)).status,
@@ -214,7 +214,7 @@ TEST(IoSerialPort, HangUpIsReportedAsDeviceLostEverywhere) {
   EXPECT_EQ(port.value().flush_queued().status, IoStatus::DeviceLost);
 }
 
-// The reads of the real-time threads (issue 28): they take only what the line discipline
+// The reads of the real-time threads: they take only what the line discipline
 // already holds and wait with their own sleeps, never in read(2) or poll(2) on an empty tty
 // (which wait for the tty's normal-priority flip-buffer worker). A pty delivers through that
 // worker too, so each test first waits (up to 2 s, not a timing assumption) for the bytes.

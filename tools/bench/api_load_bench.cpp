@@ -6,9 +6,9 @@
 // clock_nanosleep loop with the cycle's period and priority, which stands for what the platform
 // gives any real-time thread. Each window (quiet, then 1, 8 and 32 clients sending `status` as
 // fast as they can) measures all three at once, so the cycle's and the bus's wake-up lateness are
-// read against the reference's under the same load in the same run (issue 28: at most 1.1 times
-// the reference's p99, no skipped cycle the reference does not also show, no missing reply, no
-// link fault). Also prints requests per second and request latency per load.
+// read against the reference's under the same load in the same run (the criterion: at most 1.1
+// times the reference's p99, no skipped cycle the reference does not also show, no missing reply,
+// no link fault). Also prints requests per second and request latency per load.
 #include <poll.h>
 #include <signal.h>
 #include <unistd.h>
@@ -408,7 +408,7 @@ double ratio(const HistogramData& d, const HistogramData& ref) {
   return r > 0 ? d.percentile_us(0.99) / r : 0;
 }
 
-/// Issue 28's criterion for one loaded window: p99 at most 1.1 times the reference's.
+/// The criterion for one loaded window: p99 at most 1.1 times the reference's.
 constexpr double kMaxRatio = 1.1;
 
 }  // namespace
@@ -578,7 +578,7 @@ int main(int argc, char** argv) {
     std::printf("  %-11s %9.0f %9.1f %9.1f %9.2f\n", w.name.c_str(), w.load.requests_per_s,
                 w.load.latency_p50_us, w.load.latency_p99_us, w.load.fairness);
   }
-  // One verdict line per loaded window and link, for tools/bench.sh. The criterion of issue 28
+  // One verdict line per loaded window and link, for tools/bench.sh. The criterion
   // (p99 at most 1.1 x the reference loop's, no skipped cycle it does not also show, no missing
   // reply, no link fault), and beside it liftd's own share: misses the reference link also had
   // in the same window are the platform's (the tty's flip-buffer worker), as are the link faults
@@ -636,7 +636,7 @@ int main(int argc, char** argv) {
       static_cast<unsigned long long>(counters.skipped_cycles),
       static_cast<unsigned long long>(counters.missing_replies),
       static_cast<unsigned long long>(counters.late_replies));
-  std::printf("issue 28 criterion under 8 and 32 clients: %s; liftd's own share: %s\n",
+  std::printf("real-time criterion under 8 and 32 clients: %s; liftd's own share: %s\n",
               all_ok ? "met" : "MISSED", own_all_ok ? "met" : "MISSED");
   daemon.request_stop("benchmark done");
   daemon_thread.join();

@@ -111,8 +111,8 @@ check "the car arrives at floor 2" wait_for 60 idle_at 2
 check "the drive stands at 6000 mm (within 5 mm)" at_a_level
 level_note
 
-# ---- users and groups (issue 29.1): each role from a real login user
-section "users and groups (issue 29.1): each role from a real login user"
+# ---- users and groups: each role from a real login user
+section "users and groups: each role from a real login user"
 useradd -m -s /bin/bash -G liftd reader
 useradd -m -s /bin/bash -G liftd-control controller
 useradd -m -s /bin/bash -G liftd-io ioboard
@@ -208,8 +208,8 @@ check "the watchdog kills and restarts a liftd frozen with SIGSTOP" \
 check "the journal says Watchdog timeout" jgrep watchdog 'Watchdog timeout' -u liftd
 wait_for 30 link_up
 
-# ---- 20 healthy starts without a watchdog alarm (issue 29.3)
-section "20 healthy starts without a watchdog alarm (issue 29.3)"
+# ---- 20 healthy starts without a watchdog alarm
+section "20 healthy starts without a watchdog alarm"
 mark starts
 for i in $(seq 20); do
   systemctl restart liftd
@@ -221,8 +221,8 @@ check "no watchdog warning after the 20 starts (journalctl -p warning)" \
   eval "! jgrep starts 'stopped answering the systemd watchdog\|no progress' -x -u liftd -p warning"
 wait_for 30 link_up
 
-# ---- a bad start with a client reconnecting (issue 29.2)
-section "a bad start with a client reconnecting (issue 29.2)"
+# ---- a bad start with a client reconnecting
+section "a bad start with a client reconnecting"
 cp $conf /root/liftd.json.orig
 set_key $conf 'c["dcp"]["link_falt_frames"] = 10'
 mark bad
@@ -274,8 +274,8 @@ level_note
 check "the journal has liftd's stop with exit code 0" \
   bash -c "journalctl -q -u liftd LIFTD_EVENT=stopped -o verbose -n 1 | grep -q 'LIFTD_EXIT_CODE=0'"
 
-# ---- a stop with a line that cannot drain (issue 29.4)
-section "a stop with a line that cannot drain (issue 29.4)"
+# ---- a stop with a line that cannot drain
+section "a stop with a line that cannot drain"
 touch /run/stage/sim.stop
 wait $ioboard
 (cd /root && apt install -y ./liftd_*.deb >/dev/null 2>&1)
