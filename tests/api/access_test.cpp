@@ -130,6 +130,22 @@ ChildResult run_as(const std::string& path, uid_t uid, gid_t gid, std::vector<gi
   return result;
 }
 
+/// One byte with room for one descriptor (SCM_RIGHTS), for sendmsg and recvmsg alike.
+struct FdMessage {
+  FdMessage() {
+    msg.msg_iov = &iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = control;
+    msg.msg_controllen = sizeof control;
+  }
+  FdMessage(const FdMessage&) = delete;
+  FdMessage& operator=(const FdMessage&) = delete;
+  char byte = 'x';
+  iovec iov{&byte, 1};
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
+  msghdr msg{};
+};
+
 /// A socket connected by a child running as uid/gid/groups, handed back over SCM_RIGHTS: the
 /// server sees the child's credentials, the test talks through it. -1 on failure.
 int connect_as(const std::string& path, uid_t uid, gid_t gid, std::vector<gid_t> groups) {
@@ -139,33 +155,19 @@ int connect_as(const std::string& path, uid_t uid, gid_t gid, std::vector<gid_t>
   if (pid == 0) {
     const int fd = child_connect(path, uid, gid, groups);
     if (fd < 0) ::_exit(4);
-    char byte = 'x';
-    iovec iov{&byte, 1};
-    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
-    msghdr msg{};
-    msg.msg_iov = &iov;
-    msg.msg_iovlen = 1;
-    msg.msg_control = control;
-    msg.msg_controllen = sizeof control;
-    cmsghdr* c = CMSG_FIRSTHDR(&msg);
+    FdMessage m;
+    cmsghdr* c = CMSG_FIRSTHDR(&m.msg);
     c->cmsg_level = SOL_SOCKET;
     c->cmsg_type = SCM_RIGHTS;
     c->cmsg_len = CMSG_LEN(sizeof(int));
     std::memcpy(CMSG_DATA(c), &fd, sizeof fd);
-    ::_exit(::sendmsg(pair[1], &msg, 0) == 1 ? 0 : 5);
+    ::_exit(::sendmsg(pair[1], &m.msg, 0) == 1 ? 0 : 5);
   }
   ::close(pair[1]);
-  char byte = 0;
-  iovec iov{&byte, 1};
-  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
-  msghdr msg{};
-  msg.msg_iov = &iov;
-  msg.msg_iovlen = 1;
-  msg.msg_control = control;
-  msg.msg_controllen = sizeof control;
+  FdMessage m;
   int fd = -1;
-  if (::recvmsg(pair[0], &msg, 0) == 1) {
-    if (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr && c->cmsg_type == SCM_RIGHTS) {
+  if (::recvmsg(pair[0], &m.msg, 0) == 1) {
+    if (cmsghdr* c = CMSG_FIRSTHDR(&m.msg); c != nullptr && c->cmsg_type == SCM_RIGHTS) {
       std::memcpy(&fd, CMSG_DATA(c), sizeof fd);
     }
   }
