@@ -7,6 +7,7 @@
 #   tools/install-deps.sh --uml-systemd  what the systemd stage needs besides (user-mode Linux,
 #                                      kmod, mmdebstrap and e2fsprogs for the Debian 12 root file
 #                                      system and its ext4 image)
+#   tools/install-deps.sh --with-uml   all three at once (tools/test.sh: one apt-get run)
 set -euo pipefail
 
 packages=(
@@ -16,9 +17,12 @@ packages=(
   clang libclang-rt-14-dev clang-format
   python3 python3-jsonschema
 )
+uml_can=(user-mode-linux kmod iproute2 can-utils)
+uml_systemd=(user-mode-linux kmod iproute2 mmdebstrap e2fsprogs python3)
 case "${1:-}" in
-  --uml-can) packages=(user-mode-linux kmod iproute2 can-utils) ;;
-  --uml-systemd) packages=(user-mode-linux kmod iproute2 mmdebstrap e2fsprogs python3) ;;
+  --uml-can) packages=("${uml_can[@]}") ;;
+  --uml-systemd) packages=("${uml_systemd[@]}") ;;
+  --with-uml) packages+=("${uml_can[@]}" "${uml_systemd[@]}") ;;
 esac
 
 missing=()

@@ -1,19 +1,29 @@
 // dcp-drive-sim: the simulated DCP drive on a serial device or pty at 38400 8N1, a command-line
 // front end over sim::SerialDriveRunner (which finds frames by the inter-frame gap and answers
 // them inside the DCP 7.2 window). Everything the drive does is printed; faults can be switched
-// on stdin while it runs ("help" lists them).
+// on stdin while it runs ("help" lists them). With --encoder it is also the shaft's absolute
+// encoder on CAN: the simulated car's position, as a process beside liftd would get it from a
+// real encoder (position.source "can").
 #include <poll.h>
 #include <signal.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
+#include <array>
+#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "can/frame.hpp"
+#include "can/socket.hpp"
 #include "common/mono_time.hpp"
 #include "common/version.hpp"
 #include "sim/serial_runner.hpp"
@@ -34,26 +44,111 @@ struct Options {
   liftd::sim::DriveConfig config;
   liftd::sim::RunnerOptions runner;
   double status_interval_s = 0.0;
+  std::string encoder;         ///< "unix:PATH" (listen there) or a CAN interface; empty: none
+  long encoder_period_ms = 5;  ///< how often the encoder sends the position
+};
+
+// The encoder's frame: identifier 0x190 (position.can_id 400), the position in whole mm as four
+// bytes little endian, two's complement from byte 0 (position.can_signed true, the other
+// position.can_* keys at their defaults: offset 0, length 4, 1000 um per count, offset 0 mm).
+constexpr std::uint32_t kEncoderId = 0x190;
+
+liftd::can::Frame encoder_frame(double position_mm) {
+  const auto count =
+      static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(position_mm)));
+  const std::array<std::uint8_t, 4> bytes = {
+      static_cast<std::uint8_t>(count), static_cast<std::uint8_t>(count >> 8),
+      static_cast<std::uint8_t>(count >> 16), static_cast<std::uint8_t>(count >> 24)};
+  return liftd::can::make_frame(kEncoderId, bytes);
+}
+
+/// Sends the simulated car's position every period on its own thread: to whoever is connected
+/// to a Unix endpoint (one reader at a time, the newest wins) or onto a CAN interface.
+class EncoderSender {
+ public:
+  EncoderSender(const SerialDriveRunner& runner, std::chrono::milliseconds period)
+      : runner_(runner), period_(period) {}
+  ~EncoderSender() { stop(); }
+
+  /// Opens the endpoint; the error text, or empty.
+  std::string open(const std::string& endpoint) {
+    if (endpoint.rfind("unix:", 0) == 0) {
+      auto l = liftd::can::listen_unix(endpoint.substr(5));
+      if (!l) return l.error().what + ": " + std::strerror(l.error().code);
+      listener_ = l.value();
+    } else {
+      auto s = liftd::can::CanSocket::open(endpoint, {kEncoderId});
+      if (!s) return s.error().what + ": " + std::strerror(s.error().code);
+      peer_.emplace(std::move(s.value()));
+    }
+    thread_ = std::thread([this] { run(); });
+    return {};
+  }
+  void stop() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+    if (listener_ >= 0) ::close(listener_);
+    listener_ = -1;
+  }
+
+ private:
+  void run() {
+    while (!stop_) {
+      pollfd fd{listener_, POLLIN, 0};
+      const int n = ::poll(&fd, listener_ >= 0 ? 1 : 0, static_cast<int>(period_.count()));
+      if (n > 0 && (fd.revents & POLLIN) != 0) {
+        const int c = ::accept4(listener_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+        if (c >= 0) peer_.emplace(liftd::can::CanSocket::adopt(c, {kEncoderId}));
+      }
+      if (!peer_) continue;
+      // What the reader sends is not for the encoder; reading it notices a reader that left.
+      using Kind = liftd::can::Received::Kind;
+      for (Kind kind = peer_->read().kind; kind != Kind::Nothing; kind = peer_->read().kind) {
+        if (kind == Kind::Closed || kind == Kind::Failed) {
+          if (listener_ >= 0) peer_.reset();  // a Unix reader left; an interface stays
+          break;
+        }
+      }
+      if (!peer_) continue;
+      const double position = runner_.encoder_sample().position_at_mm(liftd::mono_now());
+      const int err = peer_->write(encoder_frame(position));
+      if (err != 0 && err != EAGAIN && err != ENOBUFS && listener_ >= 0) peer_.reset();
+    }
+  }
+
+  const SerialDriveRunner& runner_;
+  std::chrono::milliseconds period_;
+  int listener_ = -1;
+  std::optional<liftd::can::CanSocket> peer_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
 };
 
 void usage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: dcp-drive-sim --device PATH [--dcp 3|4] [options]\n"
-               "  --device PATH        serial device or pty slave (38400 8N1)\n"
-               "  --dcp 3|4            DCP type answered in I0 (default 4)\n"
-               "  --reply-delay-us N   reply delay after the frame's last byte (default 1000)\n"
-               "  --gap-us N           gap inside a frame that resynchronises (default 1000)\n"
-               "  --position-mm N      car position at start (default 0)\n"
-               "  --maker XX           drive maker code in I0 (default KW)\n"
-               "  --no-init            travel without a prior I0 exchange\n"
-               "  --older-drive        ignore I1, answer I0 with odd version/date fields\n"
-               "  --frames N           exit after N master frames\n"
-               "  --status S           print a status line every S seconds\n"
-               "  --reconnect          reopen a lost device instead of exiting\n"
-               "  --quiet              print only start, faults and the summary\n"
-               "stdin commands: fault|warn|notready on|off, badsum|s7|late|noreply|garbage N,\n"
-               "  rate badsum|s7|late|noreply|garbage P, channel partial|garbage|silence,\n"
-               "  clear, status, help\n");
+  std::fprintf(
+      out,
+      "usage: dcp-drive-sim --device PATH [--dcp 3|4] [options]\n"
+      "  --device PATH        serial device or pty slave (38400 8N1)\n"
+      "  --dcp 3|4            DCP type answered in I0 (default 4)\n"
+      "  --reply-delay-us N   reply delay after the frame's last byte (default 1000)\n"
+      "  --gap-us N           gap inside a frame that resynchronises (default 1000)\n"
+      "  --position-mm N      car position at start (default 0)\n"
+      "  --maker XX           drive maker code in I0 (default KW)\n"
+      "  --no-init            travel without a prior I0 exchange\n"
+      "  --older-drive        ignore I1, answer I0 with odd version/date fields\n"
+      "  --frames N           exit after N master frames\n"
+      "  --status S           print a status line every S seconds\n"
+      "  --reconnect          reopen a lost device instead of exiting\n"
+      "  --quiet              print only start, faults and the summary\n"
+      "  --encoder ENDPOINT   also be the shaft's absolute encoder on CAN: unix:PATH\n"
+      "                       (listen there, as liftd's can.interface unix:PATH) or an\n"
+      "                       interface (vcan0); id 0x190, 4 bytes little endian, signed,\n"
+      "                       1 mm per count (position.can_signed true, the other\n"
+      "                       position.can_* keys at their defaults)\n"
+      "  --encoder-period-ms N  how often the encoder sends (default 5)\n"
+      "stdin commands: fault|warn|notready on|off, badsum|s7|late|noreply|garbage N,\n"
+      "  rate badsum|s7|late|noreply|garbage P, channel partial|garbage|silence,\n"
+      "  clear, status, help\n");
 }
 
 bool parse(int argc, char** argv, Options& o) {
@@ -91,6 +186,11 @@ bool parse(int argc, char** argv, Options& o) {
       o.runner.reconnect = true;
     } else if (a == "--quiet") {
       o.runner.quiet = true;
+    } else if (a == "--encoder" && (v = next())) {
+      o.encoder = v;
+    } else if (a == "--encoder-period-ms" && (v = next())) {
+      o.encoder_period_ms = std::strtol(v, nullptr, 10);
+      if (o.encoder_period_ms < 1 || o.encoder_period_ms > 1000) return false;
     } else {
       return false;
     }
@@ -149,6 +249,7 @@ int main(int argc, char** argv) {
   sa.sa_handler = on_signal;
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  signal(SIGPIPE, SIG_IGN);
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
 
   SerialDriveRunner runner(opt.config, opt.runner);
@@ -161,6 +262,17 @@ int main(int argc, char** argv) {
               opt.config.protocol == liftd::dcp::Protocol::Dcp3 ? '3' : '4',
               opt.runner.device.c_str(), static_cast<long long>(opt.config.reply_delay.count()),
               runner.port_features().rs485_enabled ? ", kernel RS485" : "");
+  // Only this thread reads the runner's encoder sample from here on (one reader, see there).
+  EncoderSender encoder(runner, std::chrono::milliseconds(opt.encoder_period_ms));
+  if (!opt.encoder.empty()) {
+    if (const std::string error = encoder.open(opt.encoder); !error.empty()) {
+      std::fprintf(stderr, "dcp-drive-sim: encoder %s: %s\n", opt.encoder.c_str(), error.c_str());
+      runner.stop();
+      return 1;
+    }
+    std::printf("dcp-drive-sim: encoder on %s, every %ld ms (id 0x%03X)\n", opt.encoder.c_str(),
+                opt.encoder_period_ms, kEncoderId);
+  }
 
   bool stdin_open = true;
   std::string pending_line;
@@ -193,6 +305,7 @@ int main(int argc, char** argv) {
                               std::chrono::duration<double>(opt.status_interval_s));
     }
   }
+  encoder.stop();
   runner.stop();
   print_events(runner);
   const auto s = runner.status();

@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """The stage's drive and I/O board inside the guest.
 
-Runs dcp-drive-sim on /dev/ttyS2 (the far end of liftd's /dev/ttyS1) and, as the I/O board's
-daemon would, keeps an API connection that sends liftd the machine inputs (safety chain and
-doors closed and locked) with the car position the simulated drive reports. Files under
+Runs dcp-drive-sim on /dev/ttyS2 (the far end of liftd's /dev/ttyS1), which is also the shaft's
+absolute encoder (CAN frames on the Unix endpoint /run/stage/encoder.sock, liftd's
+can.interface), and, as the I/O board's daemon would, keeps an API connection that sends liftd
+the machine inputs (safety chain and doors closed and locked). Files under
 /run/stage steer it: sim.cmd (a FIFO: lines for the drive's stdin, e.g. "fault on"),
 io.pause (while it exists: no API connection), io.pause-at-end (becomes io.pause when the
 connection ends: liftd stopped), sim.stop (end the drive for good). It writes
@@ -20,9 +21,7 @@ import time
 RUN = "/run/stage"
 SIM = sys.argv[1] if len(sys.argv) > 1 else "/usr/bin/dcp-drive-sim"
 STATUS = re.compile(r"pos (-?[0-9.]+) mm v ([-+0-9.]+) m/s")
-# The drive's newest position (mm), speed (m/s) and when its line was read: the position sent
-# is extrapolated to the moment of sending (by at most 50 ms), as an encoder would have it.
-position = [0.0, 0.0, time.monotonic()]
+ENCODER = f"{RUN}/encoder.sock"
 
 
 def log(text):
@@ -35,7 +34,6 @@ def read_sim(sim):
         for line in sim.stdout:
             m = STATUS.search(line)
             if m:
-                position[:] = [float(m.group(1)), float(m.group(2)), time.monotonic()]
                 with open(f"{RUN}/sim.status.tmp", "w") as f:
                     f.write(line)
                 os.replace(f"{RUN}/sim.status.tmp", f"{RUN}/sim.status")
@@ -56,8 +54,11 @@ def main():
     os.makedirs(RUN, exist_ok=True)
     if not os.path.exists(f"{RUN}/sim.cmd"):
         os.mkfifo(f"{RUN}/sim.cmd")
-    sim = subprocess.Popen([SIM, "--device", "/dev/ttyS2", "--status", "0.01", "--reconnect"],
-                           stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, bufsize=1)
+    # The encoder's socket is for liftd's user too (umask 0: connecting needs write access).
+    sim = subprocess.Popen([SIM, "--device", "/dev/ttyS2", "--status", "0.01", "--reconnect",
+                            "--encoder", f"unix:{ENCODER}"],
+                           stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, bufsize=1,
+                           preexec_fn=lambda: os.umask(0))
     threading.Thread(target=read_sim, args=(sim,), daemon=True).start()
     threading.Thread(target=forward_commands, args=(sim,), daemon=True).start()
     conn = None
@@ -86,10 +87,8 @@ def main():
                 conn = None
                 time.sleep(0.2)
                 continue
-        pos, speed, seen = position
-        now_mm = pos + speed * 1000.0 * min(time.monotonic() - seen, 0.05)
         request = ('{"cmd":"inputs","safety_chain":true,"doors_closed":true,"doors_locked":true,'
-                   f'"zone_level":false,"position_mm":{round(now_mm)}}}\n')
+                   '"zone_level":false}\n')
         try:
             conn.send(request.encode())
             while True:
