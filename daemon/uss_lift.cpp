@@ -705,10 +705,14 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
           up ? "USS slave " + address + " answers" + (drive ? " (the drive)" : "")
              : "USS slave " + address + " does not send (no good reply in time, USS A 5.2.1.1)" +
                    (drive ? ": the drive; no travel" : "");
-      // A slave that does not send is the catalog's uss_slave_fault.
-      log::event(up ? log::Level::info : log::Level::warn, "uss",
-                 up ? "link_state_changed" : "uss_slave_fault",
-                 {{"state", up ? "up" : "fault"}, {"address", address}}, text);
+      // A slave that does not send is the catalog's uss_slave_fault. A flapping link journals
+      // a few lines, then one count per 10 s (after_events); watchers get every change.
+      last_link_line_ = text;
+      if (link_lines_.admit(1, event.at)) {
+        log::event(up ? log::Level::info : log::Level::warn, "uss",
+                   up ? "link_state_changed" : "uss_slave_fault",
+                   {{"state", up ? "up" : "fault"}, {"address", address}}, text);
+      }
       if (drive) daemon_.report_status(std::string("USS drive link ") + (up ? "up" : "fault"));
       server_->publish("link", {{"kind", "state changed"},
                                 {"state", up ? "up" : "fault"},
@@ -773,6 +777,12 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
 }
 
 void UssLift::after_events(MonoTime now) {
+  if (const auto n = link_lines_.suppressed(now)) {
+    log::event(
+        log::Level::warn, "uss", "link_flapping", {{"changes", std::to_string(*n)}},
+        "USS slave links changed " + std::to_string(*n) +
+            " more times in the last 10 s without a line each; the last: " + last_link_line_);
+  }
   if (const auto n = drive_state_lines_.suppressed(now)) {
     log::event(log::Level::warn, "uss", "drive_state_flapping",
                {{"changes", std::to_string(*n)},

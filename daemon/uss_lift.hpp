@@ -154,6 +154,9 @@ class UssLift final : public ControllerLift<UssDrive> {
   /// A status word flapping at the bus's rate: at most a few lines per interval, then a count.
   log::Throttle drive_state_lines_{5, std::chrono::seconds(10)};
   uss::ProfileState last_drive_state_{};
+  // A slave's link flapping (answers / does not send) likewise: a few lines in full, then a count.
+  log::Throttle link_lines_{5, std::chrono::seconds(10)};
+  std::string last_link_line_;
 };
 
 }  // namespace liftd::daemon
