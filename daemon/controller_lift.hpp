@@ -153,8 +153,9 @@ class ControllerBackend : public api::Backend {
     out.faults = active_faults(
         s.faults, s.fault_since, [](lift::FaultCode code) { return Drive::fault_text(code); },
         [this](MonoTime at) { return wall_time(at); });
-    out.drive_state = drive::state_of(out.link == api::LinkState::Up,
-                                      s.travel_kind != TravelKind::None, !out.faults.empty());
+    out.drive_state =
+        drive::state_of(out.link == api::LinkState::Up, s.travel_kind != TravelKind::None,
+                        !out.faults.empty(), s.drive_allows_travel);
     out.position_mm = s.position_mm;
     if (s.floor) out.floor = static_cast<int>(*s.floor);
     if (s.travel_kind == TravelKind::None && s.floor) out.next_possible_stop = out.floor;

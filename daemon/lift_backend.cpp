@@ -121,8 +121,9 @@ api::StatusSnapshot LiftBackend::status() {
     out.faults.push_back({std::string(control::fault_code_name(code)),
                           std::string(control::fault_text(code)), wall_time(s.fault_since[i])});
   }
-  out.drive_state = drive::state_of(s.link == dcp::LinkState::Up,
-                                    s.travel_kind != travel::TravelKind::None, !out.faults.empty());
+  out.drive_state =
+      drive::state_of(s.link == dcp::LinkState::Up, s.travel_kind != travel::TravelKind::None,
+                      !out.faults.empty(), s.drive_allows_travel);
   const rt::RtThreadStatus& rt = runner_.thread_status();
   out.rt.realtime = rt.realtime;
   out.rt.policy = rt.realtime ? "SCHED_FIFO" : "SCHED_OTHER";

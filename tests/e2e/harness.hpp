@@ -194,6 +194,15 @@ class Lift {
   json call(const json& request) { return client_->call(request); }
   /// The `status` result.
   json status() { return client_->call({{"cmd", "status"}})["result"]; }
+  /// Polls `status` until `drive.state` is `state`; false after `timeout`.
+  bool wait_drive_state(const std::string& state, std::chrono::milliseconds timeout = 10s) {
+    const auto end = Clock::now() + timeout;
+    while (Clock::now() < end) {
+      if (status()["drive"]["state"] == state) return true;
+      client_->drain(50ms);
+    }
+    return false;
+  }
   /// The flight-recorder files (liftd-trace-*.txt) in dir(), by name.
   std::vector<std::filesystem::path> trace_files() const {
     std::vector<std::filesystem::path> out;

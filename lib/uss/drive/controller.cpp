@@ -402,7 +402,7 @@ void UssController::publish(MonoTime now) noexcept {
   s.expected_cycle_time = master_.expected_cycle_time();
   s.last_cycle_time = master_.last_cycle_time();
   s.speed = travel_.speed();
-  fill_lift_snapshot(s, now, in.inputs);
+  fill_lift_snapshot(s, now, in);
   s.quiesced = shutting_down_ && !travel_.busy() && (last_output_.stw & stw::kOn) == 0 &&
                !last_output_.brake_open && !last_output_.contactors_on &&
                !(in.link_ok && operation_enabled(in.zsw));

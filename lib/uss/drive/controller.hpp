@@ -186,6 +186,8 @@ struct ControllerSnapshot {
   std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
   bool shutting_down = false;
   bool quiesced = false;  ///< shutting down, no run, OFF1 (or OFF2) sent, brake and contactors off
+  /// The drive lets a travel start now (LiftTravel::drive_forbidding(): status drive.state).
+  bool drive_allows_travel = false;
 };
 
 using lift::kCommandQueueSize;
