@@ -41,7 +41,8 @@ const DriveCase kCases[] = {
       {"floors", kThreeFloors},
       {"travel", {{"dcp3_decel_distance_mm", {{"V4", 700}, {"V3", 500}}}}},
       {"uss", {{"speeds", {{"V0", 10}, {"VN", 3}, {"VI", 30}, {"V3", 63}, {"V4", 100}}}}}},
-     "local control", ""},
+     "local control",
+     "in local control (status word bit 9 = 0): no travel starts"},
 };
 
 class DriveStateTest : public ::testing::TestWithParam<DriveCase> {

@@ -64,6 +64,15 @@ TEST(UssController, TheSnapshotAllowsATravelExactlyWhenTheDriveTakesControl) {
   EXPECT_FALSE(local.drive_allows_travel);
   EXPECT_TRUE(std::none_of(local.faults.begin(), local.faults.end(), [](bool f) { return f; }))
       << "local control is no fault";
+  const auto control_told = [&] {
+    std::vector<bool> out;
+    for (const auto& e : bus.events) {
+      if (e.kind == ControllerEvent::Kind::DriveState) out.push_back(e.plc_control);
+    }
+    return out;
+  };
+  ASSERT_FALSE(control_told().empty());
+  EXPECT_FALSE(control_told().back()) << "the journal's drive_state line is told of it";
   const CommandReply refused = bus.command(1, TravelCommand{2, SpeedName::V4});
   EXPECT_EQ(refused.code, ReplyCode::NotReady);
   EXPECT_NE(refused.detail.find("local control"), std::string_view::npos) << refused.detail;
@@ -72,6 +81,7 @@ TEST(UssController, TheSnapshotAllowsATravelExactlyWhenTheDriveTakesControl) {
   bus.exchange();
   bus.exchange();
   EXPECT_TRUE(bus.controller.snapshot().drive_allows_travel);
+  EXPECT_TRUE(control_told().back());
   EXPECT_EQ(bus.command(2, TravelCommand{2, SpeedName::V4}).code, ReplyCode::Ok);
 }
 
