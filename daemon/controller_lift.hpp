@@ -1,8 +1,9 @@
 // The io-thread side of a lift whose controller runs on a real-time thread of its own behind
 // lock-free queues (SCH001 on the CAN runner, USS on the USS runner), written once for both:
-// the API backend's drive-neutral commands and `status` fields, and the lift's start and stop,
-// its io-thread poll and its service-stop wind-down. What only one drive has (its link and
-// events, its status details, stats and trace) stays in hydraulic_lift.* and uss_lift.*.
+// the API backend's drive-neutral commands and `status` fields, the flight recorder's files (the
+// API's `trace` with `save`, SIGUSR1), and the lift's start and stop, its io-thread poll and its
+// service-stop wind-down. What only one drive has (its link and events, its status details,
+// stats and trace) stays in hydraulic_lift.* and uss_lift.*.
 //
 // `Drive` names the parts of one drive kind (see Sch001Drive, UssDrive):
 //   Controller, Runner, Simulator, Snapshot, Command, CommandReply, Event, TravelKind,
@@ -17,6 +18,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -29,6 +31,7 @@
 #include "daemon/drives.hpp"
 #include "daemon/lift_common.hpp"
 #include "daemon/lift_core.hpp"
+#include "daemon/trace_files.hpp"
 #include "drive/drive.hpp"
 #include "lift/position_source.hpp"
 #include "log/log.hpp"
@@ -51,6 +54,9 @@ class ControllerBackend : public api::Backend {
         runner_(runner),
         sim_(sim),
         inputs_(config, position_feed, sim != nullptr),
+        flight_recorder_(runner.recorder(), default_runtime_dir(config),
+                         static_cast<std::size_t>(config.rt.trace_files_kept),
+                         std::string(Drive::kName)),
         mono_at_start_(mono_now()),
         wall_at_start_(std::chrono::system_clock::now()) {}
 
@@ -92,6 +98,14 @@ class ControllerBackend : public api::Backend {
     }
     done(sim_->apply(request, mono_now()));
   }
+  /// `trace` with `save`: the runner's flight recorder to a file, as the DCP lift writes it.
+  api::Result save_trace() override {
+    return flight_recorder_.save_requested(std::chrono::steady_clock::now());
+  }
+
+  /// Writes the flight recorder to `<runtime dir>/liftd-trace-<UTC time>.txt` and journals it
+  /// with `why` (SIGUSR1).
+  api::Result write_flight_recorder(std::string_view why) { return flight_recorder_.write(why); }
 
   /// Io thread: replies to their clients, requests the controller's thread never answered time
   /// out.
@@ -139,8 +153,9 @@ class ControllerBackend : public api::Backend {
     out.faults = active_faults(
         s.faults, s.fault_since, [](lift::FaultCode code) { return Drive::fault_text(code); },
         [this](MonoTime at) { return wall_time(at); });
-    out.drive_state = drive::state_of(out.link == api::LinkState::Up,
-                                      s.travel_kind != TravelKind::None, !out.faults.empty());
+    out.drive_state =
+        drive::state_of(out.link == api::LinkState::Up, s.travel_kind != TravelKind::None,
+                        !out.faults.empty(), s.drive_allows_travel);
     out.position_mm = s.position_mm;
     if (s.floor) out.floor = static_cast<int>(*s.floor);
     if (s.travel_kind == TravelKind::None && s.floor) out.next_possible_stop = out.floor;
@@ -158,6 +173,8 @@ class ControllerBackend : public api::Backend {
   Simulator* sim_;
   MachineInputs inputs_;  ///< the API's and the simulated machine's inputs
   PendingReplies pending_;
+  /// The runner's recorder to files in the runtime directory.
+  FlightRecorderFiles flight_recorder_;
 
  private:
   void send_inputs(const lift::Inputs& inputs) {
@@ -218,6 +235,7 @@ class ControllerLift : public LiftRunner {
                            [this] { stop_runner(); },
                            [this](std::function<void()> done) { wind_down(std::move(done)); }});
     register_api(daemon_, *server_);
+    daemon_.set_dump_handler([this] { (void)backend_->write_flight_recorder("SIGUSR1"); });
     daemon_.set_progress_probe(progress_probe([this] { return runner_->progress(); }));
     daemon_.set_running_status(running_status);
   }

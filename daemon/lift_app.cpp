@@ -486,6 +486,7 @@ void LiftApp::publish_state_if_changed(MonoTime now) {
   d.call_count = s.call_count;
   d.calls = s.calls;
   d.faults = s.faults;
+  d.drive_allows_travel = s.drive_allows_travel;
   const ContinuousState c{
       s.position_mm ? std::optional<std::int64_t>(*s.position_mm / 10) : std::nullopt, s.data_word};
   const bool discrete_changed = !last_discrete_ || d != *last_discrete_;

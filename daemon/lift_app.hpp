@@ -100,6 +100,7 @@ class LiftApp final : public LiftRunner {
     std::size_t call_count = 0;
     std::array<std::uint8_t, control::kMaxSnapshotCalls> calls{};
     std::array<bool, static_cast<std::size_t>(control::FaultCode::kCount)> faults{};
+    bool drive_allows_travel = false;  ///< drive.state ready / not_ready
     bool operator==(const DiscreteState&) const = default;
   };
   struct ContinuousState {

@@ -1,7 +1,5 @@
 #include "daemon/lift_backend.hpp"
 
-#include <sstream>
-
 #include <algorithm>
 #include <ctime>
 
@@ -71,7 +69,16 @@ LiftBackend::LiftBackend(const config::Config& config, control::DcpController& c
     : config_(config),
       controller_(controller),
       runner_(runner),
-      trace_files_(std::move(runtime_dir), static_cast<std::size_t>(config.rt.trace_files_kept)),
+      flight_recorder_(
+          runner.recorder(), std::move(runtime_dir),
+          static_cast<std::size_t>(config.rt.trace_files_kept), "dcp",
+          [this] {
+            // The decoded column of the protocol the drive speaks now (DCP 3.5).
+            dcp::TraceOptions options;
+            options.protocol = controller_.snapshot().protocol.value_or(dcp::Protocol::Dcp4);
+            options.data_info = *dcp::data_info_type_from_char(config_.dcp.data_info_type);
+            return dcp::trace_decoder(options);
+          }),
       sim_(sim),
       inputs_(config, position_feed, sim != nullptr),
       mono_at_start_(mono_now()),
@@ -114,8 +121,9 @@ api::StatusSnapshot LiftBackend::status() {
     out.faults.push_back({std::string(control::fault_code_name(code)),
                           std::string(control::fault_text(code)), wall_time(s.fault_since[i])});
   }
-  out.drive_state = drive::state_of(s.link == dcp::LinkState::Up,
-                                    s.travel_kind != travel::TravelKind::None, !out.faults.empty());
+  out.drive_state =
+      drive::state_of(s.link == dcp::LinkState::Up, s.travel_kind != travel::TravelKind::None,
+                      !out.faults.empty(), s.drive_allows_travel);
   const rt::RtThreadStatus& rt = runner_.thread_status();
   out.rt.realtime = rt.realtime;
   out.rt.policy = rt.realtime ? "SCHED_FIFO" : "SCHED_OTHER";
@@ -172,48 +180,11 @@ std::vector<api::TraceEntry> LiftBackend::trace(std::size_t max_entries) {
 }
 
 api::Result LiftBackend::save_trace() {
-  if (const auto wait = trace_files_.admit_request(std::chrono::steady_clock::now())) {
-    return Result::fail(api::ErrorCode::Busy, *wait);
-  }
-  return write_flight_recorder("request");
+  return flight_recorder_.save_requested(std::chrono::steady_clock::now());
 }
 
 api::Result LiftBackend::write_flight_recorder(std::string_view why) {
-  const std::vector<rt::FrameRecord> records = runner_.recorder().copy();
-  char stamp[32];
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
-  dcp::TraceOptions options;
-  options.protocol = controller_.snapshot().protocol.value_or(dcp::Protocol::Dcp4);
-  options.data_info = *dcp::data_info_type_from_char(config_.dcp.data_info_type);
-  std::ostringstream text_out;
-  rt::write_text(text_out, records, dcp::trace_decoder(options));
-  const TraceWrite written = trace_files_.write(stamp, text_out.str());
-  if (!written.ok()) {
-    const std::string text = "could not write the flight recorder: " + written.error;
-    log::event(log::Level::warn, "dcp", "trace_not_written", {{"dir", trace_files_.dir()}}, text);
-    return Result::fail(api::ErrorCode::Internal, text);
-  }
-  const std::string& path = written.path;
-  for (const auto& old : written.removed) {
-    log::event(log::Level::info, "dcp", "trace_removed", {{"path", old}},
-               "removed the old flight recorder " + old + " (rt.trace_files_kept " +
-                   std::to_string(config_.rt.trace_files_kept) + ")");
-  }
-  std::size_t bad = 0;
-  for (const auto& r : records) {
-    if ((r.flags & (rt::record_flag::kMissing | rt::record_flag::kBad)) != 0) ++bad;
-  }
-  log::event(log::Level::warn, "dcp", "trace_written",
-             {{"path", path},
-              {"records", std::to_string(records.size())},
-              {"bad_or_missing", std::to_string(bad)}},
-             "flight recorder (" + std::to_string(records.size()) + " records, " +
-                 std::to_string(bad) + " bad or missing replies) written to " + path + " after " +
-                 std::string(why));
-  return Result::ok({{"file", path}, {"records", records.size()}});
+  return flight_recorder_.write(why);
 }
 
 api::DisplaySnapshot LiftBackend::display() {

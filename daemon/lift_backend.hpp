@@ -93,10 +93,10 @@ class LiftBackend final : public api::Backend {
   const config::Config& config_;
   control::DcpController& controller_;
   rt::CycleRunner& runner_;
-  TraceFiles trace_files_;      ///< flight-recorder files in the runtime directory
-  SimulatedLift* sim_;          ///< the simulated lift (liftd --simulate), else nullptr
-  MachineInputs inputs_;        ///< the API's and the simulated machine's inputs
-  DcpStatusFacts dcp_facts_{};  ///< what dcp_details_ was built from
+  FlightRecorderFiles flight_recorder_;  ///< its files in the runtime directory
+  SimulatedLift* sim_;                   ///< the simulated lift (liftd --simulate), else nullptr
+  MachineInputs inputs_;                 ///< the API's and the simulated machine's inputs
+  DcpStatusFacts dcp_facts_{};           ///< what dcp_details_ was built from
   nlohmann::json dcp_details_ = dcp_status_json({});  ///< status.dcp
   std::map<std::uint32_t, Pending> pending_;
   std::uint32_t next_tag_ = 0;

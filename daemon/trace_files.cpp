@@ -9,7 +9,11 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <ctime>
+#include <sstream>
 #include <utility>
+
+#include "log/log.hpp"
 
 namespace liftd::daemon {
 namespace {
@@ -133,6 +137,57 @@ TraceWrite TraceFiles::write(std::string_view stamp, std::string_view text) {
   }
   ::close(dir_fd);
   return out;
+}
+
+FlightRecorderFiles::FlightRecorderFiles(const rt::FlightRecorder& recorder, std::string dir,
+                                         std::size_t keep, std::string component,
+                                         DecoderSource decoder)
+    : recorder_(recorder),
+      files_(std::move(dir), keep),
+      keep_(keep),
+      component_(std::move(component)),
+      decoder_(std::move(decoder)) {}
+
+api::Result FlightRecorderFiles::save_requested(std::chrono::steady_clock::time_point now) {
+  if (const auto wait = files_.admit_request(now)) {
+    return api::Result::fail(api::ErrorCode::Busy, *wait);
+  }
+  return write("request");
+}
+
+api::Result FlightRecorderFiles::write(std::string_view why) {
+  const std::vector<rt::FrameRecord> records = recorder_.copy();
+  char stamp[32];
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
+  std::ostringstream text_out;
+  rt::write_text(text_out, records, decoder_ ? decoder_() : rt::FrameDecoder{});
+  const TraceWrite written = files_.write(stamp, text_out.str());
+  if (!written.ok()) {
+    const std::string text = "could not write the flight recorder: " + written.error;
+    log::event(log::Level::warn, component_, "trace_not_written", {{"dir", files_.dir()}}, text);
+    return api::Result::fail(api::ErrorCode::Internal, text);
+  }
+  const std::string& path = written.path;
+  for (const auto& old : written.removed) {
+    log::event(log::Level::info, component_, "trace_removed", {{"path", old}},
+               "removed the old flight recorder " + old + " (rt.trace_files_kept " +
+                   std::to_string(keep_) + ")");
+  }
+  std::size_t bad = 0;
+  for (const auto& r : records) {
+    if ((r.flags & (rt::record_flag::kMissing | rt::record_flag::kBad)) != 0) ++bad;
+  }
+  log::event(log::Level::warn, component_, "trace_written",
+             {{"path", path},
+              {"records", std::to_string(records.size())},
+              {"bad_or_missing", std::to_string(bad)}},
+             "flight recorder (" + std::to_string(records.size()) + " records, " +
+                 std::to_string(bad) + " bad or missing replies) written to " + path + " after " +
+                 std::string(why));
+  return api::Result::ok({{"file", path}, {"records", records.size()}});
 }
 
 }  // namespace liftd::daemon

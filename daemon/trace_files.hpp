@@ -1,14 +1,20 @@
 // Flight-recorder files in the runtime directory: created safely, capped in number, and saved on
 // request at a limited rate. The directory is a RAM file system under systemd, and anyone able
-// to plant a symbolic link there must not make liftd write elsewhere.
+// to plant a symbolic link there must not make liftd write elsewhere. FlightRecorderFiles is how
+// every drive kind writes its recorder there (the API's `trace` with `save`, SIGUSR1, and on a
+// DCP link fault).
 #pragma once
 
 #include <chrono>
 #include <cstddef>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "api/result.hpp"
+#include "rt/flight_recorder.hpp"
 
 namespace liftd::daemon {
 
@@ -48,6 +54,39 @@ class TraceFiles {
   std::string dir_;
   std::size_t keep_;
   std::optional<std::chrono::steady_clock::time_point> last_request_;
+};
+
+/// One drive's flight recorder written to TraceFiles, alike for every drive kind: the records as
+/// rt::write_text() lines (with the drive's decoded column where it has a decoder) in a new
+/// liftd-trace-<UTC time>.txt, journalled under the drive's component as `trace_written`
+/// (`trace_removed` for each old file beyond the cap, `trace_not_written` when it failed).
+class FlightRecorderFiles {
+ public:
+  /// Makes the decoder of the next file (the DCP decoder follows the negotiated protocol); an
+  /// empty source, or an empty decoder, writes no decoded column.
+  using DecoderSource = std::function<rt::FrameDecoder()>;
+
+  /// Files of `recorder` go to `dir`, at most `keep` of them stay; `component` is the journal's
+  /// (the drive kind: "dcp", "sch001", "uss").
+  FlightRecorderFiles(const rt::FlightRecorder& recorder, std::string dir, std::size_t keep,
+                      std::string component, DecoderSource decoder = {});
+
+  /// The API's `trace` with `save`: `busy` when the last such request was less than
+  /// TraceFiles::kRequestInterval ago, else write("request").
+  api::Result save_requested(std::chrono::steady_clock::time_point now);
+  /// Writes the whole recorder to a new file and journals it "after `why`". The result holds
+  /// `file` and `records`, or `internal` with the reason it was not written.
+  api::Result write(std::string_view why);
+
+  /// The directory.
+  const std::string& dir() const { return files_.dir(); }
+
+ private:
+  const rt::FlightRecorder& recorder_;
+  TraceFiles files_;
+  std::size_t keep_;
+  std::string component_;
+  DecoderSource decoder_;
 };
 
 }  // namespace liftd::daemon

@@ -758,13 +758,19 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
       if (!drive_state_lines_.admit(1, event.at)) break;
       // A drive that reports a fault is the catalog's uss_slave_fault.
       const bool fault = event.drive_state == uss::ProfileState::Fault;
+      // Local control (status word bit 9 = 0): whatever its state, the drive takes no travel
+      // (status drive.state not_ready).
       log::event(fault ? log::Level::warn : log::Level::info, "uss",
                  fault ? "uss_slave_fault" : "drive_state",
                  {{"state", std::string(uss::to_string(event.drive_state))},
+                  {"control", event.plc_control ? "plc" : "local"},
                   {"address", std::to_string(config_.uss.drive_address)},
                   {"status_word", std::to_string(event.zsw)}},
-                 "USS drive: " + std::string(uss::to_string(event.drive_state)) + " (status word " +
-                     std::to_string(event.zsw) + ")");
+                 "USS drive: " + std::string(uss::to_string(event.drive_state)) +
+                     (event.plc_control ? ""
+                                        : ", in local control (status word bit 9 = 0): no "
+                                          "travel starts") +
+                     " (status word " + std::to_string(event.zsw) + ")");
       break;
     }
     case Kind::Travel:

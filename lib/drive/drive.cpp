@@ -24,6 +24,8 @@ std::string_view to_string(State state) noexcept {
       return "travelling";
     case State::Fault:
       return "fault";
+    case State::NotReady:
+      return "not_ready";
   }
   return "offline";
 }

@@ -32,20 +32,28 @@ inline constexpr std::array<std::string_view, 7> kTravelSpeedNames = {"V4", "V3"
 /// The drive as a dispatcher sees it, whatever the kind (status `drive.state`).
 enum class State : std::uint8_t {
   Offline,     ///< no working link to the drive yet (or any more): nothing can move
-  Ready,       ///< link up, no active fault, no travel: a travel may start
+  Ready,       ///< link up, no active fault, no travel, the drive allows one: a travel may start
   Travelling,  ///< a travel (of any kind) is running
   Fault,       ///< link up, but an active fault forbids new travels
+  NotReady,    ///< link up, no fault, but the drive itself does not let a travel start now
+               ///< (DCP S0 = 0, SCH001 RDY = 0, USS in local control or not ready to switch on)
 };
-/// "offline", "ready", "travelling", "fault".
+/// "offline", "ready", "travelling", "fault", "not_ready".
 std::string_view to_string(State state) noexcept;
 
 /// The drive state from the facts every kind has. A running travel counts before a fault (a
 /// fault ends a travel within the cycle, and a warning that only forbids new travels lets the
-/// running one finish); a link that is not up counts before everything.
-constexpr State state_of(bool link_up, bool travelling, bool any_fault) noexcept {
+/// running one finish); a link that is not up counts before everything. `drive_allows_travel` is
+/// the drive's own verdict on a travel starting now: what its controller refuses a travel for on
+/// the drive's side (DCP: travel::CommandGate::drive_forbidding, SCH001:
+/// HydraulicTravel::drive_forbidding, USS: LiftTravel::drive_forbidding), so that `ready` holds
+/// exactly when the drive would let a travel start.
+constexpr State state_of(bool link_up, bool travelling, bool any_fault,
+                         bool drive_allows_travel) noexcept {
   if (!link_up) return State::Offline;
   if (travelling) return State::Travelling;
-  return any_fault ? State::Fault : State::Ready;
+  if (any_fault) return State::Fault;
+  return drive_allows_travel ? State::Ready : State::NotReady;
 }
 
 /// Commands that only some drive kinds have. The common ones (travel, stop, relevel,

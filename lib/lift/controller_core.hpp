@@ -8,8 +8,8 @@
 // snapshot, travel sequencer, travel event and tick input types; the drive's own parts (its link,
 // its travel and relevelling starts, its snapshot fields) stay in the controller. The travel
 // sequencer has kind(), phase(), direction(), target(), busy(), stop(floors, in), abort(cause,
-// now), poll_event() and dropped_events(); its Cause enum has None, Shutdown, SafetyChain,
-// DoorsUnlocked, InputsLost and PositionLost.
+// now), drive_forbidding(in), poll_event() and dropped_events(); its Cause enum has None,
+// Shutdown, SafetyChain, DoorsUnlocked, InputsLost and PositionLost.
 //
 // Threads: the real-time thread calls the protected members; ONE other thread (the daemon's io
 // thread) calls post(), poll_reply(), poll_event(), snapshot() and dropped_events().
@@ -390,9 +390,13 @@ class ControllerCore {
     }
     report_fault(i, now);
   }
-  /// The snapshot fields every lift has: the car, the travel, the inputs, the calls, the faults.
+  /// The snapshot fields every lift has: the car, the travel, the inputs, the calls, the faults,
+  /// and whether the drive lets a travel start by `in` (the travel's drive_forbidding(), the
+  /// check every travel start makes first: status `drive.state`).
   void fill_lift_snapshot(typename Types::Snapshot& s, MonoTime now,
-                          const Inputs& inputs) const noexcept {
+                          const typename Types::Input& in) const noexcept {
+    const Inputs& inputs = in.inputs;
+    s.drive_allows_travel = travel_.drive_forbidding(in) == Types::Cause::None;
     s.at = now;
     s.steps = steps_;
     s.position_mm = lift_.position_mm();

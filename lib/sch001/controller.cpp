@@ -279,7 +279,7 @@ void Sch001Controller::update_faults(const TickInput& in, MonoTime now) noexcept
 
 void Sch001Controller::publish(MonoTime now) noexcept {
   ControllerSnapshot s;
-  fill_lift_snapshot(s, now, build_input(now).inputs);
+  fill_lift_snapshot(s, now, build_input(now));
   s.endpoint_up = endpoint_up_ && !bus_fault_;
   s.heard = link_.heard();
   s.ever_heard = link_.ever_heard();

@@ -82,11 +82,16 @@ std::string_view to_string(Cause cause) noexcept {
   return "none";
 }
 
-Cause HydraulicTravel::forbidding(TravelKind kind, const TickInput& in) const noexcept {
+Cause HydraulicTravel::drive_forbidding(const TickInput& in) const noexcept {
   if (!in.bus_ok) return Cause::BusFault;
   if (in.card_silent) return Cause::CardSilent;
   if (in.card_error) return Cause::CardError;
   if (!in.card_allows_travel) return Cause::CardNotReady;  // no status yet, or RDY = 0 (3e)
+  return Cause::None;
+}
+
+Cause HydraulicTravel::forbidding(TravelKind kind, const TickInput& in) const noexcept {
+  if (const Cause why = drive_forbidding(in); why != Cause::None) return why;
   // The machine's rules, common to every drive kind (lib/lift/gate.hpp). Inspection: the
   // safety chain holds the door contacts.
   const lift::MachineNeeds needs =

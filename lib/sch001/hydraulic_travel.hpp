@@ -136,8 +136,12 @@ class HydraulicTravel {
   /// One step: checks the conditions, moves through the phases, returns the signals.
   TickOutput tick(const lift::FloorTable& floors, const TickInput& in) noexcept;
 
-  /// The condition of `in` that forbids moving now, for a run of `kind`, or None.
+  /// The condition of `in` that forbids moving now, for a run of `kind`, or None: the drive's
+  /// (drive_forbidding()), then the machine's.
   Cause forbidding(TravelKind kind, const TickInput& in) const noexcept;
+  /// The card's side of forbidding(): the bus, a silent card, ERR, RDY (3d, 3e, 3f). Status
+  /// `drive.state` is `ready` only when it is None.
+  Cause drive_forbidding(const TickInput& in) const noexcept;
 
   TravelKind kind() const noexcept { return kind_; }
   /// Something runs: no new run may start.

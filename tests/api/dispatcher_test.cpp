@@ -213,6 +213,38 @@ TEST_F(DispatcherTest, InputsKeepOmittedFields) {
   EXPECT_EQ(reply.at("result").size(), kInputFlags.size() + 1);
 }
 
+// status drive.state from the facts every drive kind has, in the order docs/api.md gives:
+// `ready` only when the drive lets a travel start (its controller's own check of a start).
+TEST(DriveState, IsReadyOnlyWhenTheDriveLetsATravelStart) {
+  struct Case {
+    const char* legend;
+    bool link_up, travelling, any_fault, drive_allows_travel;
+    const char* state;
+  };
+  const Case cases[] = {
+      {"no link", false, false, false, true, "offline"},
+      {"no link, whatever else", false, true, true, false, "offline"},
+      {"a travel runs, even with a fault and S0 = 0", true, true, true, false, "travelling"},
+      {"an active fault", true, false, true, true, "fault"},
+      {"an active fault and a drive not ready", true, false, true, false, "fault"},
+      {"the drive lets no travel start (S0 = 0, RDY = 0, USS local control)", true, false, false,
+       false, "not_ready"},
+      {"the drive lets a travel start", true, false, false, true, "ready"},
+  };
+  for (const Case& c : cases) {
+    EXPECT_EQ(drive::to_string(
+                  drive::state_of(c.link_up, c.travelling, c.any_fault, c.drive_allows_travel)),
+              c.state)
+        << c.legend;
+  }
+}
+
+TEST_F(DispatcherTest, StatusSaysNotReady) {
+  backend_.status_snapshot.drive_state = drive::State::NotReady;
+  const json r = handle(R"({"cmd":"status"})").at("result");
+  EXPECT_EQ(r.at("drive").at("state"), "not_ready");
+}
+
 TEST_F(DispatcherTest, StatusNamesEveryField) {
   backend_.status_snapshot.details["status"]["advance_warning"] = true;
   backend_.status_snapshot.faults.push_back(

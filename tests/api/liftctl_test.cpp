@@ -43,6 +43,18 @@ TEST_F(Liftctl, StatusPrintsASummary) {
   EXPECT_NE(r.output.find("car:      floor 1, position 3000 mm"), std::string::npos) << r.output;
 }
 
+TEST_F(Liftctl, StatusSaysWhatOfTheDriveHoldsATravelBack) {
+  backend_.status_snapshot.drive_kind = drive::Kind::Sch001;
+  backend_.status_snapshot.drive_state = drive::State::NotReady;
+  start_server();
+  const RunResult r = run(liftctl("status"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("drive:    sch001, not_ready (the card reports RDY = 0: no travel "
+                          "starts)"),
+            std::string::npos)
+      << r.output;
+}
+
 TEST_F(Liftctl, JsonPrintsTheRawResult) {
   start_server();
   const RunResult r = run(liftctl("--json status"));

@@ -4,6 +4,8 @@
 // after every stop (DCP 5.12.9), S0 dropping during a travel (DCP 9.1.3, 5.5), the service stop.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "controller_rig.hpp"
 
 namespace liftd::control {
@@ -168,6 +170,30 @@ TEST(DriveNotReady, DuringATravelItFinishesThenNoNewTravelStarts) {
   rig.sim.set_not_ready(false);
   rig.run(100ms);
   EXPECT_EQ(rig.command(TravelCommand{0, std::nullopt, std::nullopt, false}).code, ReplyCode::Ok);
+}
+
+TEST(DriveNotReady, TheSnapshotAllowsATravelExactlyWhenS0Does) {
+  // status drive.state reads drive_allows_travel: the drive's side of the check a travel command
+  // passes (DCP 9.1.3), so `ready` and an accepted travel go together.
+  Rig rig;
+  ASSERT_TRUE(rig.warm_up());
+  EXPECT_TRUE(rig.controller.snapshot().drive_allows_travel);
+  rig.sim.set_not_ready(true);
+  rig.run(100ms);
+  ControllerSnapshot s = rig.controller.snapshot();
+  ASSERT_TRUE(s.status_byte.has_value());
+  EXPECT_EQ(*s.status_byte & dcp::status_bit::kReady, 0);
+  EXPECT_FALSE(s.drive_allows_travel);
+  EXPECT_TRUE(std::none_of(s.faults.begin(), s.faults.end(), [](bool f) { return f; }))
+      << "S0 = 0 is no fault";
+  const CommandReply r = rig.command(TravelCommand{3, std::nullopt, std::nullopt, false});
+  EXPECT_EQ(r.code, ReplyCode::NotReady);
+  EXPECT_EQ(r.detail, "drive not ready (S0 = 0)");
+  EXPECT_FALSE(rig.controller.snapshot().drive_allows_travel);
+  rig.sim.set_not_ready(false);
+  rig.run(100ms);
+  EXPECT_TRUE(rig.controller.snapshot().drive_allows_travel);
+  EXPECT_EQ(rig.command(TravelCommand{3, std::nullopt, std::nullopt, false}).code, ReplyCode::Ok);
 }
 
 TEST(DriveReset, IsRefusedWhileATravelRuns) {

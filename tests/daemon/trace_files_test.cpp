@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -108,6 +109,49 @@ TEST_F(TraceFilesTest, RequestsAreRateLimited) {
   EXPECT_EQ(files.admit_request(t0 + 4s), "a trace was saved less than 10 s ago; try again in 6 s");
   EXPECT_EQ(files.admit_request(t0 + 10s), std::nullopt);
   EXPECT_NE(files.admit_request(t0 + 19s), std::nullopt);
+}
+
+// The one path every drive kind's `trace` save and SIGUSR1 take: the recorder's records as text
+// in a new file, with the drive's decoded column where it has one, under the same rate limit.
+TEST_F(TraceFilesTest, FlightRecorderFilesWriteTheRecorderForAnyDriveKind) {
+  rt::FlightRecorder recorder(16, rt::kCanRecordBytes);
+  const std::array<std::uint8_t, 4> answer = {0x05, 0x51, 0x68, 0x00};  // SCH001 3c, id first
+  const std::array<std::uint8_t, 4> status = {0x05, 0x81, 0x61, 0x02};  // SCH001 3b
+  recorder.record(MonoTime(1s), rt::Direction::Rx, rt::record_flag::kReply, status);
+  recorder.record(MonoTime(1s + 1ms), rt::Direction::Tx, rt::record_flag::kSent, answer);
+  FlightRecorderFiles files(recorder, dir_, 10, "sch001");
+  const api::Result written = files.write("SIGUSR1");
+  ASSERT_TRUE(written.is_ok());
+  const std::string path = written.value().at("file");
+  EXPECT_EQ(path.rfind(dir_ + "/liftd-trace-", 0), 0U) << path;
+  EXPECT_EQ(written.value().at("records"), 2);
+  const std::string text = read(path);
+  EXPECT_THAT(text, HasSubstr("rx 05 81 61 02"));
+  EXPECT_THAT(text, HasSubstr("tx 05 51 68 00"));
+  EXPECT_EQ(text.find(" | "), std::string::npos) << "no decoder, no decoded column";
+
+  // With a decoder (as the DCP lift has), its column; requests rate-limited as TraceFiles does.
+  FlightRecorderFiles decoded(recorder, dir_, 10, "dcp", [] {
+    return rt::FrameDecoder([](const rt::FrameRecord& r) {
+      return std::string(r.direction == rt::Direction::Tx ? "ours" : "theirs");
+    });
+  });
+  const auto now = std::chrono::steady_clock::now();
+  const api::Result saved = decoded.save_requested(now);
+  ASSERT_TRUE(saved.is_ok());
+  EXPECT_THAT(read(saved.value().at("file")), HasSubstr("| theirs"));
+  const api::Result again = decoded.save_requested(now + 1s);
+  ASSERT_FALSE(again.is_ok());
+  EXPECT_EQ(again.error().code, api::ErrorCode::Busy);
+}
+
+TEST_F(TraceFilesTest, FlightRecorderFilesSayWhyTheyCouldNotWrite) {
+  rt::FlightRecorder recorder(4, rt::kUssRecordBytes);
+  FlightRecorderFiles files(recorder, dir_ + "/missing", 10, "uss");
+  const api::Result r = files.write("request");
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_EQ(r.error().code, api::ErrorCode::Internal);
+  EXPECT_THAT(r.error().message, HasSubstr("could not write the flight recorder"));
 }
 
 }  // namespace

@@ -176,6 +176,11 @@ class Lift {
   Client& api() { return *client_; }
   /// The API socket's path (for more clients).
   const std::string& socket() const { return socket_; }
+  /// The daemon's own directory: its config, its API socket, and so its runtime directory
+  /// (flight-recorder files).
+  const std::filesystem::path& dir() const { return dir_; }
+  /// Sends `signal_number` to the daemon (it keeps running unless the signal ends it).
+  void signal(int signal_number) { daemon_->signal(signal_number); }
   /// The daemon's stderr so far (for failure messages).
   std::string log() const { return daemon_->err(); }
   /// Sends `signal_number` to the daemon and waits for it to exit: its exit code, or nullopt
@@ -189,6 +194,27 @@ class Lift {
   json call(const json& request) { return client_->call(request); }
   /// The `status` result.
   json status() { return client_->call({{"cmd", "status"}})["result"]; }
+  /// Polls `status` until `drive.state` is `state`; false after `timeout`.
+  bool wait_drive_state(const std::string& state, std::chrono::milliseconds timeout = 10s) {
+    const auto end = Clock::now() + timeout;
+    while (Clock::now() < end) {
+      if (status()["drive"]["state"] == state) return true;
+      client_->drain(50ms);
+    }
+    return false;
+  }
+  /// The flight-recorder files (liftd-trace-*.txt) in dir(), by name.
+  std::vector<std::filesystem::path> trace_files() const {
+    std::vector<std::filesystem::path> out;
+    for (const auto& entry : std::filesystem::directory_iterator(dir_)) {
+      const std::string name = entry.path().filename().string();
+      if (name.rfind("liftd-trace-", 0) == 0 && entry.path().extension() == ".txt") {
+        out.push_back(entry.path());
+      }
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  }
   /// The car position from `status` (NaN when unknown).
   double position_mm() {
     const json p = status()["car"]["position_mm"];

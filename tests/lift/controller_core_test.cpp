@@ -53,7 +53,10 @@ class StubTravel {
   bool busy() const noexcept { return kind_ != StubKind::None; }
   void set_current_floor(std::size_t floor) noexcept { current_floor_ = floor; }
   std::size_t current_floor() const noexcept { return current_floor_; }
+  /// The drive's side of a start, as the real travels check it first.
+  StubCause drive_forbidding(const StubInput&) const noexcept { return drive_refuse_; }
   StubCause start_travel(std::size_t floor, MonoTime now) noexcept {
+    if (drive_refuse_ != StubCause::None) return drive_refuse_;
     if (refuse_ != StubCause::None) return refuse_;
     kind_ = StubKind::Travel;
     target_ = floor;
@@ -77,6 +80,7 @@ class StubTravel {
   std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
 
   StubCause refuse_ = StubCause::None;
+  StubCause drive_refuse_ = StubCause::None;  ///< the drive's own refusal (drive_forbidding)
 
  private:
   StubKind kind_ = StubKind::None;
@@ -109,6 +113,7 @@ struct StubSnapshot {
   std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults{};
   std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
   bool shutting_down = false;
+  bool drive_allows_travel = false;
 };
 
 using StubTravelCommand = BasicTravelCommand<StubSpeed>;
@@ -180,11 +185,12 @@ class StubController : public ControllerCore<StubTypes> {
     set_fault(FaultCode::InputsLost, !in.inputs.valid, now);
     lift_.update(in.position_mm, Direction::None, std::nullopt);
     StubSnapshot s;
-    fill_lift_snapshot(s, now, in.inputs);
+    fill_lift_snapshot(s, now, in);
     publish_snapshot(s);
   }
   void land(MonoTime now) { travel_.land(now); }
   void refuse_starts(StubCause cause) { travel_.refuse_ = cause; }
+  void drive_refuses(StubCause cause) { travel_.drive_refuse_ = cause; }
 
   std::optional<std::int64_t> position_mm = 0;
 
@@ -243,6 +249,23 @@ TEST_F(ControllerCoreTest, TravelCommandGatesInOrder) {
   EXPECT_EQ(stopping.code, ReplyCode::NotReady);
   EXPECT_EQ(stopping.detail, "the service is stopping");
   EXPECT_TRUE(controller.snapshot().shutting_down);
+}
+
+TEST_F(ControllerCoreTest, TheSnapshotSaysTheDriveAllowsATravelExactlyWhenItsStartCheckPasses) {
+  // status drive.state reads drive_allows_travel: it is the travel's own drive check, so a travel
+  // is refused for the drive exactly while the snapshot says the drive does not allow one.
+  good_inputs();
+  EXPECT_TRUE(controller.snapshot().drive_allows_travel);
+  controller.drive_refuses(StubCause::Refused);
+  controller.step(now);
+  EXPECT_FALSE(controller.snapshot().drive_allows_travel);
+  const CommandReply refused = command(1, StubTravelCommand{2, StubSpeed::V4});
+  EXPECT_EQ(refused.code, ReplyCode::NotReady);
+  EXPECT_FALSE(controller.snapshot().drive_allows_travel);
+  controller.drive_refuses(StubCause::None);
+  controller.step(now);
+  EXPECT_TRUE(controller.snapshot().drive_allows_travel);
+  EXPECT_EQ(command(2, StubTravelCommand{2, StubSpeed::V4}).code, ReplyCode::Ok);
 }
 
 TEST_F(ControllerCoreTest, CallsAreServedByTravelOrAtOnceWhenThere) {

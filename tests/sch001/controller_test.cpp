@@ -134,6 +134,35 @@ TEST_F(Sch001ControllerTest, ALostEndpointIsOneFaultHoweverOftenItIsReopened) {
   EXPECT_FALSE(controller_.snapshot().endpoint_lost);
 }
 
+// status drive.state reads the snapshot's drive_allows_travel, the card's side of the travel
+// check: for each card status, what the snapshot says and what a travel is answered agree.
+TEST_F(Sch001ControllerTest, TheSnapshotAllowsATravelExactlyWhenTheCardDoes) {
+  struct Case {
+    const char* legend;
+    std::uint8_t status;  ///< ERR PNP2 AVV T1 P1 P2 RDY PNP1 (3b)
+    bool allows;
+    ReplyCode travel;
+  };
+  const Case cases[] = {
+      {"RDY = 0: not ready (3e)", 0x00, false, ReplyCode::NotReady},
+      {"ERR with RDY: a fault (3d)", 0x82, false, ReplyCode::Fault},
+      {"RDY with T1 and P1: only reported", 0x1A, true, ReplyCode::Ok},
+      {"RDY = 0 again", 0x00, false, ReplyCode::NotReady},
+      {"RDY: ready", kReady, true, ReplyCode::Ok},
+  };
+  for (const Case& c : cases) {
+    for (int i = 0; i < 3; ++i) run_100ms(c.status);
+    EXPECT_EQ(controller_.snapshot().drive_allows_travel, c.allows) << c.legend;
+    const CommandReply r = ask(TravelCommand{2, Speed::Fast});
+    EXPECT_EQ(r.code, c.travel) << c.legend << ": " << r.detail;
+    if (r.code == ReplyCode::Ok) {
+      // RDY dropping ends the travel (3e): back at rest for the next case.
+      for (int i = 0; i < 3; ++i) run_100ms(0x00);
+      EXPECT_EQ(controller_.snapshot().travel_kind, TravelKind::None) << c.legend;
+    }
+  }
+}
+
 TEST_F(Sch001ControllerTest, NoReplyIsLostWhenCommandsComeFasterThanRepliesAreRead) {
   run_100ms();
   // Clients pipeline calls while the io thread does not read replies: every command the

@@ -2,6 +2,7 @@
 // travels, the drive profile on the wire, faults, parameters, calls, relevelling, inspection.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -48,6 +49,40 @@ TEST(UssController, IdleBusShowsTheDriveReadyInTheSnapshot) {
   ASSERT_GE(bus.stw_sent.size(), 2U);
   EXPECT_EQ(bus.stw_sent[0], 0x0404);
   EXPECT_EQ(bus.stw_sent[1], 0x047E);
+}
+
+// status drive.state reads the snapshot's drive_allows_travel, the drive's side of the travel
+// check: a drive in local control (ZSW bit 9 = 0, C 5.2.1) allows none, and a travel is refused
+// exactly then.
+TEST(UssController, TheSnapshotAllowsATravelExactlyWhenTheDriveTakesControl) {
+  Bus bus;
+  EXPECT_TRUE(bus.controller.snapshot().drive_allows_travel);
+  bus.drive.plc_control = false;
+  bus.exchange();
+  bus.exchange();
+  const ControllerSnapshot local = bus.controller.snapshot();
+  EXPECT_FALSE(local.drive_allows_travel);
+  EXPECT_TRUE(std::none_of(local.faults.begin(), local.faults.end(), [](bool f) { return f; }))
+      << "local control is no fault";
+  const auto control_told = [&] {
+    std::vector<bool> out;
+    for (const auto& e : bus.events) {
+      if (e.kind == ControllerEvent::Kind::DriveState) out.push_back(e.plc_control);
+    }
+    return out;
+  };
+  ASSERT_FALSE(control_told().empty());
+  EXPECT_FALSE(control_told().back()) << "the journal's drive_state line is told of it";
+  const CommandReply refused = bus.command(1, TravelCommand{2, SpeedName::V4});
+  EXPECT_EQ(refused.code, ReplyCode::NotReady);
+  EXPECT_NE(refused.detail.find("local control"), std::string_view::npos) << refused.detail;
+  EXPECT_FALSE(bus.controller.snapshot().drive_allows_travel);
+  bus.drive.plc_control = true;
+  bus.exchange();
+  bus.exchange();
+  EXPECT_TRUE(bus.controller.snapshot().drive_allows_travel);
+  EXPECT_TRUE(control_told().back());
+  EXPECT_EQ(bus.command(2, TravelCommand{2, SpeedName::V4}).code, ReplyCode::Ok);
 }
 
 TEST(UssController, TravelUpAndDownThroughTheMasterLandWithinTolerance) {

@@ -57,6 +57,16 @@ void flatten(const json& value, const std::string& prefix, std::ostringstream& o
   out << (prefix.empty() ? "value" : prefix) << ": " << text(value) << '\n';
 }
 
+/// drive.state, and for `not_ready` what of the drive (`kind`) holds a travel back.
+std::string drive_state_text(const json& kind, const json& state) {
+  if (state != "not_ready") return text(state);
+  const std::string why = kind == "sch001" ? "the card reports RDY = 0"
+                          : kind == "uss"  ? "the drive is in local control or not ready to "
+                                             "switch on"
+                                           : "the drive reports S0 = 0";
+  return "not_ready (" + why + ": no travel starts)";
+}
+
 /// The DCP object of a status: "dcp" since API 2, the "drive" object of API 1 before.
 const json& dcp_of(const json& s) {
   const json& dcp = at(s, "dcp");
@@ -73,7 +83,8 @@ std::string format_status(const json& s) {
   const json& rt = at(s, "rt");
   out << "link:     " << text(at(at(s, "link"), "state")) << '\n';
   if (drive.contains("kind")) {  // API 2
-    out << "drive:    " << text(at(drive, "kind")) << ", " << text(at(drive, "state")) << '\n';
+    out << "drive:    " << text(at(drive, "kind")) << ", "
+        << drive_state_text(at(drive, "kind"), at(drive, "state")) << '\n';
   }
   if (at(drive, "kind") == "sch001") {
     const json& card = at(at(s, "sch001"), "card");

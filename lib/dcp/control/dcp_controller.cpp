@@ -163,21 +163,26 @@ void DcpController::after_cycle(MonoTime now) noexcept {
 travel::CycleInput DcpController::build_input(MonoTime now) noexcept {
   travel::CycleInput in;
   in.now = now;
-  in.link_up = link_.realtime_up();  // DCP 7.3: the real-time channel alone (DCP 5.1)
-  in.reply_fresh = link_.last_exchange_good();
-  in.handshake_done = link_.travel_allowed();
-  in.protocol = link_.protocol().value_or(dcp::Protocol::ComChan);
-  const dcp::DriveSnapshot& drive = link_.drive();
-  if (drive.status) in.status = dcp::Status::from_byte(*drive.status);
-  if (drive.deceleration && !drive.deceleration->saturated) {
-    in.decel_distance_mm = drive.deceleration->deceleration_distance_mm;
-  }
-  in.extended = drive.extended;
+  read_drive(in);
   in.position_mm = position_.position_mm(now);
   in.inputs = effective_inputs(now);
   in.channel_reply = pending_reply_;
   pending_reply_.reset();
   return in;
+}
+
+void DcpController::read_drive(travel::CycleInput& in) const noexcept {
+  in.link_up = link_.realtime_up();  // DCP 7.3: the real-time channel alone (DCP 5.1)
+  in.reply_fresh = link_.last_exchange_good();
+  in.handshake_done = link_.travel_allowed();
+  in.protocol = link_.protocol().value_or(dcp::Protocol::ComChan);
+  const dcp::DriveSnapshot& drive = link_.drive();
+  in.status = drive.status ? dcp::Status::from_byte(*drive.status) : dcp::Status{};
+  in.decel_distance_mm.reset();
+  if (drive.deceleration && !drive.deceleration->saturated) {
+    in.decel_distance_mm = drive.deceleration->deceleration_distance_mm;
+  }
+  in.extended = drive.extended;
 }
 
 lift::Inputs DcpController::effective_inputs(MonoTime now) const noexcept {
@@ -756,6 +761,11 @@ void DcpController::publish(MonoTime now) noexcept {
   s.quiesced = shutting_down_ && travel_.active_kind() == TravelKind::None &&
                !last_input_.status.travel_active &&
                frames_at_rest_ >= static_cast<std::uint32_t>(config_.link.fault_after_bad_frames);
+  // The drive's verdict on the status the next cycle's travel command is judged by.
+  travel::CycleInput now_in = last_input_;
+  read_drive(now_in);
+  s.drive_allows_travel =
+      travel::CommandGate::drive_forbidding(now_in, /*starting=*/true) == AbortCause::None;
   snapshot_.publish(s);
 }
 

@@ -194,6 +194,9 @@ struct ControllerSnapshot {
   /// Shutting down and at rest: no travel, S1 = 0, and at least one DCP 7.3 supervision window
   /// of frames without B0/B1/B2 has gone out.
   bool quiesced = false;
+  /// The drive lets a travel start now: travel::CommandGate::drive_forbidding() of the link and
+  /// status as published, the check a travel command passes (status `drive.state`).
+  bool drive_allows_travel = false;
 };
 
 inline constexpr std::size_t kCommandQueueSize = 64;
@@ -255,6 +258,9 @@ class DcpController final : public rt::CycleEngine {
              bool extended = false) noexcept;
   void push_event(const ControllerEvent& event) noexcept;
   travel::CycleInput build_input(MonoTime now) noexcept;
+  /// The link's and the drive's part of a cycle input as the link knows them now: link and
+  /// handshake, protocol, status, deceleration distance, extended status.
+  void read_drive(travel::CycleInput& in) const noexcept;
   lift::Inputs effective_inputs(MonoTime now) const noexcept;
   void submit_channel(const travel::ChannelRequest& request) noexcept;
   void drain_link(MonoTime now) noexcept;

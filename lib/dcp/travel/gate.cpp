@@ -10,11 +10,24 @@ namespace {
 constexpr std::uint8_t kMotionBits = cb::kDriveEnable | cb::kTravel | cb::kStopSwitch;
 }  // namespace
 
+AbortCause CommandGate::drive_forbidding(const CycleInput& in, bool starting) noexcept {
+  if (!in.link_up) return AbortCause::LinkDown;                                  // DCP 7.3
+  if (!in.handshake_done) return AbortCause::NoHandshake;                        // DCP 5.12.2
+  if (in.status.general_fault) return AbortCause::DriveFault;                    // DCP 9.1.6
+  if (starting && !in.status.ready) return AbortCause::DriveNotReady;            // DCP 9.1.3
+  if (starting && in.status.advance_warning) return AbortCause::AdvanceWarning;  // DCP 9.1.5
+  return AbortCause::None;
+}
+
 AbortCause CommandGate::forbidding(const CycleInput& in, const GateProfile& profile,
                                    bool starting) noexcept {
-  if (!in.link_up) return AbortCause::LinkDown;                // DCP 7.3 / protocol notes 1
-  if (!in.handshake_done) return AbortCause::NoHandshake;      // DCP 5.12.2: no travel without I0
-  if (in.status.general_fault) return AbortCause::DriveFault;  // DCP 9.1.6
+  // The link and a drive fault come first; the drive's start conditions (S0, S2) after the
+  // machine's, so a refusal names an open safety chain or door before a drive not ready.
+  const AbortCause drive = drive_forbidding(in, starting);
+  if (drive == AbortCause::LinkDown || drive == AbortCause::NoHandshake ||
+      drive == AbortCause::DriveFault) {
+    return drive;
+  }
   // The machine's rules, common to every drive kind (DCP 9.1.1: the safety chain).
   switch (lift::machine_refusal(
       in.inputs, in.position_mm.has_value(),
@@ -30,9 +43,7 @@ AbortCause CommandGate::forbidding(const CycleInput& in, const GateProfile& prof
     case lift::MachineRefusal::None:
       break;
   }
-  if (starting && !in.status.ready) return AbortCause::DriveNotReady;            // DCP 9.1.3
-  if (starting && in.status.advance_warning) return AbortCause::AdvanceWarning;  // DCP 9.1.5
-  return AbortCause::None;
+  return drive;
 }
 
 GateResult CommandGate::apply(const Demand& demand, const CycleInput& in) noexcept {

@@ -135,13 +135,17 @@ void UssController::step(MonoTime now) noexcept {
 
   if (in.link_ok) {
     const ProfileState state = travel_.profile().state();
-    if (!state_reported_ || state != last_state_) {
+    // Local control (ZSW bit 9 = 0) holds every travel back whatever the state: told too.
+    const bool plc_control = travel_.profile().plc_control(in.zsw);
+    if (!state_reported_ || state != last_state_ || plc_control != last_plc_control_) {
       state_reported_ = true;
       last_state_ = state;
+      last_plc_control_ = plc_control;
       ControllerEvent e;
       e.kind = ControllerEvent::Kind::DriveState;
       e.at = now;
       e.drive_state = state;
+      e.plc_control = plc_control;
       e.zsw = in.zsw;
       push_event(e);
     }
@@ -402,7 +406,7 @@ void UssController::publish(MonoTime now) noexcept {
   s.expected_cycle_time = master_.expected_cycle_time();
   s.last_cycle_time = master_.last_cycle_time();
   s.speed = travel_.speed();
-  fill_lift_snapshot(s, now, in.inputs);
+  fill_lift_snapshot(s, now, in);
   s.quiesced = shutting_down_ && !travel_.busy() && (last_output_.stw & stw::kOn) == 0 &&
                !last_output_.brake_open && !last_output_.contactors_on &&
                !(in.link_ok && operation_enabled(in.zsw));

@@ -111,7 +111,7 @@ struct ControllerEvent {
     Port,          ///< the serial port opened or was lost (`port_up`)
     Spontaneous,   ///< a spontaneous report (C 4.2.1.2)
     Mirror,        ///< a mirror result without a command (the start test)
-    DriveState,    ///< the drive-profile state read from ZSW changed
+    DriveState,    ///< the drive-profile state read from ZSW, or its control (bit 9), changed
     Travel,        ///< `travel`
     FaultRaised,   ///< `fault`
     FaultCleared,  ///< `fault`
@@ -124,6 +124,7 @@ struct ControllerEvent {
   SpontaneousReport spontaneous{};
   MirrorResult mirror{};
   ProfileState drive_state = ProfileState::NotReadyToSwitchOn;
+  bool plc_control = true;  ///< DriveState: the drive takes the master's control (ZSW bit 9)
   std::uint16_t zsw = 0;
   TravelEvent travel{};
   FaultCode fault = FaultCode::LinkFault;
@@ -186,6 +187,8 @@ struct ControllerSnapshot {
   std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
   bool shutting_down = false;
   bool quiesced = false;  ///< shutting down, no run, OFF1 (or OFF2) sent, brake and contactors off
+  /// The drive lets a travel start now (LiftTravel::drive_forbidding(): status drive.state).
+  bool drive_allows_travel = false;
 };
 
 using lift::kCommandQueueSize;
@@ -242,6 +245,7 @@ class UssController final : public rt::UssHooks, public lift::ControllerCore<Uss
   DriveOutput last_output_{};
   std::int16_t setpoint_raw_ = 0;
   ProfileState last_state_ = ProfileState::NotReadyToSwitchOn;
+  bool last_plc_control_ = true;
   bool state_reported_ = false;
   // Scratch for the master's results (large; kept off the stack of the real-time thread).
   PkwResult pkw_result_{};

@@ -212,7 +212,7 @@ ProfileWish abort_wish(Cause cause) noexcept {
 
 // ---- gating ----
 
-Cause LiftTravel::forbidding(TravelKind kind, const DriveInput& in) const noexcept {
+Cause LiftTravel::drive_forbidding(const DriveInput& in) const noexcept {
   if (!in.link_ok) return Cause::LinkFault;
   if ((in.zsw & zsw::kFault) != 0 || profile_.supervision() != Supervision::None) {
     return Cause::DriveFault;
@@ -222,6 +222,11 @@ Cause LiftTravel::forbidding(TravelKind kind, const DriveInput& in) const noexce
   if (config_.warning_blocks_start && (in.zsw & zsw::kWarning) != 0) {
     return Cause::AdvanceWarning;
   }
+  return Cause::None;
+}
+
+Cause LiftTravel::forbidding(TravelKind kind, const DriveInput& in) const noexcept {
+  if (const Cause why = drive_forbidding(in); why != Cause::None) return why;
   return ending(kind, in);
 }
 

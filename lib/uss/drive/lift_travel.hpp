@@ -235,8 +235,13 @@ class LiftTravel {
   /// One step: checks the conditions, moves through the phases, returns what goes out.
   DriveOutput tick(const lift::FloorTable& floors, const DriveInput& in) noexcept;
 
-  /// The condition of `in` that forbids starting a run of `kind` now, or None.
+  /// The condition of `in` that forbids starting a run of `kind` now, or None: the drive's
+  /// (drive_forbidding()), then what would end a run.
   Cause forbidding(TravelKind kind, const DriveInput& in) const noexcept;
+  /// The drive's side of forbidding(): the link, a fault or a latched supervision, local control
+  /// (ZSW bit 9 = 0), not ready to switch on, a warning where it blocks a start (C 5.2.1).
+  /// Status `drive.state` is `ready` only when it is None.
+  Cause drive_forbidding(const DriveInput& in) const noexcept;
   /// The condition of `in` that ends a running run of `kind`, or None.
   Cause ending(TravelKind kind, const DriveInput& in) const noexcept;
   /// The speed has a setpoint.
