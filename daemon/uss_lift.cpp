@@ -1,8 +1,9 @@
 #include "daemon/uss_lift.hpp"
 
-#include <poll.h>
 #include <pthread.h>
 #include <sched.h>
+#include <sys/epoll.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -200,20 +201,40 @@ void SimulatedUssBus::loop() {
   sched_param param{};
   param.sched_priority = priority_;
   (void)::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &param);
+  // It never enters poll(2) or read(2) on a tty that holds nothing: both wait there for the
+  // tty's flip-buffer worker, a normal-priority kernel thread that other work can keep from a
+  // CPU for hundreds of ms (docs/architecture.md, "What the cycle may wait for"). It reads
+  // what the line discipline holds (TIOCINQ) and sleeps in an edge-triggered epoll watch,
+  // which the tty wakes when bytes arrive and which never looks at an empty tty.
+  const int epoll_fd = ::epoll_create1(EPOLL_CLOEXEC);
+  epoll_event watch{};
+  watch.events = EPOLLIN | EPOLLET;
+  watch.data.fd = port_.fd();
+  if (epoll_fd >= 0) (void)::epoll_ctl(epoll_fd, EPOLL_CTL_ADD, port_.fd(), &watch);
   std::array<std::uint8_t, 512> buffer{};
   while (!stopping()) {
     const timespec slice{0, std::chrono::nanoseconds(kSimSlice).count()};
-    pollfd p{port_.fd(), POLLIN, 0};
-    (void)::ppoll(&p, 1, &slice, nullptr);
-    const io::IoResult r = port_.read_available(buffer);
+    epoll_event ready{};
+    if (epoll_fd >= 0) {
+      (void)::epoll_pwait2(epoll_fd, &ready, 1, &slice, nullptr);
+    } else {
+      (void)::clock_nanosleep(CLOCK_MONOTONIC, 0, &slice, nullptr);
+    }
+    std::size_t got = 0;
+    while (got < buffer.size()) {
+      const io::IoResult r = port_.read_queued(std::span(buffer).subspan(got));
+      got += r.bytes;
+      if (r.bytes == 0) break;
+    }
     const MonoTime now = mono_now();
     std::lock_guard<std::mutex> lock(mutex_);
     // The pseudo-terminal carries no parity bit: every character arrives clean.
-    for (std::size_t i = 0; i < r.bytes; ++i) {
+    for (std::size_t i = 0; i < got; ++i) {
       bus_->on_char(uss::RxChar{buffer[i], uss::LineError::None}, now);
     }
     serve(now);
   }
+  if (epoll_fd >= 0) ::close(epoll_fd);
 }
 
 void SimulatedUssBus::serve(MonoTime now) {

@@ -68,14 +68,29 @@ if [ $under_load = 1 ]; then
   echo "=== preset: default (built before the load starts) ==="
   cmake --preset default >/dev/null
   timed "default build" cmake --build --preset default --parallel "$jobs"
-  # Two CPU hogs and a disk writer at normal priority for as long as the tests run.
+  # Two CPU hogs and a disk writer at normal priority (nice 0) for as long as the tests run,
+  # each in a session of its own (setsid), as any other program on a machine runs: with the
+  # kernel's autogroups a session is one scheduling group. Started inside this script's
+  # session, a hog made the tests' group always runnable, and the tty's flip-buffer worker (a
+  # normal-priority kernel thread that carries every byte of a pseudo-terminal, see
+  # docs/architecture.md) then waited up to 2.5 s for a CPU (tools/bench/trace_tty_worker.sh),
+  # so replies reached no master in time. The load is the same either way: two CPUs' worth of
+  # spinning and a writer that syncs 256 MB again and again.
   load_pids=()
-  stop_load() { kill "${load_pids[@]}" 2>/dev/null || true; wait "${load_pids[@]}" 2>/dev/null || true; rm -f build/under-load.tmp; }
+  start_load() {  # start_load SCRIPT: runs it in a new session; notes the session's process group
+    local pid_file
+    pid_file=$(mktemp)
+    setsid -f bash -c 'echo $$ >"$1"; eval "$2"' load "$pid_file" "$1"
+    for _ in $(seq 100); do [ -s "$pid_file" ] && break; sleep 0.05; done
+    load_pids+=("$(cat "$pid_file")")
+    rm -f "$pid_file"
+  }
+  # The whole group: the writer's loop and the dd it is waiting for.
+  stop_load() { for p in "${load_pids[@]}"; do kill -- "-$p" 2>/dev/null || true; done; rm -f build/under-load.tmp; }
   trap stop_load EXIT
   mkdir -p build
-  for _ in 1 2; do (while :; do :; done) & load_pids+=($!); done
-  (while :; do dd if=/dev/zero of=build/under-load.tmp bs=1M count=256 conv=fsync status=none; done) &
-  load_pids+=($!)
+  for _ in 1 2; do start_load 'while :; do :; done'; done
+  start_load 'while :; do dd if=/dev/zero of=build/under-load.tmp bs=1M count=256 conv=fsync status=none; done'
   echo "=== under load: two CPU hogs and a disk writer (pids ${load_pids[*]}) ==="
   timed "default tests" ctest --preset default --parallel "$test_jobs"
   stop_load

@@ -6,6 +6,7 @@
 #include <poll.h>
 #include <pthread.h>
 #include <sched.h>
+#include <sys/epoll.h>
 #include <sys/eventfd.h>
 #include <time.h>
 #include <unistd.h>
@@ -35,6 +36,23 @@ void sleep_until(MonoTime t) noexcept {
 int poll_timeout_ms(MonoTime left) noexcept {
   if (left <= MonoTime::zero()) return 0;
   return static_cast<int>(std::chrono::ceil<std::chrono::milliseconds>(left).count());
+}
+
+timespec to_timespec(MonoTime d) noexcept {
+  if (d < MonoTime::zero()) d = MonoTime::zero();
+  return timespec{static_cast<time_t>(d.count() / 1'000'000'000),
+                  static_cast<long>(d.count() % 1'000'000'000)};
+}
+
+// Watches `fd` for input, edge-triggered: epoll looks at the tty (n_tty_poll) only when the
+// line discipline has just woken its readers, i.e. when it holds bytes. A level-triggered watch,
+// like poll(2), looks again while it holds nothing, and that look waits for the flip-buffer
+// worker (docs/architecture.md, "What the cycle may wait for").
+bool watch_input(int epoll_fd, int fd) noexcept {
+  epoll_event ev{};
+  ev.events = EPOLLIN | EPOLLET;
+  ev.data.fd = fd;
+  return ::epoll_ctl(epoll_fd, EPOLL_CTL_ADD, fd, &ev) == 0;
 }
 
 bool important(const SimEvent& e) noexcept {
@@ -134,6 +152,7 @@ SerialDriveRunner::SerialDriveRunner(const DriveConfig& config, RunnerOptions op
 
 SerialDriveRunner::~SerialDriveRunner() {
   stop();
+  if (epoll_fd_ >= 0) ::close(epoll_fd_);
   if (wake_fd_ >= 0) ::close(wake_fd_);
 }
 
@@ -164,9 +183,20 @@ bool SerialDriveRunner::start() {
   }
   wire_time_ = pty_wire_time(port_.fd());
   wake_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
-  if (wake_fd_ < 0) {
+  epoll_fd_ = ::epoll_create1(EPOLL_CLOEXEC);
+  const char* failed = wake_fd_ < 0 ? "eventfd" : epoll_fd_ < 0 ? "epoll_create1" : nullptr;
+  if (failed == nullptr) {
+    epoll_event ev{};
+    ev.events = EPOLLIN;
+    ev.data.fd = wake_fd_;
+    if (::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, wake_fd_, &ev) != 0 ||
+        !watch_input(epoll_fd_, port_.fd())) {
+      failed = "epoll_ctl";
+    }
+  }
+  if (failed != nullptr) {
     std::lock_guard lock(mutex_);
-    last_error_ = std::string("eventfd: ") + std::system_category().message(errno);
+    last_error_ = std::string(failed) + ": " + std::system_category().message(errno);
     state_.store(RunnerState::Failed, std::memory_order_release);
     port_.close();
     return false;
@@ -394,6 +424,10 @@ bool SerialDriveRunner::reopen() noexcept {
           continue;
         }
         port_ = std::move(opened).value();
+        if (!watch_input(epoll_fd_, port_.fd())) {
+          port_.close();
+          continue;
+        }
         std::lock_guard lock(mutex_);
         features_ = port_.features();
       } catch (...) {
@@ -419,48 +453,50 @@ void SerialDriveRunner::run() noexcept {
   MonoTime last_byte{};
   std::uint64_t frames = 0;
   RunnerState end = RunnerState::Stopped;
+  bool hangup = false;  // the tty reported a hang-up: read(2) confirms it (EIO)
 
+  // This thread stands for the drive and its encoder, separate hardware that a busy controller
+  // board does not slow down. It never enters read(2) or poll(2) on a tty that holds nothing:
+  // both wait there for the tty's flip-buffer worker, a normal-priority kernel thread that
+  // other work on the machine can keep from running for hundreds of ms, and the car model and
+  // the encoder would stand still meanwhile (docs/architecture.md, "What the cycle may wait
+  // for"). It reads what the line discipline holds (TIOCINQ) and sleeps in epoll, which the tty
+  // wakes when bytes arrive, until then, the gap of a partial frame, or idle_poll.
   while (!stop_requested_.load(std::memory_order_acquire)) {
     if (options_.max_frames != 0 && frames >= options_.max_frames) {
       end = RunnerState::FrameLimit;
       break;
     }
-    // Wake for the gap deadline of a partial frame, else after idle_poll for the drive's timers.
-    MonoTime now = mono_now();
-    MonoTime wake_at = now + options_.idle_poll;
-    if (have > 0) wake_at = std::min(wake_at, last_byte + options_.gap);
-    std::array<pollfd, 2> fds{{{port_.fd(), POLLIN, 0}, {wake_fd_, POLLIN, 0}}};
-    const int n = ::poll(fds.data(), fds.size(), poll_timeout_ms(wake_at - now));
-    if (stop_requested_.load(std::memory_order_acquire)) break;
-    now = mono_now();
-    if (have > 0 && now - last_byte > options_.gap) {
-      have = 0;  // an incomplete frame followed by silence: resynchronise
+    std::array<std::uint8_t, 64> buf{};
+    io::IoResult r = port_.read_queued(buf);
+    if (r.status == io::IoStatus::Ok && r.bytes == 0 && hangup) {
+      hangup = false;
+      r = port_.read_available(buf);  // EIO on a hung-up tty, never a wait: it is hung up
+    }
+    const MonoTime now = mono_now();
+    bool lost = r.status == io::IoStatus::DeviceLost || r.status == io::IoStatus::Error;
+    if (r.bytes == 0 && have > 0 && now - last_byte > options_.gap) {
+      have = 0;  // a look found nothing a gap after the last byte: resynchronise
       std::lock_guard lock(mutex_);
       ++counters_.resyncs;
     }
-    bool lost = n < 0 && errno != EINTR;
-    if (n > 0 && (fds[0].revents & (POLLIN | POLLHUP | POLLERR | POLLNVAL)) != 0) {
-      std::array<std::uint8_t, 64> buf{};
-      const auto r = port_.read_available(buf);
-      lost = r.status == io::IoStatus::DeviceLost || r.status == io::IoStatus::Error;
-      for (std::size_t i = 0; i < r.bytes; ++i) {
-        frame[have++] = buf[i];
-        last_byte = now;
-        if (have < frame.size()) continue;
-        have = 0;
-        Reply reply;
-        {
+    for (std::size_t i = 0; i < r.bytes; ++i) {
+      frame[have++] = buf[i];
+      last_byte = now;
+      if (have < frame.size()) continue;
+      have = 0;
+      Reply reply;
+      {
+        std::lock_guard lock(mutex_);
+        reply = sim_.on_master_frame(frame, now);
+        publish(now);
+      }
+      ++frames;
+      if (reply.size > 0 && !lost) {
+        sleep_until(now + reply.delay + wire_time_);
+        if (port_.write_frame(reply.view()).status != io::IoStatus::Ok) {
           std::lock_guard lock(mutex_);
-          reply = sim_.on_master_frame(frame, now);
-          publish(now);
-        }
-        ++frames;
-        if (reply.size > 0 && !lost) {
-          sleep_until(now + reply.delay + wire_time_);
-          if (port_.write_frame(reply.view()).status != io::IoStatus::Ok) {
-            std::lock_guard lock(mutex_);
-            ++counters_.write_failures;
-          }
+          ++counters_.write_failures;
         }
       }
     }
@@ -474,6 +510,7 @@ void SerialDriveRunner::run() noexcept {
     }
     if (lost) {
       have = 0;
+      hangup = false;
       if (!options_.reconnect) {
         end = RunnerState::DeviceLost;
         break;
@@ -481,6 +518,22 @@ void SerialDriveRunner::run() noexcept {
       state_.store(RunnerState::Reconnecting, std::memory_order_release);
       if (!reopen()) break;
       state_.store(RunnerState::Running, std::memory_order_release);
+      continue;
+    }
+    if (r.bytes > 0) continue;  // more may have come while this look's bytes were answered
+    // Wake for the gap deadline of a partial frame, else after idle_poll for the drive's timers.
+    MonoTime wake_at = now + options_.idle_poll;
+    if (have > 0)
+      wake_at = std::min(wake_at, last_byte + options_.gap + std::chrono::microseconds(1));
+    std::array<epoll_event, 2> events{};
+    const timespec timeout = to_timespec(wake_at - mono_now());
+    const int n = ::epoll_pwait2(epoll_fd_, events.data(), static_cast<int>(events.size()),
+                                 &timeout, nullptr);
+    for (int i = 0; i < n; ++i) {
+      if (events[static_cast<std::size_t>(i)].data.fd == port_.fd() &&
+          (events[static_cast<std::size_t>(i)].events & (EPOLLHUP | EPOLLERR)) != 0) {
+        hangup = true;
+      }
     }
   }
   finish(end);

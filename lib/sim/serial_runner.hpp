@@ -206,7 +206,8 @@ class SerialDriveRunner {
   RunnerOptions options_;
   MonoTime epoch_{};
   io::SerialPort port_;
-  int wake_fd_ = -1;                       // eventfd: stop() wakes the loop's poll at once
+  int wake_fd_ = -1;                       // eventfd: stop() wakes the loop's wait at once
+  int epoll_fd_ = -1;                      // the loop's wait: wake_fd_ and the port's input
   std::chrono::microseconds wire_time_{};  // pty_wire_time() of the port (0 on a real line)
   std::thread thread_;
   std::atomic<bool> stop_requested_{false};
