@@ -285,6 +285,52 @@ class Lift {
   std::string error_;
 };
 
+/// The text of a file ("" when it cannot be read).
+inline std::string file_text(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+/// `trace save` as a client sends it, on any drive kind: the reply carries the newest frame and
+/// names a liftd-trace-*.txt in the lift's directory with more than `min_records` records; the
+/// journal says `<kind>: flight recorder (` and names the file; a second save at once is refused
+/// `busy` (one rate limit for every lift). Returns the file's text ("" on a failed expectation).
+inline std::string expect_trace_save_writes_file(Lift& lift, const std::string& kind,
+                                                 int min_records) {
+  const json r = lift.call({{"cmd", "trace"}, {"count", 1}, {"save", true}});
+  EXPECT_TRUE(r.value("ok", false)) << r.dump();
+  if (!r.value("ok", false)) return "";
+  EXPECT_EQ(r["result"]["frames"].size(), 1U) << r.dump();
+  const std::string path = r["result"]["file"];
+  EXPECT_EQ(std::filesystem::path(path).parent_path(), lift.dir());
+  EXPECT_EQ(std::filesystem::path(path).filename().string().rfind("liftd-trace-", 0), 0U) << path;
+  EXPECT_GT(r["result"]["records"].get<int>(), min_records) << r.dump();
+  EXPECT_NE(lift.log().find(kind + ": flight recorder ("), std::string::npos) << lift.log();
+  EXPECT_NE(lift.log().find("after request [event=trace_written path=" + path), std::string::npos)
+      << lift.log();
+  const json again = lift.call({{"cmd", "trace"}, {"save", true}});
+  EXPECT_EQ(again["error"]["code"], "busy") << again.dump();
+  return file_text(path);
+}
+
+/// SIGUSR1 writes one flight-recorder file, the journal names it once it is complete, and the
+/// daemon runs on with its link up. Returns the file's text ("" on a failed expectation).
+inline std::string expect_sigusr1_writes_file(Lift& lift) {
+  EXPECT_TRUE(lift.trace_files().empty());
+  lift.signal(SIGUSR1);
+  for (int i = 0; i < 100 && lift.log().find("after SIGUSR1") == std::string::npos; ++i) {
+    lift.api().drain(50ms);
+  }
+  const std::vector<std::filesystem::path> files = lift.trace_files();
+  EXPECT_EQ(files.size(), 1U) << lift.log();
+  if (files.size() != 1) return "";
+  EXPECT_NE(lift.log().find("written to " + files.front().string() + " after SIGUSR1"),
+            std::string::npos)
+      << lift.log();
+  EXPECT_EQ(lift.status()["link"]["state"], "up") << "the daemon runs on";
+  return file_text(files.front());
+}
+
 /// Monotonic now in microseconds, comparable with the trace's t_us (both CLOCK_MONOTONIC).
 inline std::int64_t mono_us() {
   return std::chrono::duration_cast<std::chrono::microseconds>(Clock::now().time_since_epoch())

@@ -240,12 +240,6 @@ TEST_F(HydraulicTest, AReconnectedSilentCardIsUnknownUntilItSpeaksAgain) {
   travel_to(2);
 }
 
-/// The text of a file ("" when it cannot be read).
-std::string file_text(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
 /// A flight-recorder file of the hydraulic lift holds the card's status frames (identifier
 /// 0x581: 61 and the status byte, 3b) and our answers to them (0x551: 68 and the command, 3c).
 void expect_card_frames(const std::string& text) {
@@ -255,37 +249,12 @@ void expect_card_frames(const std::string& text) {
 
 TEST_F(HydraulicTest, TraceSaveWritesTheFlightRecorderAsOnEveryLift) {
   // Before: not_ready "this daemon keeps no flight recorder", though `trace` showed the frames.
-  const json r = lift_->call({{"cmd", "trace"}, {"count", 1}, {"save", true}});
-  ASSERT_TRUE(r.value("ok", false)) << r.dump();
-  EXPECT_EQ(r["result"]["frames"].size(), 1U) << r.dump();
-  const std::string path = r["result"]["file"];
-  EXPECT_EQ(std::filesystem::path(path).parent_path(), lift_->dir());
-  EXPECT_EQ(std::filesystem::path(path).filename().string().rfind("liftd-trace-", 0), 0U) << path;
-  EXPECT_GT(r["result"]["records"].get<int>(), 2) << r.dump();
-  expect_card_frames(file_text(path));
-  EXPECT_NE(lift_->log().find("sch001: flight recorder ("), std::string::npos) << lift_->log();
-  EXPECT_NE(lift_->log().find("after request [event=trace_written path=" + path), std::string::npos)
-      << lift_->log();
-  // The same rate limit as the DCP lift's.
-  const json again = lift_->call({{"cmd", "trace"}, {"save", true}});
-  EXPECT_EQ(again["error"]["code"], "busy") << again.dump();
+  expect_card_frames(expect_trace_save_writes_file(*lift_, "sch001", 2));
 }
 
 TEST_F(HydraulicTest, Sigusr1WritesTheFlightRecorder) {
   // Before: "SIGUSR1: writing the flight recorder" in the journal, and no file.
-  ASSERT_TRUE(lift_->trace_files().empty());
-  lift_->signal(SIGUSR1);
-  // The journal line comes once the file is complete.
-  for (int i = 0; i < 100 && lift_->log().find("after SIGUSR1") == std::string::npos; ++i) {
-    lift_->api().drain(50ms);
-  }
-  const std::vector<std::filesystem::path> files = lift_->trace_files();
-  ASSERT_EQ(files.size(), 1U) << lift_->log();
-  expect_card_frames(file_text(files.front()));
-  EXPECT_NE(lift_->log().find("written to " + files.front().string() + " after SIGUSR1"),
-            std::string::npos)
-      << lift_->log();
-  EXPECT_EQ(lift_->status()["link"]["state"], "up") << "the daemon runs on";
+  expect_card_frames(expect_sigusr1_writes_file(*lift_));
 }
 
 // The card simulator as a process of its own on a Unix socket (can.interface "unix:PATH"), the
