@@ -11,8 +11,9 @@
 #   LIFTD_SKIP_UML=1 ...     skip the real-SocketCAN stage (user-mode Linux, tools/uml/can-stage.sh)
 #   LIFTD_SKIP_FUZZ=1 ...    skip the fuzz targets
 #   LIFTD_SOAK_SECONDS=N     fault soak length after the default tests (default 45; 0 skips)
-#   LIFTD_SKIP_SYSTEMD=1 ... skip the systemd stage (tests/systemd/stage.sh: the package on
-#                            Debian 12 with systemd as PID 1 under user-mode Linux)
+#   LIFTD_SYSTEMD_STAGE=1 ... also run the systemd stage (tests/systemd/stage.sh: the package on
+#                            Debian 12 with systemd as PID 1 under user-mode Linux; 3 to 5
+#                            minutes more, which the 30-minute CI budget does not hold today)
 #   LIFTD_JOBS=N, LIFTD_TEST_JOBS=M   build with N jobs (default: cores), run M tests at once
 #                            (default: N + 1)
 set -euo pipefail
@@ -21,9 +22,9 @@ under_load=0
 [ "${1:-}" = --under-load ] && under_load=1
 
 jobs=${LIFTD_JOBS:-$(nproc)}
-systemd_stage=1
-[ $under_load = 0 ] && [ "${LIFTD_SKIP_UML:-0}" != 1 ] && [ "${LIFTD_SKIP_SYSTEMD:-0}" != 1 ] ||
-  systemd_stage=0
+systemd_stage=0
+[ $under_load = 0 ] && [ "${LIFTD_SKIP_UML:-0}" != 1 ] && [ "${LIFTD_SYSTEMD_STAGE:-0}" = 1 ] &&
+  systemd_stage=1
 if [ $under_load = 0 ] && [ "${LIFTD_SKIP_UML:-0}" != 1 ]; then
   tools/install-deps.sh --with-uml  # one apt-get run for the build and both user-mode Linux stages
 else
@@ -110,9 +111,10 @@ run_preset default
 # meanwhile compiles the fuzz and sanitizer builds with ONE job at nice 19, so the guest keeps a
 # CPU of its own (measured: with a compiler on both CPUs, even at nice 19 and with the guest at
 # SCHED_FIFO, the guest's cycle woke up to 7.5 ms late and its encoder went stale mid-travel).
-# Nothing else runs beside it: the soaks and the CAN stage wait (a second guest beside it made
+# Nothing else runs beside it: the CAN stage and the soaks wait (a second guest beside it made
 # the stage's first travel end in a link fault; a soak beside it once stopped a car 6 mm off its
-# level when its simulated drive refused the master's remaining distance).
+# level when its simulated drive refused the master's remaining distance). On request only
+# (LIFTD_SYSTEMD_STAGE=1): with it a clean run takes over 30 minutes on a 2-core machine.
 if [ $systemd_stage = 1 ]; then
   echo "=== systemd stage: the package on Debian 12 with systemd as PID 1 (beside a one-job"
   echo "    compile of the next presets; its log: build/systemd-stage.log) ==="
@@ -142,15 +144,13 @@ if [ $systemd_stage = 1 ]; then
   timings+=("$(printf '%-22s %5d s (beside a one-job compile)' "systemd stage" $((SECONDS - systemd_start)))")
   [ $systemd_rc = 0 ] || { echo "tools/test.sh: the systemd stage failed"; exit 1; }
 fi
-# The real-SocketCAN stage beside the soaks: measured together (and beside the systemd stage),
-# both kept their timing; the soaks' daemons use a few percent of a CPU.
+# The real-SocketCAN stage, then the soaks, each alone: a soak beside a booting user-mode Linux
+# guest twice stopped a car 6 mm off its level (its simulated drive refused the master's
+# remaining distance as implausible while the guest took the CPUs).
 if [ "${LIFTD_SKIP_UML:-0}" != 1 ]; then
   # The tests that need a kernel with AF_CAN (label "vcan"), inside user-mode Linux.
-  echo "=== real SocketCAN: user-mode Linux with vcan0 (beside the soaks; its log: build/can-stage.log) ==="
-  can_start=$SECONDS
-  tools/uml/can-stage.sh build >build/can-stage.log 2>&1 &
-  can_pid=$!
-  background+=("$can_pid")
+  echo "=== real SocketCAN: user-mode Linux with vcan0 ==="
+  timed "uml can" tools/uml/can-stage.sh build
 fi
 soak_seconds=${LIFTD_SOAK_SECONDS:-45}
 if [ "$soak_seconds" != 0 ]; then
@@ -162,14 +162,6 @@ if [ "$soak_seconds" != 0 ]; then
   echo "=== attack soak, hydraulic and USS: $controller_seconds s each ==="
   timed "soak sch001" tools/soak --kind sch001 --seconds "$controller_seconds" --seed 1
   timed "soak uss" tools/soak --kind uss --seconds "$controller_seconds" --seed 1
-fi
-if [ -n "${can_pid:-}" ]; then
-  echo "=== real SocketCAN (started $((SECONDS - can_start)) s ago) ==="
-  can_rc=0
-  wait "$can_pid" || can_rc=$?
-  cat build/can-stage.log
-  timings+=("$(printf '%-22s %5d s (beside the soaks)' "uml can" $((SECONDS - can_start)))")
-  [ $can_rc = 0 ] || { echo "tools/test.sh: the real-SocketCAN stage failed"; exit 1; }
 fi
 [ "${LIFTD_SKIP_ASAN:-0}" = 1 ] || run_preset asan -LE 'slow|vcan'
 if [ "${LIFTD_SKIP_FUZZ:-0}" != 1 ]; then
