@@ -14,13 +14,12 @@ namespace liftd::daemon {
 /// The drive simulator's car position as the cycle's absolute encoder. A position older than
 /// `kMaxAge` means the simulator stalled: the encoder reports invalid, as a real one would.
 ///
-/// The simulator publishes the car's motion when it handles a frame, so when the cycle reads it
-/// for the next frame it is most of a cycle old: 15 ms at 1.6 m/s is 24 mm, which a DCP3 travel
-/// by position turns into a late deceleration point and an overshoot. A real encoder is read
-/// when asked, so this one carries the sample forward to `now` (EncoderSample::position_at_mm:
-/// speed and acceleration of one consistent sample, stopping where a braking car stops; a
-/// straight line at the sampled speed ran a car that had stopped at its level on by 20 mm when
-/// the simulator's thread was held up, and the drive refused the distance as implausible).
+/// A real encoder is read when asked. The simulator publishes the drive's motion plan each time
+/// its loop runs, and this encoder evaluates that plan at `now` (EncoderSample::position_at_mm),
+/// so the position is where the drive's own model has the car at that moment however long ago
+/// the simulator's thread last ran. Carrying a sampled speed and acceleration forward instead
+/// missed the jerk-limited end of a stop by up to 10 mm when that thread was held up on a loaded
+/// machine, and the drive refused the distance as implausible.
 class SimulatedLift::Encoder final : public control::PositionSource {
  public:
   explicit Encoder(const sim::SerialDriveRunner& drive) : drive_(drive) {}

@@ -173,19 +173,26 @@ MotionState DriveSim::state_at(MonoTime now) const noexcept {
   return plan_.at(seconds(now));
 }
 
+double Trajectory::position_mm(MonoTime t) const noexcept {
+  const double s_mm = plan.at(std::chrono::duration<double>(t - epoch).count()).s_m * 1000.0;
+  return origin_mm + (down ? -s_mm : s_mm);
+}
+
+double Trajectory::velocity_mps(MonoTime t) const noexcept {
+  const double v = plan.at(std::chrono::duration<double>(t - epoch).count()).v_mps;
+  return down ? -v : v;
+}
+
+Trajectory DriveSim::trajectory() const noexcept {
+  return {plan_, epoch_, origin_mm_, down_};
+}
+
 double DriveSim::position_mm() const noexcept {
-  const double s_mm = state_at(now_).s_m * 1000.0;
-  return origin_mm_ + (down_ ? -s_mm : s_mm);
+  return trajectory().position_mm(now_);
 }
 
 double DriveSim::velocity_mps() const noexcept {
-  const double v = state_at(now_).v_mps;
-  return down_ ? -v : v;
-}
-
-double DriveSim::acceleration_mps2() const noexcept {
-  const double a = state_at(now_).a_mps2;
-  return down_ ? -a : a;
+  return trajectory().velocity_mps(now_);
 }
 
 bool DriveSim::stationary() const noexcept {
@@ -830,6 +837,10 @@ void DriveSim::on_remaining_distance(std::uint16_t raw, MonoTime now) noexcept {
   // counts: the true target is only known from then on.
   const bool exact = saturated || rd_saturated_;
   rd_saturated_ = saturated;
+  // DCP 3.5.3.4: a remaining distance of 0 says the car is at its target. While this drive's
+  // car is on or past its own target (it ran past braking on a harder ramp after a late
+  // correction) the master agrees with the drive: nothing to judge and nothing to change.
+  if (word == 0 && diff_m >= 0.0) return;
   const double extend_tol_m = exact ? 1e-4 : lag_tol_m;
   if (diff_m >= 0.0 ? diff_m <= extend_tol_m : -diff_m <= lag_tol_m) {
     // DCP 3.5.3.4: "the drive unit must process always the remaining distance during the

@@ -192,6 +192,21 @@ struct SimCounters {
   std::uint64_t shortened = 0;           ///< target changes to a nearer level accepted
 };
 
+/// The car's motion as the drive has planned it from one moment on: where the car is at any
+/// later time, until the drive changes its plan (on a frame, a timer or an injected fault).
+/// Trivially copyable, so another thread can read the car's position at the time it asks,
+/// the way a real absolute encoder is read, without calling into the drive.
+struct Trajectory {
+  MotionPlan plan{};       ///< the distance along the travel direction over time
+  MonoTime epoch{};        ///< time 0 of the plan
+  double origin_mm = 0.0;  ///< car position at plan distance 0
+  bool down = false;       ///< true: the plan's distance counts downwards
+  /// Car position in mm at `t` (the plan's start position before it starts).
+  double position_mm(MonoTime t) const noexcept;
+  /// Car speed in m/s at `t`, signed (+ up).
+  double velocity_mps(MonoTime t) const noexcept;
+};
+
 /// The simulated drive. Not thread-safe: one owner calls it.
 class DriveSim {
  public:
@@ -211,8 +226,8 @@ class DriveSim {
   double position_mm() const noexcept;
   /// Car speed in m/s, signed (+ up).
   double velocity_mps() const noexcept;
-  /// Car acceleration in m/s^2, signed (+ up).
-  double acceleration_mps2() const noexcept;
+  /// The car's planned motion from now on (valid until the next call that changes the plan).
+  Trajectory trajectory() const noexcept;
   /// True while the car does not move.
   bool stationary() const noexcept;
   /// Moves the car (only while idle), e.g. to start a test at a floor.

@@ -347,20 +347,11 @@ void SerialDriveRunner::publish(MonoTime now) noexcept {
   EncoderSample sample;
   sample.position_mm = sim_.position_mm();
   sample.velocity_mps = sim_.velocity_mps();
-  sample.accel_mps2 = sim_.acceleration_mps2();
   sample.at = now;
+  sample.motion = sim_.trajectory();
   position_mm_.store(sample.position_mm, std::memory_order_relaxed);
   velocity_mps_.store(sample.velocity_mps, std::memory_order_relaxed);
   encoder_.publish(sample);
-}
-
-double EncoderSample::position_at_mm(MonoTime now) const noexcept {
-  if (now <= at) return position_mm;
-  double t = std::chrono::duration<double>(now - at).count();
-  // Slowing down (speed and acceleration of opposite signs): the car stops at v = 0.
-  if (velocity_mps * accel_mps2 < 0.0) t = std::min(t, -velocity_mps / accel_mps2);
-  // m -> mm
-  return position_mm + (velocity_mps * t + 0.5 * accel_mps2 * t * t) * 1000.0;
 }
 
 // Caller holds mutex_. Moves the engine's events into the bounded queue.

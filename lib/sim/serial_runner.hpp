@@ -105,14 +105,14 @@ struct RunnerStatus {
 
 /// The car's motion as the drive loop last computed it, published as one consistent value.
 struct EncoderSample {
-  double position_mm = 0.0;   ///< car position
-  double velocity_mps = 0.0;  ///< car speed, + up
-  double accel_mps2 = 0.0;    ///< car acceleration, + up
+  double position_mm = 0.0;   ///< car position at `at`
+  double velocity_mps = 0.0;  ///< car speed at `at`, + up
   MonoTime at{};              ///< when the loop computed it
-  /// The position carried forward to `now` at the sample's speed and acceleration, the way the
-  /// car moves between two of the loop's updates. A car that is slowing down stops where its
-  /// speed reaches zero instead of reversing; `now` before `at` gives the sampled position.
-  double position_at_mm(MonoTime now) const noexcept;
+  Trajectory motion{};        ///< the drive's plan from `at` on
+  /// The car's position at `now` on the drive's own plan: exactly where the drive's model puts
+  /// the car then, however long ago the loop last ran, as long as it has not changed the plan
+  /// since (and a change starts from where this plan has the car at that moment).
+  double position_at_mm(MonoTime now) const noexcept { return motion.position_mm(now); }
 };
 
 /// One line of text for an event, time relative to `epoch`:

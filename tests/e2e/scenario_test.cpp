@@ -74,7 +74,7 @@ TEST(Travel, ExtendedMidTravelLandsOnTheNewFloor) {
   EXPECT_EQ(r["result"]["extended"], true) << r.dump();
   const json end = lift.wait_travel_end();
   ASSERT_FALSE(end.is_null()) << lift.log();
-  EXPECT_EQ(end["data"]["event"], "finished") << end.dump();
+  EXPECT_EQ(end["data"]["event"], "finished") << end.dump() << lift.log();
   EXPECT_EQ(end["data"]["target_mm"], level_mm(4));
   EXPECT_NEAR(end["data"]["position_mm"].get<double>(), level_mm(4), kLandingMm);
   // One travel, moved on: no second start; the drive's S5 confirmed the new target once.

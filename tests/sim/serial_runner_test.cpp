@@ -464,30 +464,49 @@ TEST(SimText, FormatsEventsRelativeToTheEpoch) {
   EXPECT_EQ(format_event(e, 1500ms), "[     0.000] channel-message I7");
 }
 
-// The simulated encoder between two updates of the drive loop: carried forward at the
-// sample's speed and acceleration; a braking car stops at v = 0 and never runs on or reverses.
-TEST(EncoderSample, CarriesThePositionForwardTheWayTheCarMoves) {
+// The simulated encoder reads the drive's plan at the time it is asked (the drive-side property,
+// that the plan matches the drive's own model throughout a travel, is in travel_test.cpp): the
+// plan's distance counts from the origin in the travel direction, and a car whose plan ends in
+// standstill stays where it stopped and never reverses.
+TEST(EncoderSample, ReadsTheDrivesPlanAtTheTimeAsked) {
+  const MonoTime epoch{std::chrono::seconds(100)};
+  const auto cruising = [&](double v_mps, bool down) {
+    EncoderSample sample;
+    sample.at = epoch;
+    sample.motion.epoch = epoch;
+    sample.motion.origin_mm = 1000.0;
+    sample.motion.down = down;
+    sample.motion.plan.reset(0.0, MotionState{0.0, v_mps, 0.0});
+    return sample;
+  };
   struct Case {
     const char* what;
-    double v_mps, a_mps2;
+    EncoderSample sample;
     std::chrono::milliseconds age;
     double expected_mm;
   };
   const Case cases[] = {
-      {"at rest", 0.0, 0.0, 50ms, 1000.0},
-      {"constant speed up", 1.6, 0.0, 15ms, 1024.0},               // 1.6 m/s * 15 ms
-      {"constant speed down", -1.0, 0.0, 20ms, 980.0},             // -1 m/s * 20 ms
-      {"accelerating from rest", 0.0, 0.5, 20ms, 1000.1},          // 0.5 * 0.5 * 0.02^2 m
-      {"braking, still moving", 0.3, -0.5, 20ms, 1005.9},          // 0.3*0.02 - 0.25*0.0004
-      {"braking, stopped in between", 0.3, -0.5, 1000ms, 1090.0},  // stops after 0.6 s: 90 mm
-      {"braking down, stopped", -0.3, 0.5, 1000ms, 910.0},
-      {"sample newer than now", 1.6, 0.0, -5ms, 1000.0},
+      {"at rest", cruising(0.0, false), 50ms, 1000.0},
+      {"cruising up", cruising(1.6, false), 15ms, 1024.0},  // 1.6 m/s * 15 ms
+      {"cruising down", cruising(1.0, true), 20ms, 980.0},  // 1 m/s * 20 ms, downwards
+      {"before the plan starts", cruising(1.6, false), -5ms, 1000.0},
   };
-  const MonoTime at{std::chrono::seconds(100)};
   for (const Case& c : cases) {
-    const EncoderSample sample{1000.0, c.v_mps, c.a_mps2, at};
-    EXPECT_NEAR(sample.position_at_mm(at + c.age), c.expected_mm, 1e-6) << c.what;
+    EXPECT_NEAR(c.sample.position_at_mm(epoch + c.age), c.expected_mm, 1e-9) << c.what;
   }
+
+  EncoderSample braking = cruising(0.0, true);
+  braking.motion.plan.plan_speed(0.0, MotionState{0.0, 0.3, 0.0}, 0.0, RampLimits{}, RampLimits{});
+  const double stop_mm = 1000.0 - braking.motion.plan.final_position_m() * 1000.0;
+  const double settle_s = braking.motion.plan.settle_time_s();
+  ASSERT_GT(settle_s, 0.0);
+  ASSERT_LT(stop_mm, 1000.0);
+  const auto after = [&](double s) {
+    return epoch + std::chrono::duration_cast<MonoTime>(std::chrono::duration<double>(s));
+  };
+  EXPECT_GT(braking.position_at_mm(after(settle_s / 2)), stop_mm);
+  EXPECT_NEAR(braking.position_at_mm(after(settle_s)), stop_mm, 1e-9);
+  EXPECT_NEAR(braking.position_at_mm(after(settle_s + 10.0)), stop_mm, 1e-9);
 }
 
 }  // namespace

@@ -272,16 +272,11 @@ TEST(SimTravel, Dcp4NearerLevelReadLateIsRefinedAsTheCarSlowsAndLandsOnTheLevel)
   EXPECT_NEAR(m.sim.position_mm(), 9000.0, 1.0);
 }
 
-class NearerLevelWithMeasuringLag : public ::testing::TestWithParam<int> {};
-
-TEST_P(NearerLevelWithMeasuringLag, EveryFrameLateByTheLagStillLandsOnTheLevel) {
-  // A service stop as liftd makes it: a DCP4 travel to 15 m is cut short to the next possible
-  // level (6 m) while the car still speeds up, and every frame reaches the drive GetParam() ms
-  // after the master measured the car (the thread hand-offs of a loaded machine). DCP 3.5.3.4:
-  // the drive follows the remaining distance onto the level; the readings' lag shrinks with the
-  // speed, and a reading of 0 near the level must not make it stop behind the car.
-  const auto lag = std::chrono::milliseconds(GetParam());
-  Harness m;
+// A service stop as liftd makes it: a DCP4 travel to 15 m is cut short to the next possible level
+// (6 m) while the car still speeds up, and every frame reaches the drive `lag` after the master
+// measured the car (the thread hand-offs of a loaded machine).
+Harness service_stop_with_lag(std::chrono::milliseconds lag, DriveConfig config = {}) {
+  Harness m(config);
   m.init();
   m.cycle(cmd::kSpeed, kV4);
   double target = 15000.0;
@@ -296,7 +291,29 @@ TEST_P(NearerLevelWithMeasuringLag, EveryFrameLateByTheLagStillLandsOnTheLevel) 
     }
     if (shortened && c.velocity_mps == 0.0 && !has(c.status, sb::kBrakeOpen)) break;
   }
+  return m;
+}
+
+class NearerLevelWithMeasuringLag : public ::testing::TestWithParam<int> {};
+
+TEST_P(NearerLevelWithMeasuringLag, EveryFrameLateByTheLagStillLandsOnTheLevel) {
+  // DCP 3.5.3.4: the drive follows the remaining distance onto the level; the readings' lag
+  // shrinks with the speed, and a reading of 0 near the level must not make it stop behind the
+  // car.
+  const Harness m = service_stop_with_lag(std::chrono::milliseconds(GetParam()));
   EXPECT_EQ(m.sim.counters().shortened, 1U);
+  EXPECT_EQ(m.sim.counters().implausible, 0U);
+  EXPECT_NEAR(m.sim.position_mm(), 6000.0, 2.0);
+}
+
+TEST(SimTravel, Dcp4ZeroWhileTheCarIsPastItsTargetIsNotImplausible) {
+  // DCP 3.5.3.4: 0 says the car is at its target. The late readings of the service stop above
+  // make the drive brake on its hardest ramp and run a little past its target before it comes
+  // back; the master, seeing the car past the level, sends 0. That agrees with the drive however
+  // small its tolerance for jitter (here 1 mm), and is no plausibility error.
+  DriveConfig strict;
+  strict.distance_tolerance_mm = 1;
+  const Harness m = service_stop_with_lag(20ms, strict);
   EXPECT_EQ(m.sim.counters().implausible, 0U);
   EXPECT_NEAR(m.sim.position_mm(), 6000.0, 2.0);
 }
@@ -560,6 +577,46 @@ TEST(SimTravel, DirectionChangeDeceleratesWithoutFault) {
   const Cycle c = m.repeat(cmd::kTravel | cmd::kDown, 100);
   EXPECT_EQ(m.sim.velocity_mps(), 0.0);
   EXPECT_FALSE(has(c.status, sb::kGeneralFault));
+}
+
+// The simulated absolute encoder reads the drive's trajectory from another thread, at the time
+// the master asks, however long ago the drive last ran. Taken at any moment of a travel (the
+// jerk-limited start, cruise, the rounded-off stop) and up to 100 ms before the next frame
+// (fewer than DCP 7.3's 10 missing frames, so the drive keeps its plan), the trajectory puts
+// the car exactly where the drive's own model then has it, up and down.
+TEST(SimTravel, TrajectoryPredictsTheCarUntilTheDriveChangesItsPlan) {
+  struct Case {
+    const char* what;
+    double from_mm, to_mm;
+  };
+  const Case cases[] = {{"up", 0.0, 3000.0}, {"down", 9000.0, 5500.0}};
+  for (const Case& c : cases) {
+    Harness m;
+    m.sim.set_position_mm(c.from_mm);
+    m.init();
+    const std::uint8_t dir = c.to_mm < c.from_mm ? cmd::kDown : 0;
+    m.cycle(cmd::kSpeed | dir, kV4);
+    int checked = 0;
+    bool moved = false;
+    for (int i = 0; i < 4000; ++i) {
+      const Cycle cy = m.distance_cycle(cmd::kDecel | dir, c.to_mm);
+      if (has(cy.status, sb::kBrakeOpen)) moved = true;
+      if (moved && !has(cy.status, sb::kBrakeOpen)) break;
+      if (i % 7 != 0) continue;
+      const Trajectory seen = m.sim.trajectory();
+      for (auto later = 1ms; later <= 100ms; later += 3ms) {
+        DriveSim probe = m.sim;
+        probe.advance(m.now + later);
+        ASSERT_NEAR(seen.position_mm(m.now + later), probe.position_mm(), 1e-9)
+            << c.what << " cycle " << i << " +" << later.count() << " ms";
+        ASSERT_NEAR(seen.velocity_mps(m.now + later), probe.velocity_mps(), 1e-12) << c.what;
+        ++checked;
+      }
+    }
+    EXPECT_TRUE(moved) << c.what;
+    EXPECT_GT(checked, 1000) << c.what;
+    EXPECT_NEAR(m.sim.position_mm(), c.to_mm, 1.0) << c.what;
+  }
 }
 
 }  // namespace
