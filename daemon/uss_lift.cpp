@@ -207,10 +207,7 @@ void SimulatedUssBus::loop() {
   // what the line discipline holds (TIOCINQ) and sleeps in an edge-triggered epoll watch,
   // which the tty wakes when bytes arrive and which never looks at an empty tty.
   const int epoll_fd = ::epoll_create1(EPOLL_CLOEXEC);
-  epoll_event watch{};
-  watch.events = EPOLLIN | EPOLLET;
-  watch.data.fd = port_.fd();
-  if (epoll_fd >= 0) (void)::epoll_ctl(epoll_fd, EPOLL_CTL_ADD, port_.fd(), &watch);
+  if (epoll_fd >= 0) (void)port_.watch_input(epoll_fd);
   std::array<std::uint8_t, 512> buffer{};
   while (!stopping()) {
     const timespec slice{0, std::chrono::nanoseconds(kSimSlice).count()};

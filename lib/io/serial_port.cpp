@@ -6,6 +6,7 @@
 #include <fcntl.h>
 #include <linux/serial.h>
 #include <poll.h>
+#include <sys/epoll.h>
 #include <sys/ioctl.h>
 #include <unistd.h>
 
@@ -332,6 +333,13 @@ IoResult SerialPort::read_until(std::span<std::uint8_t> buffer, MonoTime deadlin
     if (w.status != IoStatus::Ok) return IoResult{w.status, got, w.error_number};
   }
   return IoResult{IoStatus::Ok, got, 0};
+}
+
+bool SerialPort::watch_input(int epoll_fd) const noexcept {
+  epoll_event ev{};
+  ev.events = EPOLLIN | EPOLLET;
+  ev.data.fd = fd_;
+  return ::epoll_ctl(epoll_fd, EPOLL_CTL_ADD, fd_, &ev) == 0;
 }
 
 IoResult SerialPort::input_queued() const noexcept {

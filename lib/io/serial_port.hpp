@@ -154,6 +154,13 @@ class SerialPort {
   /// worker. DeviceLost on a hung-up tty (EIO), e.g. a pty whose master closed.
   IoResult input_queued() const noexcept;
 
+  /// Adds this port to `epoll_fd` as an edge-triggered input watch (data: the port's fd). epoll
+  /// then looks at the tty only when the line discipline has just woken its readers, i.e. when
+  /// it holds bytes; a level-triggered watch, like poll(2), looks again while it holds nothing,
+  /// and that look waits for the flip-buffer worker (docs/architecture.md, "What the cycle may
+  /// wait for"). Pair it with read_queued() until that returns 0. False with errno on failure.
+  bool watch_input(int epoll_fd) const noexcept;
+
   /// Reads what the line discipline already holds, at most buffer.size() bytes, without ever
   /// entering read(2) with nothing queued. Ok with the count (0: nothing there).
   IoResult read_queued(std::span<std::uint8_t> buffer) noexcept;

@@ -44,17 +44,6 @@ timespec to_timespec(MonoTime d) noexcept {
                   static_cast<long>(d.count() % 1'000'000'000)};
 }
 
-// Watches `fd` for input, edge-triggered: epoll looks at the tty (n_tty_poll) only when the
-// line discipline has just woken its readers, i.e. when it holds bytes. A level-triggered watch,
-// like poll(2), looks again while it holds nothing, and that look waits for the flip-buffer
-// worker (docs/architecture.md, "What the cycle may wait for").
-bool watch_input(int epoll_fd, int fd) noexcept {
-  epoll_event ev{};
-  ev.events = EPOLLIN | EPOLLET;
-  ev.data.fd = fd;
-  return ::epoll_ctl(epoll_fd, EPOLL_CTL_ADD, fd, &ev) == 0;
-}
-
 bool important(const SimEvent& e) noexcept {
   return e.kind == SimEvent::Kind::Fault || e.kind == SimEvent::Kind::FaultCleared ||
          e.kind == SimEvent::Kind::Violation;
@@ -190,7 +179,7 @@ bool SerialDriveRunner::start() {
     ev.events = EPOLLIN;
     ev.data.fd = wake_fd_;
     if (::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, wake_fd_, &ev) != 0 ||
-        !watch_input(epoll_fd_, port_.fd())) {
+        !port_.watch_input(epoll_fd_)) {
       failed = "epoll_ctl";
     }
   }
@@ -415,7 +404,7 @@ bool SerialDriveRunner::reopen() noexcept {
           continue;
         }
         port_ = std::move(opened).value();
-        if (!watch_input(epoll_fd_, port_.fd())) {
+        if (!port_.watch_input(epoll_fd_)) {
           port_.close();
           continue;
         }

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <poll.h>
+#include <sys/epoll.h>
 
 #include <array>
 #include <atomic>
@@ -252,6 +253,31 @@ TEST(IoSerialPort, QueuedReadTakesOnlyWhatTheLineDisciplineHolds) {
   EXPECT_EQ(buf[0], 7);
   EXPECT_EQ(buf[3], 10);
   EXPECT_EQ(port.value().input_queued().bytes, 0U);
+}
+
+TEST(IoSerialPort, EdgeTriggeredWatchWakesOncePerArrivalAndNeverForAnEmptyTty) {
+  PtyPair pty = make_pty();
+  auto port = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(port.ok());
+  const int epoll_fd = ::epoll_create1(EPOLL_CLOEXEC);
+  ASSERT_GE(epoll_fd, 0);
+  ASSERT_TRUE(port.value().watch_input(epoll_fd));
+  epoll_event ready{};
+  EXPECT_EQ(::epoll_wait(epoll_fd, &ready, 1, 0), 0) << "nothing arrived yet";
+  const std::array<std::uint8_t, 3> sent{1, 2, 3};
+  ASSERT_EQ(::write(pty.master_fd(), sent.data(), sent.size()), 3);
+  ASSERT_EQ(::epoll_wait(epoll_fd, &ready, 1, 5000), 1);
+  EXPECT_EQ(ready.data.fd, port.value().fd());
+  EXPECT_TRUE((ready.events & EPOLLIN) != 0);
+  ASSERT_TRUE(await_queued(port.value(), 3));
+  std::array<std::uint8_t, 8> buf{};
+  EXPECT_EQ(port.value().read_queued(buf).bytes, 3U);
+  // Drained, and no new bytes: an edge-triggered watch does not report the empty tty again.
+  EXPECT_EQ(::epoll_wait(epoll_fd, &ready, 1, 20), 0);
+  // A second watch of the same port on the same epoll is refused, with errno.
+  EXPECT_FALSE(port.value().watch_input(epoll_fd));
+  EXPECT_EQ(errno, EEXIST);
+  ::close(epoll_fd);
 }
 
 TEST(IoSerialPort, QueuedReadUntilCollectsAReplyAsItArrives) {
