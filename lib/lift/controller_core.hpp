@@ -1,8 +1,9 @@
 // The command plumbing the SCH001 and USS controllers share (lib/sch001/controller,
-// lib/uss/drive/controller): the commands every lift takes, the reply codes, the lock-free queues
-// and the snapshot box between the real-time thread and the io thread, and the handling of the
-// commands that do not depend on the drive (inputs, inspection, shutdown, stop, calls and the
-// gates of a travel command), of the travel events and of the fault table.
+// lib/uss/drive/controller): the commands every lift takes, the lock-free queues and the
+// snapshot box between the real-time thread and the io thread, and the handling of the commands
+// that do not depend on the drive (inputs, inspection, shutdown, stop, calls and the gates of a
+// travel command), of the travel events and of the fault table. The rules the DCP lift applies
+// too (inputs, inspection, start grace, calls) are LiftRules (lift/rules.hpp).
 //
 // A controller derives from ControllerCore<Types>, where Types names its command, reply, event,
 // snapshot, travel sequencer, travel event and tick input types; the drive's own parts (its link,
@@ -31,6 +32,7 @@
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
+#include "lift/rules.hpp"
 #include "rt/snapshot.hpp"
 #include "rt/spsc_queue.hpp"
 
@@ -70,7 +72,6 @@ struct TaggedCommand {
 };
 
 // ---- replies (real-time thread -> io thread) ----
-enum class ReplyCode : std::uint8_t { Ok, NotReady, Busy, BadRequest, Fault };
 struct CommandReply {
   std::uint32_t tag = 0;
   ReplyCode code = ReplyCode::Ok;
@@ -173,9 +174,8 @@ class ControllerCore {
       : travel_(travel_config),
         lift_(config.lift),
         level_tolerance_mm_(config.lift.level_tolerance_mm),
-        inputs_timeout_(config.inputs_timeout),
-        inspection_hold_(config.inspection_hold),
-        start_at_(config.start) {
+        rules_(config.inputs_timeout, config.inspection_hold) {
+    rules_.start(config.start);
     if (!lift_.set_floors(config.floors_mm)) {
       throw std::invalid_argument("floors: need 2 or more strictly increasing levels");
     }
@@ -207,32 +207,16 @@ class ControllerCore {
 
   // ---- inputs ----
 
-  /// The provider's last inputs (valid while fresh) with the API's inspection and its buttons
-  /// held for inspection_hold after the last inspection command.
-  Inputs current_inputs(MonoTime now) const noexcept {
-    Inputs in = provider_inputs_;
-    in.valid = inputs_seen_ && now - inputs_at_ <= inputs_timeout_;
-    if (api_inspection_) {
-      in.inspection = true;
-      const bool held = now <= api_hold_until_;
-      in.button_up = in.button_up || (held && api_direction_ == Direction::Up);
-      in.button_down = in.button_down || (held && api_direction_ == Direction::Down);
-    }
-    return in;
-  }
-  /// After start, the link, the inputs and the position get two input timeouts before they count
-  /// as lost (as the DCP lift).
-  bool start_grace_over(MonoTime now) const noexcept {
-    return now - start_at_ > inputs_timeout_ * 2;
-  }
+  /// The provider's last inputs (valid while fresh) with the API's inspection (LiftRules).
+  Inputs current_inputs(MonoTime now) const noexcept { return rules_.current_inputs(now); }
+  /// The start grace of the link, the inputs and the position (LiftRules).
+  bool start_grace_over(MonoTime now) const noexcept { return rules_.start_grace_over(now); }
 
   // ---- commands every lift handles alike ----
 
   void handle_shared(std::uint32_t tag, const InputsCommand& body,
                      typename Types::Input& in) noexcept {
-    provider_inputs_ = body.inputs;
-    inputs_at_ = in.now;
-    inputs_seen_ = true;
+    rules_.take_inputs(body.inputs, in.now);
     reply(tag, ReplyCode::Ok);
   }
   void handle_shared(std::uint32_t tag, const ShutdownCommand& body,
@@ -253,29 +237,12 @@ class ControllerCore {
   }
   void handle_shared(std::uint32_t tag, const InspectionCommand& body,
                      typename Types::Input& in) noexcept {
-    api_inspection_ = body.on;
-    api_direction_ = body.on ? body.direction : Direction::None;
-    api_hold_until_ = in.now + inspection_hold_;
+    rules_.take_inspection(body.on, body.direction, in.now);
     reply(tag, ReplyCode::Ok);
   }
   void handle_shared(std::uint32_t tag, const CallCommand& body, typename Types::Input&) noexcept {
-    if (body.add) {
-      if (shutting_down_) return reply(tag, ReplyCode::NotReady, "the service is stopping");
-      switch (lift_.add_call(body.floor)) {
-        case CallError::None:
-          return reply(tag, ReplyCode::Ok);
-        case CallError::NoSuchFloor:
-          return reply(tag, ReplyCode::BadRequest, "no such floor in this installation");
-        case CallError::AlreadyQueued:  // as the DCP lift answers it (docs/api.md `calls`)
-          return reply(tag, ReplyCode::Ok, "already queued");
-        case CallError::Full:
-          return reply(tag, ReplyCode::Busy, "the calls queue is full");
-      }
-    }
-    if (!lift_.cancel_call(body.floor)) {
-      return reply(tag, ReplyCode::BadRequest, "that floor is not in the calls queue");
-    }
-    reply(tag, ReplyCode::Ok);
+    const Answer a = LiftRules::answer_call(lift_, body.add, body.floor, shutting_down_);
+    reply(tag, a.code, a.detail);
   }
 
   /// The travel command's gates in order (stopping, floor, the drive's own check, inspection,
@@ -288,7 +255,7 @@ class ControllerCore {
                      CodeFor code_for, TextFor text_for) noexcept {
     if (shutting_down_) return refuse(tag, ReplyCode::NotReady, "the service is stopping");
     if (body.floor >= lift_.floors().size()) {
-      return refuse(tag, ReplyCode::BadRequest, "no such floor in this installation");
+      return refuse(tag, ReplyCode::BadRequest, "no such floor");
     }
     if (const std::optional<Refusal> refusal = drive_gate()) {
       return refuse(tag, refusal->code, refusal->detail);
@@ -460,9 +427,7 @@ class ControllerCore {
   }
 
   std::uint32_t level_tolerance_mm_;
-  MonoTime inputs_timeout_;
-  MonoTime inspection_hold_;
-  MonoTime start_at_;
+  LiftRules rules_;  ///< inputs, inspection, start grace and calls, as every lift has them
 
   rt::SpscQueue<typename Types::Command, kCommandQueueSize> commands_;
   rt::SpscQueue<typename Types::Reply, kReplyQueueSize> replies_;
@@ -472,12 +437,6 @@ class ControllerCore {
   std::atomic<std::uint64_t> travel_dropped_{0};  ///< the travel's own count, copied each step
 
   // Real-time-thread state.
-  Inputs provider_inputs_{};
-  MonoTime inputs_at_{};
-  bool inputs_seen_ = false;
-  bool api_inspection_ = false;
-  Direction api_direction_ = Direction::None;
-  MonoTime api_hold_until_{};
   bool place_known_ = false;  ///< the travel was told the floor the car stands at
   std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults_{};
   std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since_{};

@@ -592,6 +592,24 @@ INSTANTIATE_TEST_SUITE_P(
 
 // ---- calls ----
 
+TEST(Calls, AnsweredAsOnEveryLiftAndRefusedWhileTheServiceStops) {
+  // The DCP lift answers `calls` with the shared lift rules (lift/rules.hpp), as the SCH001 and
+  // USS lifts do: docs/api.md's texts, and no new call once the service is stopping.
+  Rig rig;
+  ASSERT_TRUE(rig.warm_up());
+  CommandReply r = rig.command(CallCommand{true, 99});
+  EXPECT_EQ(r.code, ReplyCode::BadRequest);
+  EXPECT_EQ(r.detail, "no such floor");
+  r = rig.command(CallCommand{false, 2});
+  EXPECT_EQ(r.code, ReplyCode::BadRequest);
+  EXPECT_EQ(r.detail, "floor is not queued");
+  ASSERT_EQ(rig.command(ShutdownCommand{false}).code, ReplyCode::Ok);
+  r = rig.command(CallCommand{true, 2});
+  EXPECT_EQ(r.code, ReplyCode::NotReady);
+  EXPECT_EQ(r.detail, "the service is stopping");
+  EXPECT_EQ(rig.controller.snapshot().call_count, 0U);
+}
+
 TEST(Calls, ServedInOrder) {
   Rig rig;
   ASSERT_TRUE(rig.warm_up());

@@ -1,10 +1,12 @@
-// Floors, next possible stop and the calls queue (DCP 11.1.2.1: which floors can still be served).
+// Floors, next possible stop and the calls queue (DCP 11.1.2.1: which floors can still be served),
+// and the lift rules every controller shares (inputs, inspection, start grace, calls answers).
 #include <gtest/gtest.h>
 
 #include <optional>
 #include <vector>
 
 #include "lift/lift_model.hpp"
+#include "lift/rules.hpp"
 
 namespace liftd::lift {
 namespace {
@@ -149,6 +151,81 @@ TEST(LiftModel, NewFloorTableClearsCalls) {
   const std::vector<std::int64_t> two = {0, 4000};
   ASSERT_TRUE(model.set_floors(two));
   EXPECT_EQ(model.calls().size(), 0U);
+}
+
+// ---- the lift rules (one copy for the DCP, SCH001 and USS lifts) ----
+
+using namespace std::chrono_literals;
+
+LiftModel five_floors() {
+  LiftModel lift;
+  EXPECT_TRUE(lift.set_floors(kLevels));
+  return lift;
+}
+
+TEST(LiftRules, CallsAnswersAreTheApisOnEveryLift) {
+  // docs/api.md `calls`: what a dispatcher reads on every drive kind.
+  struct Case {
+    const char* what;
+    bool add;
+    std::size_t floor;
+    bool shutting_down;
+    ReplyCode code;
+    std::string_view detail;
+  };
+  const Case cases[] = {
+      {"add", true, 3, false, ReplyCode::Ok, ""},
+      {"add again", true, 3, false, ReplyCode::Ok, "already queued"},
+      {"add a floor that does not exist", true, 5, false, ReplyCode::BadRequest, "no such floor"},
+      {"add while the service stops", true, 1, true, ReplyCode::NotReady,
+       "the service is stopping"},
+      {"cancel", false, 3, false, ReplyCode::Ok, ""},
+      {"cancel again", false, 3, false, ReplyCode::BadRequest, "floor is not queued"},
+      {"cancel while the service stops", false, 1, true, ReplyCode::BadRequest,
+       "floor is not queued"},
+  };
+  LiftModel lift = five_floors();
+  for (const Case& c : cases) {
+    const Answer a = LiftRules::answer_call(lift, c.add, c.floor, c.shutting_down);
+    EXPECT_EQ(a.code, c.code) << c.what;
+    EXPECT_EQ(a.detail, c.detail) << c.what;
+  }
+  EXPECT_EQ(lift.calls().size(), 0U);
+}
+
+TEST(LiftRules, InputsAreValidWhileFreshAndTheApiInspectionHoldsItsDirection) {
+  LiftRules rules(200ms, 300ms);
+  const MonoTime t0{10s};
+  EXPECT_FALSE(rules.current_inputs(t0).valid) << "nothing from the provider yet";
+  Inputs sent;
+  sent.safety_chain_closed = true;
+  sent.doors_locked = true;
+  rules.take_inputs(sent, t0);
+  EXPECT_TRUE(rules.current_inputs(t0 + 200ms).valid);
+  EXPECT_TRUE(rules.current_inputs(t0 + 200ms).doors_locked);
+  EXPECT_FALSE(rules.current_inputs(t0 + 201ms).valid) << "older than inputs_timeout";
+
+  rules.take_inputs(sent, t0 + 1s);
+  rules.take_inspection(true, Direction::Up, t0 + 1s);
+  Inputs in = rules.current_inputs(t0 + 1s + 300ms);
+  EXPECT_TRUE(in.inspection);
+  EXPECT_TRUE(in.button_up);
+  EXPECT_FALSE(in.button_down);
+  in = rules.current_inputs(t0 + 1s + 301ms);
+  EXPECT_TRUE(in.inspection) << "inspection stays on";
+  EXPECT_FALSE(in.button_up) << "the direction was not repeated within the hold";
+  rules.take_inspection(false, Direction::Down, t0 + 1s + 310ms);
+  in = rules.current_inputs(t0 + 1s + 320ms);
+  EXPECT_FALSE(in.inspection);
+  EXPECT_FALSE(in.button_down) << "off carries no direction";
+}
+
+TEST(LiftRules, StartGraceIsTwoInputTimeouts) {
+  LiftRules rules(200ms, 300ms);
+  const MonoTime t0{5s};
+  rules.start(t0);
+  EXPECT_FALSE(rules.start_grace_over(t0 + 400ms));
+  EXPECT_TRUE(rules.start_grace_over(t0 + 401ms));
 }
 
 }  // namespace

@@ -72,7 +72,8 @@ DcpController::DcpController(const ControllerConfig& config, const PositionSourc
       position_(position),
       link_(config.link),
       travel_(config.travel),
-      lift_(config.lift) {
+      lift_(config.lift),
+      rules_(config.inputs_timeout, config.inspection_hold) {
   if (auto bad = travel::validate(config.travel)) {
     throw std::invalid_argument("travel setting out of range: " + std::string(*bad));
   }
@@ -85,7 +86,7 @@ DcpController::DcpController(const ControllerConfig& config, const PositionSourc
 // ---- the cycle ----
 
 std::span<const std::uint8_t> DcpController::frame_to_send(MonoTime now) noexcept {
-  if (cycle_++ == 0) start_at_ = now;
+  if (cycle_++ == 0) rules_.start(now);
   // Inputs (machine inputs, the API's inspection buttons) and the clock first, so this cycle's
   // input is current; then every other command is
   // judged against that input (a travel asked for right after the handshake is not refused with
@@ -186,18 +187,30 @@ void DcpController::read_drive(travel::CycleInput& in) const noexcept {
 }
 
 lift::Inputs DcpController::effective_inputs(MonoTime now) const noexcept {
-  lift::Inputs in = provider_inputs_;
-  in.valid = inputs_seen_ && now - inputs_at_ <= config_.inputs_timeout;
-  if (api_inspection_) {
-    in.inspection = true;
-    const bool held = now <= api_hold_until_;
-    in.button_up = in.button_up || (held && api_direction_ == lift::Direction::Up);
-    in.button_down = in.button_down || (held && api_direction_ == lift::Direction::Down);
-  }
-  return in;
+  return rules_.current_inputs(now);
 }
 
 // ---- commands ----
+
+namespace {
+
+ReplyCode to_reply_code(lift::ReplyCode code) noexcept {
+  switch (code) {
+    case lift::ReplyCode::Ok:
+      return ReplyCode::Ok;
+    case lift::ReplyCode::NotReady:
+      return ReplyCode::NotReady;
+    case lift::ReplyCode::Busy:
+      return ReplyCode::Busy;
+    case lift::ReplyCode::BadRequest:
+      return ReplyCode::BadRequest;
+    case lift::ReplyCode::Fault:
+      return ReplyCode::Fault;
+  }
+  return ReplyCode::Fault;
+}
+
+}  // namespace
 
 void DcpController::reply(std::uint32_t tag, ReplyCode code, std::string_view detail,
                           bool extended) noexcept {
@@ -236,9 +249,7 @@ void DcpController::handle(const Command& command, MonoTime now) noexcept {
         } else if constexpr (std::is_same_v<T, RelevelCommand>) {
           handle_relevel(tag);
         } else if constexpr (std::is_same_v<T, InspectionCommand>) {
-          api_inspection_ = body.on;
-          api_direction_ = body.on ? body.direction : lift::Direction::None;
-          api_hold_until_ = now + config_.inspection_hold;
+          rules_.take_inspection(body.on, body.direction, now);
           reply(tag, ReplyCode::Ok);
         } else if constexpr (std::is_same_v<T, FastStartCommand>) {
           if (!fast_start_armed_) {
@@ -252,32 +263,11 @@ void DcpController::handle(const Command& command, MonoTime now) noexcept {
             reply(tag, ReplyCode::Ok);  // DCP 12.1.3: the go message follows doors locked
           }
         } else if constexpr (std::is_same_v<T, CallCommand>) {
-          if (!body.add) {
-            if (lift_.cancel_call(body.floor)) {
-              reply(tag, ReplyCode::Ok);
-            } else {
-              reply(tag, ReplyCode::BadRequest, "floor is not queued");
-            }
-            return;
-          }
-          switch (lift_.add_call(body.floor)) {
-            case lift::CallError::None:
-              reply(tag, ReplyCode::Ok);
-              break;
-            case lift::CallError::NoSuchFloor:
-              reply(tag, ReplyCode::BadRequest, "no such floor");
-              break;
-            case lift::CallError::AlreadyQueued:
-              reply(tag, ReplyCode::Ok, "already queued");
-              break;
-            case lift::CallError::Full:
-              reply(tag, ReplyCode::Busy, "calls queue full");
-              break;
-          }
+          const lift::Answer a =
+              lift::LiftRules::answer_call(lift_, body.add, body.floor, shutting_down_);
+          reply(tag, to_reply_code(a.code), a.detail);
         } else if constexpr (std::is_same_v<T, InputsCommand>) {
-          provider_inputs_ = body.inputs;
-          inputs_at_ = now;
-          inputs_seen_ = true;
+          rules_.take_inputs(body.inputs, now);
           reply(tag, ReplyCode::Ok);
         } else if constexpr (std::is_same_v<T, LinkCommand>) {
           const auto* sw = std::get_if<dcp::SwitchRequest>(&body.request);
@@ -707,8 +697,7 @@ void DcpController::set_fault(FaultCode code, bool active, MonoTime now) noexcep
 
 void DcpController::update_faults(const travel::CycleInput& in, MonoTime now) noexcept {
   const bool link_up = link_.state() == dcp::LinkState::Up;
-  // Grace after start: inputs and position get two timeouts to arrive before they count as lost.
-  const bool started = now - start_at_ > config_.inputs_timeout * 2;
+  const bool started = rules_.start_grace_over(now);
   set_fault(FaultCode::LinkFault, link_.state() == dcp::LinkState::Fault, now);
   set_fault(FaultCode::DriveFault, link_up && in.status.general_fault, now);
   set_fault(FaultCode::AdvanceWarning, link_up && in.status.advance_warning, now);

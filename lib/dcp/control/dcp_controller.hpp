@@ -25,6 +25,7 @@
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/position_source.hpp"
+#include "lift/rules.hpp"
 #include "rt/cycle_runner.hpp"
 #include "rt/snapshot.hpp"
 #include "rt/spsc_queue.hpp"
@@ -291,12 +292,7 @@ class DcpController final : public rt::CycleEngine {
   dcp::FrameBytes frame_{};
   travel::CycleInput last_input_{};
   travel::CycleOutput last_output_{};
-  lift::Inputs provider_inputs_{};
-  MonoTime inputs_at_{};
-  bool inputs_seen_ = false;
-  bool api_inspection_ = false;
-  lift::Direction api_direction_ = lift::Direction::None;
-  MonoTime api_hold_until_{};
+  lift::LiftRules rules_;  ///< inputs, inspection, start grace and calls, as every lift has them
   Internal internal_;
   std::optional<travel::ChannelReply> pending_reply_;
   std::optional<std::size_t> target_floor_;
@@ -316,7 +312,6 @@ class DcpController final : public rt::CycleEngine {
   std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults_{};
   std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since_{};
   std::uint64_t cycle_ = 0;
-  MonoTime start_at_{};
 };
 
 }  // namespace liftd::control

@@ -1,0 +1,79 @@
+// The lift rules every controller applies alike, whatever drive it runs (the DCP lift's
+// DcpController and the ControllerCore of the SCH001 and USS lifts each own one): the machine's
+// inputs as the provider last sent them, the API's software inspection with its held direction,
+// the start grace, and the answers to the calls commands. One copy, so a dispatcher and a
+// technician see the same lift on every drive kind (docs/api.md `inputs`, `inspection`, `calls`).
+//
+// Real-time safe: no allocation, no lock, no exception; the answers are static strings.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+
+#include "common/mono_time.hpp"
+#include "lift/inputs.hpp"
+#include "lift/lift_model.hpp"
+
+namespace liftd::lift {
+
+/// How a command ended, as the API's error codes name it.
+enum class ReplyCode : std::uint8_t { Ok, NotReady, Busy, BadRequest, Fault };
+
+/// A command's answer: its code and a static text ("" for a plain ok).
+struct Answer {
+  ReplyCode code = ReplyCode::Ok;
+  std::string_view detail;
+};
+
+class LiftRules {
+ public:
+  /// `inputs_timeout`: inputs older than this count as lost (config inputs.timeout_ms).
+  /// `inspection_hold`: an API inspection direction must be repeated within this (config
+  /// travel.inspection_hold_ms).
+  LiftRules(MonoTime inputs_timeout, MonoTime inspection_hold) noexcept
+      : inputs_timeout_(inputs_timeout), inspection_hold_(inspection_hold) {}
+
+  /// The controller started at `now`: the start grace counts from here.
+  void start(MonoTime now) noexcept { start_at_ = now; }
+  /// After start, the link, the inputs and the position get two input timeouts to arrive before
+  /// they count as lost.
+  bool start_grace_over(MonoTime now) const noexcept {
+    return now - start_at_ > inputs_timeout_ * 2;
+  }
+
+  /// The provider's complete inputs, received at `now`.
+  void take_inputs(const Inputs& inputs, MonoTime now) noexcept {
+    provider_inputs_ = inputs;
+    inputs_at_ = now;
+    inputs_seen_ = true;
+  }
+  /// The API's software inspection: on/off and the direction held until `now` +
+  /// inspection_hold (a client repeats it to keep the car moving).
+  void take_inspection(bool on, Direction direction, MonoTime now) noexcept {
+    api_inspection_ = on;
+    api_direction_ = on ? direction : Direction::None;
+    api_hold_until_ = now + inspection_hold_;
+  }
+  /// The provider's last inputs (valid while fresh) with the API's inspection and its buttons
+  /// while the direction is held.
+  Inputs current_inputs(MonoTime now) const noexcept;
+
+  /// `calls add` / `calls cancel` of `floor` on `lift`. While the service stops no call is
+  /// added (the calls were cleared and no travel starts); a floor already queued is ok.
+  static Answer answer_call(LiftModel& lift, bool add, std::size_t floor,
+                            bool shutting_down) noexcept;
+
+ private:
+  MonoTime inputs_timeout_;
+  MonoTime inspection_hold_;
+  MonoTime start_at_{};
+  Inputs provider_inputs_{};
+  MonoTime inputs_at_{};
+  bool inputs_seen_ = false;
+  bool api_inspection_ = false;
+  Direction api_direction_ = Direction::None;
+  MonoTime api_hold_until_{};
+};
+
+}  // namespace liftd::lift
