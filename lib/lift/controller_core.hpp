@@ -347,16 +347,15 @@ class ControllerCore {
   /// and one clear. So the journal never shows a clear without its raise, two raises in a row,
   /// or nothing of a short fault, whatever the load.
   void set_fault(FaultCode code, bool active, MonoTime now) noexcept {
-    const auto i = static_cast<std::size_t>(code);
-    if (faults_[i] != active) {
-      faults_[i] = active;
-      if (active) {
-        fault_since_[i] = now;
-        ++fault_raises_[i];
-      }
-    }
-    report_fault(i, now);
+    faults_.set(code, active, now, [&](FaultCode c, bool raised) {
+      typename Types::Event e;
+      e.kind = raised ? Types::Event::Kind::FaultRaised : Types::Event::Kind::FaultCleared;
+      e.at = now;
+      e.fault = c;
+      return events_.try_push(e);
+    });
   }
+
   /// The snapshot fields every lift has: the car, the travel, the inputs, the calls, the faults,
   /// and whether the drive lets a travel start by `in` (the travel's drive_forbidding(), the
   /// check every travel start makes first: status `drive.state`).
@@ -377,8 +376,8 @@ class ControllerCore {
     for (std::size_t i = 0; i < s.call_count; ++i) {
       s.calls[i] = static_cast<std::uint8_t>(lift_.calls().at(i));
     }
-    s.faults = faults_;
-    s.fault_since = fault_since_;
+    s.faults = faults_.active_all();
+    s.fault_since = faults_.since_all();
     s.shutting_down = shutting_down_;
   }
 
@@ -388,26 +387,6 @@ class ControllerCore {
   std::uint64_t steps_ = 0;
 
  private:
-  void report_fault(std::size_t i, MonoTime now) noexcept {
-    for (;;) {
-      const bool raise_owed = fault_raises_[i] != fault_raises_told_[i];
-      bool raise;
-      if (!fault_told_[i] && raise_owed) {
-        raise = true;
-      } else if (fault_told_[i] && (!faults_[i] || raise_owed)) {
-        raise = false;  // ended, or ended and came again: the clear first
-      } else {
-        return;  // the io thread knows the truth
-      }
-      typename Types::Event e;
-      e.kind = raise ? Types::Event::Kind::FaultRaised : Types::Event::Kind::FaultCleared;
-      e.at = now;
-      e.fault = static_cast<FaultCode>(i);
-      if (!events_.try_push(e)) return;  // not lost: told at a later step
-      fault_told_[i] = raise;
-      if (raise) fault_raises_told_[i] = fault_raises_[i];  // missed repeats told as one
-    }
-  }
   /// Answers a refusal; false (nothing started).
   bool refuse(std::uint32_t tag, ReplyCode code, std::string_view detail) noexcept {
     reply(tag, code, detail);
@@ -438,11 +417,7 @@ class ControllerCore {
 
   // Real-time-thread state.
   bool place_known_ = false;  ///< the travel was told the floor the car stands at
-  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults_{};
-  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since_{};
-  std::array<std::uint64_t, static_cast<std::size_t>(FaultCode::kCount)> fault_raises_{};
-  std::array<std::uint64_t, static_cast<std::size_t>(FaultCode::kCount)> fault_raises_told_{};
-  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> fault_told_{};
+  FaultTable faults_;         ///< each raise and clear told once, never lost to a full queue
   std::atomic<std::uint64_t> lost_replies_{0};
   std::size_t replies_owed_ = 0;  ///< io thread only
 };

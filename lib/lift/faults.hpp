@@ -4,8 +4,12 @@
 // the technician's explanation in its own terms (fault_text in its controller).
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string_view>
+
+#include "common/mono_time.hpp"
 
 namespace liftd::lift {
 
@@ -21,5 +25,55 @@ enum class FaultCode : std::uint8_t {
 
 /// snake_case code for the API and the journal ("link_fault", ...); "internal" for kCount.
 std::string_view fault_code_name(FaultCode code) noexcept;
+
+/// The faults a controller stands in, when each began, and what it still owes the io thread:
+/// every raise and every clear is told once and in order. When telling fails (the event queue is
+/// full) it stays owed and is told at a later set() of that fault: never lost, and repeats missed
+/// meanwhile are told as one (a clear, then a raise). Real-time safe.
+class FaultTable {
+ public:
+  static constexpr std::size_t kSize = static_cast<std::size_t>(FaultCode::kCount);
+
+  /// Sets `code` active or not at `now`, then tells what is owed for it through
+  /// `tell(code, raised)`, which returns false when it could not tell (tried again next time).
+  /// Call it for every fault at every step, so that an owed report is not kept waiting.
+  template <typename Tell>
+  void set(FaultCode code, bool active, MonoTime now, Tell&& tell) noexcept {
+    const auto i = static_cast<std::size_t>(code);
+    if (active_[i] != active) {
+      active_[i] = active;
+      if (active) {
+        since_[i] = now;
+        ++raises_[i];
+      }
+    }
+    for (;;) {
+      const bool raise_owed = raises_[i] != raises_told_[i];
+      bool raise;
+      if (!told_[i] && raise_owed) {
+        raise = true;
+      } else if (told_[i] && (!active_[i] || raise_owed)) {
+        raise = false;  // ended, or ended and came again: the clear first
+      } else {
+        return;  // the io thread knows the truth
+      }
+      if (!tell(code, raise)) return;  // not lost: told at a later set()
+      told_[i] = raise;
+      if (raise) raises_told_[i] = raises_[i];  // missed repeats told as one
+    }
+  }
+  bool active(FaultCode code) const noexcept { return active_[static_cast<std::size_t>(code)]; }
+  /// Each fault's state, indexed by FaultCode (for a snapshot).
+  const std::array<bool, kSize>& active_all() const noexcept { return active_; }
+  /// When each fault last began.
+  const std::array<MonoTime, kSize>& since_all() const noexcept { return since_; }
+
+ private:
+  std::array<bool, kSize> active_{};
+  std::array<MonoTime, kSize> since_{};
+  std::array<std::uint64_t, kSize> raises_{};
+  std::array<std::uint64_t, kSize> raises_told_{};
+  std::array<bool, kSize> told_{};
+};
 
 }  // namespace liftd::lift

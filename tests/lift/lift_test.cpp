@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <optional>
+#include <string>
 #include <vector>
 
+#include "lift/faults.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/rules.hpp"
 
@@ -226,6 +228,58 @@ TEST(LiftRules, StartGraceIsTwoInputTimeouts) {
   rules.start(t0);
   EXPECT_FALSE(rules.start_grace_over(t0 + 400ms));
   EXPECT_TRUE(rules.start_grace_over(t0 + 401ms));
+}
+
+TEST(FaultTable, EachRaiseAndClearIsToldOnceAndInOrderWhateverTheQueueTakes) {
+  // The io thread's event queue refuses (full) at some sets: what was not told is owed and told
+  // at a later set; a fault that came and went while the queue was full is still told as one
+  // raise and one clear; nothing is told twice.
+  struct Step {
+    bool active;
+    bool queue_takes;
+    const char* told;  // what reaches the queue at this set: r = raise, c = clear
+  };
+  struct Case {
+    const char* what;
+    std::vector<Step> steps;
+  };
+  const std::vector<Case> cases = {
+      {"plain", {{true, true, "r"}, {true, true, ""}, {false, true, "c"}, {false, true, ""}}},
+      {"raise waits", {{true, false, ""}, {true, false, ""}, {true, true, "r"}}},
+      {"came and went while full", {{true, false, ""}, {false, false, ""}, {false, true, "rc"}}},
+      {"ended and came again while full",
+       {{true, true, "r"}, {false, false, ""}, {true, false, ""}, {true, true, "cr"}}},
+      {"clear waits", {{true, true, "r"}, {false, false, ""}, {false, true, "c"}}},
+  };
+  for (const Case& c : cases) {
+    FaultTable table;
+    MonoTime now{1s};
+    for (std::size_t i = 0; i < c.steps.size(); ++i) {
+      const Step& step = c.steps[i];
+      std::string told;
+      table.set(FaultCode::DriveFault, step.active, now, [&](FaultCode code, bool raised) {
+        EXPECT_EQ(code, FaultCode::DriveFault);
+        if (!step.queue_takes) return false;
+        told += raised ? 'r' : 'c';
+        return true;
+      });
+      EXPECT_EQ(told, step.told) << c.what << ", step " << i;
+      EXPECT_EQ(table.active(FaultCode::DriveFault), step.active) << c.what;
+      now += 15ms;
+    }
+  }
+}
+
+TEST(FaultTable, KeepsWhenEachFaultBegan) {
+  FaultTable table;
+  const auto any = [](FaultCode, bool) { return true; };
+  table.set(FaultCode::SafetyChain, true, MonoTime{2s}, any);
+  table.set(FaultCode::SafetyChain, true, MonoTime{3s}, any);
+  EXPECT_EQ(table.since_all()[static_cast<std::size_t>(FaultCode::SafetyChain)], MonoTime{2s});
+  table.set(FaultCode::SafetyChain, false, MonoTime{4s}, any);
+  table.set(FaultCode::SafetyChain, true, MonoTime{5s}, any);
+  EXPECT_EQ(table.since_all()[static_cast<std::size_t>(FaultCode::SafetyChain)], MonoTime{5s});
+  EXPECT_FALSE(table.active(FaultCode::LinkFault));
 }
 
 }  // namespace

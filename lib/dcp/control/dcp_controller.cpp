@@ -10,10 +10,6 @@ namespace {
 using travel::AbortCause;
 using travel::TravelKind;
 
-constexpr std::size_t index(FaultCode code) noexcept {
-  return static_cast<std::size_t>(code);
-}
-
 std::string_view abort_text(AbortCause cause) noexcept {
   switch (cause) {
     case AbortCause::LinkDown:
@@ -684,15 +680,15 @@ void DcpController::serve_calls() noexcept {
 }
 
 void DcpController::set_fault(FaultCode code, bool active, MonoTime now) noexcept {
-  bool& current = faults_[index(code)];
-  if (current == active) return;
-  current = active;
-  if (active) fault_since_[index(code)] = now;
-  ControllerEvent ev;
-  ev.kind = active ? ControllerEvent::Kind::FaultRaised : ControllerEvent::Kind::FaultCleared;
-  ev.at = now;
-  ev.fault = code;
-  push_event(ev);
+  // lift::FaultTable: each raise and clear told once; one that does not fit the event queue is
+  // told at a later cycle (update_faults sets every fault every cycle), never dropped.
+  faults_.set(code, active, now, [&](FaultCode c, bool raised) {
+    ControllerEvent ev;
+    ev.kind = raised ? ControllerEvent::Kind::FaultRaised : ControllerEvent::Kind::FaultCleared;
+    ev.at = now;
+    ev.fault = c;
+    return events_.try_push(ev);
+  });
 }
 
 void DcpController::update_faults(const travel::CycleInput& in, MonoTime now) noexcept {
@@ -741,8 +737,8 @@ void DcpController::publish(MonoTime now) noexcept {
   }
   s.display_version = link_.display().version();
   s.link_counters = link_.counters();
-  s.faults = faults_;
-  s.fault_since = fault_since_;
+  s.faults = faults_.active_all();
+  s.fault_since = faults_.since_all();
   s.last_travel_measured_mm = measured_mm_;
   s.last_travel_slip_mm = slip_mm_;
   s.handshake_problem = link_.handshake_problem();

@@ -309,8 +309,7 @@ class DcpController final : public rt::CycleEngine {
   std::optional<std::int64_t> measured_mm_;
   std::optional<std::int64_t> slip_mm_;
   bool fast_start_armed_ = false;
-  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults_{};
-  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since_{};
+  lift::FaultTable faults_;  ///< each raise and clear told once, never lost to a full queue
   std::uint64_t cycle_ = 0;
 };
 
