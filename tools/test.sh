@@ -76,6 +76,28 @@ start_session() {
   rm -f "$pid_file"
 }
 
+# A user-mode Linux guest uses one CPU at most (its kernel is uniprocessor). Beside it the other
+# CPU compiles the fuzz and sanitizer presets with ONE job at nice 19, so the guest keeps a CPU
+# of its own (measured: with a compiler on both CPUs, even at nice 19 and with the guest at
+# SCHED_FIFO, the guest's cycle woke up to 7.5 ms late and its encoder went stale mid-travel).
+# The builder runs in its own session, so that one kill ends ninja and its compiler when the
+# stage is done; what it finished stays built (ninja logs each output as it completes) and the
+# presets below build the rest with every CPU.
+builder=
+start_early_builds() {
+  local builds=() script
+  [ "${LIFTD_SKIP_FUZZ:-0}" = 1 ] || builds+=("cmake --preset fuzz >/dev/null && cmake --build --preset fuzz --parallel 1")
+  [ "${LIFTD_SKIP_ASAN:-0}" = 1 ] || builds+=("cmake --preset asan >/dev/null && cmake --build --preset asan --parallel 1")
+  [ ${#builds[@]} -gt 0 ] || return 0
+  script=$(printf '%s && ' "${builds[@]}")
+  builder=$(start_session "exec >>build/early-builds.log 2>&1; nice -n 19 bash -c '${script% && }'")
+  trap 'kill "${background[@]}" 2>/dev/null || true; stop_early_builds' EXIT
+}
+stop_early_builds() {
+  [ -z "$builder" ] || kill -- "-$builder" 2>/dev/null || true
+  builder=
+}
+
 if [ $under_load = 1 ]; then
   echo "=== preset: default (built before the load starts) ==="
   cmake --preset default >/dev/null
@@ -107,14 +129,10 @@ fi
 
 run_preset default
 # The installed service as an operator meets it: Debian 12 booted with systemd as PID 1 under
-# user-mode Linux. A guest uses one CPU at most (its kernel is uniprocessor); the other CPU
-# meanwhile compiles the fuzz and sanitizer builds with ONE job at nice 19, so the guest keeps a
-# CPU of its own (measured: with a compiler on both CPUs, even at nice 19 and with the guest at
-# SCHED_FIFO, the guest's cycle woke up to 7.5 ms late and its encoder went stale mid-travel).
-# Nothing else runs beside it: the CAN stage and the soaks wait (a second guest beside it made
-# the stage's first travel end in a link fault; a soak beside it once stopped a car 6 mm off its
-# level when its simulated drive refused the master's remaining distance). On request only
-# (LIFTD_SYSTEMD_STAGE=1): with it a clean run takes over 30 minutes on a 2-core machine.
+# user-mode Linux, beside the one-job compile of the next presets (start_early_builds). Nothing
+# else runs beside it: the CAN stage and the soaks wait (a second guest beside it made the
+# stage's first travel end in a link fault). On request only (LIFTD_SYSTEMD_STAGE=1): with it a
+# clean run takes over 30 minutes on a 2-core machine.
 if [ $systemd_stage = 1 ]; then
   echo "=== systemd stage: the package on Debian 12 with systemd as PID 1 (beside a one-job"
   echo "    compile of the next presets; its log: build/systemd-stage.log) ==="
@@ -126,31 +144,23 @@ if [ $systemd_stage = 1 ]; then
   tests/systemd/stage.sh build >build/systemd-stage.log 2>&1 &
   systemd_pid=$!
   background+=("$systemd_pid")
-  builds=()
-  [ "${LIFTD_SKIP_FUZZ:-0}" = 1 ] || builds+=("cmake --preset fuzz >/dev/null && cmake --build --preset fuzz --parallel 1")
-  [ "${LIFTD_SKIP_ASAN:-0}" = 1 ] || builds+=("cmake --preset asan >/dev/null && cmake --build --preset asan --parallel 1")
-  if [ ${#builds[@]} -gt 0 ]; then
-    # Its own session, so that one kill ends ninja and its compiler when the stage is done; what
-    # it finished stays built (ninja logs each output as it completes) and the presets below
-    # build the rest with every CPU.
-    script=$(printf '%s && ' "${builds[@]}")
-    builder=$(start_session "exec >build/early-builds.log 2>&1; nice -n 19 bash -c '${script% && }'")
-    trap 'kill "${background[@]}" 2>/dev/null || true; kill -- "-$builder" 2>/dev/null || true' EXIT
-  fi
+  start_early_builds
   systemd_rc=0
   wait "$systemd_pid" || systemd_rc=$?
-  [ -z "${builder:-}" ] || kill -- "-$builder" 2>/dev/null || true
+  stop_early_builds
   cat build/systemd-stage.log
   timings+=("$(printf '%-22s %5d s (beside a one-job compile)' "systemd stage" $((SECONDS - systemd_start)))")
   [ $systemd_rc = 0 ] || { echo "tools/test.sh: the systemd stage failed"; exit 1; }
 fi
-# The real-SocketCAN stage, then the soaks, each alone: a soak beside a booting user-mode Linux
-# guest twice stopped a car 6 mm off its level (its simulated drive refused the master's
-# remaining distance as implausible while the guest took the CPUs).
+# The real-SocketCAN stage beside the one-job compile of the next presets (start_early_builds),
+# then the soaks alone.
 if [ "${LIFTD_SKIP_UML:-0}" != 1 ]; then
   # The tests that need a kernel with AF_CAN (label "vcan"), inside user-mode Linux.
-  echo "=== real SocketCAN: user-mode Linux with vcan0 ==="
+  echo "=== real SocketCAN: user-mode Linux with vcan0 (beside a one-job compile of the next"
+  echo "    presets; its log: build/early-builds.log) ==="
+  start_early_builds  # a failing stage ends the script, and its EXIT trap the builder
   timed "uml can" tools/uml/can-stage.sh build
+  stop_early_builds
 fi
 soak_seconds=${LIFTD_SOAK_SECONDS:-45}
 if [ "$soak_seconds" != 0 ]; then
