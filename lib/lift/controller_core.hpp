@@ -1,16 +1,19 @@
-// The command plumbing the SCH001 and USS controllers share (lib/sch001/controller,
-// lib/uss/drive/controller): the commands every lift takes, the lock-free queues and the
-// snapshot box between the real-time thread and the io thread, and the handling of the commands
-// that do not depend on the drive (inputs, inspection, shutdown, stop, calls and the gates of a
-// travel command), of the travel events and of the fault table. The rules the DCP lift applies
-// too (inputs, inspection, start grace, calls) are LiftRules (lift/rules.hpp).
+// The command plumbing every lift controller shares (the DCP, SCH001 and USS controllers): the
+// commands every lift takes, the lock-free queues and the snapshot box between the real-time
+// thread and the io thread with the bound on replies owed, the handling of the commands that do
+// not depend on the drive (inputs, inspection, calls, and on SCH001 and USS stop and service
+// stop), the first gates of a travel command, the travel events and the fault table. The rules
+// underneath (inputs, inspection, start grace, calls) are LiftRules (lift/rules.hpp).
 //
 // A controller derives from ControllerCore<Types>, where Types names its command, reply, event,
 // snapshot, travel sequencer, travel event and tick input types; the drive's own parts (its link,
-// its travel and relevelling starts, its snapshot fields) stay in the controller. The travel
-// sequencer has kind(), phase(), direction(), target(), busy(), stop(floors, in), abort(cause,
-// now), drive_forbidding(in), poll_event() and dropped_events(); its Cause enum has None,
-// Shutdown, SafetyChain, DoorsUnlocked, InputsLost and PositionLost.
+// its travel and relevelling starts, its snapshot fields) stay in the controller. The members
+// that drive the travel sequencer (handle_travel, the stop and shutdown handling, inspection,
+// drain_travel, fill_lift_snapshot) need one with kind(), phase(), direction(), target(),
+// busy(), stop(floors, in), abort(cause, now), drive_forbidding(in), poll_event() and
+// dropped_events(), whose Cause enum has None, Shutdown, SafetyChain, DoorsUnlocked, InputsLost
+// and PositionLost; the DCP controller sequences its travels itself (DCP 10-13) and uses the
+// rest.
 //
 // Threads: the real-time thread calls the protected members; ONE other thread (the daemon's io
 // thread) calls post(), poll_reply(), poll_event(), snapshot() and dropped_events().
@@ -216,7 +219,7 @@ class ControllerCore {
 
   void handle_shared(std::uint32_t tag, const InputsCommand& body,
                      typename Types::Input& in) noexcept {
-    rules_.take_inputs(body.inputs, in.now);
+    take_inputs(body.inputs, in.now);
     reply(tag, ReplyCode::Ok);
   }
   void handle_shared(std::uint32_t tag, const ShutdownCommand& body,
@@ -237,11 +240,11 @@ class ControllerCore {
   }
   void handle_shared(std::uint32_t tag, const InspectionCommand& body,
                      typename Types::Input& in) noexcept {
-    rules_.take_inspection(body.on, body.direction, in.now);
+    take_inspection(body, in.now);
     reply(tag, ReplyCode::Ok);
   }
   void handle_shared(std::uint32_t tag, const CallCommand& body, typename Types::Input&) noexcept {
-    const Answer a = LiftRules::answer_call(lift_, body.add, body.floor, shutting_down_);
+    const Answer a = answer_call(body);
     reply(tag, a.code, a.detail);
   }
 
@@ -253,9 +256,8 @@ class ControllerCore {
   bool handle_travel(std::uint32_t tag, const typename Types::TravelCommand& body,
                      const typename Types::Input& in, DriveGate drive_gate, Start start,
                      CodeFor code_for, TextFor text_for) noexcept {
-    if (shutting_down_) return refuse(tag, ReplyCode::NotReady, "the service is stopping");
-    if (body.floor >= lift_.floors().size()) {
-      return refuse(tag, ReplyCode::BadRequest, "no such floor");
+    if (const std::optional<Refusal> refusal = first_travel_refusal(body.floor)) {
+      return refuse(tag, refusal->code, refusal->detail);
     }
     if (const std::optional<Refusal> refusal = drive_gate()) {
       return refuse(tag, refusal->code, refusal->detail);
@@ -269,6 +271,13 @@ class ControllerCore {
     if (why != Types::Cause::None) return refuse(tag, code_for(why), text_for(why));
     reply(tag, ReplyCode::Ok);
     return true;
+  }
+  /// The first gates of every travel command, on every lift: not while the service stops, and
+  /// only to a floor of the installation.
+  std::optional<Refusal> first_travel_refusal(std::size_t floor) const noexcept {
+    if (shutting_down_) return Refusal{ReplyCode::NotReady, "the service is stopping"};
+    if (floor >= lift_.floors().size()) return Refusal{ReplyCode::BadRequest, "no such floor"};
+    return std::nullopt;
   }
   /// The first gates of a relevel command: not while stopping, not while a run is in progress.
   /// True when refused (answered).
@@ -308,7 +317,9 @@ class ControllerCore {
       inspect(Direction::None);
     }
   }
-  /// Forwards the travel's events; a finished travel to the first call's floor serves that call.
+  /// Forwards the travel's events; a finished travel to the first call's floor serves that call,
+  /// a travel that ended early empties the queue (docs/api.md `calls`: whoever dispatches the
+  /// lift decides again).
   void drain_travel(MonoTime now) noexcept {
     typename Types::TravelEvent t;
     while (travel_.poll_event(t)) {
@@ -323,9 +334,35 @@ class ControllerCore {
           lift_.calls().pop_front();
           call_served(t.floor, now);
         }
+      } else if (t.type == Types::TravelEvent::Type::Aborted) {
+        lift_.calls().clear();
       }
     }
-    travel_dropped_.store(travel_.dropped_events(), std::memory_order_relaxed);
+    note_travel_dropped(travel_.dropped_events());
+  }
+  /// The travel sequencer's own count of events it lost (stats cycle.dropped_events).
+  void note_travel_dropped(std::uint64_t count) noexcept {
+    travel_dropped_.store(count, std::memory_order_relaxed);
+  }
+  /// The start grace (start_grace_over) counts from `now`: for a controller whose loop starts
+  /// later than it was made.
+  void restart_start_grace(MonoTime now) noexcept { rules_.start(now); }
+  /// The provider's inputs and the API's inspection as commands carry them.
+  void take_inputs(const Inputs& inputs, MonoTime now) noexcept { rules_.take_inputs(inputs, now); }
+  void take_inspection(const InspectionCommand& body, MonoTime now) noexcept {
+    rules_.take_inspection(body.on, body.direction, now);
+  }
+  /// `floor` left the calls queue because the car is there (event call_served).
+  void call_served(std::size_t floor, MonoTime now) noexcept {
+    typename Types::Event served;
+    served.kind = Types::Event::Kind::CallServed;
+    served.at = now;
+    served.floor = floor;
+    push_event(served);
+  }
+  /// The answer to a calls add or cancel (LiftRules::answer_call), not yet sent.
+  Answer answer_call(const CallCommand& body) noexcept {
+    return LiftRules::answer_call(lift_, body.add, body.floor, shutting_down_);
   }
   /// The floor of the first call to travel to now, if any: none while a run is in progress or
   /// inspection is on; a call to the floor the car is at is served at once.
@@ -355,6 +392,10 @@ class ControllerCore {
       return events_.try_push(e);
     });
   }
+
+  /// The fault table as the snapshot shows it: which faults are active, and since when.
+  auto active_faults() const noexcept { return faults_.active_all(); }
+  auto fault_since() const noexcept { return faults_.since_all(); }
 
   /// The snapshot fields every lift has: the car, the travel, the inputs, the calls, the faults,
   /// and whether the drive lets a travel start by `in` (the travel's drive_forbidding(), the
@@ -397,14 +438,6 @@ class ControllerCore {
     return in.position_mm && std::llabs(*in.position_mm - lift_.floors().level_mm(floor)) <=
                                  static_cast<std::int64_t>(level_tolerance_mm_);
   }
-  void call_served(std::size_t floor, MonoTime now) noexcept {
-    typename Types::Event served;
-    served.kind = Types::Event::Kind::CallServed;
-    served.at = now;
-    served.floor = floor;
-    push_event(served);
-  }
-
   std::uint32_t level_tolerance_mm_;
   LiftRules rules_;  ///< inputs, inspection, start grace and calls, as every lift has them
 

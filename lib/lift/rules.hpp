@@ -18,7 +18,14 @@
 namespace liftd::lift {
 
 /// How a command ended, as the API's error codes name it.
-enum class ReplyCode : std::uint8_t { Ok, NotReady, Busy, BadRequest, Fault };
+enum class ReplyCode : std::uint8_t {
+  Ok,
+  NotReady,    ///< a condition forbids it now (the detail names it)
+  Busy,        ///< something else is running
+  BadRequest,  ///< the request cannot apply to this lift (the detail says why)
+  Fault,       ///< the drive or its link is in fault
+  Timeout,     ///< the drive did not answer a request in time
+};
 
 /// A command's answer: its code and a static text ("" for a plain ok).
 struct Answer {

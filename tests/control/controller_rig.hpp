@@ -147,7 +147,7 @@ struct Rig {
     ControllerEvent ev;
     while (controller.poll_event(ev)) events.push_back(ev);
     CommandReply r;
-    while (controller.poll_reply(r)) replies.push_back(r);
+    while (read_replies && controller.poll_reply(r)) replies.push_back(r);
   }
 
   void run(std::chrono::milliseconds duration) {
@@ -234,6 +234,7 @@ struct Rig {
   DcpController controller;
   lift::Inputs inputs;
   bool drop_replies = false;
+  bool read_replies = true;  ///< false: the io thread does not read replies (a test does)
   bool post_inputs = true;  ///< false: the input provider falls silent
   lift::Inputs posted_inputs{};
   MonoTime posted_at{-1s};

@@ -3,6 +3,8 @@
 // extension, stops, relevelling, inspection, fast start and the calls queue.
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <cmath>
 
 #include "controller_rig.hpp"
@@ -608,6 +610,59 @@ TEST(Calls, AnsweredAsOnEveryLiftAndRefusedWhileTheServiceStops) {
   EXPECT_EQ(r.code, ReplyCode::NotReady);
   EXPECT_EQ(r.detail, "the service is stopping");
   EXPECT_EQ(rig.controller.snapshot().call_count, 0U);
+}
+
+TEST(Calls, ATravelRefusedWhileTheServiceStopsAsOnEveryLift) {
+  // The first gates of a travel command are the shared ones (lift::ControllerCore): the service
+  // stop before the floor, with the same text on every drive kind. Before, the DCP lift judged
+  // the floor first and said "liftd is stopping: no new travel".
+  Rig rig;
+  ASSERT_TRUE(rig.warm_up());
+  ASSERT_EQ(rig.command(ShutdownCommand{false}).code, ReplyCode::Ok);
+  for (std::size_t floor : {2U, 99U}) {
+    TravelCommand travel;
+    travel.floor = floor;
+    const CommandReply r = rig.command(travel);
+    EXPECT_EQ(r.code, ReplyCode::NotReady) << floor;
+    EXPECT_EQ(r.detail, "the service is stopping") << floor;
+  }
+}
+
+TEST(Calls, NoReplyIsLostWhenCommandsComeFasterThanRepliesAreRead) {
+  // Clients pipeline calls while the io thread does not read replies: every command the cycle
+  // took gets exactly one reply; the rest are refused before they are queued (post() false, the
+  // daemon answers busy). Before, the DCP controller took commands while the reply queue was
+  // full and dropped their replies: a client waited for an answer that never came.
+  Rig rig;
+  ASSERT_TRUE(rig.warm_up());
+  rig.read_replies = false;
+  int accepted = 0;
+  int refused = 0;
+  std::map<std::uint32_t, int> answered;
+  auto read = [&] {
+    CommandReply r;
+    while (rig.controller.poll_reply(r)) ++answered[r.tag];
+  };
+  for (int round = 0; round < 40; ++round) {
+    for (int i = 0; i < 20; ++i) {
+      const bool add = (i % 2) == 0;
+      const Command c{++rig.next_tag, CallCommand{add, static_cast<std::size_t>(1 + i % 3)}};
+      if (rig.controller.post(c)) {
+        ++accepted;
+      } else {
+        ++refused;
+      }
+    }
+    rig.cycle();
+    if (round % 8 == 7) read();
+  }
+  rig.cycle();
+  read();
+  EXPECT_GT(refused, 0) << "the test never filled the queues";
+  EXPECT_EQ(static_cast<int>(answered.size()), accepted);
+  for (const auto& [tag, n] : answered) EXPECT_EQ(n, 1) << "tag " << tag;
+  EXPECT_EQ(rig.controller.lost_replies(), 0U);
+  EXPECT_EQ(rig.controller.replies_owed(), 0U);
 }
 
 TEST(Calls, ServedInOrder) {

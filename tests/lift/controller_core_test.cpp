@@ -1,4 +1,4 @@
-// The shared command plumbing of the SCH001 and USS controllers (lift/controller_core.hpp) and
+// The shared command plumbing of every lift controller (lift/controller_core.hpp) and
 // the travel sequencers' shared helpers (lift/gate.hpp, lift/floors.hpp, lift/travel_event.hpp),
 // on a stub travel: the order of a travel command's gates, calls, inputs and inspection, faults.
 #include <gtest/gtest.h>
@@ -189,6 +189,7 @@ class StubController : public ControllerCore<StubTypes> {
     publish_snapshot(s);
   }
   void land(MonoTime now) { travel_.land(now); }
+  void abort(StubCause cause, MonoTime now) { travel_.abort(cause, now); }
   void refuse_starts(StubCause cause) { travel_.refuse_ = cause; }
   void drive_refuses(StubCause cause) { travel_.drive_refuse_ = cause; }
 
@@ -363,6 +364,23 @@ TEST(TravelHelpers, MachineNeedsAndRefusalCauses) {
   EXPECT_EQ(shared_cause_code(StubCause::InputsLost), ReplyCode::Fault);
   EXPECT_EQ(shared_cause_code(StubCause::DoorsUnlocked), ReplyCode::NotReady);
   EXPECT_EQ(shared_cause_text(StubCause::Refused), "not possible now");
+}
+
+TEST_F(ControllerCoreTest, ATravelThatEndsEarlyEmptiesTheCallsQueue) {
+  // docs/api.md `calls`: a travel that ends early empties the queue, whoever dispatches the lift
+  // decides again. Before, the SCH001 and USS lifts kept it and, once the fault cleared, set off
+  // by themselves to a call the dispatcher may have given to another car; the DCP lift emptied it.
+  good_inputs();
+  EXPECT_EQ(command(1, CallCommand{true, 2}).code, ReplyCode::Ok);
+  EXPECT_EQ(command(2, CallCommand{true, 3}).code, ReplyCode::Ok);
+  ASSERT_EQ(controller.snapshot().travel_kind, StubKind::Travel);
+  controller.abort(StubCause::SafetyChain, now);
+  controller.step(now);
+  const StubSnapshot after = controller.snapshot();
+  EXPECT_EQ(after.call_count, 0U);
+  EXPECT_EQ(after.travel_kind, StubKind::None);
+  controller.step(now);
+  EXPECT_EQ(controller.snapshot().travel_kind, StubKind::None) << "a call was served anyway";
 }
 
 }  // namespace

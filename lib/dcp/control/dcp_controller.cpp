@@ -62,19 +62,27 @@ std::string_view fault_text(FaultCode code) noexcept {
 
 // ---- construction ----
 
+namespace {
+
+lift::ControllerCoreConfig core_config(const ControllerConfig& config) {
+  lift::ControllerCoreConfig core;
+  core.lift = config.lift;
+  core.floors_mm = config.floors_mm;
+  core.inputs_timeout = config.inputs_timeout;
+  core.inspection_hold = config.inspection_hold;
+  return core;  // the start grace counts from the first cycle (frame_to_send)
+}
+
+}  // namespace
+
 DcpController::DcpController(const ControllerConfig& config, const PositionSource& position)
-    : config_(config),
+    : ControllerCore(core_config(config), config.travel),
+      config_(config),
       floors_mm_(config.floors_mm),
       position_(position),
-      link_(config.link),
-      travel_(config.travel),
-      lift_(config.lift),
-      rules_(config.inputs_timeout, config.inspection_hold) {
+      link_(config.link) {
   if (auto bad = travel::validate(config.travel)) {
     throw std::invalid_argument("travel setting out of range: " + std::string(*bad));
-  }
-  if (!lift_.set_floors(floors_mm_)) {
-    throw std::invalid_argument("floor levels must be strictly increasing, 2 to 64 floors");
   }
   publish(MonoTime{});
 }
@@ -82,24 +90,26 @@ DcpController::DcpController(const ControllerConfig& config, const PositionSourc
 // ---- the cycle ----
 
 std::span<const std::uint8_t> DcpController::frame_to_send(MonoTime now) noexcept {
-  if (cycle_++ == 0) rules_.start(now);
+  if (cycle_++ == 0) restart_start_grace(now);
   // Inputs (machine inputs, the API's inspection buttons) and the clock first, so this cycle's
   // input is current; then every other command is
   // judged against that input (a travel asked for right after the handshake is not refused with
   // the previous cycle's state).
   std::size_t deferred = 0;
   Command command;
-  while (deferred < deferred_.size() && commands_.try_pop(command)) {
+  travel::CycleInput before;  // what the inputs and the clock need: the time
+  before.now = now;
+  while (deferred < deferred_.size() && next_command(command)) {
     if (std::holds_alternative<InputsCommand>(command.body) ||
         std::holds_alternative<InspectionCommand>(command.body) ||  // a held button: an input
         std::holds_alternative<ClockCommand>(command.body)) {
-      handle(command, now);
+      handle(command, before);
     } else {
       deferred_[deferred++] = command;
     }
   }
   last_input_ = build_input(now);
-  for (std::size_t i = 0; i < deferred; ++i) handle(deferred_[i], now);
+  for (std::size_t i = 0; i < deferred; ++i) handle(deferred_[i], last_input_);
   // DCP 5.12.9: the next travel begins once the I9 for the last stop has reached the drive.
   travel_.hold_start(position_owed_ || (internal_.active &&
                                         internal_.kind == travel::ChannelRequest::Kind::Position));
@@ -162,7 +172,7 @@ travel::CycleInput DcpController::build_input(MonoTime now) noexcept {
   in.now = now;
   read_drive(in);
   in.position_mm = position_.position_mm(now);
-  in.inputs = effective_inputs(now);
+  in.inputs = current_inputs(now);
   in.channel_reply = pending_reply_;
   pending_reply_.reset();
   return in;
@@ -182,44 +192,19 @@ void DcpController::read_drive(travel::CycleInput& in) const noexcept {
   in.extended = drive.extended;
 }
 
-lift::Inputs DcpController::effective_inputs(MonoTime now) const noexcept {
-  return rules_.current_inputs(now);
-}
-
 // ---- commands ----
 
-namespace {
-
-ReplyCode to_reply_code(lift::ReplyCode code) noexcept {
-  switch (code) {
-    case lift::ReplyCode::Ok:
-      return ReplyCode::Ok;
-    case lift::ReplyCode::NotReady:
-      return ReplyCode::NotReady;
-    case lift::ReplyCode::Busy:
-      return ReplyCode::Busy;
-    case lift::ReplyCode::BadRequest:
-      return ReplyCode::BadRequest;
-    case lift::ReplyCode::Fault:
-      return ReplyCode::Fault;
-  }
-  return ReplyCode::Fault;
-}
-
-}  // namespace
-
-void DcpController::reply(std::uint32_t tag, ReplyCode code, std::string_view detail,
-                          bool extended) noexcept {
+void DcpController::reply_extended(std::uint32_t tag) noexcept {
   if (tag == 0) return;
   CommandReply r;
   r.tag = tag;
-  r.code = code;
-  r.detail = detail;
-  r.extended = extended;
-  (void)replies_.try_push(r);  // the queue is as deep as the command queue
+  r.code = ReplyCode::Ok;
+  r.detail = "target extended";
+  r.extended = true;
+  push_reply(r);
 }
 
-void DcpController::handle(const Command& command, MonoTime now) noexcept {
+void DcpController::handle(const Command& command, travel::CycleInput& in) noexcept {
   const std::uint32_t tag = command.tag;
   std::visit(
       [&](const auto& body) {
@@ -229,6 +214,8 @@ void DcpController::handle(const Command& command, MonoTime now) noexcept {
         } else if constexpr (std::is_same_v<T, StopCommand>) {
           handle_stop(tag);
         } else if constexpr (std::is_same_v<T, ShutdownCommand>) {
+          // As on every lift (ControllerCore's ShutdownCommand): no new travel or call, the
+          // running travel stops as `stop` stops it, or at once when forced.
           shutting_down_ = true;
           travel_.shut_down(body.force);
           if (!body.force) handle_stop(0);
@@ -244,9 +231,10 @@ void DcpController::handle(const Command& command, MonoTime now) noexcept {
           reply(tag, ReplyCode::Ok);
         } else if constexpr (std::is_same_v<T, RelevelCommand>) {
           handle_relevel(tag);
-        } else if constexpr (std::is_same_v<T, InspectionCommand>) {
-          rules_.take_inspection(body.on, body.direction, now);
-          reply(tag, ReplyCode::Ok);
+        } else if constexpr (std::is_same_v<T, InspectionCommand> ||
+                             std::is_same_v<T, CallCommand> ||
+                             std::is_same_v<T, InputsCommand>) {
+          handle_shared(tag, body, in);
         } else if constexpr (std::is_same_v<T, FastStartCommand>) {
           if (!fast_start_armed_) {
             reply(tag, ReplyCode::BadRequest, "no fast start armed");
@@ -258,13 +246,6 @@ void DcpController::handle(const Command& command, MonoTime now) noexcept {
           } else {
             reply(tag, ReplyCode::Ok);  // DCP 12.1.3: the go message follows doors locked
           }
-        } else if constexpr (std::is_same_v<T, CallCommand>) {
-          const lift::Answer a =
-              lift::LiftRules::answer_call(lift_, body.add, body.floor, shutting_down_);
-          reply(tag, to_reply_code(a.code), a.detail);
-        } else if constexpr (std::is_same_v<T, InputsCommand>) {
-          rules_.take_inputs(body.inputs, now);
-          reply(tag, ReplyCode::Ok);
         } else if constexpr (std::is_same_v<T, LinkCommand>) {
           const auto* sw = std::get_if<dcp::SwitchRequest>(&body.request);
           if (sw != nullptr && sw->function == dcp::SwitchFunction::Reset &&
@@ -314,12 +295,8 @@ dcp::Speed DcpController::choose_dcp3_speed(std::int64_t distance_mm) const noex
 }
 
 void DcpController::handle_travel(std::uint32_t tag, const TravelCommand& cmd) noexcept {
-  if (cmd.floor >= floors_mm_.size()) {
-    reply(tag, ReplyCode::BadRequest, "no such floor");
-    return;
-  }
-  if (shutting_down_) {
-    reply(tag, ReplyCode::NotReady, "liftd is stopping: no new travel");
+  if (const std::optional<lift::Refusal> refusal = first_travel_refusal(cmd.floor)) {
+    reply(tag, refusal->code, refusal->detail);
     return;
   }
   if (!link_.travel_allowed()) {
@@ -333,7 +310,7 @@ void DcpController::handle_travel(std::uint32_t tag, const TravelCommand& cmd) n
     const travel::ExtendResult r = travel_.extend_target(target_mm);
     if (r == travel::ExtendResult::Accepted) {
       target_floor_ = cmd.floor;
-      reply(tag, ReplyCode::Ok, "target extended", true);
+      reply_extended(tag);
     } else if (r == travel::ExtendResult::Pending) {
       // DCP 4.1 / 7.2: answered once the drive's S5 accepts or refuses the new distance.
       extend_tag_ = tag == 0 ? kInternalTag : tag;
@@ -434,12 +411,7 @@ void DcpController::handle_stop(std::uint32_t tag) noexcept {
   } else {
     travel_.stop();
   }
-  if (tag == 0) return;
-  CommandReply r;
-  r.tag = tag;
-  r.code = ReplyCode::Ok;
-  r.floor = stop_floor;
-  (void)replies_.try_push(r);
+  reply(tag, ReplyCode::Ok, {}, stop_floor);
 }
 
 void DcpController::settle_extension(const travel::Event& event) noexcept {
@@ -448,7 +420,7 @@ void DcpController::settle_extension(const travel::Event& event) noexcept {
   extend_tag_ = 0;
   if (event.type == travel::Event::Type::TargetExtended) {
     target_floor_ = extend_floor_;
-    reply(tag, ReplyCode::Ok, "target extended", true);
+    reply_extended(tag);
   } else if (event.type == travel::Event::Type::TargetRefused) {
     reply(tag, ReplyCode::Fault,
           "the drive refused the new target (S5 cleared, DCP 4.1): it stops on its emergency ramp");
@@ -536,13 +508,6 @@ void DcpController::submit_channel(const travel::ChannelRequest& request) noexce
 
 // ---- after the cycle ----
 
-void DcpController::push_event(const ControllerEvent& event) noexcept {
-  if (!events_.try_push(event)) {
-    dropped_events_.store(dropped_events_.load(std::memory_order_relaxed) + 1,
-                          std::memory_order_relaxed);
-  }
-}
-
 void DcpController::drain_link(MonoTime now) noexcept {
   while (auto c = link_.pop_completion()) {
     if (c->tag == kTravelTag) {
@@ -586,7 +551,7 @@ void DcpController::drain_link(MonoTime now) noexcept {
         break;
     }
     r.drive_reply = c->reply;
-    (void)replies_.try_push(r);
+    push_reply(r);
   }
   while (auto e = link_.pop_event()) {
     ControllerEvent ev;
@@ -637,11 +602,7 @@ void DcpController::drain_travel(MonoTime now) noexcept {
                                             : std::nullopt;
         if (front && reached && *front == *reached) {
           lift_.calls().pop_front();
-          ControllerEvent served;
-          served.kind = ControllerEvent::Kind::CallServed;
-          served.at = now;
-          served.floor = *front;
-          push_event(served);
+          call_served(*front, now);
         }
         target_floor_.reset();
         break;
@@ -656,7 +617,7 @@ void DcpController::drain_travel(MonoTime now) noexcept {
         break;
     }
   }
-  travel_dropped_.store(travel_.dropped_events(), std::memory_order_relaxed);
+  note_travel_dropped(travel_.dropped_events());
 }
 
 void DcpController::serve_calls() noexcept {
@@ -666,11 +627,7 @@ void DcpController::serve_calls() noexcept {
   }
   if (lift_.current_floor() == front) {
     lift_.calls().pop_front();
-    ControllerEvent served;
-    served.kind = ControllerEvent::Kind::CallServed;
-    served.at = last_input_.now;
-    served.floor = *front;
-    push_event(served);
+    call_served(*front, last_input_.now);
     return;
   }
   if (!link_.travel_allowed() || not_ready_reason(false)) return;  // wait until ready
@@ -679,21 +636,9 @@ void DcpController::serve_calls() noexcept {
   handle_travel(0, cmd);
 }
 
-void DcpController::set_fault(FaultCode code, bool active, MonoTime now) noexcept {
-  // lift::FaultTable: each raise and clear told once; one that does not fit the event queue is
-  // told at a later cycle (update_faults sets every fault every cycle), never dropped.
-  faults_.set(code, active, now, [&](FaultCode c, bool raised) {
-    ControllerEvent ev;
-    ev.kind = raised ? ControllerEvent::Kind::FaultRaised : ControllerEvent::Kind::FaultCleared;
-    ev.at = now;
-    ev.fault = c;
-    return events_.try_push(ev);
-  });
-}
-
 void DcpController::update_faults(const travel::CycleInput& in, MonoTime now) noexcept {
   const bool link_up = link_.state() == dcp::LinkState::Up;
-  const bool started = rules_.start_grace_over(now);
+  const bool started = start_grace_over(now);
   set_fault(FaultCode::LinkFault, link_.state() == dcp::LinkState::Fault, now);
   set_fault(FaultCode::DriveFault, link_up && in.status.general_fault, now);
   set_fault(FaultCode::AdvanceWarning, link_up && in.status.advance_warning, now);
@@ -737,8 +682,8 @@ void DcpController::publish(MonoTime now) noexcept {
   }
   s.display_version = link_.display().version();
   s.link_counters = link_.counters();
-  s.faults = faults_.active_all();
-  s.fault_since = faults_.since_all();
+  s.faults = active_faults();
+  s.fault_since = fault_since();
   s.last_travel_measured_mm = measured_mm_;
   s.last_travel_slip_mm = slip_mm_;
   s.handshake_problem = link_.handshake_problem();
@@ -751,7 +696,7 @@ void DcpController::publish(MonoTime now) noexcept {
   read_drive(now_in);
   s.drive_allows_travel =
       travel::CommandGate::drive_forbidding(now_in, /*starting=*/true) == AbortCause::None;
-  snapshot_.publish(s);
+  publish_snapshot(s);
 }
 
 }  // namespace liftd::control

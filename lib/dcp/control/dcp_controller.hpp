@@ -1,7 +1,8 @@
 // The DCP controller: what runs inside the 15 ms cycle for a DCP drive. It joins the master link
-// (lib/dcp), the travel sequencers (lib/travel) and the lift model (lib/lift) into one
-// rt::CycleEngine, and talks to the non-real-time side only through lock-free structures:
-// commands in (SPSC queue), replies and events out (SPSC queues), state out (triple buffer).
+// (lib/dcp), the travel sequencers (lib/dcp/travel) and the lift (lib/lift) into one
+// rt::CycleEngine. The command plumbing, the rules and the fault table every lift has are
+// lift::ControllerCore's, as on the SCH001 and USS lifts: commands in, replies and events out
+// (lock-free queues), state out (triple buffer), inputs, inspection, calls, the first travel gates.
 //
 // Threads: the cycle thread calls the rt::CycleEngine methods; ONE other thread (the daemon's
 // io thread) calls post(), poll_reply(), poll_event() and snapshot().
@@ -21,14 +22,12 @@
 #include "config/defaults.hpp"
 #include "dcp/master_link.hpp"
 #include "dcp/travel/controller.hpp"
+#include "lift/controller_core.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/position_source.hpp"
-#include "lift/rules.hpp"
 #include "rt/cycle_runner.hpp"
-#include "rt/snapshot.hpp"
-#include "rt/spsc_queue.hpp"
 
 namespace liftd::control {
 
@@ -48,7 +47,7 @@ struct ControllerConfig {
   MonoTime inspection_hold = std::chrono::milliseconds(defaults::kInspectionHoldMs);
 };
 
-// ---- commands (non-RT -> cycle) ----
+// ---- commands (non-RT -> cycle); the ones every lift takes are lift::ControllerCore's ----
 
 /// Go to a floor; extends a running DCP4 travel where the spec allows.
 struct TravelCommand {
@@ -59,35 +58,25 @@ struct TravelCommand {
 };
 /// Stop at the next possible floor (DCP4: remaining distance retargeted; DCP3: crawl from that
 /// floor's deceleration point); other travels end with the controlled stop.
-struct StopCommand {};
+using lift::StopCommand;
 /// The service is stopping: no new travel, the running one stops as StopCommand does; `force`
 /// (deadline passed) withdraws the drive enable at once.
-struct ShutdownCommand {
-  bool force = false;
-};
+using lift::ShutdownCommand;
 /// DCP 13 fast stop.
 struct FastStopCommand {};
 /// Relevel to the floor the car is at (DCP4 VN', DCP3 relevelling without distance).
-struct RelevelCommand {};
+using lift::RelevelCommand;
 /// Software inspection: switch on/off and hold a direction (must be repeated).
-struct InspectionCommand {
-  bool on = false;
-  lift::Direction direction = lift::Direction::None;
-};
+using lift::InspectionCommand;
 /// Fast start: the go signal (checks the doors) or abort (controlled stop).
 struct FastStartCommand {
   enum class Action : std::uint8_t { Go, Abort };
   Action action = Action::Go;
 };
 /// Queue a destination / cancel one.
-struct CallCommand {
-  bool add = true;
-  std::size_t floor = 0;
-};
+using lift::CallCommand;
 /// The machine's inputs, complete (the provider merges partial updates).
-struct InputsCommand {
-  lift::Inputs inputs;
-};
+using lift::InputsCommand;
 /// An I-message for the drive (I2, I6, I8, I9, keypad).
 struct LinkCommand {
   dcp::Request request;
@@ -102,22 +91,12 @@ using CommandBody = std::variant<TravelCommand, StopCommand, FastStopCommand, Re
                                  LinkCommand, ClockCommand, ShutdownCommand>;
 
 /// A command with the caller's tag (echoed in the reply; 0 = no reply wanted).
-struct Command {
-  std::uint32_t tag = 0;
-  CommandBody body;
-};
+using Command = lift::TaggedCommand<CommandBody>;
 
 // ---- replies and events (cycle -> non-RT) ----
 
-/// How a command ended. Mirrors the API's error codes.
-enum class ReplyCode : std::uint8_t {
-  Ok,
-  NotReady,    ///< a condition forbids it now (detail names it)
-  Busy,        ///< something else is running
-  BadRequest,  ///< the request cannot apply to this lift (detail says why)
-  Fault,       ///< the drive or link is in fault
-  Timeout,     ///< the drive did not answer
-};
+/// How a command ended, as on every lift (the API's error codes).
+using lift::ReplyCode;
 
 /// The answer to one tagged command. `detail` points to a static string.
 struct CommandReply {
@@ -155,7 +134,7 @@ struct ControllerEvent {
 };
 
 /// Bound on queued calls shown in the snapshot.
-inline constexpr std::size_t kMaxSnapshotCalls = 64;
+using lift::kMaxSnapshotCalls;
 
 /// The state published after every cycle.
 struct ControllerSnapshot {
@@ -200,31 +179,31 @@ struct ControllerSnapshot {
   bool drive_allows_travel = false;
 };
 
-inline constexpr std::size_t kCommandQueueSize = 64;
-inline constexpr std::size_t kReplyQueueSize = 64;
-inline constexpr std::size_t kEventQueueSize = 256;
+using lift::kCommandQueueSize;
+using lift::kEventQueueSize;
+using lift::kReplyQueueSize;
+
+/// The types lift::ControllerCore works on for a DCP lift.
+struct DcpCoreTypes {
+  using Command = control::Command;
+  using Reply = CommandReply;
+  using Event = ControllerEvent;
+  using Snapshot = ControllerSnapshot;
+  using Travel = travel::TravelController;
+  using TravelEvent = travel::Event;
+  using TravelKind = travel::TravelKind;
+  using TravelCommand = control::TravelCommand;
+  using Input = travel::CycleInput;
+  using Cause = travel::AbortCause;
+};
 
 /// The DCP side of one lift, run by an rt::CycleRunner.
-class DcpController final : public rt::CycleEngine {
+class DcpController final : public rt::CycleEngine, public lift::ControllerCore<DcpCoreTypes> {
  public:
   /// Throws std::invalid_argument on a bad link/travel config or floor table (at start-up).
   DcpController(const ControllerConfig& config, const PositionSource& position);
 
-  // ---- non-real-time side (one thread) ----
-  /// Queues a command for the next cycle; false when the queue is full.
-  bool post(const Command& command) noexcept { return commands_.try_push(command); }
-  /// The next reply to a tagged command.
-  bool poll_reply(CommandReply& out) noexcept { return replies_.try_pop(out); }
-  /// The next event.
-  bool poll_event(ControllerEvent& out) noexcept { return events_.try_pop(out); }
-  /// The latest published state.
-  ControllerSnapshot snapshot() noexcept { return snapshot_.read(); }
-  /// Events lost because a queue was full: ours to the io thread or the travel controller's own
-  /// (read on any thread; stats cycle.dropped_events).
-  std::uint64_t dropped_events() const noexcept {
-    return dropped_events_.load(std::memory_order_relaxed) +
-           travel_dropped_.load(std::memory_order_relaxed);
-  }
+  // ---- io thread: post(), poll_reply(), poll_event(), snapshot(), dropped_events() ----
   /// Floor levels as configured.
   std::span<const std::int64_t> floors_mm() const noexcept { return floors_mm_; }
 
@@ -236,9 +215,8 @@ class DcpController final : public rt::CycleEngine {
   void on_port_lost(MonoTime now) noexcept override { link_.on_port_lost(now); }
   void after_cycle(MonoTime now) noexcept override;
 
-  /// Direct access for in-process tests and benchmarks driven on one thread.
+  /// Direct access for in-process tests and benchmarks driven on one thread (and travel()).
   const dcp::MasterLink& link() const noexcept { return link_; }
-  const travel::TravelController& travel() const noexcept { return travel_; }
 
  private:
   struct Internal {  // a channel request the travel made; its reply goes back to the travel
@@ -248,27 +226,24 @@ class DcpController final : public rt::CycleEngine {
   static constexpr dcp::RequestTag kTravelTag = 0xFFFF'FFFFU;
   static constexpr std::uint32_t kInternalTag = 0xFFFF'FFFEU;  ///< a change without a caller
 
-  void handle(const Command& command, MonoTime now) noexcept;
+  void handle(const Command& command, travel::CycleInput& in) noexcept;
   void handle_travel(std::uint32_t tag, const TravelCommand& cmd) noexcept;
   void handle_relevel(std::uint32_t tag) noexcept;
   void handle_stop(std::uint32_t tag) noexcept;
   std::optional<std::size_t> next_stop_floor() const noexcept;
   void settle_extension(const travel::Event& event) noexcept;
   void owe_position(MonoTime now) noexcept;
-  void reply(std::uint32_t tag, ReplyCode code, std::string_view detail = {},
-             bool extended = false) noexcept;
-  void push_event(const ControllerEvent& event) noexcept;
+  /// The travel command moved the running travel's target (reply `extended`).
+  void reply_extended(std::uint32_t tag) noexcept;
   travel::CycleInput build_input(MonoTime now) noexcept;
   /// The link's and the drive's part of a cycle input as the link knows them now: link and
   /// handshake, protocol, status, deceleration distance, extended status.
   void read_drive(travel::CycleInput& in) const noexcept;
-  lift::Inputs effective_inputs(MonoTime now) const noexcept;
   void submit_channel(const travel::ChannelRequest& request) noexcept;
   void drain_link(MonoTime now) noexcept;
   void drain_travel(MonoTime now) noexcept;
   void serve_calls() noexcept;
   void update_faults(const travel::CycleInput& in, MonoTime now) noexcept;
-  void set_fault(FaultCode code, bool active, MonoTime now) noexcept;
   void publish(MonoTime now) noexcept;
   std::optional<std::string_view> not_ready_reason(bool fast_start) const noexcept;
   dcp::Speed choose_dcp3_speed(std::int64_t distance_mm) const noexcept;
@@ -277,22 +252,13 @@ class DcpController final : public rt::CycleEngine {
   std::vector<std::int64_t> floors_mm_;
   const PositionSource& position_;
   dcp::MasterLink link_;
-  travel::TravelController travel_;
-  lift::LiftModel lift_;
 
-  rt::SpscQueue<Command, kCommandQueueSize> commands_;
   std::array<Command, kCommandQueueSize> deferred_{};  ///< this cycle's commands after inputs
-  rt::SpscQueue<CommandReply, kReplyQueueSize> replies_;
-  rt::SpscQueue<ControllerEvent, kEventQueueSize> events_;
-  rt::Snapshot<ControllerSnapshot> snapshot_;
-  std::atomic<std::uint64_t> dropped_events_{0};
-  std::atomic<std::uint64_t> travel_dropped_{0};  ///< the travel's own count, copied each cycle
 
   // Cycle-thread state.
   dcp::FrameBytes frame_{};
   travel::CycleInput last_input_{};
   travel::CycleOutput last_output_{};
-  lift::LiftRules rules_;  ///< inputs, inspection, start grace and calls, as every lift has them
   Internal internal_;
   std::optional<travel::ChannelReply> pending_reply_;
   std::optional<std::size_t> target_floor_;
@@ -302,14 +268,12 @@ class DcpController final : public rt::CycleEngine {
   bool position_owed_ = false;  ///< DCP 5.12.9: I9 after every stop, not sent yet
   std::optional<std::int64_t> previous_position_mm_;  ///< last cycle's position
   travel::TravelKind last_kind_ = travel::TravelKind::None;
-  bool shutting_down_ = false;
   std::uint32_t frames_at_rest_ = 0;  ///< frames in a row without B0/B1/B2
   std::optional<std::int64_t> travel_start_mm_;
   std::optional<std::int64_t> pending_i9_travel_mm_;  ///< commanded distance, for slip
   std::optional<std::int64_t> measured_mm_;
   std::optional<std::int64_t> slip_mm_;
   bool fast_start_armed_ = false;
-  lift::FaultTable faults_;  ///< each raise and clear told once, never lost to a full queue
   std::uint64_t cycle_ = 0;
 };
 

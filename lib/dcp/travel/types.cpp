@@ -211,7 +211,7 @@ std::string_view to_string(StartResult result) noexcept {
     case StartResult::InspectionMode:
       return "inspection or recall is switched on";
     case StartResult::ShuttingDown:
-      return "liftd is stopping: no new travel";
+      return "the service is stopping";
   }
   return "accepted";
 }
