@@ -111,7 +111,7 @@ class ControllerBackend : public api::Backend {
   /// out.
   virtual void poll(MonoTime now) {
     typename Drive::CommandReply r;
-    while (controller_.poll_reply(r)) pending_.complete(r.tag, reply_result(r));
+    while (controller_.poll_reply(r)) pending_.answer(r);
     expire_unanswered(now);
   }
   /// A sample of the simulated machine's inputs (--simulate), sent on with the API's shaft
@@ -132,11 +132,13 @@ class ControllerBackend : public api::Backend {
     done(api::Result::fail(api::ErrorCode::NotOffered,
                            "not offered by drive kind \"" + std::string(Drive::kName) + "\""));
   }
+  using Pending = PendingReplies<typename Drive::CommandReply>;
+  /// Posts a command; an ok reply answers through `complete` (none: reply_result).
   template <typename Body>
-  void send(Body&& body, api::Responder done) {
+  void send(Body&& body, api::Responder done, typename Pending::Completion complete = {}) {
     (void)post_command<typename Drive::Command>(controller_, pending_, std::forward<Body>(body),
                                                 std::move(done), Drive::kReplyGrace,
-                                                Drive::kThread);
+                                                Drive::kThread, std::move(complete));
   }
   /// Fails the requests the controller's thread did not answer in Drive::kReplyGrace.
   void expire_unanswered(MonoTime now) {
@@ -172,7 +174,7 @@ class ControllerBackend : public api::Backend {
   Runner& runner_;
   Simulator* sim_;
   MachineInputs inputs_;  ///< the API's and the simulated machine's inputs
-  PendingReplies pending_;
+  Pending pending_;
   /// The runner's recorder to files in the runtime directory.
   FlightRecorderFiles flight_recorder_;
 
@@ -348,8 +350,9 @@ class ControllerLift : public LiftRunner {
       done();
       return;
     }
-    wind_down_.start(std::move(done),
-                     controller_->snapshot().travel_kind != Drive::TravelKind::None, mono_now());
+    const typename Drive::Snapshot s = controller_->snapshot();
+    wind_down_.start(std::move(done), s.travel_kind != Drive::TravelKind::None, s.target_floor,
+                     mono_now());
   }
 
   std::string socket_path_;

@@ -141,7 +141,10 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
       poll_timer_(daemon.io()),
       state_interval_(std::chrono::nanoseconds(std::chrono::seconds(1)) /
                       std::max(1, config.api.state_rate_hz)),
-      overruns_(rt::CycleConfig{}.period) {
+      overruns_(rt::CycleConfig{}.period),
+      wind_down_(
+          daemon, [this](bool force) { return backend_->send_shutdown(force); },
+          kShutdownDeadline, kDcpShutdownGrace) {
   std::string device = config.drive.device;
   if (simulate_) {
     sim_ = std::make_unique<SimulatedLift>(config);
@@ -254,49 +257,18 @@ void LiftApp::wind_down(std::function<void()> done) {
     done();
     return;
   }
-  // Issue 13: a service stop must not leave a moving car to the drive's link timeout. The
-  // controller stops the travel the way `stop` does, refuses new ones, and reports "quiesced"
-  // once the car is at rest and a DCP 7.3 supervision window of frames without B0 has gone out.
-  wind_down_done_ = std::move(done);
-  wind_down_deadline_ = mono_now() + kShutdownDeadline;
-  wind_down_forced_ = false;
+  // The controller stops the travel the way `stop` does and refuses new ones; it reports
+  // "quiesced" once the car is at rest and a DCP 7.3 supervision window of frames without B0 has
+  // gone out.
   const control::ControllerSnapshot s = controller_->snapshot();
   const bool moving = s.travel_kind != travel::TravelKind::None ||
                       (s.status_byte && (*s.status_byte & dcp::status_bit::kTravelActive) != 0);
-  if (moving) {
-    log::event(log::Level::info, "travel", "shutdown_stopping_travel",
-               {{"target_floor", s.target_floor ? std::to_string(*s.target_floor) : "none"}},
-               "stopping: bringing the car to rest at the next possible floor before exit");
-    daemon_.report_status("stopping: bringing the car to rest before exit");
-  }
-  backend_->send_shutdown(false);
+  wind_down_.start(std::move(done), moving, s.target_floor, mono_now());
 }
 
 void LiftApp::check_wind_down(MonoTime now) {
-  if (!wind_down_done_) return;
   const control::ControllerSnapshot s = controller_->snapshot();
-  if (!s.shutting_down && !wind_down_forced_) (void)backend_->send_shutdown(false);  // queue full
-  if (!s.quiesced && now < wind_down_deadline_) return;
-  if (!s.quiesced && !wind_down_forced_) {
-    // The deadline inside the unit's TimeoutStopSec= passed with the car still moving: drive
-    // enable off now, then one supervision window of B0-off frames before exit.
-    wind_down_forced_ = true;
-    wind_down_deadline_ = now + kDcpShutdownGrace;
-    backend_->send_shutdown(true);
-    log::event(log::Level::error, "travel", "shutdown_forced", {},
-               "stopping: the car did not come to rest in time; drive enable withdrawn");
-    return;
-  }
-  const std::string where =
-      s.floor ? "at floor " + std::to_string(*s.floor)
-              : (s.position_mm ? "at " + std::to_string(*s.position_mm) + " mm" : "");
-  log::event(log::Level::info, "travel", "shutdown_at_rest",
-             {{"floor", s.floor ? std::to_string(*s.floor) : "none"}},
-             "stopping: car at rest " + where + ", drive enable off");
-  daemon_.report_status("stopping: car at rest " + where);
-  auto done = std::move(wind_down_done_);
-  wind_down_done_ = nullptr;
-  done();
+  wind_down_.check({s.shutting_down, s.quiesced, s.floor, s.position_mm}, now);
 }
 
 void LiftApp::stop_cycle() {

@@ -19,6 +19,7 @@
 #include "config/config.hpp"
 #include "daemon/daemon.hpp"
 #include "daemon/lift_backend.hpp"
+#include "daemon/lift_core.hpp"
 #include "dcp/control/dcp_controller.hpp"
 #include "io/pty.hpp"
 #include "rt/cycle_runner.hpp"
@@ -123,9 +124,7 @@ class LiftApp final : public LiftRunner {
   ContinuousState last_continuous_{};
   std::uint32_t last_display_version_ = 0;
   dcp::LinkState last_link_ = dcp::LinkState::Down;
-  std::function<void()> wind_down_done_;  ///< set while a service stop waits for rest
-  MonoTime wind_down_deadline_{};
-  bool wind_down_forced_ = false;
+  WindDown wind_down_;  ///< a service stop waiting for the car to rest, as on every lift
 };
 
 }  // namespace liftd::daemon

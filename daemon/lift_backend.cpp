@@ -23,6 +23,8 @@ using control::ReplyCode;
 // commands within a cycle and I-messages within dcp.request_timeout_ms; this only catches a
 // cycle that stopped.
 constexpr std::chrono::seconds kDcpReplyGrace{3};
+// The thread as the busy and expiry answers name it.
+constexpr std::string_view kCycleThread = "cycle";
 
 api::LinkState to_api(dcp::LinkState state) {
   switch (state) {
@@ -44,24 +46,6 @@ std::string utf8_row(const std::array<std::uint8_t, dcp::kDisplayColumns>& row) 
 }
 
 }  // namespace
-
-api::ErrorCode to_api_error(ReplyCode code) noexcept {
-  switch (code) {
-    case ReplyCode::Ok:
-      break;
-    case ReplyCode::NotReady:
-      return api::ErrorCode::NotReady;
-    case ReplyCode::Busy:
-      return api::ErrorCode::Busy;
-    case ReplyCode::BadRequest:
-      return api::ErrorCode::BadRequest;
-    case ReplyCode::Fault:
-      return api::ErrorCode::Fault;
-    case ReplyCode::Timeout:
-      return api::ErrorCode::Timeout;
-  }
-  return api::ErrorCode::Internal;
-}
 
 LiftBackend::LiftBackend(const config::Config& config, control::DcpController& controller,
                          rt::CycleRunner& runner, control::PositionFeed* position_feed,
@@ -200,54 +184,22 @@ nlohmann::json LiftBackend::config() {
 
 // ---- commands through the cycle ----
 
-void LiftBackend::send(control::CommandBody body, api::Responder done, Completion complete) {
-  std::uint32_t tag = ++next_tag_;
-  if (tag == 0 || tag == 0xFFFF'FFFFU) tag = next_tag_ = 1;  // 0: no reply; max: the travel's own
-  if (!controller_.post(control::Command{tag, std::move(body)})) {
-    done(Result::fail(api::ErrorCode::Busy, "the cycle's command queue is full; try again"));
-    return;
-  }
-  pending_[tag] = Pending{std::move(done), std::move(complete), mono_now() + kDcpReplyGrace};
-}
-
-void LiftBackend::send_ok(control::CommandBody body, api::Responder done) {
-  send(std::move(body), std::move(done), [](const control::CommandReply& r) {
-    nlohmann::json result = nlohmann::json::object();
-    if (!r.detail.empty()) result["detail"] = std::string(r.detail);
-    if (r.extended) result["extended"] = true;
-    if (r.floor) result["floor"] = *r.floor;
-    return Result::ok(std::move(result));
-  });
+void LiftBackend::send(control::CommandBody body, api::Responder done,
+                       Pending::Completion complete) {
+  (void)post_command<control::Command>(controller_, pending_, std::move(body), std::move(done),
+                                       kDcpReplyGrace, kCycleThread, std::move(complete));
 }
 
 void LiftBackend::poll(MonoTime now) {
   control::CommandReply r;
-  while (controller_.poll_reply(r)) {
-    auto it = pending_.find(r.tag);
-    if (it == pending_.end()) continue;  // its client gave up long ago
-    Pending p = std::move(it->second);
-    pending_.erase(it);
-    if (r.code == ReplyCode::Ok) {
-      p.done(p.complete(r));
-    } else {
-      p.done(Result::fail(to_api_error(r.code), std::string(r.detail)));
-    }
-  }
-  for (auto it = pending_.begin(); it != pending_.end();) {
-    if (now > it->second.deadline) {
-      it->second.done(Result::fail(api::ErrorCode::Internal,
-                                   "the real-time cycle did not answer; see the journal"));
-      it = pending_.erase(it);
-    } else {
-      ++it;
-    }
-  }
+  while (controller_.poll_reply(r)) pending_.answer(r);
+  pending_.expire(now, "the " + std::string(kCycleThread) + " thread did not answer; see the journal");
 }
 
 void LiftBackend::key(int button, api::Responder done) {
   // DCP 5.6.3: button n is bit 0x04 << (n - 1).
   const auto bits = static_cast<std::uint8_t>(0x04U << (button - 1));
-  send_ok(control::LinkCommand{dcp::KeypadPress{bits}}, std::move(done));
+  send(control::LinkCommand{dcp::KeypadPress{bits}}, std::move(done));
 }
 
 void LiftBackend::drive_reset(api::Responder done) {
@@ -285,7 +237,7 @@ void LiftBackend::power(api::PowerSetting setting, api::Responder done) {
 }
 
 void LiftBackend::load(int percent, api::Responder done) {
-  send_ok(control::LinkCommand{dcp::LoadRequest{static_cast<std::uint16_t>(percent)}},
+  send(control::LinkCommand{dcp::LoadRequest{static_cast<std::uint16_t>(percent)}},
           std::move(done));
 }
 
@@ -334,19 +286,19 @@ control::TravelCommand travel_command(const api::TravelArgs& args) {
 }  // namespace
 
 void LiftBackend::travel(const api::TravelArgs& args, api::Responder done) {
-  send_ok(travel_command(args), std::move(done));
+  send(travel_command(args), std::move(done));
 }
 
 void LiftBackend::stop(api::Responder done) {
-  send_ok(control::StopCommand{}, std::move(done));
+  send(control::StopCommand{}, std::move(done));
 }
 
 void LiftBackend::fast_stop(api::Responder done) {
-  send_ok(control::FastStopCommand{}, std::move(done));
+  send(control::FastStopCommand{}, std::move(done));
 }
 
 void LiftBackend::relevel(api::Responder done) {
-  send_ok(control::RelevelCommand{}, std::move(done));
+  send(control::RelevelCommand{}, std::move(done));
 }
 
 void LiftBackend::inspection(bool on, const std::string& direction, api::Responder done) {
@@ -355,7 +307,7 @@ void LiftBackend::inspection(bool on, const std::string& direction, api::Respond
   cmd.direction = direction == "up"     ? lift::Direction::Up
                   : direction == "down" ? lift::Direction::Down
                                         : lift::Direction::None;
-  send_ok(cmd, std::move(done));
+  send(cmd, std::move(done));
 }
 
 void LiftBackend::fast_start(const std::string& action, const api::TravelArgs& args,
@@ -363,10 +315,10 @@ void LiftBackend::fast_start(const std::string& action, const api::TravelArgs& a
   if (action == "arm") {
     control::TravelCommand cmd = travel_command(args);
     cmd.fast_start = true;
-    send_ok(cmd, std::move(done));
+    send(cmd, std::move(done));
     return;
   }
-  send_ok(control::FastStartCommand{action == "go" ? control::FastStartCommand::Action::Go
+  send(control::FastStartCommand{action == "go" ? control::FastStartCommand::Action::Go
                                                    : control::FastStartCommand::Action::Abort},
           std::move(done));
 }
@@ -382,7 +334,7 @@ void LiftBackend::calls(const std::string& action, std::optional<int> floor, api
   control::CallCommand cmd;
   cmd.add = action == "add";
   cmd.floor = static_cast<std::size_t>(floor.value_or(0));
-  send_ok(cmd, std::move(done));
+  send(cmd, std::move(done));
 }
 
 void LiftBackend::sim(const api::SimRequest& request, api::Responder done) {

@@ -16,6 +16,7 @@
 #include "config/config.hpp"
 #include "daemon/dcp_status.hpp"
 #include "daemon/lift_common.hpp"
+#include "daemon/lift_core.hpp"
 #include "daemon/trace_files.hpp"
 #include "dcp/control/dcp_controller.hpp"
 #include "rt/cycle_runner.hpp"
@@ -78,16 +79,10 @@ class LiftBackend final : public api::Backend {
   std::chrono::system_clock::time_point wall_time(MonoTime at) const;
 
  private:
-  using Completion = std::function<api::Result(const control::CommandReply&)>;
-  struct Pending {
-    api::Responder done;
-    Completion complete;
-    MonoTime deadline{};
-  };
+  using Pending = PendingReplies<control::CommandReply>;
 
-  /// Posts a command; the responder gets `complete(reply)` or an error.
-  void send(control::CommandBody body, api::Responder done, Completion complete);
-  void send_ok(control::CommandBody body, api::Responder done);
+  /// Posts a command; an ok reply answers through `complete` (none: reply_result).
+  void send(control::CommandBody body, api::Responder done, Pending::Completion complete = {});
   void send_inputs(const lift::Inputs& inputs);
 
   const config::Config& config_;
@@ -98,13 +93,9 @@ class LiftBackend final : public api::Backend {
   MachineInputs inputs_;                 ///< the API's and the simulated machine's inputs
   DcpStatusFacts dcp_facts_{};           ///< what dcp_details_ was built from
   nlohmann::json dcp_details_ = dcp_status_json({});  ///< status.dcp
-  std::map<std::uint32_t, Pending> pending_;
-  std::uint32_t next_tag_ = 0;
+  Pending pending_;  ///< requests waiting for the cycle's reply
   MonoTime mono_at_start_{};
   std::chrono::system_clock::time_point wall_at_start_{};
 };
-
-/// The API error code for a controller reply code.
-api::ErrorCode to_api_error(control::ReplyCode code) noexcept;
 
 }  // namespace liftd::daemon

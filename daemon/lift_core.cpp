@@ -5,34 +5,6 @@
 
 namespace liftd::daemon {
 
-std::uint32_t PendingReplies::add(api::Responder done, MonoTime deadline) {
-  std::uint32_t tag = ++next_tag_;
-  if (tag == 0) tag = next_tag_ = 1;
-  pending_[tag] = Pending{std::move(done), deadline};
-  return tag;
-}
-
-bool PendingReplies::complete(std::uint32_t tag, api::Result result) {
-  auto it = pending_.find(tag);
-  if (it == pending_.end()) return false;
-  api::Responder done = std::move(it->second.done);
-  pending_.erase(it);
-  done(std::move(result));
-  return true;
-}
-
-void PendingReplies::expire(MonoTime now, const std::string& message) {
-  for (auto it = pending_.begin(); it != pending_.end();) {
-    if (now > it->second.deadline) {
-      api::Responder done = std::move(it->second.done);
-      it = pending_.erase(it);
-      done(api::Result::fail(api::ErrorCode::Internal, message));
-    } else {
-      ++it;
-    }
-  }
-}
-
 void StatePublisher::publish(api::Server& server, api::StatusSnapshot status, MonoTime now) {
   if (last_ && status == *last_) return;
   // Position alone changes often while moving: rate-limited; anything else goes out at once.
@@ -72,12 +44,14 @@ void PollTimer::arm() {
   });
 }
 
-void WindDown::start(std::function<void()> done, bool moving, MonoTime now) {
+void WindDown::start(std::function<void()> done, bool moving,
+                     std::optional<std::size_t> target_floor, MonoTime now) {
   done_ = std::move(done);
   until_ = now + deadline_;
   forced_ = false;
   if (moving) {
-    log::event(log::Level::info, "travel", "shutdown_stopping_travel", {},
+    log::event(log::Level::info, "travel", "shutdown_stopping_travel",
+               {{"target_floor", target_floor ? std::to_string(*target_floor) : "none"}},
                "stopping: bringing the car to rest at the next possible floor before exit");
     daemon_.report_status("stopping: bringing the car to rest before exit");
   }
@@ -225,6 +199,24 @@ void journal_port_event(const rt::CycleEvent& e) {
              : e.kind == rt::CycleEventKind::PortOpened     ? "port_opened"
                                                             : "thread_status",
              {}, rt::describe(e));
+}
+
+api::ErrorCode to_api_error(lift::ReplyCode code) noexcept {
+  switch (code) {
+    case lift::ReplyCode::Ok:
+      break;
+    case lift::ReplyCode::NotReady:
+      return api::ErrorCode::NotReady;
+    case lift::ReplyCode::Busy:
+      return api::ErrorCode::Busy;
+    case lift::ReplyCode::BadRequest:
+      return api::ErrorCode::BadRequest;
+    case lift::ReplyCode::Fault:
+      return api::ErrorCode::Fault;
+    case lift::ReplyCode::Timeout:
+      return api::ErrorCode::Timeout;
+  }
+  return api::ErrorCode::Internal;
 }
 
 }  // namespace liftd::daemon

@@ -22,6 +22,7 @@
 #include "daemon/daemon.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
+#include "lift/rules.hpp"
 #include "rt/cycle_runner.hpp"
 #include "rt/rt_thread.hpp"
 
@@ -38,30 +39,6 @@ inline constexpr std::chrono::milliseconds kSimInputsPeriod{100};
 /// seconds; the unit's TimeoutStopSec=30s leaves room for the forced end and the rest of the
 /// shutdown.
 inline constexpr std::chrono::seconds kShutdownDeadline{20};
-
-/// Requests sent to a controller, waiting for its reply: the responder of each by tag. A
-/// controller that never answers (a stalled thread) fails the request after a grace time.
-class PendingReplies {
- public:
-  /// Keeps `done` under a new tag (never 0: tag 0 means "no reply wanted").
-  std::uint32_t add(api::Responder done, MonoTime deadline);
-  /// Answers the request of `tag` (false when there is none: answered or expired already).
-  bool complete(std::uint32_t tag, api::Result result);
-  /// True while the request of `tag` waits for its reply.
-  bool waiting(std::uint32_t tag) const { return pending_.count(tag) != 0; }
-  /// Drops a request whose command never reached the controller.
-  void forget(std::uint32_t tag) { pending_.erase(tag); }
-  /// Fails every request past its deadline with `message` (an internal error).
-  void expire(MonoTime now, const std::string& message);
-
- private:
-  struct Pending {
-    api::Responder done;
-    MonoTime deadline{};
-  };
-  std::map<std::uint32_t, Pending> pending_;
-  std::uint32_t next_tag_ = 0;
-};
 
 /// Publishes `state` events: at once for a discrete change, coalesced to api.state_rate_hz when
 /// only the position (or a `continuous` member of the kind's details, e.g. a speed) moved.
@@ -105,7 +82,7 @@ struct RestFacts {
   std::optional<std::int64_t> position_mm;
 };
 
-/// A service stop must not leave a moving car to the drive's own timeout (issue 13): the
+/// A service stop must not leave a moving car to the drive's own timeout: the
 /// controller stops the travel as `stop` does and refuses new ones; the stop completes once the
 /// car is at rest with every travel signal off, or, after `deadline`, with every signal dropped
 /// at once and `grace` for the last telegrams to go out.
@@ -118,8 +95,9 @@ class WindDown {
         send_shutdown_(std::move(send_shutdown)),
         deadline_(deadline),
         grace_(grace) {}
-  /// Starts the wind-down; `moving`: a travel is running (journalled).
-  void start(std::function<void()> done, bool moving, MonoTime now);
+  /// Starts the wind-down; `moving`: a travel is running (journalled with its target floor).
+  void start(std::function<void()> done, bool moving, std::optional<std::size_t> target_floor,
+             MonoTime now);
   /// Every poll: completes `done` once the controller reports rest (or the deadline forced it).
   void check(const RestFacts& facts, MonoTime now);
 
@@ -133,33 +111,103 @@ class WindDown {
   bool forced_ = false;
 };
 
-/// A controller's reply as the API's result: ok with its `detail` and `floor`, or the error its
-/// code stands for. Every controller's CommandReply has `code` (Ok, NotReady, Busy, BadRequest,
-/// Fault), `detail` and `floor`.
+/// The API error code for a controller's reply code (every lift's lift::ReplyCode).
+api::ErrorCode to_api_error(lift::ReplyCode code) noexcept;
+
+/// A controller's reply as the API's result: ok with its `detail`, `floor` (and `extended`, on
+/// a lift whose travels can take a new target), or the error its code stands for. Every
+/// controller's CommandReply has `code` (lift::ReplyCode), `detail` and `floor`.
 template <typename Reply>
 api::Result reply_result(const Reply& r) {
-  using Code = decltype(r.code);
-  if (r.code == Code::Ok) {
+  if (r.code == lift::ReplyCode::Ok) {
     nlohmann::json result = nlohmann::json::object();
     if (!r.detail.empty()) result["detail"] = std::string(r.detail);
+    if constexpr (requires { r.extended; }) {
+      if (r.extended) result["extended"] = true;
+    }
     if (r.floor) result["floor"] = *r.floor;
     return api::Result::ok(std::move(result));
   }
-  const api::ErrorCode code = r.code == Code::Busy         ? api::ErrorCode::Busy
-                              : r.code == Code::BadRequest ? api::ErrorCode::BadRequest
-                              : r.code == Code::Fault      ? api::ErrorCode::Fault
-                                                           : api::ErrorCode::NotReady;
-  return api::Result::fail(code, std::string(r.detail));
+  return api::Result::fail(to_api_error(r.code), std::string(r.detail));
 }
 
-/// Posts `body` to a controller's command queue under a new tag of `pending`. A full queue, or
-/// as many replies owed as the controller's reply queue holds, answers `busy` at once: nothing
-/// was queued, so nothing took effect. Returns the tag (0 when refused).
-template <typename Command, typename Controller, typename Body>
-std::uint32_t post_command(Controller& controller, PendingReplies& pending, Body&& body,
+/// Tags from here up are a controller's own (the DCP controller's travel requests): never a
+/// client's.
+inline constexpr std::uint32_t kFirstControllerTag = 0xFFFF'FF00U;
+
+/// Requests sent to a controller, waiting for its reply: the responder of each by tag, and how
+/// its reply becomes the API's result. A controller that never answers (a stalled thread) fails
+/// the request after a grace time. One for every lift; `Reply` is the controller's CommandReply
+/// (tag, lift::ReplyCode code, detail, floor).
+template <typename Reply>
+class PendingReplies {
+ public:
+  /// The result of an ok reply, for a request whose answer carries more than reply_result()
+  /// shows (a drive's answer to a parameter, an I-message, a mirror telegram).
+  using Completion = std::function<api::Result(const Reply&)>;
+
+  /// Keeps `done` under a new tag (never 0, "no reply wanted", nor a controller's own).
+  std::uint32_t add(api::Responder done, MonoTime deadline, Completion complete = {}) {
+    std::uint32_t tag = ++next_tag_;
+    if (tag == 0 || tag >= kFirstControllerTag) tag = next_tag_ = 1;
+    pending_[tag] = Pending{std::move(done), std::move(complete), deadline};
+    return tag;
+  }
+  /// Answers the request `r` is the reply to: an ok reply through the request's completion (if
+  /// it has one), every other through reply_result(). False when there is none (answered or
+  /// expired already).
+  bool answer(const Reply& r) {
+    auto it = pending_.find(r.tag);
+    if (it == pending_.end()) return false;
+    Pending p = std::move(it->second);
+    pending_.erase(it);
+    p.done(r.code == lift::ReplyCode::Ok && p.complete ? p.complete(r) : reply_result(r));
+    return true;
+  }
+  /// Answers the request of `tag` with `result` (false when there is none).
+  bool complete(std::uint32_t tag, api::Result result) {
+    auto it = pending_.find(tag);
+    if (it == pending_.end()) return false;
+    api::Responder done = std::move(it->second.done);
+    pending_.erase(it);
+    done(std::move(result));
+    return true;
+  }
+  /// True while the request of `tag` waits for its reply.
+  bool waiting(std::uint32_t tag) const { return pending_.count(tag) != 0; }
+  /// Fails every request past its deadline with `message` (an internal error).
+  void expire(MonoTime now, const std::string& message) {
+    for (auto it = pending_.begin(); it != pending_.end();) {
+      if (now > it->second.deadline) {
+        api::Responder done = std::move(it->second.done);
+        it = pending_.erase(it);
+        done(api::Result::fail(api::ErrorCode::Internal, message));
+      } else {
+        ++it;
+      }
+    }
+  }
+
+ private:
+  struct Pending {
+    api::Responder done;
+    Completion complete;
+    MonoTime deadline{};
+  };
+  std::map<std::uint32_t, Pending> pending_;
+  std::uint32_t next_tag_ = 0;
+};
+
+/// Posts `body` to a controller's command queue under a new tag of `pending`; `complete` makes
+/// an ok reply the API's result (none: reply_result). A full queue, or as many replies owed as
+/// the controller's reply queue holds, answers `busy` at once: nothing was queued, so nothing
+/// took effect. Returns the tag (0 when refused).
+template <typename Command, typename Controller, typename Reply, typename Body>
+std::uint32_t post_command(Controller& controller, PendingReplies<Reply>& pending, Body&& body,
                            api::Responder done, std::chrono::nanoseconds grace,
-                           std::string_view thread) {
-  const std::uint32_t tag = pending.add(std::move(done), mono_now() + grace);
+                           std::string_view thread,
+                           typename PendingReplies<Reply>::Completion complete = {}) {
+  const std::uint32_t tag = pending.add(std::move(done), mono_now() + grace, std::move(complete));
   if (!controller.post(Command{tag, std::forward<Body>(body)})) {
     pending.complete(tag, api::Result::fail(api::ErrorCode::Busy,
                                             "the " + std::string(thread) +

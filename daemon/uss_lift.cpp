@@ -135,7 +135,7 @@ SimulatedUssBus::SimulatedUssBus(const config::Config& config)
       baud_(static_cast<std::uint32_t>(config.uss.baud)),
       drive_address_(static_cast<std::uint8_t>(config.uss.drive_address)),
       priority_(std::max(1, config.rt.priority - 1)) {
-  auto pair = io::PtyPair::create(rt::uss_serial_settings(baud_), true);
+  auto pair = io::PtyPair::create(uss::uss_serial_settings(baud_), true);
   if (!pair) throw std::runtime_error("simulated USS bus: " + pair.error().message());
   pty_ = std::make_unique<io::PtyPair>(std::move(pair).value());
   port_ = pty_->take_master();
@@ -399,7 +399,7 @@ api::StatusSnapshot UssBackend::status() {
 
 api::StatsSnapshot UssBackend::stats() {
   const uss::ControllerSnapshot s = controller_.snapshot();
-  const rt::UssRunnerStats r = runner_.stats();
+  const uss::UssRunnerStats r = runner_.stats();
   api::StatsSnapshot out;
   // The drive-neutral counters with their USS meaning (docs/api.md `stats`).
   out.frames_sent = r.counters.exchanges;
@@ -526,38 +526,6 @@ api::Result UssBackend::parameter_result(const ParameterContext& context,
   return Result::ok(std::move(out));
 }
 
-void UssBackend::poll(MonoTime now) {
-  uss::CommandReply r;
-  while (controller_.poll_reply(r)) {
-    const auto context = parameter_requests_.find(r.tag);
-    if (context != parameter_requests_.end()) {
-      const ParameterContext c = context->second;
-      parameter_requests_.erase(context);
-      if (r.code == uss::ReplyCode::Ok && r.pkw) {
-        pending_.complete(r.tag, parameter_result(c, *r.pkw));
-        continue;
-      }
-    }
-    if (r.code == uss::ReplyCode::Ok && r.mirror) {
-      const auto us =
-          std::chrono::duration_cast<std::chrono::microseconds>(r.mirror->round_trip).count();
-      pending_.complete(
-          r.tag,
-          r.mirror->ok
-              ? Result::ok({{"address", r.mirror->address}, {"ok", true}, {"round_trip_us", us}})
-              : Result::fail(api::ErrorCode::Fault, "the mirror telegram to slave " +
-                                                        std::to_string(r.mirror->address) +
-                                                        " did not come back unchanged in time "
-                                                        "(USS A 5.3)"));
-      continue;
-    }
-    pending_.complete(r.tag, reply_result(r));
-  }
-  expire_unanswered(now);
-  std::erase_if(parameter_requests_,
-                [this](const auto& entry) { return !pending_.waiting(entry.first); });
-}
-
 void UssBackend::travel(const api::TravelArgs& args, api::Responder done) {
   uss::TravelCommand cmd;
   cmd.floor = static_cast<std::size_t>(args.floor);
@@ -642,10 +610,10 @@ void UssBackend::parameter(const api::ParameterArgs& args, api::Responder done) 
   uss::ParameterCommand cmd;
   cmd.address = address;
   cmd.request = request;
-  // The context must be there before the reply can come: kept under the request's tag.
-  const std::uint32_t tag = post_command<uss::ControllerCommand>(
-      controller_, pending_, cmd, std::move(done), UssDrive::kReplyGrace, UssDrive::kThread);
-  if (tag != 0) parameter_requests_[tag] = ParameterContext{args, address, *length};
+  const ParameterContext context{args, address, *length};
+  send(cmd, std::move(done), [this, context](const uss::CommandReply& r) {
+    return r.pkw ? parameter_result(context, *r.pkw) : reply_result(r);
+  });
 }
 
 void UssBackend::mirror(std::optional<int> address, api::Responder done) {
@@ -657,16 +625,26 @@ void UssBackend::mirror(std::optional<int> address, api::Responder done) {
                       "address"));
     return;
   }
-  send(uss::MirrorCommand{a}, std::move(done));
+  send(uss::MirrorCommand{a}, std::move(done), [](const uss::CommandReply& r) {
+    if (!r.mirror) return reply_result(r);
+    const auto us =
+        std::chrono::duration_cast<std::chrono::microseconds>(r.mirror->round_trip).count();
+    return r.mirror->ok
+               ? Result::ok({{"address", r.mirror->address}, {"ok", true}, {"round_trip_us", us}})
+               : Result::fail(api::ErrorCode::Fault, "the mirror telegram to slave " +
+                                                         std::to_string(r.mirror->address) +
+                                                         " did not come back unchanged in time "
+                                                         "(USS A 5.3)");
+  });
 }
 
 // ---- the lift ----
 
 UssLift::UssLift(Daemon& daemon, const config::Config& config, bool simulate)
     : ControllerLift(daemon, config, simulate, {"actual"}) {
-  rt::UssRunnerConfig rc;
+  uss::UssRunnerConfig rc;
   rc.device_path = config.drive.device;
-  rc.serial = rt::uss_serial_settings(static_cast<std::uint32_t>(config.uss.baud));
+  rc.serial = uss::uss_serial_settings(static_cast<std::uint32_t>(config.uss.baud));
   rc.serial.rs485 = config.drive.rs485 == config::Rs485Mode::required ? io::Rs485Mode::Required
                     : config.drive.rs485 == config::Rs485Mode::off    ? io::Rs485Mode::Off
                                                                       : io::Rs485Mode::Auto;
@@ -686,7 +664,7 @@ UssLift::UssLift(Daemon& daemon, const config::Config& config, bool simulate)
   master_ = std::make_unique<uss::Master>(uss_master_config(config));
   controller_ = std::make_unique<uss::UssController>(uss_controller_config(config), *master_,
                                                      *position, mono_now());
-  runner_ = std::make_unique<rt::UssRunner>(rc, *master_, *controller_);
+  runner_ = std::make_unique<uss::UssRunner>(rc, *master_, *controller_);
   register_parts(std::make_unique<UssBackend>(config, *controller_, *runner_, *master_,
                                               api_position_feed(), sim_.get()),
                  simulate_ ? "simulated USS lift running; API on " + socket_path()

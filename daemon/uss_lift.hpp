@@ -27,7 +27,7 @@
 #include "io/pty.hpp"
 #include "lift/position_source.hpp"
 #include "log/throttle.hpp"
-#include "rt/uss_runner.hpp"
+#include "uss/runner/uss_runner.hpp"
 #include "sim/sim_io.hpp"
 #include "sim/uss_slave_sim.hpp"
 #include "uss/drive/controller.hpp"
@@ -77,7 +77,7 @@ class SimulatedUssBus final : public SimulatorThread {
 /// The USS lift as controller_lift.hpp names its parts.
 struct UssDrive {
   using Controller = uss::UssController;
-  using Runner = rt::UssRunner;
+  using Runner = uss::UssRunner;
   using Simulator = SimulatedUssBus;
   using Snapshot = uss::ControllerSnapshot;
   using Command = uss::ControllerCommand;
@@ -107,7 +107,7 @@ struct UssDrive {
 /// api::Backend over the USS lift controller.
 class UssBackend final : public ControllerBackend<UssDrive> {
  public:
-  UssBackend(const config::Config& config, uss::UssController& controller, rt::UssRunner& runner,
+  UssBackend(const config::Config& config, uss::UssController& controller, uss::UssRunner& runner,
              uss::Master& master, lift::PositionFeed* position_feed, SimulatedUssBus* sim)
       : ControllerBackend(config, controller, runner, position_feed, sim), master_(master) {}
 
@@ -118,10 +118,6 @@ class UssBackend final : public ControllerBackend<UssDrive> {
   void travel(const api::TravelArgs& args, api::Responder done) override;
   void parameter(const api::ParameterArgs& args, api::Responder done) override;
   void mirror(std::optional<int> address, api::Responder done) override;
-
-  /// Io thread: replies to their clients (a parameter or mirror request's with its result),
-  /// requests the USS thread never answered time out.
-  void poll(MonoTime now) override;
 
  private:
   /// What a reply must turn into: the parameter request's arguments for its result.
@@ -135,7 +131,6 @@ class UssBackend final : public ControllerBackend<UssDrive> {
   api::Result parameter_result(const ParameterContext& context, const uss::PkwResult& r) const;
 
   uss::Master& master_;  ///< its configuration only (the runner's thread owns the rest)
-  std::map<std::uint32_t, ParameterContext> parameter_requests_;
 };
 
 /// The USS lift as one piece, registered with the daemon.
