@@ -2,7 +2,7 @@
 // baud rate, so this thread plays the line: every byte the master wrote is handed to the slave
 // simulator only when it would be complete on a real line (one character time after the
 // previous one, A 6.1), and a reply is written one character time after the slave starts it
-// (when its STX would be complete). The master's own pacing (uss::Master + rt::UssRunner: start
+// (when its STX would be complete). The master's own pacing (uss::Master + uss::UssRunner: start
 // pause, transmission time, reply delay) then makes the cycle a real line would have.
 // Header only: used by tests/uss_master and tools/bench/uss_bench.cpp (which builds without
 // the tests).

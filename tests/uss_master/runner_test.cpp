@@ -20,7 +20,7 @@
 #include "io/pty.hpp"
 #include "io/serial_port.hpp"
 #include "pty_line.hpp"
-#include "rt/uss_runner.hpp"
+#include "uss/runner/uss_runner.hpp"
 #include "sim/uss_slave_sim.hpp"
 #include "uss/master/master.hpp"
 #include "uss/pkw.hpp"
@@ -32,6 +32,11 @@ namespace {
 
 using namespace std::chrono_literals;
 using uss::Master;
+using uss::uss_serial_settings;
+using uss::UssHooks;
+using uss::UssRunner;
+using uss::UssRunnerConfig;
+using uss::UssRunnerStats;
 using uss::MasterConfig;
 using uss::PkwLength;
 using uss::SlaveConfig;

@@ -1,7 +1,7 @@
 // api-load-bench: what API load does to the real-time threads. Runs the real daemon wiring in
 // process (Daemon + LiftApp with the simulated lift on a pty, the cycle thread at its configured
 // priority, the API server), keeps the car travelling between the lowest and the top floor, and
-// beside it a USS bus (rt::UssRunner + uss::Master against simulated slaves on a pty at 38400
+// beside it a USS bus (uss::UssRunner + uss::Master against simulated slaves on a pty at 38400
 // baud, the bus thread at the cycle's priority) and a reference loop: a bare SCHED_FIFO
 // clock_nanosleep loop with the cycle's period and priority, which stands for what the platform
 // gives any real-time thread. Each window (quiet, then 1, 8 and 32 clients sending `status` as
@@ -37,7 +37,7 @@
 #include "rt/cycle_runner.hpp"
 #include "rt/histogram.hpp"
 #include "rt/rt_thread.hpp"
-#include "rt/uss_runner.hpp"
+#include "uss/runner/uss_runner.hpp"
 #include "service/notify.hpp"
 #include "sim/uss_slave_sim.hpp"
 #include "support/api_client.hpp"
@@ -283,7 +283,7 @@ class ReferenceLink {
 };
 
 /// The user side of the USS bus: drains what the master reports, nothing else.
-class UssHooks final : public rt::UssHooks {
+class UssHooks final : public uss::UssHooks {
  public:
   explicit UssHooks(uss::Master& master) : master_(master) {}
   void after_exchange(MonoTime /*now*/) noexcept override {
@@ -314,12 +314,12 @@ class UssBus {
         master_(std::make_unique<uss::Master>(master_config())),
         hooks_(*master_),
         line_(pty_.master_fd(), *bus_, kBaud) {
-    rt::UssRunnerConfig rc;
+    uss::UssRunnerConfig rc;
     rc.device_path = pty_.slave_path();
-    rc.serial = rt::uss_serial_settings(kBaud);
+    rc.serial = uss::uss_serial_settings(kBaud);
     rc.thread.priority = priority;
     rc.thread.lock_memory = lock_memory;
-    runner_ = std::make_unique<rt::UssRunner>(rc, *master_, hooks_);
+    runner_ = std::make_unique<uss::UssRunner>(rc, *master_, hooks_);
     line_priority_ = std::max(1, priority - 1);
   }
   ~UssBus() { stop(); }
@@ -331,12 +331,12 @@ class UssBus {
     runner_->stop();
     line_.stop();
   }
-  rt::UssRunnerStats stats() const { return runner_->stats(); }
+  uss::UssRunnerStats stats() const { return runner_->stats(); }
   std::chrono::nanoseconds expected_cycle() const { return master_->expected_cycle_time(); }
 
  private:
   static liftd::io::PtyPair make_pty() {
-    auto created = liftd::io::PtyPair::create(rt::uss_serial_settings(kBaud));
+    auto created = liftd::io::PtyPair::create(uss::uss_serial_settings(kBaud));
     if (!created.ok()) throw std::runtime_error(created.error().message());
     return std::move(created).value();
   }
@@ -366,7 +366,7 @@ class UssBus {
   std::unique_ptr<uss::Master> master_;
   UssHooks hooks_;
   liftd::uss::testing::PtyLine<sim::UssBusSim, sim::UssReply> line_;
-  std::unique_ptr<rt::UssRunner> runner_;
+  std::unique_ptr<uss::UssRunner> runner_;
   int line_priority_ = 1;
 };
 
@@ -376,7 +376,7 @@ struct Window {
   int clients = 0;
   HistogramData cycle, reference, uss;
   rt::CycleCounters cycle_counters;  // deltas over the window
-  rt::UssRunnerCounters uss_counters;
+  uss::UssRunnerCounters uss_counters;
   std::uint64_t reference_skipped = 0;
   std::uint64_t link_exchanges = 0;  // the reference link's
   std::uint64_t link_missing = 0;
@@ -395,8 +395,8 @@ rt::CycleCounters delta(const rt::CycleCounters& a, const rt::CycleCounters& b) 
   d.bad_replies = b.bad_replies - a.bad_replies;
   return d;
 }
-rt::UssRunnerCounters delta(const rt::UssRunnerCounters& a, const rt::UssRunnerCounters& b) {
-  rt::UssRunnerCounters d;
+uss::UssRunnerCounters delta(const uss::UssRunnerCounters& a, const uss::UssRunnerCounters& b) {
+  uss::UssRunnerCounters d;
   d.exchanges = b.exchanges - a.exchanges;
   d.reply_timeouts = b.reply_timeouts - a.reply_timeouts;
   d.bad_replies = b.bad_replies - a.bad_replies;
@@ -511,7 +511,7 @@ int main(int argc, char** argv) {
     const auto s0 = reference.skipped();
     const auto le0 = reference_link.exchanges();
     const auto lm0 = reference_link.missing();
-    const rt::UssRunnerStats u0 = uss_bus ? uss_bus->stats() : rt::UssRunnerStats{};
+    const uss::UssRunnerStats u0 = uss_bus ? uss_bus->stats() : uss::UssRunnerStats{};
     const long long f0 = link_faults(cfg.api.socket);
     if (clients == 0) {
       std::this_thread::sleep_for(phase);
@@ -526,7 +526,7 @@ int main(int argc, char** argv) {
     w.cycle = window(c0.wake_lateness, c1.wake_lateness);
     w.cycle_counters = delta(c0.counters, c1.counters);
     if (uss_bus) {
-      const rt::UssRunnerStats u1 = uss_bus->stats();
+      const uss::UssRunnerStats u1 = uss_bus->stats();
       w.uss = window(u0.wake_lateness, u1.wake_lateness);
       w.uss_counters = delta(u0.counters, u1.counters);
     }

@@ -1,4 +1,4 @@
-// uss-bench: the USS master (uss::Master on rt::UssRunner) polling simulated slaves
+// uss-bench: the USS master (uss::Master on uss::UssRunner) polling simulated slaves
 // (sim::UssBusSim, written from the spec) over a pty, at 38400 and 187500 baud. Prints the
 // cycle time expected from the spec's timing rules (A 5.1.1: per exchange start pause, request,
 // reply delay, reply), the measured cycle (mean, p50, p99, max) and whether it is within 10 %,
@@ -34,7 +34,7 @@
 
 #include "io/pty.hpp"
 #include "rt/rt_thread.hpp"
-#include "rt/uss_runner.hpp"
+#include "uss/runner/uss_runner.hpp"
 #include "sim/uss_slave_sim.hpp"
 #include "uss/master/master.hpp"
 #include "uss/timing.hpp"
@@ -157,7 +157,7 @@ Summary summarize(std::vector<std::int64_t> samples) {
 
 // The user side on the bus thread: PZD out, results drained, cycle times kept in storage
 // reserved before start, allocation counting switched on after warm-up.
-class BenchHooks : public rt::UssHooks {
+class BenchHooks : public uss::UssHooks {
  public:
   BenchHooks(uss::Master& master, std::uint64_t warm_up, std::size_t capacity)
       : master_(master), warm_up_(warm_up) {
@@ -234,7 +234,7 @@ Summary reference_loop(const Options& o, std::chrono::nanoseconds period, std::u
 int run_rate(const Options& o, std::uint32_t baud) {
   std::printf("\n== %u baud, %d slave(s), slaves reply %ld us after our BCC ==\n", baud, o.slaves,
               o.reply_delay_us);
-  auto created = liftd::io::PtyPair::create(rt::uss_serial_settings(baud));
+  auto created = liftd::io::PtyPair::create(uss::uss_serial_settings(baud));
   if (!created.ok()) {
     std::printf("pty refused %u baud: %s (skipped)\n", baud, created.error().message().c_str());
     return 0;
@@ -271,15 +271,15 @@ int run_rate(const Options& o, std::uint32_t baud) {
       ms(expected));
 
   BenchHooks hooks(master, o.warm_up, static_cast<std::size_t>(o.cycles));
-  rt::UssRunnerConfig rc;
+  uss::UssRunnerConfig rc;
   rc.device_path = pty.slave_path();
-  rc.serial = rt::uss_serial_settings(baud);
+  rc.serial = uss::uss_serial_settings(baud);
   rc.thread.priority = o.priority;
   rc.thread.lock_memory = o.lock_memory;
   liftd::uss::testing::PtyLine<sim::UssBusSim, sim::UssReply> line(pty.master_fd(), *bus, baud);
-  std::unique_ptr<rt::UssRunner> runner;
+  std::unique_ptr<uss::UssRunner> runner;
   try {
-    runner = std::make_unique<rt::UssRunner>(rc, master, hooks);
+    runner = std::make_unique<uss::UssRunner>(rc, master, hooks);
   } catch (const std::exception& e) {
     std::printf("runner refused: %s\n", e.what());
     return 1;
@@ -304,7 +304,7 @@ int run_rate(const Options& o, std::uint32_t baud) {
 
   rt::CycleEvent event;
   while (runner->poll_event(event)) std::printf("event: %s\n", rt::describe(event).c_str());
-  const rt::UssRunnerStats stats = runner->stats();
+  const uss::UssRunnerStats stats = runner->stats();
   const Summary measured = summarize(hooks.samples());
   const double off_mean = (measured.mean_ms - ms(expected)) / ms(expected) * 100.0;
   const double off_p50 = (measured.p50_ms - ms(expected)) / ms(expected) * 100.0;
@@ -364,7 +364,7 @@ int main(int argc, char** argv) {
   const std::optional<Options> parsed = parse(argc, argv);
   if (!parsed) return 2;
   std::puts(
-      "uss-bench: uss::Master on rt::UssRunner over a pty against sim::UssBusSim.\n"
+      "uss-bench: uss::Master on uss::UssRunner over a pty against sim::UssBusSim.\n"
       "A pty has no baud-rate timing: the cycle is made by the runner's own pacing (start pause\n"
       "after the computed end of the last telegram, transmission time of each telegram, the\n"
       "slaves' reply delay) and by the line thread, which delivers bytes one character time\n"

@@ -67,7 +67,7 @@ UssController::UssController(const UssControllerConfig& config, Master& master,
   publish(start);
 }
 
-// ---- rt::UssHooks ----
+// ---- uss::UssHooks ----
 
 void UssController::after_exchange(MonoTime now) noexcept {
   step(now);

@@ -5,7 +5,7 @@
 // non-real-time side only through lock-free structures: commands in, replies and events out
 // (SPSC queues), state out (triple buffer).
 //
-// Threads: the USS runner's thread calls the rt::UssHooks methods (and so every uss::Master
+// Threads: the USS runner's thread calls the uss::UssHooks methods (and so every uss::Master
 // user-side call); ONE other thread (the daemon's io thread) calls post(), poll_reply(),
 // poll_event() and snapshot().
 #pragma once
@@ -28,7 +28,7 @@
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/position_source.hpp"
-#include "rt/uss_runner.hpp"
+#include "uss/runner/uss_runner.hpp"
 #include "uss/drive/drive_profile.hpp"
 #include "uss/drive/lift_travel.hpp"
 #include "uss/master/master.hpp"
@@ -209,7 +209,7 @@ struct UssCoreTypes {
   using Cause = uss::Cause;
 };
 
-class UssController final : public rt::UssHooks, public lift::ControllerCore<UssCoreTypes> {
+class UssController final : public uss::UssHooks, public lift::ControllerCore<UssCoreTypes> {
  public:
   /// Throws std::invalid_argument on a bad floor table, a bad travel config or a drive address
   /// the master does not poll.
@@ -219,7 +219,7 @@ class UssController final : public rt::UssHooks, public lift::ControllerCore<Uss
   // ---- io thread: post(), poll_reply(), poll_event(), snapshot(), dropped_events() ----
   std::span<const std::int64_t> floors_mm() const noexcept { return config_.floors_mm; }
 
-  // ---- rt::UssHooks (USS thread) ----
+  // ---- uss::UssHooks (USS thread) ----
   void after_exchange(MonoTime now) noexcept override;
   void on_port(bool up, MonoTime now) noexcept override;
 

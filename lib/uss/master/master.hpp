@@ -1,7 +1,7 @@
 // The USS master engine (spec chapter A 2, A 3, A 5; chapter C 4 for the PKW channel), sans-I/O:
 // it decides which telegram goes out next and when, supervises the reply delay, takes the
 // received characters apart with a uss::Receiver, keeps every slave's link state and runs one
-// PKW request per slave. It owns no port and reads no clock: a runner (rt::UssRunner) or a test
+// PKW request per slave. It owns no port and reads no clock: a runner (uss::UssRunner) or a test
 // passes every time in. No allocation, lock or exception after construction.
 //
 // The order of calls for one exchange (runner side, one thread):

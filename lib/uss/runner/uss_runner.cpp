@@ -1,4 +1,4 @@
-#include "rt/uss_runner.hpp"
+#include "uss/runner/uss_runner.hpp"
 
 #include <unistd.h>
 
@@ -9,7 +9,7 @@
 
 #include "uss/timing.hpp"
 
-namespace liftd::rt {
+namespace liftd::uss {
 namespace {
 
 constexpr auto kIdleTick = std::chrono::milliseconds(5);  // hooks' pace while without port
@@ -56,7 +56,7 @@ UssRunner::UssRunner(UssRunnerConfig config, uss::Master& master, UssHooks& hook
       hooks_(hooks),
       input_check_(io::character_time(config_.serial)),
       recorder_(recorder_capacity(config_, master), config_.recorder_bytes),
-      port_keeper_(PortKeeperConfig{config_.device_path, config_.serial, config_.reopen_backoff_min,
+      port_keeper_(rt::PortKeeperConfig{config_.device_path, config_.serial, config_.reopen_backoff_min,
                                     config_.reopen_backoff_max, add_line_counter_note}) {
   if (config_.serial.baud != master_.config().baud) {
     throw std::invalid_argument("uss runner: the line runs at " +
@@ -71,7 +71,7 @@ UssRunner::~UssRunner() {
 }
 
 int UssRunner::start() {
-  RtThreadOptions options = config_.thread;
+  rt::RtThreadOptions options = config_.thread;
   if (options.name.empty()) options.name = "liftd-uss-bus";  // ps -L, chrt -p, ftrace
   return port_keeper_.start(options, [this] { loop(); });
 }
@@ -80,7 +80,7 @@ void UssRunner::stop() noexcept {
   port_keeper_.stop();
 }
 
-bool UssRunner::poll_event(CycleEvent& out) noexcept {
+bool UssRunner::poll_event(rt::CycleEvent& out) noexcept {
   return bus_events_.try_pop(out) || port_keeper_.poll_event(out);
 }
 
@@ -125,19 +125,19 @@ void UssRunner::loop() noexcept {
   while (!port_keeper_.stop_requested()) {
     adopt_offered_port();
     if (!port_keeper_.port().is_open()) {
-      sleep_until(mono_now() + kIdleTick);
+      rt::sleep_until(mono_now() + kIdleTick);
       hooks_.after_exchange(mono_now());
     } else {
       // A 5.1.2 start pause, A 5.1.1 fixed cycle time: the master says when.
       const MonoTime at = master_.send_at();
       const MonoTime now = mono_now();
       if (at > now + kMaxSleep) {
-        sleep_until(now + kMaxSleep);
+        rt::sleep_until(now + kMaxSleep);
         progress_.fetch_add(1, std::memory_order_relaxed);
         continue;
       }
       if (at > now) {
-        sleep_until(at);
+        rt::sleep_until(at);
         // Wake-up lateness of a sleep, as the reference loops measure it. After a reply
         // timeout send_at() is already past (the line has been free since our request ended,
         // A 5.1.2): sending at once is then the rule, not a late wake-up.
@@ -180,17 +180,17 @@ void UssRunner::run_exchange(MonoTime wake) noexcept {
   // (A 6.2); on a pty this is what keeps the reply delay and the next start pause honest.
   const MonoTime end = sent_at + uss::transmission_time(master_.config().baud, telegram.size());
   if (written.status == io::IoStatus::DeviceLost) {
-    recorder_.record(sent_at, Direction::Tx, record_flag::kSendFailed, telegram);
+    recorder_.record(sent_at, rt::Direction::Tx, rt::record_flag::kSendFailed, telegram);
     lose_port(sent_at, written.error_number);
     return;
   }
   if (written.status == io::IoStatus::Ok) {
-    recorder_.record(sent_at, Direction::Tx, record_flag::kSent, telegram);
+    recorder_.record(sent_at, rt::Direction::Tx, rt::record_flag::kSent, telegram);
   } else {
     // The port refused (part of) the telegram: the reply supervision still runs (it will
     // time out), so the slave is flagged as A 5.2.1.1 says.
     bump(counters_.send_failures);
-    recorder_.record(sent_at, Direction::Tx, record_flag::kSendFailed, telegram);
+    recorder_.record(sent_at, rt::Direction::Tx, rt::record_flag::kSendFailed, telegram);
   }
   master_.on_sent(end);
   sent_end_ = end;
@@ -255,17 +255,17 @@ void UssRunner::receive(MonoTime sent_at) noexcept {
     case uss::ExchangeOutcome::Reply:
       bump(counters_.good_replies);
       reply_time_.record(now - sent_end_);
-      recorder_.record(now, Direction::Rx, record_flag::kReply, reply);
+      recorder_.record(now, rt::Direction::Rx, rt::record_flag::kReply, reply);
       break;
     case uss::ExchangeOutcome::BadReply:
       bump(counters_.bad_replies);
-      recorder_.record(now, Direction::Rx, record_flag::kReply | record_flag::kBad, reply);
+      recorder_.record(now, rt::Direction::Rx, rt::record_flag::kReply | rt::record_flag::kBad, reply);
       break;
     case uss::ExchangeOutcome::Timeout:
       bump(counters_.reply_timeouts);
       recorder_.record(
-          now, Direction::Rx,
-          reply.empty() ? record_flag::kMissing : record_flag::kMissing | record_flag::kPartial,
+          now, rt::Direction::Rx,
+          reply.empty() ? rt::record_flag::kMissing : rt::record_flag::kMissing | rt::record_flag::kPartial,
           reply);
       break;
     case uss::ExchangeOutcome::NoReplyExpected:
@@ -279,10 +279,10 @@ void UssRunner::receive(MonoTime sent_at) noexcept {
 
 void UssRunner::lose_port(MonoTime now, int error_number) noexcept {
   port_keeper_.hand_back_port();
-  recorder_.record(now, Direction::Event, record_flag::kPortLost, {});
+  recorder_.record(now, rt::Direction::Event, rt::record_flag::kPortLost, {});
   master_.reset_link(now);
-  bus_events_.try_push(port_lost_event(now, error_number));
+  bus_events_.try_push(rt::port_lost_event(now, error_number));
   hooks_.on_port(false, now);
 }
 
-}  // namespace liftd::rt
+}  // namespace liftd::uss

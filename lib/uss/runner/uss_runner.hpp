@@ -25,7 +25,7 @@
 #include "uss/line.hpp"
 #include "uss/master/master.hpp"
 
-namespace liftd::rt {
+namespace liftd::uss {
 
 /// The user side of a USS bus (e.g. the lift's USS controller). Called only from the runner's
 /// thread; must not allocate, lock or block.
@@ -48,14 +48,14 @@ struct UssRunnerConfig {
   std::string device_path;  ///< serial device, e.g. /dev/ttyS1 or a pty slave
   /// Line settings; the baud rate must equal the master's. Default: 38400 8E1, mark_errors.
   io::SerialSettings serial = uss_serial_settings(38400);
-  RtThreadOptions thread;  ///< SCHED_FIFO priority, memory locking, affinity
+  rt::RtThreadOptions thread;  ///< SCHED_FIFO priority, memory locking, affinity
   std::chrono::nanoseconds reopen_backoff_min = std::chrono::milliseconds(100);  ///< first retry
   std::chrono::nanoseconds reopen_backoff_max = std::chrono::seconds(2);         ///< retry cap
   /// How much traffic the flight recorder keeps (estimated from the expected cycle time, at
   /// most kMaxRecords records).
   std::chrono::nanoseconds recorder_span = std::chrono::seconds(30);
   /// Bytes kept per record: the longest telegram (A 4.2: 256).
-  std::size_t recorder_bytes = kUssRecordBytes;
+  std::size_t recorder_bytes = rt::kUssRecordBytes;
 };
 
 /// Counters of the runner, copied out by stats().
@@ -77,11 +77,11 @@ struct UssRunnerCounters {
 /// A copy of the runner's statistics, taken on any thread.
 struct UssRunnerStats {
   UssRunnerCounters counters;
-  HistogramData cycle_time;  ///< master.last_cycle_time() per pass, 50 us bins up to 1 s
+  rt::HistogramData cycle_time;  ///< master.last_cycle_time() per pass, 50 us bins up to 1 s
   /// Wake-up minus send_at() of each sleep until send_at(), 1 us bins up to 20 ms (none when
   /// send_at() had already passed, as after a reply timeout).
-  HistogramData wake_lateness;
-  HistogramData reply_time;  ///< end of our request to the end of the reply, 10 us bins
+  rt::HistogramData wake_lateness;
+  rt::HistogramData reply_time;  ///< end of our request to the end of the reply, 10 us bins
 };
 
 /// Runs a uss::Master on its own real-time thread, plus a helper thread that (re)opens the
@@ -105,15 +105,15 @@ class UssRunner {
   /// Stops the bus and closes the port (idempotent).
   void stop() noexcept;
 
-  /// Non-real-time side: pops the next port/thread event (rt::CycleEvent, describe()).
-  bool poll_event(CycleEvent& out) noexcept;
+  /// Non-real-time side: pops the next port/thread event (rt::CycleEvent, rt::describe()).
+  bool poll_event(rt::CycleEvent& out) noexcept;
 
   /// What the thread got (SCHED_FIFO, memory lock, affinity); valid after start().
-  const RtThreadStatus& thread_status() const noexcept { return port_keeper_.thread_status(); }
+  const rt::RtThreadStatus& thread_status() const noexcept { return port_keeper_.thread_status(); }
   /// Any thread: counters and histograms.
   UssRunnerStats stats() const;
   /// Any thread: sent telegrams and received characters (copy(), write_text()).
-  const FlightRecorder& recorder() const noexcept { return recorder_; }
+  const rt::FlightRecorder& recorder() const noexcept { return recorder_; }
   /// Any thread: goes up after every exchange and every idle tick (systemd watchdog).
   std::uint64_t progress() const noexcept { return progress_.load(std::memory_order_relaxed); }
   /// An eventfd bumped after every exchange (one write(2), never blocks). Set before start().
@@ -163,16 +163,16 @@ class UssRunner {
         no_reply_expected{0}, cycles{0}, send_failures{0}, stray_bytes{0}, chars_received{0},
         line_errors{0};
   } counters_;
-  Histogram<20000> cycle_time_{std::chrono::microseconds(50)};    // 0..1 s
-  Histogram<20000> wake_lateness_{std::chrono::microseconds(1)};  // 0..20 ms
-  Histogram<10000> reply_time_{std::chrono::microseconds(10)};    // 0..100 ms
-  FlightRecorder recorder_;
+  rt::Histogram<20000> cycle_time_{std::chrono::microseconds(50)};    // 0..1 s
+  rt::Histogram<20000> wake_lateness_{std::chrono::microseconds(1)};  // 0..20 ms
+  rt::Histogram<10000> reply_time_{std::chrono::microseconds(10)};    // 0..100 ms
+  rt::FlightRecorder recorder_;
 
   // Events of the bus thread; poll_event() drains them, then the keeper's.
-  SpscQueue<CycleEvent, kEventSlots> bus_events_;
+  rt::SpscQueue<rt::CycleEvent, kEventSlots> bus_events_;
 
   // The bus thread (loop), its port and the keeper thread that (re)opens the port.
-  PortKeeper port_keeper_;
+  rt::PortKeeper port_keeper_;
 };
 
-}  // namespace liftd::rt
+}  // namespace liftd::uss
