@@ -33,7 +33,7 @@
 #include "daemon/lift_core.hpp"
 #include "daemon/trace_files.hpp"
 #include "drive/drive.hpp"
-#include "lift/position_source.hpp"
+#include "common/position_source.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -48,7 +48,7 @@ class ControllerBackend : public api::Backend {
   using Simulator = typename Drive::Simulator;
 
   ControllerBackend(const config::Config& config, Controller& controller, Runner& runner,
-                    lift::PositionFeed* position_feed, Simulator* sim)
+                    PositionFeed* position_feed, Simulator* sim)
       : config_(config),
         controller_(controller),
         runner_(runner),
@@ -213,13 +213,13 @@ class ControllerLift : public LiftRunner {
             kShutdownDeadline, Drive::kShutdownGrace) {}
 
   /// The position the API's `inputs` carry (position.source "api"), made as the car's position.
-  const lift::PositionSource& make_position_feed() {
+  const PositionSource& make_position_feed() {
     position_feed_ =
-        std::make_unique<lift::PositionFeed>(std::chrono::milliseconds(config_.inputs.timeout_ms));
+        std::make_unique<PositionFeed>(std::chrono::milliseconds(config_.inputs.timeout_ms));
     return *position_feed_;
   }
   /// The feed the backend hands the API's positions: for position.source "api" only.
-  lift::PositionFeed* api_position_feed() const {
+  PositionFeed* api_position_feed() const {
     return config_.position.source == config::PositionSource::api ? position_feed_.get() : nullptr;
   }
 
@@ -289,7 +289,7 @@ class ControllerLift : public LiftRunner {
   const config::Config& config_;
   bool simulate_;
   std::unique_ptr<typename Drive::Simulator> sim_;
-  std::unique_ptr<lift::PositionFeed> position_feed_;
+  std::unique_ptr<PositionFeed> position_feed_;
   std::unique_ptr<typename Drive::Controller> controller_;
   std::unique_ptr<typename Drive::Runner> runner_;
   std::unique_ptr<Backend> backend_;

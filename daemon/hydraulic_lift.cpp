@@ -398,7 +398,7 @@ HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool 
   rc.rt.priority = config.rt.priority;
   rc.rt.cpu = config.rt.cpu;
   rc.rt.lock_memory = config.rt.lock_memory;
-  const lift::PositionSource* position = nullptr;
+  const PositionSource* position = nullptr;
   if (simulate_) {
     // Beside the API socket, in the daemon's own runtime directory.
     const std::string card_socket =

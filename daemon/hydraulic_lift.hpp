@@ -21,7 +21,7 @@
 #include "daemon/drives.hpp"
 #include "daemon/lift_common.hpp"
 #include "daemon/lift_core.hpp"
-#include "lift/position_source.hpp"
+#include "common/position_source.hpp"
 #include "log/throttle.hpp"
 #include "rt/can_runner.hpp"
 #include "rt/encoder_tap.hpp"

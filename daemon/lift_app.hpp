@@ -28,7 +28,7 @@
 namespace liftd::daemon {
 
 /// The DCP controller's settings from the configuration (what a default Config gives is what a
-/// default ControllerConfig holds: config/defaults.hpp).
+/// default ControllerConfig holds: common/defaults.hpp).
 control::ControllerConfig dcp_controller_config(const config::Config& config);
 
 class SimulatedLift;

@@ -16,7 +16,7 @@
 #include "can/encoder.hpp"
 #include "config/config.hpp"
 #include "lift/inputs.hpp"
-#include "lift/position_source.hpp"
+#include "common/position_source.hpp"
 #include "sim/sim_io.hpp"
 
 namespace liftd::daemon {
@@ -40,7 +40,7 @@ can::EncoderFormat encoder_format(const config::Config& config);
 class MachineInputs {
  public:
   /// `feed` takes the API's position (position.source "api"; nullptr otherwise).
-  MachineInputs(const config::Config& config, lift::PositionFeed* feed, bool simulated)
+  MachineInputs(const config::Config& config, PositionFeed* feed, bool simulated)
       : config_(config), feed_(feed), simulated_(simulated) {}
   /// Takes an `inputs` update (partial updates keep the rest); a refusal, changing nothing, when
   /// it carries a position the configured source does not take.
@@ -68,14 +68,14 @@ class MachineInputs {
 
  private:
   const config::Config& config_;
-  lift::PositionFeed* feed_;
+  PositionFeed* feed_;
   bool simulated_;
   api::Inputs api_{};
   std::optional<lift::Inputs> sample_;
 };
 /// A simulated car's encoder: the simulator's thread stores the position, the controller's thread
 /// reads it (lock-free).
-class SimulatedEncoder final : public lift::PositionSource {
+class SimulatedEncoder final : public PositionSource {
  public:
   std::optional<std::int64_t> position_mm(MonoTime) const noexcept override {
     return mm_.load(std::memory_order_relaxed);
@@ -113,7 +113,7 @@ class SimulatorThread {
   SimulatorThread& operator=(const SimulatorThread&) = delete;
 
   /// The simulated encoder on the car (lock-free).
-  const lift::PositionSource& position() const { return encoder_; }
+  const PositionSource& position() const { return encoder_; }
   /// The simulated I/O board's inputs now (io thread).
   lift::Inputs inputs(MonoTime now);
 

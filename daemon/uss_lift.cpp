@@ -652,7 +652,7 @@ UssLift::UssLift(Daemon& daemon, const config::Config& config, bool simulate)
   rc.thread.cpu = config.rt.cpu;
   rc.thread.lock_memory = config.rt.lock_memory;
   rc.recorder_span = std::chrono::seconds(config.rt.flight_recorder_s);
-  const lift::PositionSource* position = nullptr;
+  const PositionSource* position = nullptr;
   if (simulate_) {
     sim_ = std::make_unique<SimulatedUssBus>(config);
     rc.device_path = sim_->device_path();

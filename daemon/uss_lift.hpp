@@ -25,7 +25,7 @@
 #include "daemon/lift_common.hpp"
 #include "daemon/lift_core.hpp"
 #include "io/pty.hpp"
-#include "lift/position_source.hpp"
+#include "common/position_source.hpp"
 #include "log/throttle.hpp"
 #include "uss/runner/uss_runner.hpp"
 #include "sim/sim_io.hpp"
@@ -108,7 +108,7 @@ struct UssDrive {
 class UssBackend final : public ControllerBackend<UssDrive> {
  public:
   UssBackend(const config::Config& config, uss::UssController& controller, uss::UssRunner& runner,
-             uss::Master& master, lift::PositionFeed* position_feed, SimulatedUssBus* sim)
+             uss::Master& master, PositionFeed* position_feed, SimulatedUssBus* sim)
       : ControllerBackend(config, controller, runner, position_feed, sim), master_(master) {}
 
   api::StatusSnapshot status() override;

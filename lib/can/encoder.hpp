@@ -11,7 +11,7 @@
 
 #include "can/frame.hpp"
 #include "common/mono_time.hpp"
-#include "lift/position_source.hpp"
+#include "common/position_source.hpp"
 
 namespace liftd::can {
 
@@ -33,7 +33,7 @@ std::optional<std::string> validate(const EncoderFormat& format);
 std::optional<std::int64_t> decode_position(const EncoderFormat& format, const Frame& frame);
 
 /// The encoder as a position source: fed on the CAN thread, read on the real-time thread.
-class CanEncoder final : public lift::PositionSource {
+class CanEncoder final : public PositionSource {
  public:
   CanEncoder(const EncoderFormat& format, MonoTime timeout) noexcept
       : format_(format), feed_(timeout) {}
@@ -50,7 +50,7 @@ class CanEncoder final : public lift::PositionSource {
 
  private:
   EncoderFormat format_;
-  lift::PositionFeed feed_;
+  PositionFeed feed_;
   std::atomic<std::uint64_t> short_frames_{0};
 };
 

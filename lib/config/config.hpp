@@ -13,7 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "config/defaults.hpp"
+#include "common/defaults.hpp"
 #include "drive/drive.hpp"
 
 namespace liftd::config {

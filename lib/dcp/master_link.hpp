@@ -19,7 +19,7 @@
 
 #include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
-#include "config/defaults.hpp"
+#include "common/defaults.hpp"
 #include "dcp/channel.hpp"
 #include "dcp/display.hpp"
 #include "dcp/frame.hpp"

@@ -36,8 +36,8 @@
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/rules.hpp"
-#include "rt/snapshot.hpp"
-#include "rt/spsc_queue.hpp"
+#include "common/snapshot_box.hpp"
+#include "common/spsc_queue.hpp"
 
 namespace liftd::lift {
 
@@ -441,10 +441,10 @@ class ControllerCore {
   std::uint32_t level_tolerance_mm_;
   LiftRules rules_;  ///< inputs, inspection, start grace and calls, as every lift has them
 
-  rt::SpscQueue<typename Types::Command, kCommandQueueSize> commands_;
-  rt::SpscQueue<typename Types::Reply, kReplyQueueSize> replies_;
-  rt::SpscQueue<typename Types::Event, kEventQueueSize> events_;
-  rt::Snapshot<typename Types::Snapshot> snapshot_;
+  SpscQueue<typename Types::Command, kCommandQueueSize> commands_;
+  SpscQueue<typename Types::Reply, kReplyQueueSize> replies_;
+  SpscQueue<typename Types::Event, kEventQueueSize> events_;
+  SnapshotBox<typename Types::Snapshot> snapshot_;
   std::atomic<std::uint64_t> dropped_events_{0};
   std::atomic<std::uint64_t> travel_dropped_{0};  ///< the travel's own count, copied each step
 

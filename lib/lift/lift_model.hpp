@@ -6,7 +6,7 @@
 #include <optional>
 #include <span>
 
-#include "config/defaults.hpp"
+#include "common/defaults.hpp"
 #include "lift/calls.hpp"
 #include "lift/floors.hpp"
 #include "lift/inputs.hpp"

@@ -17,7 +17,7 @@
 #include "rt/histogram.hpp"
 #include "rt/port_keeper.hpp"
 #include "rt/rt_thread.hpp"
-#include "rt/spsc_queue.hpp"
+#include "common/spsc_queue.hpp"
 
 namespace liftd::rt {
 

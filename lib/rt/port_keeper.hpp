@@ -19,7 +19,7 @@
 #include "io/serial_port.hpp"
 #include "rt/cycle_event.hpp"
 #include "rt/rt_thread.hpp"
-#include "rt/spsc_queue.hpp"
+#include "common/spsc_queue.hpp"
 
 namespace liftd::rt {
 

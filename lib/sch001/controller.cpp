@@ -40,7 +40,7 @@ std::string_view fault_text(FaultCode code) noexcept {
 }
 
 Sch001Controller::Sch001Controller(const ControllerConfig& config,
-                                   const lift::PositionSource& position, MonoTime start)
+                                   const PositionSource& position, MonoTime start)
     : ControllerCore(core_config(config, start), config.hydraulic),
       config_(config),
       position_(position),

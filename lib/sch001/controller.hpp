@@ -20,12 +20,12 @@
 
 #include "can/socket.hpp"
 #include "common/mono_time.hpp"
-#include "config/defaults.hpp"
+#include "common/defaults.hpp"
 #include "lift/controller_core.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
-#include "lift/position_source.hpp"
+#include "common/position_source.hpp"
 #include "rt/can_runner.hpp"
 #include "sch001/card_link.hpp"
 #include "sch001/hydraulic_travel.hpp"
@@ -159,7 +159,7 @@ struct Sch001CoreTypes {
 class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore<Sch001CoreTypes> {
  public:
   /// Throws std::invalid_argument on a bad floor table.
-  Sch001Controller(const ControllerConfig& config, const lift::PositionSource& position,
+  Sch001Controller(const ControllerConfig& config, const PositionSource& position,
                    MonoTime start);
 
   // ---- io thread: post(), poll_reply(), poll_event(), snapshot(), dropped_events() ----
@@ -187,7 +187,7 @@ class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore
   static std::string_view text_for(Cause cause) noexcept;
 
   ControllerConfig config_;
-  const lift::PositionSource& position_;
+  const PositionSource& position_;
   CardLink link_;
 
   // CAN-thread state.

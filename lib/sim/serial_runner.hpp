@@ -23,7 +23,7 @@
 
 #include "common/mono_time.hpp"
 #include "io/serial_port.hpp"
-#include "rt/snapshot.hpp"
+#include "common/snapshot_box.hpp"
 #include "sim/drive_sim.hpp"
 
 namespace liftd::sim {
@@ -217,7 +217,7 @@ class SerialDriveRunner {
   std::atomic<double> position_mm_{0.0};
   std::atomic<double> velocity_mps_{0.0};
   static_assert(std::atomic<double>::is_always_lock_free, "the encoder must be lock-free");
-  mutable rt::Snapshot<EncoderSample> encoder_;  // written under mutex_, read by one thread
+  mutable SnapshotBox<EncoderSample> encoder_;  // written under mutex_, read by one thread
 
   mutable std::mutex mutex_;  // guards everything below
   DriveSim sim_;

@@ -1,5 +1,5 @@
 // One set of defaults: a default configuration file gives the controllers exactly the settings a
-// test gets from their default-constructed structs (both read config/defaults.hpp). A test that
+// test gets from their default-constructed structs (both read common/defaults.hpp). A test that
 // builds a sequencer directly runs the lift the daemon runs.
 #include <gtest/gtest.h>
 

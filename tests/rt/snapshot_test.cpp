@@ -1,5 +1,5 @@
 // Snapshot (triple buffer): newest value wins, no torn reads across threads.
-#include "rt/snapshot.hpp"
+#include "common/snapshot_box.hpp"
 
 #include <gtest/gtest.h>
 
@@ -23,14 +23,14 @@ State make_state(std::uint64_t v) {
 }
 
 TEST(RtSnapshot, ReadsDefaultBeforeFirstPublish) {
-  Snapshot<State> box;
+  SnapshotBox<State> box;
   State out = make_state(7);
   EXPECT_FALSE(box.read(out));
   EXPECT_EQ(out.version, 0U);
 }
 
 TEST(RtSnapshot, ReturnsNewestPublishAndReportsFreshnessOnce) {
-  Snapshot<State> box;
+  SnapshotBox<State> box;
   box.publish(make_state(1));
   box.publish(make_state(2));
   box.publish(make_state(3));
@@ -46,7 +46,7 @@ TEST(RtSnapshot, ReturnsNewestPublishAndReportsFreshnessOnce) {
 
 TEST(RtSnapshot, TwoThreadsNeverSeeTornOrOlderValues) {
   constexpr std::uint64_t kVersions = 100000;
-  Snapshot<State> box;
+  SnapshotBox<State> box;
   std::thread writer([&box] {
     for (std::uint64_t v = 1; v <= kVersions; ++v) box.publish(make_state(v));
   });

@@ -1,5 +1,5 @@
 // SpscQueue: order, capacity limits and a two-thread handoff (run it under TSan too).
-#include "rt/spsc_queue.hpp"
+#include "common/spsc_queue.hpp"
 
 #include <gtest/gtest.h>
 

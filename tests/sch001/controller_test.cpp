@@ -17,7 +17,7 @@ using namespace std::chrono_literals;
 
 constexpr std::uint8_t kReady = 0x02;
 
-class StillCar final : public lift::PositionSource {
+class StillCar final : public PositionSource {
  public:
   std::optional<std::int64_t> position_mm(MonoTime) const noexcept override { return mm; }
   std::optional<std::int64_t> mm = 0;

@@ -18,7 +18,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-class FakePosition final : public lift::PositionSource {
+class FakePosition final : public PositionSource {
  public:
   std::optional<std::int64_t> position_mm(MonoTime) const noexcept override { return mm; }
   std::optional<std::int64_t> mm = 0;

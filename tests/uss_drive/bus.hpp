@@ -30,7 +30,7 @@ inline constexpr std::uint32_t kBaud = 38400;
 inline constexpr std::uint16_t kParameter = 52;  ///< the fake drive's one readable parameter
 inline constexpr std::uint16_t kParameterValue = 1234;
 
-class CarPosition final : public lift::PositionSource {
+class CarPosition final : public PositionSource {
  public:
   explicit CarPosition(const Car& car) : car_(car) {}
   std::optional<std::int64_t> position_mm(MonoTime) const noexcept override {

@@ -19,21 +19,21 @@
 #include <vector>
 
 #include "common/mono_time.hpp"
-#include "config/defaults.hpp"
+#include "common/defaults.hpp"
 #include "dcp/master_link.hpp"
 #include "dcp/travel/controller.hpp"
 #include "lift/controller_core.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
-#include "lift/position_source.hpp"
+#include "common/position_source.hpp"
 #include "rt/cycle_runner.hpp"
 
 namespace liftd::control {
 
-/// The position source of every drive kind (lib/lift/position_source.hpp).
-using lift::PositionFeed;
-using lift::PositionSource;
+/// The position source of every drive kind (lib/common/position_source.hpp).
+using liftd::PositionFeed;
+using liftd::PositionSource;
 
 /// Everything the controller needs, fixed at construction.
 struct ControllerConfig {

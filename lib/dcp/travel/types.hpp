@@ -10,7 +10,7 @@
 #include <string_view>
 
 #include "common/mono_time.hpp"
-#include "config/defaults.hpp"
+#include "common/defaults.hpp"
 #include "dcp/frame.hpp"
 #include "lift/inputs.hpp"
 

@@ -40,7 +40,7 @@ std::string_view fault_text(FaultCode code) noexcept {
 }
 
 UssController::UssController(const UssControllerConfig& config, Master& master,
-                             const lift::PositionSource& position, MonoTime start)
+                             const PositionSource& position, MonoTime start)
     : ControllerCore(core_config(config, start), config.travel),
       config_(config),
       master_(master),

@@ -22,12 +22,12 @@
 #include <vector>
 
 #include "common/mono_time.hpp"
-#include "config/defaults.hpp"
+#include "common/defaults.hpp"
 #include "lift/controller_core.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
-#include "lift/position_source.hpp"
+#include "common/position_source.hpp"
 #include "uss/runner/uss_runner.hpp"
 #include "uss/drive/drive_profile.hpp"
 #include "uss/drive/lift_travel.hpp"
@@ -214,7 +214,7 @@ class UssController final : public uss::UssHooks, public lift::ControllerCore<Us
   /// Throws std::invalid_argument on a bad floor table, a bad travel config or a drive address
   /// the master does not poll.
   UssController(const UssControllerConfig& config, Master& master,
-                const lift::PositionSource& position, MonoTime start);
+                const PositionSource& position, MonoTime start);
 
   // ---- io thread: post(), poll_reply(), poll_event(), snapshot(), dropped_events() ----
   std::span<const std::int64_t> floors_mm() const noexcept { return config_.floors_mm; }
@@ -237,7 +237,7 @@ class UssController final : public uss::UssHooks, public lift::ControllerCore<Us
 
   UssControllerConfig config_;
   Master& master_;
-  const lift::PositionSource& position_;
+  const PositionSource& position_;
 
   // USS-thread state.
   bool port_up_ = false;

@@ -23,7 +23,7 @@
 #include <string_view>
 
 #include "common/mono_time.hpp"
-#include "config/defaults.hpp"
+#include "common/defaults.hpp"
 #include "uss/pzd.hpp"
 
 namespace liftd::uss {

@@ -37,7 +37,7 @@
 #include <string_view>
 
 #include "common/mono_time.hpp"
-#include "config/defaults.hpp"
+#include "common/defaults.hpp"
 #include "lift/floors.hpp"
 #include "lift/inputs.hpp"
 #include "lift/travel_event.hpp"
@@ -66,7 +66,7 @@ enum class Reference : std::uint8_t {
   ShaftSignals,  ///< Inputs::decel_point(n, direction) of the travel's speed, Inputs::level_zone
 };
 
-/// Defaults of the `uss.*` travel settings: lib/config/defaults.hpp (one set for the
+/// Defaults of the `uss.*` travel settings: lib/common/defaults.hpp (one set for the
 /// configuration file and this library).
 namespace uss_defaults {
 inline constexpr double kSpeedV0Percent = defaults::kUssSpeedV0Percent;

@@ -81,7 +81,7 @@
 
 #include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
-#include "config/defaults.hpp"
+#include "common/defaults.hpp"
 #include "uss/line.hpp"
 #include "uss/pkw.hpp"
 #include "uss/pzd.hpp"

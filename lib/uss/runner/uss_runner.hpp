@@ -21,7 +21,7 @@
 #include "rt/histogram.hpp"
 #include "rt/port_keeper.hpp"
 #include "rt/rt_thread.hpp"
-#include "rt/spsc_queue.hpp"
+#include "common/spsc_queue.hpp"
 #include "uss/line.hpp"
 #include "uss/master/master.hpp"
 
@@ -169,7 +169,7 @@ class UssRunner {
   rt::FlightRecorder recorder_;
 
   // Events of the bus thread; poll_event() drains them, then the keeper's.
-  rt::SpscQueue<rt::CycleEvent, kEventSlots> bus_events_;
+  SpscQueue<rt::CycleEvent, kEventSlots> bus_events_;
 
   // The bus thread (loop), its port and the keeper thread that (re)opens the port.
   rt::PortKeeper port_keeper_;

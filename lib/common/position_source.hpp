@@ -9,7 +9,7 @@
 
 #include "common/mono_time.hpp"
 
-namespace liftd::lift {
+namespace liftd {
 
 /// A source of the car's absolute position.
 class PositionSource {
@@ -43,4 +43,4 @@ class PositionFeed final : public PositionSource {
   std::atomic<std::int64_t> at_ns_{-1};  // -1: invalid
 };
 
-}  // namespace liftd::lift
+}  // namespace liftd

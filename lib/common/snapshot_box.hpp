@@ -8,16 +8,16 @@
 #include <cstdint>
 #include <type_traits>
 
-namespace liftd::rt {
+namespace liftd {
 
 /// Latest-value handoff between exactly one writer thread and one reader thread.
 template <class T>
-class Snapshot {
+class SnapshotBox {
   static_assert(std::is_nothrow_copy_assignable_v<T>, "T is copied on the real-time path");
 
  public:
   /// Starts with three default values; read() returns T{} until the first publish().
-  Snapshot() = default;
+  SnapshotBox() = default;
 
   /// Writer: stores a copy of `value` as the newest snapshot.
   void publish(const T& value) noexcept {
@@ -57,4 +57,4 @@ class Snapshot {
   std::uint8_t front_ = 2;               // reader's buffer (reader only)
 };
 
-}  // namespace liftd::rt
+}  // namespace liftd

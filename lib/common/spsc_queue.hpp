@@ -8,7 +8,7 @@
 #include <new>
 #include <type_traits>
 
-namespace liftd::rt {
+namespace liftd {
 
 /// Size of a cache line, to keep the producer's and the consumer's indices apart.
 inline constexpr std::size_t kCacheLine = 64;
@@ -62,4 +62,4 @@ class SpscQueue {
   alignas(kCacheLine) std::array<T, N> slots_{};
 };
 
-}  // namespace liftd::rt
+}  // namespace liftd

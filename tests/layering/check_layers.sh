@@ -1,0 +1,51 @@
+#!/bin/bash
+# The layers of lib/: which folders each folder's sources may include. A folder includes only
+# folders below it, so a drive kind's protocol never reaches the shared loops (lib/rt), the lift
+# rules (lib/lift) or the bus code (lib/can), and no drive kind includes another. The daemon,
+# the tools and the tests may include anything. Usage: check_layers.sh <source dir>; prints each
+# include that breaks the table and exits 1 if there is one.
+set -u
+src=${1:?usage: check_layers.sh <source dir>}
+
+# folder -> the folders it may include besides itself (lowest layer first).
+declare -A allowed=(
+  [common]=""
+  [drive]="common"
+  [io]="common"
+  [log]="common"
+  [service]="common log"
+  [can]="common io"
+  [lift]="common drive"
+  [rt]="common io log can"
+  [dcp]="common io log can drive lift rt"
+  [sch001]="common io log can drive lift rt"
+  [uss]="common io log can drive lift rt"
+  [api]="common drive log"
+  # The configuration checks floor names against the DCP display character set (DCP appendix A)
+  # until each drive kind validates its own section.
+  [config]="common drive log dcp"
+  [sim]="common io log can drive lift rt dcp sch001 uss"
+)
+
+status=0
+for dir in "$src"/lib/*/; do
+  folder=$(basename "$dir")
+  if [[ ! -v allowed[$folder] ]]; then
+    echo "lib/$folder: not in the layer table of $0; add it with the folders it may include"
+    status=1
+    continue
+  fi
+  while IFS= read -r hit; do
+    file=${hit%%:*}
+    included=$(sed -E 's/.*#include "([a-z0-9_]+)\/.*/\1/' <<<"${hit#*:}")
+    [[ $included == "$folder" ]] && continue
+    [[ -d $src/lib/$included ]] || continue  # not a lib/ folder (e.g. a system header)
+    if [[ " ${allowed[$folder]} " != *" $included "* ]]; then
+      echo "${file#"$src"/}: lib/$folder includes lib/$included (allowed: ${allowed[$folder]:-nothing})"
+      status=1
+    fi
+  done < <(grep -rHE '^#include "[a-z0-9_]+/' "$dir" --include='*.hpp' --include='*.cpp' \
+             | sed -E 's/^([^:]+):[0-9]*:?/\1:/')
+done
+[[ $status == 0 ]] && echo "layers ok: every lib/ folder includes only the folders below it"
+exit $status
