@@ -26,6 +26,7 @@
 
 #include "api/backend.hpp"
 #include "api/server.hpp"
+#include "common/position_source.hpp"
 #include "config/config.hpp"
 #include "daemon/daemon.hpp"
 #include "daemon/drives.hpp"
@@ -33,7 +34,6 @@
 #include "daemon/lift_core.hpp"
 #include "daemon/trace_files.hpp"
 #include "drive/drive.hpp"
-#include "common/position_source.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -137,8 +137,8 @@ class ControllerBackend : public api::Backend {
   template <typename Body>
   void send(Body&& body, api::Responder done, typename Pending::Completion complete = {}) {
     (void)post_command<typename Drive::Command>(controller_, pending_, std::forward<Body>(body),
-                                                std::move(done), Drive::kReplyGrace,
-                                                Drive::kThread, std::move(complete));
+                                                std::move(done), Drive::kReplyGrace, Drive::kThread,
+                                                std::move(complete));
   }
   /// Fails the requests the controller's thread did not answer in Drive::kReplyGrace.
   void expire_unanswered(MonoTime now) {

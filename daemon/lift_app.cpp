@@ -143,8 +143,8 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
                       std::max(1, config.api.state_rate_hz)),
       overruns_(rt::CycleConfig{}.period),
       wind_down_(
-          daemon, [this](bool force) { return backend_->send_shutdown(force); },
-          kShutdownDeadline, kDcpShutdownGrace) {
+          daemon, [this](bool force) { return backend_->send_shutdown(force); }, kShutdownDeadline,
+          kDcpShutdownGrace) {
   std::string device = config.drive.device;
   if (simulate_) {
     sim_ = std::make_unique<SimulatedLift>(config);

@@ -193,7 +193,8 @@ void LiftBackend::send(control::CommandBody body, api::Responder done,
 void LiftBackend::poll(MonoTime now) {
   control::CommandReply r;
   while (controller_.poll_reply(r)) pending_.answer(r);
-  pending_.expire(now, "the " + std::string(kCycleThread) + " thread did not answer; see the journal");
+  pending_.expire(now,
+                  "the " + std::string(kCycleThread) + " thread did not answer; see the journal");
 }
 
 void LiftBackend::key(int button, api::Responder done) {
@@ -238,7 +239,7 @@ void LiftBackend::power(api::PowerSetting setting, api::Responder done) {
 
 void LiftBackend::load(int percent, api::Responder done) {
   send(control::LinkCommand{dcp::LoadRequest{static_cast<std::uint16_t>(percent)}},
-          std::move(done));
+       std::move(done));
 }
 
 void LiftBackend::update_inputs(const api::InputUpdate& update, api::Responder done) {
@@ -319,8 +320,8 @@ void LiftBackend::fast_start(const std::string& action, const api::TravelArgs& a
     return;
   }
   send(control::FastStartCommand{action == "go" ? control::FastStartCommand::Action::Go
-                                                   : control::FastStartCommand::Action::Abort},
-          std::move(done));
+                                                : control::FastStartCommand::Action::Abort},
+       std::move(done));
 }
 
 void LiftBackend::calls(const std::string& action, std::optional<int> floor, api::Responder done) {

@@ -14,9 +14,9 @@
 
 #include "api/server.hpp"
 #include "can/encoder.hpp"
+#include "common/position_source.hpp"
 #include "config/config.hpp"
 #include "lift/inputs.hpp"
-#include "common/position_source.hpp"
 #include "sim/sim_io.hpp"
 
 namespace liftd::daemon {

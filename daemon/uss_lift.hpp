@@ -18,6 +18,7 @@
 
 #include "api/backend.hpp"
 #include "api/server.hpp"
+#include "common/position_source.hpp"
 #include "config/config.hpp"
 #include "daemon/controller_lift.hpp"
 #include "daemon/daemon.hpp"
@@ -25,13 +26,12 @@
 #include "daemon/lift_common.hpp"
 #include "daemon/lift_core.hpp"
 #include "io/pty.hpp"
-#include "common/position_source.hpp"
 #include "log/throttle.hpp"
-#include "uss/runner/uss_runner.hpp"
 #include "sim/sim_io.hpp"
 #include "sim/uss_slave_sim.hpp"
 #include "uss/drive/controller.hpp"
 #include "uss/master/master.hpp"
+#include "uss/runner/uss_runner.hpp"
 
 namespace liftd::daemon {
 

@@ -17,9 +17,9 @@
 #include <string_view>
 #include <variant>
 
+#include "common/defaults.hpp"
 #include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
-#include "common/defaults.hpp"
 #include "dcp/channel.hpp"
 #include "dcp/display.hpp"
 #include "dcp/frame.hpp"

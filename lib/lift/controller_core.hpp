@@ -31,13 +31,13 @@
 #include <string_view>
 
 #include "common/mono_time.hpp"
+#include "common/snapshot_box.hpp"
+#include "common/spsc_queue.hpp"
 #include "lift/calls.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/rules.hpp"
-#include "common/snapshot_box.hpp"
-#include "common/spsc_queue.hpp"
 
 namespace liftd::lift {
 

@@ -11,13 +11,13 @@
 #include <string>
 
 #include "common/mono_time.hpp"
+#include "common/spsc_queue.hpp"
 #include "io/serial_port.hpp"
 #include "rt/cycle_event.hpp"
 #include "rt/flight_recorder.hpp"
 #include "rt/histogram.hpp"
 #include "rt/port_keeper.hpp"
 #include "rt/rt_thread.hpp"
-#include "common/spsc_queue.hpp"
 
 namespace liftd::rt {
 

@@ -16,10 +16,10 @@
 #include <thread>
 
 #include "common/mono_time.hpp"
+#include "common/spsc_queue.hpp"
 #include "io/serial_port.hpp"
 #include "rt/cycle_event.hpp"
 #include "rt/rt_thread.hpp"
-#include "common/spsc_queue.hpp"
 
 namespace liftd::rt {
 

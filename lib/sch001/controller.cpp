@@ -39,8 +39,8 @@ std::string_view fault_text(FaultCode code) noexcept {
   return "internal";
 }
 
-Sch001Controller::Sch001Controller(const ControllerConfig& config,
-                                   const PositionSource& position, MonoTime start)
+Sch001Controller::Sch001Controller(const ControllerConfig& config, const PositionSource& position,
+                                   MonoTime start)
     : ControllerCore(core_config(config, start), config.hydraulic),
       config_(config),
       position_(position),

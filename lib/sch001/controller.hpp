@@ -19,13 +19,13 @@
 #include <vector>
 
 #include "can/socket.hpp"
-#include "common/mono_time.hpp"
 #include "common/defaults.hpp"
+#include "common/mono_time.hpp"
+#include "common/position_source.hpp"
 #include "lift/controller_core.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
-#include "common/position_source.hpp"
 #include "rt/can_runner.hpp"
 #include "sch001/card_link.hpp"
 #include "sch001/hydraulic_travel.hpp"
@@ -159,8 +159,7 @@ struct Sch001CoreTypes {
 class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore<Sch001CoreTypes> {
  public:
   /// Throws std::invalid_argument on a bad floor table.
-  Sch001Controller(const ControllerConfig& config, const PositionSource& position,
-                   MonoTime start);
+  Sch001Controller(const ControllerConfig& config, const PositionSource& position, MonoTime start);
 
   // ---- io thread: post(), poll_reply(), poll_event(), snapshot(), dropped_events() ----
   std::span<const std::int64_t> floors_mm() const noexcept { return config_.floors_mm; }

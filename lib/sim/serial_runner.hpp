@@ -22,8 +22,8 @@
 #include <vector>
 
 #include "common/mono_time.hpp"
-#include "io/serial_port.hpp"
 #include "common/snapshot_box.hpp"
+#include "io/serial_port.hpp"
 #include "sim/drive_sim.hpp"
 
 namespace liftd::sim {

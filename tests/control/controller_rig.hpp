@@ -235,7 +235,7 @@ struct Rig {
   lift::Inputs inputs;
   bool drop_replies = false;
   bool read_replies = true;  ///< false: the io thread does not read replies (a test does)
-  bool post_inputs = true;  ///< false: the input provider falls silent
+  bool post_inputs = true;   ///< false: the input provider falls silent
   lift::Inputs posted_inputs{};
   MonoTime posted_at{-1s};
   std::optional<std::uint8_t> last_status;

@@ -20,11 +20,11 @@
 #include "io/pty.hpp"
 #include "io/serial_port.hpp"
 #include "pty_line.hpp"
-#include "uss/runner/uss_runner.hpp"
 #include "sim/uss_slave_sim.hpp"
 #include "uss/master/master.hpp"
 #include "uss/pkw.hpp"
 #include "uss/receiver.hpp"
+#include "uss/runner/uss_runner.hpp"
 #include "uss/telegram.hpp"
 
 namespace liftd::rt {
@@ -32,14 +32,14 @@ namespace {
 
 using namespace std::chrono_literals;
 using uss::Master;
+using uss::MasterConfig;
+using uss::PkwLength;
+using uss::SlaveConfig;
 using uss::uss_serial_settings;
 using uss::UssHooks;
 using uss::UssRunner;
 using uss::UssRunnerConfig;
 using uss::UssRunnerStats;
-using uss::MasterConfig;
-using uss::PkwLength;
-using uss::SlaveConfig;
 
 constexpr std::uint32_t kBaud = 38400;
 

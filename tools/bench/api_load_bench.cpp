@@ -37,11 +37,11 @@
 #include "rt/cycle_runner.hpp"
 #include "rt/histogram.hpp"
 #include "rt/rt_thread.hpp"
-#include "uss/runner/uss_runner.hpp"
 #include "service/notify.hpp"
 #include "sim/uss_slave_sim.hpp"
 #include "support/api_client.hpp"
 #include "uss/master/master.hpp"
+#include "uss/runner/uss_runner.hpp"
 #include "uss_master/pty_line.hpp"
 
 namespace {

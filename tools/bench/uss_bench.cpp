@@ -34,9 +34,9 @@
 
 #include "io/pty.hpp"
 #include "rt/rt_thread.hpp"
-#include "uss/runner/uss_runner.hpp"
 #include "sim/uss_slave_sim.hpp"
 #include "uss/master/master.hpp"
+#include "uss/runner/uss_runner.hpp"
 #include "uss/timing.hpp"
 #include "uss_master/pty_line.hpp"
 

@@ -232,8 +232,7 @@ void DcpController::handle(const Command& command, travel::CycleInput& in) noexc
         } else if constexpr (std::is_same_v<T, RelevelCommand>) {
           handle_relevel(tag);
         } else if constexpr (std::is_same_v<T, InspectionCommand> ||
-                             std::is_same_v<T, CallCommand> ||
-                             std::is_same_v<T, InputsCommand>) {
+                             std::is_same_v<T, CallCommand> || std::is_same_v<T, InputsCommand>) {
           handle_shared(tag, body, in);
         } else if constexpr (std::is_same_v<T, FastStartCommand>) {
           if (!fast_start_armed_) {

@@ -18,15 +18,15 @@
 #include <variant>
 #include <vector>
 
-#include "common/mono_time.hpp"
 #include "common/defaults.hpp"
+#include "common/mono_time.hpp"
+#include "common/position_source.hpp"
 #include "dcp/master_link.hpp"
 #include "dcp/travel/controller.hpp"
 #include "lift/controller_core.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
-#include "common/position_source.hpp"
 #include "rt/cycle_runner.hpp"
 
 namespace liftd::control {

@@ -9,8 +9,8 @@
 #include <span>
 #include <string_view>
 
-#include "common/mono_time.hpp"
 #include "common/defaults.hpp"
+#include "common/mono_time.hpp"
 #include "dcp/frame.hpp"
 #include "lift/inputs.hpp"
 

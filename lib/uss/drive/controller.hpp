@@ -21,20 +21,20 @@
 #include <variant>
 #include <vector>
 
-#include "common/mono_time.hpp"
 #include "common/defaults.hpp"
+#include "common/mono_time.hpp"
+#include "common/position_source.hpp"
 #include "lift/controller_core.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
-#include "common/position_source.hpp"
-#include "uss/runner/uss_runner.hpp"
 #include "uss/drive/drive_profile.hpp"
 #include "uss/drive/lift_travel.hpp"
 #include "uss/master/master.hpp"
 #include "uss/pkw.hpp"
 #include "uss/pzd.hpp"
 #include "uss/receiver.hpp"
+#include "uss/runner/uss_runner.hpp"
 
 namespace liftd::uss {
 
@@ -213,8 +213,8 @@ class UssController final : public uss::UssHooks, public lift::ControllerCore<Us
  public:
   /// Throws std::invalid_argument on a bad floor table, a bad travel config or a drive address
   /// the master does not poll.
-  UssController(const UssControllerConfig& config, Master& master,
-                const PositionSource& position, MonoTime start);
+  UssController(const UssControllerConfig& config, Master& master, const PositionSource& position,
+                MonoTime start);
 
   // ---- io thread: post(), poll_reply(), poll_event(), snapshot(), dropped_events() ----
   std::span<const std::int64_t> floors_mm() const noexcept { return config_.floors_mm; }

@@ -22,8 +22,8 @@
 #include <cstdint>
 #include <string_view>
 
-#include "common/mono_time.hpp"
 #include "common/defaults.hpp"
+#include "common/mono_time.hpp"
 #include "uss/pzd.hpp"
 
 namespace liftd::uss {

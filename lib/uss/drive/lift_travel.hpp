@@ -36,8 +36,8 @@
 #include <optional>
 #include <string_view>
 
-#include "common/mono_time.hpp"
 #include "common/defaults.hpp"
+#include "common/mono_time.hpp"
 #include "lift/floors.hpp"
 #include "lift/inputs.hpp"
 #include "lift/travel_event.hpp"

@@ -79,9 +79,9 @@
 #include <span>
 #include <vector>
 
+#include "common/defaults.hpp"
 #include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
-#include "common/defaults.hpp"
 #include "uss/line.hpp"
 #include "uss/pkw.hpp"
 #include "uss/pzd.hpp"

@@ -56,8 +56,9 @@ UssRunner::UssRunner(UssRunnerConfig config, uss::Master& master, UssHooks& hook
       hooks_(hooks),
       input_check_(io::character_time(config_.serial)),
       recorder_(recorder_capacity(config_, master), config_.recorder_bytes),
-      port_keeper_(rt::PortKeeperConfig{config_.device_path, config_.serial, config_.reopen_backoff_min,
-                                    config_.reopen_backoff_max, add_line_counter_note}) {
+      port_keeper_(rt::PortKeeperConfig{config_.device_path, config_.serial,
+                                        config_.reopen_backoff_min, config_.reopen_backoff_max,
+                                        add_line_counter_note}) {
   if (config_.serial.baud != master_.config().baud) {
     throw std::invalid_argument("uss runner: the line runs at " +
                                 std::to_string(config_.serial.baud) + " baud, the master at " +
@@ -259,14 +260,15 @@ void UssRunner::receive(MonoTime sent_at) noexcept {
       break;
     case uss::ExchangeOutcome::BadReply:
       bump(counters_.bad_replies);
-      recorder_.record(now, rt::Direction::Rx, rt::record_flag::kReply | rt::record_flag::kBad, reply);
+      recorder_.record(now, rt::Direction::Rx, rt::record_flag::kReply | rt::record_flag::kBad,
+                       reply);
       break;
     case uss::ExchangeOutcome::Timeout:
       bump(counters_.reply_timeouts);
-      recorder_.record(
-          now, rt::Direction::Rx,
-          reply.empty() ? rt::record_flag::kMissing : rt::record_flag::kMissing | rt::record_flag::kPartial,
-          reply);
+      recorder_.record(now, rt::Direction::Rx,
+                       reply.empty() ? rt::record_flag::kMissing
+                                     : rt::record_flag::kMissing | rt::record_flag::kPartial,
+                       reply);
       break;
     case uss::ExchangeOutcome::NoReplyExpected:
       bump(counters_.no_reply_expected);

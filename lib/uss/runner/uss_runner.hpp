@@ -15,13 +15,13 @@
 #include <string>
 
 #include "common/mono_time.hpp"
+#include "common/spsc_queue.hpp"
 #include "io/serial_port.hpp"
 #include "rt/cycle_runner.hpp"
 #include "rt/flight_recorder.hpp"
 #include "rt/histogram.hpp"
 #include "rt/port_keeper.hpp"
 #include "rt/rt_thread.hpp"
-#include "common/spsc_queue.hpp"
 #include "uss/line.hpp"
 #include "uss/master/master.hpp"
 
