@@ -105,13 +105,8 @@ log::Level level_for(const control::ControllerEvent& event) {
       event.link.kind == dcp::LinkEventKind::HandshakeProblem) {
     return log::Level::warn;
   }
-  switch (event.kind) {
-    case control::ControllerEvent::Kind::FaultRaised:
-    case control::ControllerEvent::Kind::DriveError:
-      return log::Level::warn;
-    default:
-      return log::Level::info;
-  }
+  return event.kind == control::ControllerEvent::Kind::DriveError ? log::Level::warn
+                                                                  : log::Level::info;
 }
 
 }  // namespace
@@ -379,27 +374,14 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
       break;
     }
     case Kind::Travel: {
+      // As every lift reports its travels (daemon/lift_core); a DCP travel also tells its
+      // target changes, fast start and drive faults (DCP 4.1, 12, 9.1.6).
       const travel::Event& t = event.travel;
-      name = "travel";
-      log_event = "travel_" + std::string(travel::to_string(t.type));
-      text = "travel " + std::string(travel::to_string(t.type)) + " (" +
-             std::string(travel::to_string(t.kind)) + ")";
-      fields.push_back({"kind", std::string(travel::to_string(t.kind))});
-      if (t.type == travel::Event::Type::Aborted) {
-        text += ": " + std::string(travel::to_string(t.cause));
-        fields.push_back({"cause", std::string(travel::to_string(t.cause))});
-      }
-      if (t.position_mm) fields.push_back({"position_mm", std::to_string(*t.position_mm)});
-      if (t.position_mm) text += " at " + std::to_string(*t.position_mm) + " mm";
-      data = {{"event", std::string(travel::to_string(t.type))},
-              {"kind", std::string(travel::to_string(t.kind))},
-              {"cause", t.cause == travel::AbortCause::None
-                            ? nlohmann::json(nullptr)
-                            : nlohmann::json(std::string(travel::to_string(t.cause)))},
-              {"target_mm", t.target_mm},
-              {"position_mm",
-               t.position_mm ? nlohmann::json(*t.position_mm) : nlohmann::json(nullptr)}};
-      break;
+      report_travel(
+          *server_, travel::to_string(t.type), travel::to_string(t.kind),
+          t.cause == travel::AbortCause::None ? std::string_view{} : travel::to_string(t.cause),
+          t.type == travel::Event::Type::Aborted, t.target_mm, t.position_mm);
+      return;
     }
     case Kind::DriveError: {
       component = "dcp";
@@ -414,26 +396,15 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
     case Kind::FaultRaised:
     case Kind::FaultCleared: {
       const bool active = event.kind == Kind::FaultRaised;
-      component = "safety";
-      name = "fault";
-      log_event = active ? "fault_raised" : "fault_cleared";
-      text = std::string(active ? "fault: " : "fault cleared: ") +
-             std::string(control::fault_text(event.fault));
-      fields.push_back({"code", std::string(control::fault_code_name(event.fault))});
-      data = {{"code", std::string(control::fault_code_name(event.fault))},
-              {"text", std::string(control::fault_text(event.fault))},
-              {"active", active}};
+      report_fault(*server_, event.fault, control::fault_text(event.fault), active);
       if (active && event.fault == control::FaultCode::LinkFault) {
         dump_flight_recorder("link fault");
       }
-      break;
+      return;
     }
     case Kind::CallServed:
-      name = "call_served";
-      log_event = "call_served";
-      text = "call served: floor " + std::to_string(event.floor);
-      data = {{"floor", event.floor}};
-      break;
+      report_call_served(*server_, event.floor);
+      return;
   }
   log::event(level_for(event), component, log_event, fields, text);
   server_->publish(name, data);

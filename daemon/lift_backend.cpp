@@ -17,7 +17,6 @@ namespace liftd::daemon {
 namespace {
 
 using api::Result;
-using control::ReplyCode;
 
 // How long a client waits for the cycle to answer a command. The cycle answers travel
 // commands within a cycle and I-messages within dcp.request_timeout_ms; this only catches a

@@ -120,7 +120,10 @@ void report_travel(api::Server& server, std::string_view type, std::string_view 
     text += ": " + std::string(cause);
     fields.push_back({"cause", std::string(cause)});
   }
-  if (position_mm) text += " at " + std::to_string(*position_mm) + " mm";
+  if (position_mm) {
+    text += " at " + std::to_string(*position_mm) + " mm";
+    fields.push_back({"position_mm", std::to_string(*position_mm)});
+  }
   log::event(aborted ? log::Level::warn : log::Level::info, "travel", "travel_" + std::string(type),
              fields, text);
   server.publish(

@@ -219,7 +219,7 @@ class ControllerCore {
 
   void handle_shared(std::uint32_t tag, const InputsCommand& body,
                      typename Types::Input& in) noexcept {
-    take_inputs(body.inputs, in.now);
+    rules_.take_inputs(body.inputs, in.now);
     reply(tag, ReplyCode::Ok);
   }
   void handle_shared(std::uint32_t tag, const ShutdownCommand& body,
@@ -240,11 +240,11 @@ class ControllerCore {
   }
   void handle_shared(std::uint32_t tag, const InspectionCommand& body,
                      typename Types::Input& in) noexcept {
-    take_inspection(body, in.now);
+    rules_.take_inspection(body.on, body.direction, in.now);
     reply(tag, ReplyCode::Ok);
   }
   void handle_shared(std::uint32_t tag, const CallCommand& body, typename Types::Input&) noexcept {
-    const Answer a = answer_call(body);
+    const Answer a = LiftRules::answer_call(lift_, body.add, body.floor, shutting_down_);
     reply(tag, a.code, a.detail);
   }
 
@@ -347,11 +347,6 @@ class ControllerCore {
   /// The start grace (start_grace_over) counts from `now`: for a controller whose loop starts
   /// later than it was made.
   void restart_start_grace(MonoTime now) noexcept { rules_.start(now); }
-  /// The provider's inputs and the API's inspection as commands carry them.
-  void take_inputs(const Inputs& inputs, MonoTime now) noexcept { rules_.take_inputs(inputs, now); }
-  void take_inspection(const InspectionCommand& body, MonoTime now) noexcept {
-    rules_.take_inspection(body.on, body.direction, now);
-  }
   /// `floor` left the calls queue because the car is there (event call_served).
   void call_served(std::size_t floor, MonoTime now) noexcept {
     typename Types::Event served;
@@ -360,10 +355,7 @@ class ControllerCore {
     served.floor = floor;
     push_event(served);
   }
-  /// The answer to a calls add or cancel (LiftRules::answer_call), not yet sent.
-  Answer answer_call(const CallCommand& body) noexcept {
-    return LiftRules::answer_call(lift_, body.add, body.floor, shutting_down_);
-  }
+
   /// The floor of the first call to travel to now, if any: none while a run is in progress or
   /// inspection is on; a call to the floor the car is at is served at once.
   std::optional<std::size_t> next_call(const typename Types::Input& in) noexcept {

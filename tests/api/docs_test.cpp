@@ -193,7 +193,7 @@ TEST(ApiDocs, EventListMatchesWhatTheDaemonPublishes) {
   for (const char* lift : {"daemon/lift_app.cpp", "daemon/hydraulic_lift.cpp",
                            "daemon/uss_lift.cpp", "daemon/lift_core.cpp"}) {
     const std::string app = read_source(lift);
-    for (const auto& pattern : {R"re(\bname = "([a-z_]+)";)re", R"re(publish\("([a-z_]+)")re"}) {
+    for (const auto& pattern : {R"re(\bname = "([a-z_]+)";)re", R"re(publish\(\s*"([a-z_]+)")re"}) {
       published.merge(matches(app, pattern));
     }
   }

@@ -2,7 +2,8 @@
 // kinds, each as `liftd --simulate` (docs/api.md: `ready` when the drive lets a travel start).
 // The simulated drive stops being ready (`sim not_ready`: DCP S0 = 0, SCH001 RDY = 0, USS local
 // control by status word bit 9 = 0): the state is `not_ready` in `status` and in the watch
-// stream's `state` event, and a travel is refused `not_ready`; ready again, a travel starts.
+// stream's `state` event, and a travel is refused `not_ready`; ready again, a travel starts. A
+// travel that a fault ends is reported alike and empties the calls queue on every kind.
 #include <gtest/gtest.h>
 
 #include <ostream>
@@ -91,6 +92,39 @@ TEST_P(DriveStateTest, NotReadyWhileTheDriveIsNotReadyAndATravelIsRefusedExactly
   // USS reply): it is stopped here, and the state follows it.
   EXPECT_TRUE(lift_->call({{"cmd", "stop"}}).value("ok", false));
   EXPECT_TRUE(lift_->wait_travel_end(40s).is_object()) << lift_->log();
+}
+
+TEST_P(DriveStateTest, ATravelEndedByAFaultIsOneWarningAndEmptiesTheCallsQueue) {
+  // docs/api.md `calls`: a travel that ends early empties the queue, whoever dispatches the lift
+  // decides again. Before, the hydraulic and USS lifts kept it and set off by themselves once
+  // the fault cleared; the DCP lift journalled the aborted travel as info, the others as a
+  // warning.
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump();
+  for (int floor : {2, 1}) {
+    const json added = lift_->call({{"cmd", "calls"}, {"action", "add"}, {"floor", floor}});
+    ASSERT_TRUE(added.value("ok", false)) << added.dump();
+  }
+  ASSERT_TRUE(lift_->wait_travel("started").is_object()) << lift_->log();
+  ASSERT_TRUE(lift_->call({{"cmd", "sim"}, {"action", "safety_chain_open"}}).value("ok", false));
+  const json ended = lift_->wait_travel_end(20s);
+  ASSERT_TRUE(ended.is_object()) << lift_->log();
+  EXPECT_EQ(ended["data"]["event"], "aborted") << ended.dump();
+  EXPECT_TRUE(ended["data"]["cause"].is_string()) << ended.dump();
+  EXPECT_TRUE(lift_->status()["travel"]["calls"].empty()) << lift_->status().dump();
+  const std::string log = lift_->log();
+  const auto line = log.find("WARN  travel: travel aborted (");
+  ASSERT_NE(line, std::string::npos) << log;
+  const std::string aborted = log.substr(line, log.find('\n', line) - line);
+  EXPECT_NE(aborted.find("[event=travel_aborted kind="), std::string::npos) << aborted;
+  EXPECT_NE(aborted.find(" cause="), std::string::npos) << aborted;
+  EXPECT_NE(aborted.find(" position_mm="), std::string::npos) << aborted;
+
+  // The chain closes again: the car stays where it is, the dropped calls start nothing.
+  ASSERT_TRUE(lift_->call({{"cmd", "sim"}, {"action", "safety_chain_open"}, {"on", false}})
+                  .value("ok", false));
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump() << lift_->log();
+  EXPECT_FALSE(lift_->wait_travel("started", 2s).is_object()) << lift_->log();
+  EXPECT_EQ(lift_->status()["travel"]["state"], "idle");
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryDriveKind, DriveStateTest, ::testing::ValuesIn(kCases),

@@ -78,7 +78,6 @@ lift::ControllerCoreConfig core_config(const ControllerConfig& config) {
 DcpController::DcpController(const ControllerConfig& config, const PositionSource& position)
     : ControllerCore(core_config(config), config.travel),
       config_(config),
-      floors_mm_(config.floors_mm),
       position_(position),
       link_(config.link) {
   if (auto bad = travel::validate(config.travel)) {
@@ -302,7 +301,7 @@ void DcpController::handle_travel(std::uint32_t tag, const TravelCommand& cmd) n
     reply(tag, ReplyCode::NotReady, abort_text(AbortCause::LinkDown));
     return;
   }
-  const std::int64_t target_mm = floors_mm_[cmd.floor];
+  const std::int64_t target_mm = lift_.floors().level_mm(cmd.floor);
   const dcp::Protocol protocol = *link_.protocol();
   const TravelKind running = travel_.active_kind();
   if (running == TravelKind::Dcp4Distance && !cmd.fast_start) {
@@ -401,7 +400,7 @@ void DcpController::handle_stop(std::uint32_t tag) noexcept {
     std::optional<std::int64_t> level;
     const bool before_decel_point = dcp4_moving || dcp3_state != travel::Dcp3Travel::State::Creep;
     const auto floor = before_decel_point ? next_stop_floor() : std::nullopt;
-    if (floor) level = travel_.stop_at(floors_mm_[*floor]);
+    if (floor) level = travel_.stop_at(lift_.floors().level_mm(*floor));
     // No nearer floor within reach (or no position): the car goes on to its own target.
     if (!level && dcp4_moving) level = travel_.dcp4().target_mm();
     if (!level && dcp3_moving) level = travel_.dcp3().target_mm();
@@ -461,7 +460,7 @@ void DcpController::handle_relevel(std::uint32_t tag) noexcept {
     return;
   }
   travel::TravelRequest request;
-  request.target_mm = floors_mm_[*nearest];
+  request.target_mm = lift_.floors().level_mm(*nearest);
   request.kind =
       *link_.protocol() == dcp::Protocol::Dcp4 ? TravelKind::Dcp4Relevel : TravelKind::Relevel;
   request.speed = dcp::Speed::VN;

@@ -205,7 +205,7 @@ class DcpController final : public rt::CycleEngine, public lift::ControllerCore<
 
   // ---- io thread: post(), poll_reply(), poll_event(), snapshot(), dropped_events() ----
   /// Floor levels as configured.
-  std::span<const std::int64_t> floors_mm() const noexcept { return floors_mm_; }
+  std::span<const std::int64_t> floors_mm() const noexcept { return config_.floors_mm; }
 
   // ---- rt::CycleEngine (cycle thread) ----
   std::span<const std::uint8_t> frame_to_send(MonoTime now) noexcept override;
@@ -249,7 +249,6 @@ class DcpController final : public rt::CycleEngine, public lift::ControllerCore<
   dcp::Speed choose_dcp3_speed(std::int64_t distance_mm) const noexcept;
 
   ControllerConfig config_;
-  std::vector<std::int64_t> floors_mm_;
   const PositionSource& position_;
   dcp::MasterLink link_;
 
