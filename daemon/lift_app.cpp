@@ -355,10 +355,8 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
   std::string text;
   std::string log_event;
   log::Fields fields;  // journal fields: the catalog (MESSAGE_ID) keys on code and cause
-  std::string component = "travel";
   switch (event.kind) {
     case Kind::Link: {
-      component = "dcp";
       name = "link";
       log_event = "link_" + snake(dcp::to_string(event.link.kind));
       text = std::string(dcp::to_string(event.link.kind)) + ": " + std::string(event.link.detail);
@@ -384,7 +382,6 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
       return;
     }
     case Kind::DriveError: {
-      component = "dcp";
       name = "drive_error";
       log_event = "drive_error";
       text = "drive error: " + dcp::to_utf8(event.drive_error.chars());
@@ -406,7 +403,8 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
       report_call_served(*server_, event.floor);
       return;
   }
-  log::event(level_for(event), component, log_event, fields, text);
+  // What only a DCP drive tells: its link and its error texts (DCP 5.11).
+  log::event(level_for(event), "dcp", log_event, fields, text);
   server_->publish(name, data);
 }
 
