@@ -206,7 +206,7 @@ class ControllerLift : public LiftRunner {
         config_(config),
         simulate_(simulate),
         socket_path_(config.api.socket),
-        poll_timer_(daemon.io(), kPollPeriod),
+        wake_(daemon.io(), kFallbackPoll),
         publisher_(config.api.state_rate_hz, std::move(continuous)),
         wind_down_(
             daemon, [this](bool force) { return backend_->send_shutdown(force); },
@@ -228,6 +228,7 @@ class ControllerLift : public LiftRunner {
   /// probe and the status line while running.
   void register_parts(std::unique_ptr<Backend> backend, const std::string& running_status) {
     backend_ = std::move(backend);
+    runner_->set_notify_fd(wake_.fd());  // its news wakes poll() at once
     server_ = std::make_unique<api::Server>(daemon_.io(), *backend_, api_server_config(config_),
                                             api_log_sink());
     if (sim_) {
@@ -311,20 +312,20 @@ class ControllerLift : public LiftRunner {
       return false;
     }
     journal_started();
-    poll_timer_.start([this] { poll(); });
+    wake_.start([this] { poll(); });
     return true;
   }
 
   void stop_runner() {
-    if (!poll_timer_.running()) return;
-    poll_timer_.stop();
+    if (!wake_.running()) return;
+    wake_.stop();
     runner_->stop();
     poll();  // the last events
   }
 
-  /// The io thread's step every kPollPeriod: the simulated machine's inputs every
-  /// kSimInputsPeriod, the controller's replies and events (and the runner's own, where it has
-  /// them), the `state` event, the wind-down's check.
+  /// The io thread's step whenever the thread has news (and every kFallbackPoll): the simulated
+  /// machine's inputs every kSimInputsPeriod, the controller's replies and events (and the
+  /// runner's own, where it has them), the `state` event, the wind-down's check.
   void poll() {
     const MonoTime now = mono_now();
     if (sim_ && now - last_sim_inputs_ >= kSimInputsPeriod) {
@@ -346,7 +347,7 @@ class ControllerLift : public LiftRunner {
   }
 
   void wind_down(std::function<void()> done) {
-    if (!poll_timer_.running()) {
+    if (!wake_.running()) {
       done();
       return;
     }
@@ -356,7 +357,7 @@ class ControllerLift : public LiftRunner {
   }
 
   std::string socket_path_;
-  PollTimer poll_timer_;
+  ThreadWake wake_;
   StatePublisher publisher_;
   MonoTime last_sim_inputs_{};
   WindDown wind_down_;

@@ -27,9 +27,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// The cycle thread wakes the io thread after every cycle; this timer only matters if the cycle
-// thread stalls (API replies still time out, the clock and simulated inputs still go out).
-constexpr auto kFallbackPoll = 100ms;
 // After a forced service stop: time for one DCP 7.3 supervision window (10 x 15 ms) of B0-off
 // frames.
 constexpr auto kDcpShutdownGrace = std::chrono::milliseconds(500);
@@ -132,10 +129,8 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
       simulate_(simulate),
       socket_path_(config.api.socket),
       runtime_dir_(default_runtime_dir(config)),
-      cycle_wake_(daemon.io()),
-      poll_timer_(daemon.io()),
-      state_interval_(std::chrono::nanoseconds(std::chrono::seconds(1)) /
-                      std::max(1, config.api.state_rate_hz)),
+      wake_(daemon.io(), kFallbackPoll),
+      publisher_(config.api.state_rate_hz),
       overruns_(rt::CycleConfig{}.period),
       wind_down_(
           daemon, [this](bool force) { return backend_->send_shutdown(force); }, kShutdownDeadline,
@@ -166,13 +161,7 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
   }
   controller_ = std::make_unique<control::DcpController>(dcp_controller_config(config), *position_);
   runner_ = std::make_unique<rt::CycleRunner>(cycle_config(config, device), *controller_);
-  cycle_wake_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
-  if (cycle_wake_fd_ < 0) {
-    throw std::runtime_error(std::string("cannot create the cycle's wake-up eventfd: ") +
-                             std::strerror(errno));
-  }
-  cycle_wake_.assign(cycle_wake_fd_);  // closed by cycle_wake_, after the cycle has stopped
-  runner_->set_cycle_notify_fd(cycle_wake_fd_);
+  runner_->set_notify_fd(wake_.fd());
   backend_ = std::make_unique<LiftBackend>(
       config, *controller_, *runner_,
       config.position.source == config::PositionSource::api ? position_feed_.get() : nullptr,
@@ -242,8 +231,7 @@ bool LiftApp::start_cycle() {
              "DCP cycle running every 15 ms on " + runner_->config().device_path);
   running_ = true;
   backend_->send_clock(std::chrono::system_clock::now());
-  wait_for_cycle();
-  schedule_poll();
+  wake_.start([this] { poll(); });
   return true;
 }
 
@@ -269,8 +257,7 @@ void LiftApp::check_wind_down(MonoTime now) {
 void LiftApp::stop_cycle() {
   if (!running_) return;
   running_ = false;
-  poll_timer_.cancel();
-  cycle_wake_.cancel();
+  wake_.stop();
   runner_->stop();
 }
 
@@ -288,27 +275,6 @@ bool LiftApp::start_api() {
 
 void LiftApp::stop_api() {
   if (server_) server_->stop();
-}
-
-void LiftApp::wait_for_cycle() {
-  cycle_wake_.async_wait(
-      asio::posix::stream_descriptor::wait_read, [this](const asio::error_code& ec) {
-        if (ec || !running_) return;
-        std::uint64_t count = 0;
-        // Resets the eventfd; EAGAIN (already read) is harmless.
-        [[maybe_unused]] const ssize_t n = ::read(cycle_wake_fd_, &count, sizeof count);
-        poll();
-        wait_for_cycle();
-      });
-}
-
-void LiftApp::schedule_poll() {
-  poll_timer_.expires_after(kFallbackPoll);
-  poll_timer_.async_wait([this](const asio::error_code& ec) {
-    if (ec || !running_) return;
-    poll();
-    schedule_poll();
-  });
 }
 
 void LiftApp::poll() {
@@ -414,31 +380,7 @@ void LiftApp::publish_state_if_changed(MonoTime now) {
     last_display_version_ = s.display_version;
     server_->publish("display", api::to_json(backend_->display()));
   }
-  DiscreteState d;
-  d.link = s.link;
-  d.status_byte = s.status_byte;
-  d.floor = s.floor;
-  d.travel_kind = s.travel_kind;
-  d.direction = s.direction;
-  d.target_floor = s.target_floor;
-  d.brake_open = s.brake_open;
-  d.contactors_on = s.contactors_on;
-  d.command = s.command;
-  d.call_count = s.call_count;
-  d.calls = s.calls;
-  d.faults = s.faults;
-  d.drive_allows_travel = s.drive_allows_travel;
-  const ContinuousState c{
-      s.position_mm ? std::optional<std::int64_t>(*s.position_mm / 10) : std::nullopt, s.data_word};
-  const bool discrete_changed = !last_discrete_ || d != *last_discrete_;
-  if (!discrete_changed) {
-    // Position and speed only: coalesced to api.state_rate_hz.
-    if (c == last_continuous_ || now - last_state_publish_ < state_interval_) return;
-  }
-  last_discrete_ = d;
-  last_continuous_ = c;
-  last_state_publish_ = now;
-  server_->publish("state", api::to_json(backend_->status()));
+  publisher_.publish(*server_, backend_->status(), now);
 }
 
 std::string LiftApp::apply_config(const config::Config& next) {

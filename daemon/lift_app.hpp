@@ -58,8 +58,6 @@ class LiftApp final : public LiftRunner {
   void stop_cycle();
   bool start_api();
   void stop_api();
-  void schedule_poll();
-  void wait_for_cycle();
   void poll();
   void publish_state_if_changed(MonoTime now);
   void log_cycle_events();
@@ -86,42 +84,13 @@ class LiftApp final : public LiftRunner {
   std::unique_ptr<LiftBackend> backend_;
   std::unique_ptr<api::Server> server_;
 
-  // What a watcher learns at once when it changes (DCP status bits, link, travel, faults,
-  // calls, outputs), as opposed to position and speed, which are coalesced.
-  struct DiscreteState {
-    dcp::LinkState link = dcp::LinkState::Down;
-    std::optional<std::uint8_t> status_byte;
-    std::optional<std::size_t> floor;
-    travel::TravelKind travel_kind = travel::TravelKind::None;
-    lift::Direction direction = lift::Direction::None;
-    std::optional<std::size_t> target_floor;
-    bool brake_open = false;
-    bool contactors_on = false;
-    std::uint8_t command = 0;
-    std::size_t call_count = 0;
-    std::array<std::uint8_t, control::kMaxSnapshotCalls> calls{};
-    std::array<bool, static_cast<std::size_t>(control::FaultCode::kCount)> faults{};
-    bool drive_allows_travel = false;  ///< drive.state ready / not_ready
-    bool operator==(const DiscreteState&) const = default;
-  };
-  struct ContinuousState {
-    std::optional<std::int64_t> position_cm;  // 10 mm steps
-    std::uint16_t data_word = 0;              // speed or distance, as the drive reports
-    bool operator==(const ContinuousState&) const = default;
-  };
-
-  int cycle_wake_fd_ = -1;                     // eventfd the cycle thread bumps
-  asio::posix::stream_descriptor cycle_wake_;  // the io thread's view of it
-  asio::steady_timer poll_timer_;              // safety net if the cycle stalls
-  std::chrono::nanoseconds state_interval_;    // api.state_rate_hz
+  ThreadWake wake_;           ///< poll() after every cycle (the cycle thread's eventfd)
+  StatePublisher publisher_;  // `state` events, as on every lift
   rt::OverrunJournal overruns_;
   bool running_ = false;
   std::uint64_t last_progress_ = 0;
-  MonoTime last_state_publish_{};
   MonoTime last_clock_{};
   MonoTime last_sim_inputs_{};
-  std::optional<DiscreteState> last_discrete_;
-  ContinuousState last_continuous_{};
   std::uint32_t last_display_version_ = 0;
   dcp::LinkState last_link_ = dcp::LinkState::Down;
   WindDown wind_down_;  ///< a service stop waiting for the car to rest, as on every lift

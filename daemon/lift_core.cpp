@@ -1,5 +1,12 @@
 #include "daemon/lift_core.hpp"
 
+#include <sys/eventfd.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
 #include "daemon/lift_common.hpp"
 #include "log/log.hpp"
 
@@ -24,23 +31,48 @@ void StatePublisher::publish(api::Server& server, api::StatusSnapshot status, Mo
   last_publish_ = now;
 }
 
-void PollTimer::start(std::function<void()> poll) {
+ThreadWake::ThreadWake(asio::io_context& io, std::chrono::nanoseconds fallback)
+    : fd_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)),
+      news_(io),
+      fallback_timer_(io),
+      fallback_(fallback) {
+  if (fd_ < 0) {
+    throw std::runtime_error(std::string("cannot create the io thread's wake-up eventfd: ") +
+                             std::strerror(errno));
+  }
+  news_.assign(fd_);
+}
+
+void ThreadWake::start(std::function<void()> poll) {
   poll_ = std::move(poll);
   running_ = true;
-  arm();
+  wait_for_news();
+  arm_fallback();
 }
 
-void PollTimer::stop() {
+void ThreadWake::stop() {
   running_ = false;
-  timer_.cancel();
+  news_.cancel();
+  fallback_timer_.cancel();
 }
 
-void PollTimer::arm() {
-  timer_.expires_after(period_);
-  timer_.async_wait([this](const std::error_code& ec) {
+void ThreadWake::wait_for_news() {
+  news_.async_wait(asio::posix::stream_descriptor::wait_read, [this](const asio::error_code& ec) {
+    if (ec || !running_) return;
+    std::uint64_t count = 0;
+    // Resets the eventfd; EAGAIN (nothing since the last read) is harmless.
+    [[maybe_unused]] const ssize_t n = ::read(fd_, &count, sizeof count);
+    poll_();
+    wait_for_news();
+  });
+}
+
+void ThreadWake::arm_fallback() {
+  fallback_timer_.expires_after(fallback_);
+  fallback_timer_.async_wait([this](const asio::error_code& ec) {
     if (ec || !running_) return;
     poll_();
-    arm();
+    arm_fallback();
   });
 }
 

@@ -1,7 +1,7 @@
-// The daemon side every drive kind's lift shares once its controller runs on a real-time thread
-// behind lock-free queues (SCH001 and USS; the DCP lift keeps its own richer copies for the
-// display and the DCP status byte): replies waiting for their controller, the `state` events,
-// the service stop that lands a moving car first, and the drive-neutral half of `status`.
+// The daemon side every drive kind's lift shares, its controller running on a real-time thread
+// behind lock-free queues: the io thread's wake-up on that thread's news, replies waiting for
+// their controller, the `state` events, the service stop that lands a moving car first, and the
+// reports of travels, faults and served calls.
 #pragma once
 
 #include <chrono>
@@ -29,9 +29,10 @@
 namespace liftd::daemon {
 
 // Every lift's io thread alike.
-/// The io thread's look at replies, events and the watch stream of a lift whose controller
-/// runs on a real-time thread of its own (SCH001, USS).
-inline constexpr std::chrono::milliseconds kPollPeriod{10};
+/// The io thread looks at a lift's replies, events and watch stream when its real-time thread
+/// says there is news (an eventfd the thread bumps after each cycle, frame or exchange), and at
+/// least this often should the thread stall or the bus fall silent.
+inline constexpr std::chrono::milliseconds kFallbackPoll{100};
 /// The simulated I/O board reports its inputs this often (well inside inputs.timeout_ms).
 inline constexpr std::chrono::milliseconds kSimInputsPeriod{100};
 /// A service stop during a travel waits this long for the car to come to rest at a floor: a
@@ -57,19 +58,29 @@ class StatePublisher {
   MonoTime last_publish_{};
 };
 
-/// The io thread's periodic poll of a lift (replies, events, the watch stream), running between
-/// start() and stop().
-class PollTimer {
+/// Wakes the io thread for a lift's real-time thread: `poll` runs on the io thread each time
+/// the thread bumps fd() (CycleRunner, CanRunner and UssRunner take it as their notify fd) and
+/// every kFallbackPoll besides, between start() and stop().
+class ThreadWake {
  public:
-  PollTimer(asio::io_context& io, std::chrono::nanoseconds period) : timer_(io), period_(period) {}
+  /// Throws std::runtime_error if the eventfd cannot be made.
+  ThreadWake(asio::io_context& io, std::chrono::nanoseconds fallback);
+  ThreadWake(const ThreadWake&) = delete;
+  ThreadWake& operator=(const ThreadWake&) = delete;
+  /// The eventfd the real-time thread writes to (open until this object is destroyed: stop
+  /// the thread first).
+  int fd() const noexcept { return fd_; }
   void start(std::function<void()> poll);
   void stop();
   bool running() const noexcept { return running_; }
 
  private:
-  void arm();
-  asio::steady_timer timer_;
-  std::chrono::nanoseconds period_;
+  void wait_for_news();
+  void arm_fallback();
+  int fd_ = -1;
+  asio::posix::stream_descriptor news_;  ///< owns fd_
+  asio::steady_timer fallback_timer_;
+  std::chrono::nanoseconds fallback_;
   std::function<void()> poll_;
   bool running_ = false;
 };

@@ -131,14 +131,12 @@ void CanRunner::loop() {
     (void)::poll(fds.data(), fds.size(), std::max(1, timeout_ms));
     MonoTime now = mono_now();
     if (!socket_ && !adopted_ && now >= reopen_at_) (void)open_endpoint(now);
-    bool handled = false;
     // Every record waiting, each answered before the next is read: the card's frames come
     // 100 ms apart, so this loop is short.
     for (int i = 0; socket_ && i < 64; ++i) {
       const can::Received r = socket_->read();
       now = mono_now();
       if (r.kind == can::Received::Kind::Nothing) break;
-      handled = true;
       if (r.kind != can::Received::Kind::Closed && r.kind != can::Received::Kind::Failed) {
         reopen_delay_ = MonoTime{};  // the endpoint carries records: a new failure starts over
       }
@@ -177,7 +175,7 @@ void CanRunner::loop() {
       dropped_.store(d.filtered + d.malformed + d.extended, std::memory_order_relaxed);
     }
     engine_.on_tick(mono_now());
-    if (handled) notify();
+    notify();  // a frame's answer or a tick's timeout may have queued news for the io thread
   }
   socket_.reset();
 }

@@ -83,7 +83,8 @@ class CanRunner {
   /// Frames sent and received; each record is the 11-bit identifier (2 bytes, big-endian)
   /// followed by the data bytes.
   const FlightRecorder& recorder() const noexcept { return recorder_; }
-  /// An eventfd (or -1) bumped after every frame handled, so the io thread wakes at once.
+  /// An eventfd (or -1) bumped after every loop pass (frames answered, or a tick), so the io
+  /// thread wakes at once for what the engine queued.
   void set_notify_fd(int fd) noexcept { notify_fd_ = fd; }
 
  private:

@@ -160,7 +160,7 @@ class CycleRunner {
   /// Wakes another thread after every cycle: the cycle thread adds 1 to this eventfd (created
   /// non-blocking; one write(2), no allocation, never blocks). -1 (default) = none. Set before
   /// start(); the caller owns the descriptor and keeps it open until stop().
-  void set_cycle_notify_fd(int fd) noexcept { notify_fd_ = fd; }
+  void set_notify_fd(int fd) noexcept { notify_fd_ = fd; }
   /// Any thread: true while a port is open on the cycle thread.
   bool port_ready() const noexcept { return port_keeper_.port_ready(); }
   /// The configuration in use.

@@ -117,7 +117,7 @@ class UssRunner {
   /// Any thread: goes up after every exchange and every idle tick (systemd watchdog).
   std::uint64_t progress() const noexcept { return progress_.load(std::memory_order_relaxed); }
   /// An eventfd bumped after every exchange (one write(2), never blocks). Set before start().
-  void set_cycle_notify_fd(int fd) noexcept { notify_fd_ = fd; }
+  void set_notify_fd(int fd) noexcept { notify_fd_ = fd; }
   /// Any thread: true while a port is open on the bus thread.
   bool port_ready() const noexcept { return port_keeper_.port_ready(); }
   /// The configuration in use.
