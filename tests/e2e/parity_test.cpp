@@ -1,0 +1,346 @@
+// One behaviour, one test: the lift scenarios every drive kind must show alike, each run against
+// `liftd --simulate` of the three kinds (DCP drive, SCH001 hydraulic card, USS drive). A kind may
+// differ only where the table below says so (its refusal text, the journal line of its drive,
+// whether a drive fault needs `drive_reset`), never in what a dispatcher sees of calls, travels,
+// faults, stops, the service stop, inspection, relevelling, the flight recorder or a reload.
+//
+// `drive.state` follows what a travel command is answered (docs/api.md: `ready` when the drive
+// lets a travel start): the simulated drive stops being ready (`sim not_ready`: DCP S0 = 0,
+// SCH001 RDY = 0, USS local control by status word bit 9 = 0), the state is `not_ready` in
+// `status` and in the watch stream's `state` event, and a travel is refused `not_ready`.
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <fstream>
+#include <ostream>
+
+#include "e2e/harness.hpp"
+
+namespace liftd::e2e {
+namespace {
+
+struct DriveCase {
+  const char* name;        ///< the test's name: the drive kind (and its journal component)
+  json config;             ///< merged into the lift's config
+  const char* refusal;     ///< what the refused travel's message says
+  const char* journal;     ///< what the journal says of the drive not being ready ("" for nothing)
+  bool fault_needs_reset;  ///< the drive latches its fault until `drive_reset` (USS C 5.2.1)
+  int far_floor;           ///< a floor far enough for a stop mid-travel
+};
+
+void PrintTo(const DriveCase& c, std::ostream* out) {
+  *out << c.name;
+}
+
+// Three floors 1200 mm apart for the hydraulic and USS cars, as in their own e2e tests.
+const json kThreeFloors = json::array({{{"name", "0"}, {"level_mm", 0}},
+                                       {{"name", "1"}, {"level_mm", 1200}},
+                                       {{"name", "2"}, {"level_mm", 2400}}});
+
+const DriveCase kCases[] = {
+    {"dcp", json::object(), "drive not ready (S0 = 0)", "", false, 4},
+    {"sch001",
+     {{"drive", {{"kind", "sch001"}}},
+      {"floors", kThreeFloors},
+      {"sch001", {{"star_delta_ms", 500}, {"slowdown_up_mm", 300}, {"slowdown_down_mm", 350}}}},
+     "RDY = 0",
+     "[event=card_fault relays=",
+     false,
+     2},
+    {"uss",
+     {{"drive", {{"kind", "uss"}}},
+      {"floors", kThreeFloors},
+      {"travel", {{"dcp3_decel_distance_mm", {{"V4", 700}, {"V3", 500}}}}},
+      {"uss", {{"speeds", {{"V0", 10}, {"VN", 3}, {"VI", 30}, {"V3", 63}, {"V4", 100}}}}}},
+     "local control",
+     "in local control (status word bit 9 = 0): no travel starts",
+     true,
+     2},
+};
+
+class LiftParity : public ::testing::TestWithParam<DriveCase> {
+ protected:
+  void SetUp() override {
+    lift_ = std::make_unique<Lift>(std::string("parity-") + GetParam().name, 4, json::object(),
+                                   std::vector<std::string>{}, GetParam().config);
+    ASSERT_EQ(lift_->setup_error(), "") << lift_->log();
+  }
+  json sim_not_ready(bool on) {
+    return lift_->call({{"cmd", "sim"}, {"action", "not_ready"}, {"on", on}});
+  }
+  /// The next `state` event whose drive.state is `state` (null after 10 s).
+  json state_event(const std::string& state) {
+    return lift_->api().wait_event(
+        "state", [&](const json& d) { return d["drive"]["state"] == state; }, 10s);
+  }
+  /// A travel to the table's far floor, started (the watch stream said so).
+  void start_far_travel() {
+    ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump();
+    const json r = lift_->call({{"cmd", "travel"}, {"floor", GetParam().far_floor}});
+    ASSERT_TRUE(r.value("ok", false)) << r.dump();
+    ASSERT_TRUE(lift_->wait_travel("started").is_object()) << lift_->log();
+    // Well under way: a stop now has a moving car to land.
+    ASSERT_TRUE(lift_->wait_moved(0, 300)) << lift_->status().dump() << lift_->log();
+  }
+  json calls(const char* action, int floor) {
+    return lift_->call({{"cmd", "calls"}, {"action", action}, {"floor", floor}});
+  }
+  std::unique_ptr<Lift> lift_;
+};
+
+TEST_P(LiftParity, NotReadyWhileTheDriveIsNotReadyAndATravelIsRefusedExactlyThen) {
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump();
+  ASSERT_TRUE(sim_not_ready(true).value("ok", false));
+  // Before: `ready` here on every kind, while every travel was refused.
+  ASSERT_TRUE(lift_->wait_drive_state("not_ready")) << lift_->status().dump() << lift_->log();
+  EXPECT_TRUE(state_event("not_ready").is_object()) << "the watch stream did not say it";
+  const json s = lift_->status();
+  EXPECT_TRUE(s["faults"].empty()) << "a drive that is not ready is no fault: " << s.dump();
+  EXPECT_EQ(s["link"]["state"], "up") << s.dump();
+  const json refused = lift_->call({{"cmd", "travel"}, {"floor", 1}});
+  EXPECT_EQ(refused["error"]["code"], "not_ready") << refused.dump();
+  EXPECT_NE(refused["error"]["message"].get<std::string>().find(GetParam().refusal),
+            std::string::npos)
+      << refused.dump();
+  EXPECT_EQ(lift_->status()["drive"]["state"], "not_ready");
+  EXPECT_EQ(lift_->status()["travel"]["state"], "idle");
+  EXPECT_NE(lift_->log().find(GetParam().journal), std::string::npos) << lift_->log();
+
+  ASSERT_TRUE(sim_not_ready(false).value("ok", false));
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump() << lift_->log();
+  EXPECT_TRUE(state_event("ready").is_object()) << "the watch stream did not say it";
+  const json accepted = lift_->call({{"cmd", "travel"}, {"floor", 1}});
+  ASSERT_TRUE(accepted.value("ok", false)) << accepted.dump();
+  EXPECT_TRUE(lift_->wait_travel("started").is_object()) << lift_->log();
+  // How the travel ends is the drive kinds' own tests' business (a loaded machine may lose a
+  // USS reply): it is stopped here, and the state follows it.
+  EXPECT_TRUE(lift_->call({{"cmd", "stop"}}).value("ok", false));
+  EXPECT_TRUE(lift_->wait_travel_end(40s).is_object()) << lift_->log();
+}
+
+TEST_P(LiftParity, ATravelEndedByAFaultIsOneWarningAndEmptiesTheCallsQueue) {
+  // docs/api.md `calls`: a travel that ends early empties the queue, whoever dispatches the lift
+  // decides again. Before, the hydraulic and USS lifts kept it and set off by themselves once
+  // the fault cleared; the DCP lift journalled the aborted travel as info, the others as a
+  // warning.
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump();
+  for (int floor : {2, 1}) {
+    const json added = lift_->call({{"cmd", "calls"}, {"action", "add"}, {"floor", floor}});
+    ASSERT_TRUE(added.value("ok", false)) << added.dump();
+  }
+  ASSERT_TRUE(lift_->wait_travel("started").is_object()) << lift_->log();
+  ASSERT_TRUE(lift_->call({{"cmd", "sim"}, {"action", "safety_chain_open"}}).value("ok", false));
+  const json ended = lift_->wait_travel_end(20s);
+  ASSERT_TRUE(ended.is_object()) << lift_->log();
+  EXPECT_EQ(ended["data"]["event"], "aborted") << ended.dump();
+  EXPECT_TRUE(ended["data"]["cause"].is_string()) << ended.dump();
+  EXPECT_TRUE(lift_->status()["travel"]["calls"].empty()) << lift_->status().dump();
+  const std::string log = lift_->log();
+  const auto line = log.find("WARN  travel: travel aborted (");
+  ASSERT_NE(line, std::string::npos) << log;
+  const std::string aborted = log.substr(line, log.find('\n', line) - line);
+  EXPECT_NE(aborted.find("[event=travel_aborted kind="), std::string::npos) << aborted;
+  EXPECT_NE(aborted.find(" cause="), std::string::npos) << aborted;
+  EXPECT_NE(aborted.find(" position_mm="), std::string::npos) << aborted;
+
+  // The chain closes again: the car stays where it is, the dropped calls start nothing.
+  ASSERT_TRUE(lift_->call({{"cmd", "sim"}, {"action", "safety_chain_open"}, {"on", false}})
+                  .value("ok", false));
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump() << lift_->log();
+  EXPECT_FALSE(lift_->wait_travel("started", 2s).is_object()) << lift_->log();
+  EXPECT_EQ(lift_->status()["travel"]["state"], "idle");
+}
+
+TEST_P(LiftParity, CallsAreAnsweredAsDocumentedAndServedInOrder) {
+  // docs/api.md `calls`: a floor already queued is not added twice, a cancel of a floor not
+  // queued is refused, the queue is served in the order it was given.
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump();
+  const json first = calls("add", 2);
+  ASSERT_TRUE(first.value("ok", false)) << first.dump();
+  const json twice = calls("add", 2);
+  ASSERT_TRUE(twice.value("ok", false)) << twice.dump();
+  EXPECT_EQ(twice["result"]["detail"], "already queued") << twice.dump();
+  const json nowhere = calls("add", 50);  // a floor number the API takes, not in this building
+  EXPECT_EQ(nowhere["error"]["code"], "bad_request") << nowhere.dump();
+  EXPECT_EQ(nowhere["error"]["message"], "no such floor") << nowhere.dump();
+  const json not_queued = calls("cancel", 1);
+  EXPECT_EQ(not_queued["error"]["code"], "bad_request") << not_queued.dump();
+  EXPECT_EQ(not_queued["error"]["message"], "floor is not queued") << not_queued.dump();
+  ASSERT_TRUE(calls("add", 1).value("ok", false));
+  ASSERT_TRUE(calls("add", 0).value("ok", false));
+  ASSERT_TRUE(calls("cancel", 0).value("ok", false));
+  const json served_2 = lift_->api().wait_event(
+      "call_served", [](const json&) { return true; }, 60s);
+  ASSERT_TRUE(served_2.is_object()) << lift_->log();
+  EXPECT_EQ(served_2["data"]["floor"], 2) << served_2.dump();
+  const json served_1 = lift_->api().wait_event(
+      "call_served", [](const json&) { return true; }, 60s);
+  ASSERT_TRUE(served_1.is_object()) << lift_->log();
+  EXPECT_EQ(served_1["data"]["floor"], 1) << served_1.dump();
+  EXPECT_TRUE(lift_->status()["travel"]["calls"].empty()) << lift_->status().dump();
+  // The cancelled floor 0 is not served.
+  EXPECT_FALSE(lift_->wait_travel("started", 2s).is_object()) << lift_->log();
+}
+
+TEST_P(LiftParity, StopMidTravelLandsAtTheNextPossibleFloorAndStartsNothingMore) {
+  start_far_travel();
+  // docs/api.md `stop`: the car stops at the next possible floor, before the target.
+  const json stopped = lift_->call({{"cmd", "stop"}});
+  ASSERT_TRUE(stopped.value("ok", false)) << stopped.dump();
+  const json ended = lift_->wait_travel_end(40s);
+  ASSERT_TRUE(ended.is_object()) << lift_->log();
+  EXPECT_EQ(ended["data"]["event"], "finished") << ended.dump();
+  const json s = lift_->status();
+  EXPECT_EQ(s["travel"]["state"], "idle") << s.dump();
+  ASSERT_TRUE(s["car"]["floor"].is_number_integer()) << "not at a floor: " << s.dump();
+  EXPECT_LT(s["car"]["floor"].get<int>(), GetParam().far_floor) << s.dump();
+  EXPECT_TRUE(s["faults"].empty()) << "a stop is no fault: " << s.dump();
+  EXPECT_FALSE(lift_->wait_travel("started", 2s).is_object()) << lift_->log();
+}
+
+TEST_P(LiftParity, AServiceStopMidTravelLandsTheCarThenExits) {
+  start_far_travel();
+  // systemd's stop: the travel ends with the car at rest at a floor, then the daemon exits 0.
+  lift_->signal(SIGTERM);
+  const json ended = lift_->wait_travel_end(30s);
+  ASSERT_TRUE(ended.is_object()) << lift_->log();
+  const std::optional<int> code = lift_->stop_daemon(0, 30s);  // signal 0: only waits
+  ASSERT_TRUE(code.has_value()) << "still running 30 s after the travel ended\n" << lift_->log();
+  EXPECT_EQ(*code, 0) << lift_->log();
+  const std::string log = lift_->log();
+  EXPECT_NE(log.find("[event=shutdown_stopping_travel"), std::string::npos) << log;
+  EXPECT_NE(log.find("stopping: car at rest at floor "), std::string::npos) << log;
+  EXPECT_EQ(log.find("[event=shutdown_forced"), std::string::npos)
+      << "the wind-down had to force the end: " << log;
+}
+
+TEST_P(LiftParity, InspectionMovesTheCarWhileHeldAndEndsOnRelease) {
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump();
+  const double from = lift_->position_mm();
+  const json on = {{"cmd", "inspection"}, {"mode", "on"}, {"direction", "up"}};
+  ASSERT_TRUE(lift_->call(on).value("ok", false)) << lift_->call(on).dump();
+  // Held: repeated well inside travel.inspection_hold_ms (500 ms) until the car moved 400 mm,
+  // beyond every kind's relevelling zone (150 mm), so that what follows the release is no
+  // relevelling.
+  bool moved = false;
+  for (int i = 0; i < 150 && !moved; ++i) {
+    lift_->api().drain(150ms);
+    ASSERT_TRUE(lift_->call(on).value("ok", false)) << lift_->log();
+    moved = lift_->position_mm() >= from + 400;
+  }
+  ASSERT_TRUE(moved) << lift_->status().dump() << lift_->log();
+  EXPECT_EQ(lift_->status()["travel"]["state"], "inspection");
+  ASSERT_TRUE(lift_->call({{"cmd", "inspection"}, {"mode", "off"}}).value("ok", false));
+  const json end = lift_->wait_travel_end(20s);
+  ASSERT_TRUE(end.is_object()) << lift_->log();
+  EXPECT_EQ(end["data"]["kind"], "inspection") << end.dump();
+  EXPECT_EQ(lift_->status()["travel"]["state"], "idle");
+}
+
+TEST_P(LiftParity, ACarThatSankAtAFloorIsRelevelled) {
+  // travel.relevel_threshold_mm (15 mm; SCH001 sch001.relevel_start_mm, 10 mm) is exceeded by a
+  // 25 mm sink at rest: the lift relevels by itself to the floor's level.
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump();
+  ASSERT_TRUE(lift_->call({{"cmd", "travel"}, {"floor", 1}}).value("ok", false));
+  const json arrived = lift_->wait_travel_end(40s);
+  ASSERT_TRUE(arrived.is_object()) << lift_->log();
+  ASSERT_EQ(arrived["data"]["event"], "finished") << arrived.dump();
+  ASSERT_EQ(lift_->status()["car"]["floor"], 1) << lift_->status().dump();
+  const double level = lift_->position_mm();
+  lift_->api().drain(500ms);  // at rest (the drive's hold time after the stop)
+  const json drift = lift_->call({{"cmd", "sim"}, {"action", "drift"}, {"drift_mm", -25}});
+  ASSERT_TRUE(drift.value("ok", false)) << drift.dump();
+  const json started = lift_->wait_travel("started", 10s);
+  ASSERT_TRUE(started.is_object()) << "no relevelling after a 25 mm sink\n" << lift_->log();
+  EXPECT_NE(started["data"]["kind"].get<std::string>().find("relevel"), std::string::npos)
+      << started.dump();
+  const json ended = lift_->wait_travel_end(20s);
+  ASSERT_TRUE(ended.is_object()) << lift_->log();
+  EXPECT_EQ(ended["data"]["event"], "finished") << ended.dump();
+  EXPECT_NEAR(lift_->position_mm(), level, 10.0) << lift_->status().dump();
+}
+
+TEST_P(LiftParity, ADriveFaultIsRaisedOnceAndClearedOnce) {
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump();
+  ASSERT_TRUE(lift_->call({{"cmd", "sim"}, {"action", "general_fault"}}).value("ok", false));
+  const auto is_drive_fault = [](bool active) {
+    return [active](const json& d) { return d["code"] == "drive_fault" && d["active"] == active; };
+  };
+  ASSERT_TRUE(lift_->api().wait_event("fault", is_drive_fault(true), 10s).is_object())
+      << lift_->log();
+  ASSERT_TRUE(lift_->wait_drive_state("fault")) << lift_->status().dump();
+  EXPECT_EQ(lift_->call({{"cmd", "travel"}, {"floor", 1}})["error"]["code"], "fault");
+  ASSERT_TRUE(
+      lift_->call({{"cmd", "sim"}, {"action", "general_fault"}, {"on", false}}).value("ok", false));
+  if (GetParam().fault_needs_reset) {
+    lift_->api().drain(300ms);
+    const json reset = lift_->call({{"cmd", "drive_reset"}});
+    ASSERT_TRUE(reset.value("ok", false)) << reset.dump();
+  }
+  ASSERT_TRUE(lift_->api().wait_event("fault", is_drive_fault(false), 10s).is_object())
+      << lift_->log();
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump() << lift_->log();
+  lift_->api().drain(500ms);
+  EXPECT_EQ(lift_->count_events("fault", is_drive_fault(true)), 1);
+  EXPECT_EQ(lift_->count_events("fault", is_drive_fault(false)), 1);
+  const std::string log = lift_->log();
+  const auto count = [&log](const std::string& text) {
+    int n = 0;
+    for (auto at = log.find(text); at != std::string::npos; at = log.find(text, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("[event=fault_raised code=drive_fault"), 1) << log;
+  EXPECT_EQ(count("[event=fault_cleared code=drive_fault"), 1) << log;
+}
+
+TEST_P(LiftParity, TraceSaveAndSigusr1WriteTheFlightRecorder) {
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump();
+  // Frames to record (the SCH001 card speaks every 100 ms, the others faster).
+  json trace;
+  for (int i = 0; i < 100; ++i) {
+    trace = lift_->call({{"cmd", "trace"}, {"count", 5}});
+    ASSERT_TRUE(trace.value("ok", false)) << trace.dump();
+    if (trace["result"]["frames"].size() == 5U) break;
+    lift_->api().drain(50ms);
+  }
+  EXPECT_EQ(trace["result"]["frames"].size(), 5U) << trace.dump();
+  EXPECT_FALSE(expect_sigusr1_writes_file(*lift_).empty());
+  EXPECT_FALSE(expect_trace_save_writes_file(*lift_, GetParam().name, 5).empty());
+}
+
+TEST_P(LiftParity, AReloadAppliesAValidFileAndRefusesAnInvalidOne) {
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump();
+  const std::filesystem::path path = lift_->dir() / "liftd.json";
+  json config = json::parse(file_text(path));
+  config["api"]["max_clients"] = 7;
+  std::ofstream(path) << config.dump(2);
+  lift_->signal(SIGHUP);
+  bool applied = false;
+  for (int i = 0; i < 100 && !applied; ++i) {
+    lift_->api().drain(50ms);
+    applied = lift_->log().find("applied api.max_clients") != std::string::npos;
+  }
+  EXPECT_TRUE(applied) << lift_->log();
+  config["log"]["level"] = "loud";
+  std::ofstream(path) << config.dump(2);
+  lift_->signal(SIGHUP);
+  bool refused = false;
+  for (int i = 0; i < 100 && !refused; ++i) {
+    lift_->api().drain(50ms);
+    refused = lift_->log().find(
+                  "reload refused, the running configuration stays: log.level: "
+                  "\"loud\" is not allowed") != std::string::npos;
+  }
+  EXPECT_TRUE(refused) << lift_->log();
+  EXPECT_EQ(lift_->status()["link"]["state"], "up") << "the lift runs on";
+  ASSERT_TRUE(lift_->call({{"cmd", "travel"}, {"floor", 1}}).value("ok", false));
+  EXPECT_TRUE(lift_->wait_travel_end(40s).is_object()) << lift_->log();
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryDriveKind, LiftParity, ::testing::ValuesIn(kCases),
+                         [](const ::testing::TestParamInfo<DriveCase>& param) {
+                           return std::string(param.param.name);
+                         });
+
+}  // namespace
+}  // namespace liftd::e2e
