@@ -1,4 +1,4 @@
-// The DCP rules where the master used to depart from the spec, through the real DcpController
+// The DCP rules a master most easily gets wrong, through the real DcpController
 // against the simulated drive on a fake clock: S5 confirms target changes (DCP 4.1, 7.2), the
 // communication channel never ends a travel (DCP 5.1, 5.4), older drives (DCP 5.12.3.1), I9
 // after every stop (DCP 5.12.9), S0 dropping during a travel (DCP 9.1.3, 5.5), the service stop.
@@ -206,7 +206,7 @@ TEST(DriveReset, IsRefusedWhileATravelRuns) {
   ASSERT_TRUE(rig.run_until([&] { return rig.finished_travels(1) && rig.idle(); }, 60s));
 }
 
-// ---- the service stop (issue 13) ---------------------------------------------------------------
+// ---- the service stop ---------------------------------------------------------------------------
 
 TEST(ServiceStop, DuringATravelLandsAtAFloorThenQuiescesWithB0Off) {
   Rig rig;

@@ -614,8 +614,7 @@ TEST(Calls, AnsweredAsOnEveryLiftAndRefusedWhileTheServiceStops) {
 
 TEST(Calls, ATravelRefusedWhileTheServiceStopsAsOnEveryLift) {
   // The first gates of a travel command are the shared ones (lift::ControllerCore): the service
-  // stop before the floor, with the same text on every drive kind. Before, the DCP lift judged
-  // the floor first and said "liftd is stopping: no new travel".
+  // stop before the floor, with the same text on every drive kind.
   Rig rig;
   ASSERT_TRUE(rig.warm_up());
   ASSERT_EQ(rig.command(ShutdownCommand{false}).code, ReplyCode::Ok);
@@ -631,8 +630,7 @@ TEST(Calls, ATravelRefusedWhileTheServiceStopsAsOnEveryLift) {
 TEST(Calls, NoReplyIsLostWhenCommandsComeFasterThanRepliesAreRead) {
   // Clients pipeline calls while the io thread does not read replies: every command the cycle
   // took gets exactly one reply; the rest are refused before they are queued (post() false, the
-  // daemon answers busy). Before, the DCP controller took commands while the reply queue was
-  // full and dropped their replies: a client waited for an answer that never came.
+  // daemon answers busy), so no client waits for an answer that never comes.
   Rig rig;
   ASSERT_TRUE(rig.warm_up());
   rig.read_replies = false;

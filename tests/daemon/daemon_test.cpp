@@ -176,7 +176,7 @@ TEST(DaemonSignals, StraySignalsAreLoggedAndIgnored) {
   SimDaemon liftd(notify, config);
   std::vector<std::string> seen;
   ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit)) << liftd.process.err();
-  // Before: each of these ended the daemon without a word and left its socket behind.
+  // Signals liftd does not use must not end it: each is ignored, the socket stays.
   for (int number : {SIGUSR2, SIGALRM, SIGRTMIN + 1}) {
     liftd.process.signal(number);
     EXPECT_FALSE(liftd.process.wait(300ms).has_value()) << number << "\n" << liftd.process.err();

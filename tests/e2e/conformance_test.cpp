@@ -1,5 +1,5 @@
-// End to end through `liftd --simulate` as a process: the DCP rules where the master used to
-// depart from the spec (stop at the next possible floor, S5, channel faults) and the service's
+// End to end through `liftd --simulate` as a process: the DCP rules a master most easily gets
+// wrong (stop at the next possible floor, S5, channel faults) and the service's
 // safe edges (stop during a travel, S0 dropping during a travel, late replies). The simulated
 // drive counts every spec violation it sees (`sim` result `violations`), written from the
 // spec's sentences, not from the master's behaviour.
@@ -34,7 +34,7 @@ int nearest_floor(double position_mm) {
   return static_cast<int>(std::lround(position_mm / level_mm(1)));
 }
 
-// ---- issue 9, point 1: stop lands at the next possible floor --------------------------------
+// ---- stop lands at the next possible floor ------------------------------------------------------
 
 class StopMidTravel : public ::testing::TestWithParam<int> {};
 
@@ -63,7 +63,7 @@ TEST_P(StopMidTravel, LandsAtTheNextPossibleFloorWithoutASpecViolation) {
 INSTANTIATE_TEST_SUITE_P(Dialects, StopMidTravel, ::testing::Values(4, 3),
                          [](const auto& p) { return "Dcp" + std::to_string(p.param); });
 
-// ---- issue 9, point 2: S5 confirms target changes --------------------------------------------
+// ---- S5 confirms target changes -----------------------------------------------------------------
 
 TEST(TargetChange, ExtensionIsAnsweredOnlyAfterTheDrivesS5) {
   START_LIFT(lift, 4);
@@ -101,7 +101,7 @@ TEST(TargetChange, RefusedByTheDriveIsReportedNotClaimed) {
   EXPECT_EQ(sim_state(lift)["implausible"], 1);
 }
 
-// ---- issue 9, point 4: channel faults never stop a travel ------------------------------------
+// ---- channel faults never stop a travel ---------------------------------------------------------
 
 class ChannelFaultMidTravel : public ::testing::TestWithParam<std::string> {};
 
@@ -135,7 +135,7 @@ INSTANTIATE_TEST_SUITE_P(Faults, ChannelFaultMidTravel,
                          ::testing::Values("partial", "garbage", "silence"),
                          [](const auto& p) { return p.param; });
 
-// ---- issue 13, point 1: a service stop brings the car to a floor ------------------------------
+// ---- a service stop brings the car to a floor ---------------------------------------------------
 
 TEST(ServiceStop, SigtermDuringATravelLandsTheCarThenExits) {
   START_LIFT(lift, 4);
@@ -171,7 +171,7 @@ TEST(ServiceStop, SigtermAtRestExitsAtOnce) {
   EXPECT_NE(lift.log().find("car at rest"), std::string::npos) << lift.log();
 }
 
-// ---- issue 13, point 2: S0 dropping during a travel --------------------------------------------
+// ---- S0 dropping during a travel ----------------------------------------------------------------
 
 TEST(DriveNotReady, DuringATravelTheTravelFinishesAndNoNewOneStarts) {
   // DCP 9.1.3: "The lift controller only starts a new travel if the drive controller ready bit
@@ -196,7 +196,7 @@ TEST(DriveNotReady, DuringATravelTheTravelFinishesAndNoNewOneStarts) {
   EXPECT_EQ(lift.wait_travel_end()["data"]["event"], "finished");
 }
 
-// ---- issue 13, point 6: late replies are late -------------------------------------------------
+// ---- late replies are late ----------------------------------------------------------------------
 
 TEST(LateReplies, AreCountedAsMissingWithoutALinkFault) {
   START_LIFT(lift, 4);

@@ -248,12 +248,10 @@ void expect_card_frames(const std::string& text) {
 }
 
 TEST_F(HydraulicTest, TraceSaveWritesTheFlightRecorderAsOnEveryLift) {
-  // Before: not_ready "this daemon keeps no flight recorder", though `trace` showed the frames.
   expect_card_frames(expect_trace_save_writes_file(*lift_, "sch001", 2));
 }
 
 TEST_F(HydraulicTest, Sigusr1WritesTheFlightRecorder) {
-  // Before: "SIGUSR1: writing the flight recorder" in the journal, and no file.
   expect_card_frames(expect_sigusr1_writes_file(*lift_));
 }
 

@@ -91,7 +91,6 @@ class LiftParity : public ::testing::TestWithParam<DriveCase> {
 TEST_P(LiftParity, NotReadyWhileTheDriveIsNotReadyAndATravelIsRefusedExactlyThen) {
   ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump();
   ASSERT_TRUE(sim_not_ready(true).value("ok", false));
-  // Before: `ready` here on every kind, while every travel was refused.
   ASSERT_TRUE(lift_->wait_drive_state("not_ready")) << lift_->status().dump() << lift_->log();
   EXPECT_TRUE(state_event("not_ready").is_object()) << "the watch stream did not say it";
   const json s = lift_->status();
@@ -120,9 +119,8 @@ TEST_P(LiftParity, NotReadyWhileTheDriveIsNotReadyAndATravelIsRefusedExactlyThen
 
 TEST_P(LiftParity, ATravelEndedByAFaultIsOneWarningAndEmptiesTheCallsQueue) {
   // docs/api.md `calls`: a travel that ends early empties the queue, whoever dispatches the lift
-  // decides again. Before, the hydraulic and USS lifts kept it and set off by themselves once
-  // the fault cleared; the DCP lift journalled the aborted travel as info, the others as a
-  // warning.
+  // decides again; the car does not set off by itself once the fault cleared. The aborted
+  // travel is one warning in the journal with its cause and position.
   ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump();
   for (int floor : {2, 1}) {
     const json added = lift_->call({{"cmd", "calls"}, {"action", "add"}, {"floor", floor}});

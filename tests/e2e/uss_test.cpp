@@ -173,12 +173,10 @@ void expect_uss_telegrams(const std::string& text) {
 }
 
 TEST_F(UssTest, TraceSaveWritesTheFlightRecorderAsOnEveryLift) {
-  // Before: not_ready "this daemon keeps no flight recorder", though `trace` showed the frames.
   expect_uss_telegrams(expect_trace_save_writes_file(*lift_, "uss", 4));
 }
 
 TEST_F(UssTest, Sigusr1WritesTheFlightRecorder) {
-  // Before: "SIGUSR1: writing the flight recorder" in the journal, and no file.
   expect_uss_telegrams(expect_sigusr1_writes_file(*lift_));
 }
 

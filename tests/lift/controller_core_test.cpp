@@ -368,8 +368,8 @@ TEST(TravelHelpers, MachineNeedsAndRefusalCauses) {
 
 TEST_F(ControllerCoreTest, ATravelThatEndsEarlyEmptiesTheCallsQueue) {
   // docs/api.md `calls`: a travel that ends early empties the queue, whoever dispatches the lift
-  // decides again. Before, the SCH001 and USS lifts kept it and, once the fault cleared, set off
-  // by themselves to a call the dispatcher may have given to another car; the DCP lift emptied it.
+  // decides again: the car must not set off by itself, once the fault cleared, to a call the
+  // dispatcher may have given to another car.
   good_inputs();
   EXPECT_EQ(command(1, CallCommand{true, 2}).code, ReplyCode::Ok);
   EXPECT_EQ(command(2, CallCommand{true, 3}).code, ReplyCode::Ok);

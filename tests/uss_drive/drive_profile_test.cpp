@@ -121,7 +121,7 @@ TEST_F(ProfileTest, RunFromInhibitSendsOff1UntilReadyToSwitchOnThenOn) {
 TEST_F(ProfileTest, AcknowledgeIsOneRisingEdgeTheDriveSawTheZeroOf) {
   const std::uint16_t fault = kNo2 | kNo3 | kFlt | kPlc;
   const std::uint16_t inhibit = kNo2 | kNo3 | kInh | kPlc;
-  // Before: the idle word without bit 7.
+  // Before the acknowledgement: the idle word, bit 7 low.
   EXPECT_EQ(step(ProfileWish::Stop, 0, fault), 0x047E);
   profile_.acknowledge();
   EXPECT_TRUE(profile_.acknowledging());
