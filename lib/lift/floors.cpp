@@ -54,4 +54,15 @@ std::optional<std::size_t> next_possible_stop(const FloorTable& floors, std::int
   return std::nullopt;
 }
 
+std::optional<std::size_t> floor_to_relevel(const FloorTable& floors, std::int64_t position_mm,
+                                            std::uint32_t threshold_mm,
+                                            std::uint32_t zone_mm) noexcept {
+  const std::optional<std::size_t> nearest = floors.nearest(position_mm);
+  if (!nearest) return std::nullopt;
+  if (!drift_needs_relevel(floors.level_mm(*nearest) - position_mm, threshold_mm, zone_mm)) {
+    return std::nullopt;
+  }
+  return nearest;
+}
+
 }  // namespace liftd::lift

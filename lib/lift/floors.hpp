@@ -52,6 +52,25 @@ inline bool at_terminal_level(const FloorTable& floors, Direction direction,
   return false;
 }
 
+/// The door zone of common practice: a car at rest up to this far from a level is still at that
+/// floor and is relevelled to it; farther, it is between floors and stays where it is.
+inline constexpr std::uint32_t kRelevelZoneMm = 150;
+
+/// The relevelling rule of every lift: a car at rest `drift_mm` (either sign) off its level is
+/// relevelled when the drift is beyond `threshold_mm` and within `zone_mm`.
+constexpr bool drift_needs_relevel(std::int64_t drift_mm, std::uint32_t threshold_mm,
+                                   std::uint32_t zone_mm) noexcept {
+  const std::int64_t magnitude = drift_mm < 0 ? -drift_mm : drift_mm;
+  return magnitude > static_cast<std::int64_t>(threshold_mm) &&
+         magnitude <= static_cast<std::int64_t>(zone_mm);
+}
+
+/// The floor a car at rest at `position_mm` is relevelled to by itself: its nearest floor, when
+/// drift_needs_relevel() says so for the drift from that floor's level; nullopt otherwise.
+std::optional<std::size_t> floor_to_relevel(const FloorTable& floors, std::int64_t position_mm,
+                                            std::uint32_t threshold_mm,
+                                            std::uint32_t zone_mm) noexcept;
+
 /// The nearest floor ahead in `direction` whose level is at least `decel_distance_mm +
 /// margin_mm` away from the position, i.e. where the car can still stop. nullopt when stationary
 /// (Direction::None) or when no floor ahead is far enough.

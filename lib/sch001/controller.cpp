@@ -11,10 +11,6 @@ lift::ControllerCoreConfig core_config(const ControllerConfig& config, MonoTime 
   return {config.lift, config.floors_mm, config.inputs_timeout, config.inspection_hold, start};
 }
 
-/// How far from its nearest level a car at rest may have sunk for liftd to relevel it by
-/// itself: beyond this it is not "at a floor" any more (the door zone of common practice).
-constexpr std::int64_t kRelevelZoneMm = 150;
-
 }  // namespace
 
 std::string_view fault_text(FaultCode code) noexcept {
@@ -250,14 +246,10 @@ void Sch001Controller::maybe_relevel(TickInput& in) noexcept {
       !in.position_mm) {
     return;
   }
-  const auto nearest = lift_.floors().nearest(*in.position_mm);
-  if (!nearest) return;
-  const std::int64_t off = std::llabs(*in.position_mm - lift_.floors().level_mm(*nearest));
-  if (off <= static_cast<std::int64_t>(config_.hydraulic.relevel_start_mm) ||
-      off > kRelevelZoneMm) {
-    return;
-  }
-  // Only where it may start now; otherwise it waits (a refused relevel is no event).
+  const auto nearest = lift::floor_to_relevel(
+      lift_.floors(), *in.position_mm, config_.hydraulic.relevel_start_mm, lift::kRelevelZoneMm);
+  if (!nearest)
+    return;  // Only where it may start now; otherwise it waits (a refused relevel is no event).
   if (travel_.forbidding(TravelKind::Relevel, in) == Cause::None) {
     (void)travel_.start_relevel(lift_.floors(), *nearest, in);
   }

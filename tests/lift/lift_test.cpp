@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lift/faults.hpp"
+#include "lift/floors.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/rules.hpp"
 
@@ -59,6 +60,36 @@ TEST(FloorTable, FloorAtUsesTheLevelTolerance) {
   for (const auto& c : cases) {
     EXPECT_EQ(floors.floor_at(c.position_mm, c.tolerance_mm), c.floor) << c.position_mm;
   }
+}
+
+TEST(Relevelling, ACarAtRestIsRelevelledToItsNearestFloorBeyondTheThresholdWithinTheZone) {
+  const FloorTable floors = table();  // 3 m apart from 0
+  struct Case {
+    std::int64_t position_mm;
+    std::optional<std::size_t> floor;
+  };
+  // threshold 15 mm, zone lift::kRelevelZoneMm (150 mm), on both sides of a level.
+  const Case cases[] = {
+      {3000, std::nullopt},
+      {3015, std::nullopt},
+      {2985, std::nullopt},  // within the threshold
+      {3016, 1},
+      {2984, 1},
+      {3150, 1},  // relevelled
+      {2850, 1},
+      {3151, std::nullopt},
+      {2849, std::nullopt},  // between floors
+      {-20, 0},
+      {6020, 2},
+      {1500, std::nullopt},
+  };
+  for (const Case& c : cases) {
+    EXPECT_EQ(floor_to_relevel(floors, c.position_mm, 15, kRelevelZoneMm), c.floor)
+        << c.position_mm;
+  }
+  EXPECT_TRUE(drift_needs_relevel(-16, 15, 150));
+  EXPECT_FALSE(drift_needs_relevel(-151, 15, 150));
+  EXPECT_FALSE(floor_to_relevel(FloorTable{}, 10, 2, 150).has_value()) << "no floors";
 }
 
 TEST(NextPossibleStop, TableOfPositionsDirectionsAndDecelerationDistances) {

@@ -210,10 +210,8 @@ void TravelController::maybe_auto_relevel(const CycleInput& in) noexcept {
     return;
   }
   if (!home_level_mm_ || in.protocol != dcp::Protocol::Dcp4) return;
-  const std::int64_t drift = *home_level_mm_ - *in.position_mm;
-  const std::int64_t magnitude = drift < 0 ? -drift : drift;
-  if (magnitude <= static_cast<std::int64_t>(config_.relevel_threshold_mm) ||
-      magnitude > static_cast<std::int64_t>(config_.relevel_zone_mm)) {
+  if (!lift::drift_needs_relevel(*home_level_mm_ - *in.position_mm, config_.relevel_threshold_mm,
+                                 config_.relevel_zone_mm)) {
     return;
   }
   GateProfile profile;

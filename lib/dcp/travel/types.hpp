@@ -12,6 +12,7 @@
 #include "common/defaults.hpp"
 #include "common/mono_time.hpp"
 #include "dcp/frame.hpp"
+#include "lift/floors.hpp"
 #include "lift/inputs.hpp"
 
 namespace liftd::travel {
@@ -173,8 +174,8 @@ struct TravelConfig {
   std::uint32_t crawl_timeout_ms = 30000;
   bool auto_relevel = true;  ///< DCP4: VN' when the car drifts off the level
   std::uint32_t relevel_threshold_mm = defaults::kRelevelThresholdMm;  ///< starts auto relevelling
-  std::uint32_t relevel_zone_mm = 150;  ///< beyond this drift, no auto relevelling
-  bool relevel_electric_stop = defaults::kRelevelElectricStop;  ///< DCP 9.2.3.2 / 9.2.3.1
+  std::uint32_t relevel_zone_mm = lift::kRelevelZoneMm;                ///< beyond this drift, none
+  bool relevel_electric_stop = defaults::kRelevelElectricStop;         ///< DCP 9.2.3.2 / 9.2.3.1
   Dcp3Reference dcp3_reference = Dcp3Reference::Position;
   /// DCP 3.5.3.7: number of travelling speeds of a DCP3 installation (1..7).
   int dcp3_speed_count = defaults::kDcp3SpeedCount;

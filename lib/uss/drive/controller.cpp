@@ -324,13 +324,9 @@ void UssController::serve_calls(const DriveInput& in) noexcept {
 void UssController::maybe_relevel(const DriveInput& in) noexcept {
   if (!config_.auto_relevel || travel_.busy() || in.inputs.inspection) return;
   if (in.position_mm) {
-    const auto nearest = lift_.floors().nearest(*in.position_mm);
+    const auto nearest = lift::floor_to_relevel(
+        lift_.floors(), *in.position_mm, config_.relevel_threshold_mm, config_.relevel_zone_mm);
     if (!nearest) return;
-    const std::int64_t off = std::llabs(*in.position_mm - lift_.floors().level_mm(*nearest));
-    if (off <= static_cast<std::int64_t>(config_.relevel_threshold_mm) ||
-        off > static_cast<std::int64_t>(config_.relevel_zone_mm)) {
-      return;
-    }
     // Only where it may start now; otherwise it waits (a refused relevel is no event).
     if (travel_.forbidding(TravelKind::Relevel, in) == Cause::None) {
       (void)travel_.start_relevel(lift_.floors(), *nearest, lift::Direction::None, in);

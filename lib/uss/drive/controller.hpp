@@ -26,6 +26,7 @@
 #include "common/position_source.hpp"
 #include "lift/controller_core.hpp"
 #include "lift/faults.hpp"
+#include "lift/floors.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
 #include "uss/drive/drive_profile.hpp"
@@ -57,7 +58,7 @@ struct UssControllerConfig {
   /// relevel_down).
   bool auto_relevel = true;
   std::uint32_t relevel_threshold_mm = defaults::kRelevelThresholdMm;
-  std::uint32_t relevel_zone_mm = 150;
+  std::uint32_t relevel_zone_mm = lift::kRelevelZoneMm;
 };
 
 // ---- commands (io thread -> USS thread): the shared ones in lib/lift/controller_core.hpp ----
