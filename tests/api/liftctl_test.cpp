@@ -66,7 +66,7 @@ TEST_F(Liftctl, SocketComesFromTheEnvironment) {
   start_server();
   const RunResult r = run("LIFTD_SOCKET=" + socket_path() + " " + LIFTCTL_PATH + " version");
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("api: 2"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("api: 3"), std::string::npos) << r.output;
 }
 
 TEST_F(Liftctl, ControlCommandsReachTheBackend) {
