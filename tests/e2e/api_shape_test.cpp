@@ -26,10 +26,10 @@ Keys keys_of(const json& object) {
 }
 
 struct ShapeCase {
-  const char* kind;   ///< drive.kind, also the name of the kind's object
-  json config;        ///< merged into the lift's config
-  Keys status_keys;   ///< status.<kind>
-  Keys stats_keys;    ///< stats.<kind>
+  const char* kind;  ///< drive.kind, also the name of the kind's object
+  json config;       ///< merged into the lift's config
+  Keys status_keys;  ///< status.<kind>
+  Keys stats_keys;   ///< stats.<kind>
 };
 
 void PrintTo(const ShapeCase& c, std::ostream* out) {
@@ -55,9 +55,9 @@ const ShapeCase kCases[] = {
       {"sch001", {{"star_delta_ms", 500}, {"slowdown_up_mm", 300}, {"slowdown_down_mm", 350}}}},
      {"card", "timeout_enabled", "commands", "current_floor", "destination_floor", "motor_on",
       "phase", "send_failing", "foreign_sender"},
-     {"frames_received", "status_frames", "timeout_commands", "wrong_length",
-      "unknown_first_byte", "own_id_frames", "other_id_frames", "card_silences", "error_frames",
-      "send_errors", "reopens", "dropped_records"}},
+     {"frames_received", "status_frames", "timeout_commands", "wrong_length", "unknown_first_byte",
+      "own_id_frames", "other_id_frames", "card_silences", "error_frames", "send_errors", "reopens",
+      "dropped_records"}},
     {"uss",
      {{"drive", {{"kind", "uss"}}},
       {"floors", kThreeFloors},
@@ -89,8 +89,8 @@ TEST_P(ApiShapeTest, StatusHasTheNeutralKeysAndTheKindsObject) {
                                                              "are under dcp only: "
                                                           << s.dump();
   EXPECT_EQ(keys_of(s["link"]), (Keys{"state"})) << "handshake_problem is under dcp only";
-  EXPECT_EQ(keys_of(s["car"]), (Keys{"position_mm", "floor", "next_possible_stop", "brake_open",
-                                     "contactors_on"}));
+  EXPECT_EQ(keys_of(s["car"]),
+            (Keys{"position_mm", "floor", "next_possible_stop", "brake_open", "contactors_on"}));
   EXPECT_EQ(keys_of(s["travel"]),
             (Keys{"state", "direction", "target_floor", "calls", "last_slip_mm"}));
   EXPECT_EQ(keys_of(s["rt"]), (Keys{"realtime", "policy", "priority", "memory_locked"}));

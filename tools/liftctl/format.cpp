@@ -82,7 +82,7 @@ std::string format_status(const json& s) {
   const json& travel = at(s, "travel");
   const json& rt = at(s, "rt");
   out << "link:     " << text(at(at(s, "link"), "state")) << '\n';
-  if (drive.contains("kind")) {  // API 2
+  if (drive.contains("kind")) {  // API 2 and later
     out << "drive:    " << text(at(drive, "kind")) << ", "
         << drive_state_text(at(drive, "kind"), at(drive, "state")) << '\n';
   }
