@@ -334,18 +334,27 @@ api::StatusSnapshot Sch001Backend::status() {
 }
 
 api::StatsSnapshot Sch001Backend::stats() {
-  // The DCP-shaped counters of API 2's stats, filled with their CAN meaning (docs/api.md).
   const sch001::ControllerSnapshot s = controller_.snapshot();
   const rt::CanRunnerCounters c = runner_.counters();
   api::StatsSnapshot out;
+  out.drive_kind = drive::Kind::Sch001;
   out.frames_sent = c.frames_sent;
-  out.replies_good = s.counters.status_frames + s.counters.timeout_commands;
-  out.decode_errors = s.counters.wrong_length + s.counters.unknown_first_byte + s.counters.own_id;
-  out.link_losses = s.counters.timeouts;
-  out.channel_resets = c.reopens;
-  out.checksum_errors = c.error_frames;
   out.cycles = s.steps;
   out.dropped_events = controller_.dropped_events();
+  nlohmann::json& d = out.details;
+  // The card's frames by kind (card document 3b, 3f, 1.6) and the CAN endpoint's own counters.
+  d["frames_received"] = c.frames_received;
+  d["status_frames"] = s.counters.status_frames;
+  d["timeout_commands"] = s.counters.timeout_commands;
+  d["wrong_length"] = s.counters.wrong_length;
+  d["unknown_first_byte"] = s.counters.unknown_first_byte;
+  d["own_id_frames"] = s.counters.own_id;
+  d["other_id_frames"] = s.counters.other_id;
+  d["card_silences"] = s.counters.timeouts;
+  d["error_frames"] = c.error_frames;
+  d["send_errors"] = c.send_errors;
+  d["reopens"] = c.reopens;
+  d["dropped_records"] = c.dropped;
   return out;
 }
 

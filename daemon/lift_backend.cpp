@@ -119,26 +119,29 @@ api::StatsSnapshot LiftBackend::stats() {
   const rt::CycleStats cycle = runner_.stats();
   const dcp::LinkCounters link = controller_.snapshot().link_counters;
   api::StatsSnapshot out;
+  out.drive_kind = drive::Kind::Dcp;
   out.frames_sent = cycle.counters.frames_sent;
-  out.replies_good = link.good_replies;
-  out.checksum_errors = link.bad_checksum;
-  out.missing_replies = link.missing_replies;
-  out.repeats = link.s7_seen;
-  out.link_losses = link.link_faults;
   out.cycles = cycle.counters.cycles;
-  out.late_sends = cycle.counters.late_sends;
-  out.overruns = cycle.counters.overruns;
-  out.skipped_cycles = cycle.counters.skipped_cycles;
-  out.max_lateness_us = static_cast<std::uint64_t>(cycle.wake_lateness.max_us());
-  out.max_work_us = static_cast<std::uint64_t>(cycle.work_time.max_us());
-  out.lateness_p99_us = cycle.wake_lateness.percentile_us(0.99);
-  out.reply_p99_us = cycle.reply_latency.percentile_us(0.99);
-  out.b7_sent = link.b7_sent;
-  out.channel_resets = link.channel_resets;
-  out.decode_errors = link.decode_errors;
-  out.request_timeouts = link.request_timeouts;
-  out.longest_error_run = link.longest_error_run;
   out.dropped_events = controller_.dropped_events();
+  nlohmann::json& d = out.details;
+  // The link (DCP 6, 7) and the 15 ms cycle's timing (DCP 7.2): docs/api.md `stats`.
+  d["replies_good"] = link.good_replies;
+  d["checksum_errors"] = link.bad_checksum;
+  d["missing_replies"] = link.missing_replies;
+  d["repeats"] = link.s7_seen;
+  d["link_losses"] = link.link_faults;
+  d["b7_sent"] = link.b7_sent;
+  d["channel_resets"] = link.channel_resets;
+  d["decode_errors"] = link.decode_errors;
+  d["request_timeouts"] = link.request_timeouts;
+  d["longest_error_run"] = link.longest_error_run;
+  d["late_sends"] = cycle.counters.late_sends;
+  d["overruns"] = cycle.counters.overruns;
+  d["skipped_cycles"] = cycle.counters.skipped_cycles;
+  d["max_lateness_us"] = static_cast<std::uint64_t>(cycle.wake_lateness.max_us());
+  d["lateness_p99_us"] = cycle.wake_lateness.percentile_us(0.99);
+  d["reply_p99_us"] = cycle.reply_latency.percentile_us(0.99);
+  d["max_work_us"] = static_cast<std::uint64_t>(cycle.work_time.max_us());
   return out;
 }
 

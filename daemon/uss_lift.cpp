@@ -401,17 +401,9 @@ api::StatsSnapshot UssBackend::stats() {
   const uss::ControllerSnapshot s = controller_.snapshot();
   const uss::UssRunnerStats r = runner_.stats();
   api::StatsSnapshot out;
-  // The drive-neutral counters with their USS meaning (docs/api.md `stats`).
+  out.drive_kind = drive::Kind::Uss;
   out.frames_sent = r.counters.exchanges;
-  out.replies_good = r.counters.good_replies;
-  out.checksum_errors = s.rx.bcc;
-  out.missing_replies = r.counters.reply_timeouts;
-  out.decode_errors = r.counters.bad_replies;
-  out.channel_resets = r.counters.port_losses;
   out.cycles = r.counters.cycles;
-  out.max_lateness_us = static_cast<std::uint64_t>(r.wake_lateness.max_us());
-  out.lateness_p99_us = r.wake_lateness.percentile_us(0.99);
-  out.reply_p99_us = r.reply_time.percentile_us(0.99);
   out.dropped_events = controller_.dropped_events();
   nlohmann::json rx = {{"good", s.rx.good},
                        {"rejected", s.rx.rejected},
@@ -438,14 +430,21 @@ api::StatsSnapshot UssBackend::stats() {
   const auto us = [](std::chrono::nanoseconds t) {
     return std::chrono::duration_cast<std::chrono::microseconds>(t).count();
   };
-  out.details = {"uss",
-                 {{"baud", config_.uss.baud},
-                  {"expected_cycle_time_us", us(s.expected_cycle_time)},
-                  {"last_cycle_time_us", us(s.last_cycle_time)},
-                  {"cycle_time_p99_us", r.cycle_time.percentile_us(0.99)},
-                  {"line_errors", r.counters.line_errors},
-                  {"receive", std::move(rx)},
-                  {"slaves", std::move(slaves)}}};
+  // The bus's own figures (docs/api.md `stats`); a reply timeout and a BCC error are counted in
+  // `receive` (USS A 5.2.3), not twice.
+  out.details = {{"baud", config_.uss.baud},
+                 {"expected_cycle_time_us", us(s.expected_cycle_time)},
+                 {"last_cycle_time_us", us(s.last_cycle_time)},
+                 {"cycle_time_p99_us", r.cycle_time.percentile_us(0.99)},
+                 {"replies_good", r.counters.good_replies},
+                 {"replies_rejected", r.counters.bad_replies},
+                 {"port_losses", r.counters.port_losses},
+                 {"max_lateness_us", static_cast<std::uint64_t>(r.wake_lateness.max_us())},
+                 {"lateness_p99_us", r.wake_lateness.percentile_us(0.99)},
+                 {"reply_p99_us", r.reply_time.percentile_us(0.99)},
+                 {"line_errors", r.counters.line_errors},
+                 {"receive", std::move(rx)},
+                 {"slaves", std::move(slaves)}};
   return out;
 }
 

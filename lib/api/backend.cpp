@@ -112,14 +112,6 @@ nlohmann::json to_json(const StatusSnapshot& s) {
   drive_object["state"] = drive::to_string(s.drive_state);
   nlohmann::json& link = j["link"];
   link["state"] = to_string(s.link);
-  if (s.drive_kind == drive::Kind::Dcp) {
-    // API 1 had the DCP fields here; API 2 keeps them for DCP lifts (docs/api.md "Changes from
-    // API 1") and has them under "dcp" too. They go in API 3.
-    link["handshake_problem"] = s.details.value("handshake_problem", nlohmann::json(nullptr));
-    for (const char* key : {"mode", "status", "extended"}) {
-      drive_object[key] = s.details.value(key, nlohmann::json(nullptr));
-    }
-  }
   nlohmann::json& car = j["car"];
   car["position_mm"] = or_null(s.position_mm);
   car["floor"] = or_null(s.floor);
@@ -143,29 +135,12 @@ nlohmann::json to_json(const StatusSnapshot& s) {
 }
 
 nlohmann::json to_json(const StatsSnapshot& s) {
-  nlohmann::json out = {{"link",
-                         {{"frames_sent", s.frames_sent},
-                          {"replies_good", s.replies_good},
-                          {"checksum_errors", s.checksum_errors},
-                          {"missing_replies", s.missing_replies},
-                          {"repeats", s.repeats},
-                          {"link_losses", s.link_losses},
-                          {"b7_sent", s.b7_sent},
-                          {"channel_resets", s.channel_resets},
-                          {"decode_errors", s.decode_errors},
-                          {"request_timeouts", s.request_timeouts},
-                          {"longest_error_run", s.longest_error_run}}},
-                        {"cycle",
-                         {{"cycles", s.cycles},
-                          {"late_sends", s.late_sends},
-                          {"overruns", s.overruns},
-                          {"skipped_cycles", s.skipped_cycles},
-                          {"max_lateness_us", s.max_lateness_us},
-                          {"lateness_p99_us", s.lateness_p99_us},
-                          {"reply_p99_us", s.reply_p99_us},
-                          {"max_work_us", s.max_work_us},
-                          {"dropped_events", s.dropped_events}}}};
-  if (s.details) out[s.details->first] = s.details->second;
+  nlohmann::json out = nlohmann::json::object();
+  out["link"]["frames_sent"] = s.frames_sent;
+  nlohmann::json& cycle = out["cycle"];
+  cycle["cycles"] = s.cycles;
+  cycle["dropped_events"] = s.dropped_events;
+  out[std::string(drive::to_string(s.drive_kind))] = s.details;
   return out;
 }
 

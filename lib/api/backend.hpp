@@ -68,30 +68,15 @@ struct StatusSnapshot {
   bool operator==(const StatusSnapshot&) const = default;
 };
 
-/// Counters and timing for `stats`.
+/// Counters and timing for `stats`. The drive-neutral fields mean the same on every drive kind;
+/// every counter of one kind's own link or thread goes into `details`, reported under the kind's
+/// name (stats.dcp, stats.sch001, stats.uss).
 struct StatsSnapshot {
-  std::uint64_t frames_sent = 0;        ///< master frames sent
-  std::uint64_t replies_good = 0;       ///< replies with a good checksum
-  std::uint64_t checksum_errors = 0;    ///< replies with a bad checksum
-  std::uint64_t missing_replies = 0;    ///< cycles without a complete reply
-  std::uint64_t repeats = 0;            ///< replies with S7 set (drive saw our frame corrupt)
-  std::uint64_t link_losses = 0;        ///< times the link supervision tripped
-  std::uint64_t cycles = 0;             ///< cycles run
-  std::uint64_t late_sends = 0;         ///< frames sent late, inside the DCP 7.2 slack
-  std::uint64_t overruns = 0;           ///< wake-ups too late to send (beyond the slack)
-  std::uint64_t skipped_cycles = 0;     ///< cycles not run because of overruns
-  std::uint64_t max_lateness_us = 0;    ///< worst wake-up lateness
-  std::uint64_t max_work_us = 0;        ///< worst time spent inside one cycle
-  double lateness_p99_us = 0;           ///< wake-up lateness, 99th percentile
-  double reply_p99_us = 0;              ///< send start to complete reply, 99th percentile
-  std::uint64_t b7_sent = 0;            ///< frames sent with B7 (reply checksum error, DCP 6.1)
-  std::uint64_t channel_resets = 0;     ///< communication channel resets (DCP 5.4, 5.10)
-  std::uint64_t decode_errors = 0;      ///< channel payloads that did not decode
-  std::uint64_t request_timeouts = 0;   ///< I-messages the drive did not answer
-  std::uint64_t longest_error_run = 0;  ///< longest run of consecutive bad or missing replies
-  std::uint64_t dropped_events = 0;     ///< cycle events lost: a queue towards the io thread full
-  /// What only one drive kind counts, reported under the kind's name (e.g. stats.uss).
-  std::optional<std::pair<std::string, nlohmann::json>> details;
+  drive::Kind drive_kind = drive::Kind::Dcp;          ///< names the object of `details`
+  std::uint64_t frames_sent = 0;                      ///< link.frames_sent: frames to the drive
+  std::uint64_t cycles = 0;                           ///< cycle.cycles: passes of the drive loop
+  std::uint64_t dropped_events = 0;                   ///< cycle.dropped_events: queue full
+  nlohmann::json details = nlohmann::json::object();  ///< stats.<drive.kind>, e.g. stats.dcp
 };
 
 /// One exchange of the frame trace (DCP: one cycle).

@@ -14,7 +14,7 @@
 namespace liftd::api {
 
 /// Version of the line protocol announced in the greeting; bumped on incompatible changes.
-inline constexpr int kApiVersion = 2;
+inline constexpr int kApiVersion = 3;
 
 /// Error codes of a failed request; to_string gives the snake_case name on the wire.
 enum class ErrorCode : std::uint8_t {

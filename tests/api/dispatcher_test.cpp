@@ -255,12 +255,7 @@ TEST_F(DispatcherTest, StatusNamesEveryField) {
   EXPECT_EQ(r.at("link").at("state"), "up");
   // The drive kind's own object, under its name.
   EXPECT_EQ(r.at("dcp"), backend_.status_snapshot.details);
-  // API 1 fields kept for DCP lifts: the same values as in "dcp".
-  EXPECT_EQ(r.at("drive").at("mode"), "DCP4");
-  EXPECT_EQ(r.at("drive").at("status"), r.at("dcp").at("status"));
-  EXPECT_EQ(r.at("drive").at("status").at("advance_warning"), true);
-  EXPECT_EQ(r.at("drive").at("extended"), r.at("dcp").at("extended"));
-  EXPECT_TRUE(r.at("link").at("handshake_problem").is_null());
+  EXPECT_EQ(r.at("dcp").at("status").at("advance_warning"), true);
   EXPECT_EQ(r.at("car"), (json{{"position_mm", 3000},
                                {"floor", 1},
                                {"next_possible_stop", nullptr},
@@ -276,14 +271,41 @@ TEST_F(DispatcherTest, StatusUsesNullForUnknowns) {
   const json r = handle(R"({"cmd":"status"})").at("result");
   EXPECT_EQ(r.at("link").at("state"), "down");
   EXPECT_EQ(r.at("drive").at("state"), "offline");
-  EXPECT_TRUE(r.at("link").at("handshake_problem").is_null());
-  EXPECT_TRUE(r.at("drive").at("mode").is_null());
-  EXPECT_TRUE(r.at("drive").at("extended").is_null());
   EXPECT_TRUE(r.at("car").at("position_mm").is_null());
   EXPECT_TRUE(r.at("car").at("floor").is_null());
 }
 
 // status serialises an unchanged snapshot once; every change of any field must still show.
+// Each fact once: what only one drive kind has is under the kind's name, nowhere else.
+TEST_F(DispatcherTest, StatusOfADcpLiftHasItsFactsUnderDcpOnly) {
+  const json r = handle(R"({"cmd":"status"})").at("result");
+  EXPECT_EQ(r.at("drive"), (json{{"kind", "dcp"}, {"state", "ready"}}));
+  EXPECT_EQ(r.at("link"), (json{{"state", "up"}}));
+  for (const char* key : {"mode", "status", "extended", "handshake_problem"}) {
+    EXPECT_TRUE(r.at("dcp").contains(key)) << key;
+  }
+}
+
+TEST_F(DispatcherTest, StatsPutTheKindsOwnCountersUnderItsName) {
+  struct Case {
+    drive::Kind kind;
+    const char* name;
+  };
+  for (const Case& c : {Case{drive::Kind::Dcp, "dcp"}, Case{drive::Kind::Sch001, "sch001"},
+                        Case{drive::Kind::Uss, "uss"}}) {
+    backend_.stats_snapshot.drive_kind = c.kind;
+    backend_.stats_snapshot.frames_sent = 7;
+    backend_.stats_snapshot.cycles = 9;
+    backend_.stats_snapshot.dropped_events = 1;
+    backend_.stats_snapshot.details = {{"own_counter", 3}};
+    const json r = handle(R"({"cmd":"stats"})").at("result");
+    EXPECT_EQ(r.at("link"), (json{{"frames_sent", 7}})) << c.name;
+    EXPECT_EQ(r.at("cycle"), (json{{"cycles", 9}, {"dropped_events", 1}})) << c.name;
+    EXPECT_EQ(r.at(c.name), (json{{"own_counter", 3}})) << c.name;
+    EXPECT_EQ(r.size(), 4U) << r.dump();  // and "api"
+  }
+}
+
 TEST_F(DispatcherTest, StatusShowsEveryChangeBetweenRequests) {
   const auto position = [this] {
     return handle(R"({"cmd":"status"})").at("result").at("car").at("position_mm");

@@ -66,7 +66,30 @@ TEST_F(Liftctl, SocketComesFromTheEnvironment) {
   start_server();
   const RunResult r = run("LIFTD_SOCKET=" + socket_path() + " " + LIFTCTL_PATH + " version");
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("api: 2"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("api: 3"), std::string::npos) << r.output;
+}
+
+TEST_F(Liftctl, StatsPrintTheNeutralCountersThenTheDriveKinds) {
+  backend_.stats_snapshot.frames_sent = 24000;
+  backend_.stats_snapshot.details = {{"missing_replies", 6}, {"reply_p99_us", 2210.0}};
+  start_server();
+  const RunResult r = run(liftctl("stats"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("link:\n  frames_sent: 24000\n"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("dcp:\n  missing_replies: 6\n  reply_p99_us: 2210.0\n"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("api:\n"), std::string::npos) << r.output;
+}
+
+TEST_F(Liftctl, StatsOfAUssLiftPrintTheBussNestedFiguresByPath) {
+  backend_.status_snapshot.drive_kind = drive::Kind::Uss;
+  backend_.stats_snapshot.drive_kind = drive::Kind::Uss;
+  backend_.stats_snapshot.details = {{"receive", {{"bcc", 2}}}};
+  start_server();
+  const RunResult r = run(liftctl("stats"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("uss:\n  receive.bcc: 2\n"), std::string::npos) << r.output;
 }
 
 TEST_F(Liftctl, ControlCommandsReachTheBackend) {

@@ -183,13 +183,13 @@ TEST(DriveNotReady, DuringATravelTheTravelFinishesAndNoNewOneStarts) {
   const json end = lift.wait_travel_end();
   ASSERT_FALSE(end.is_null());
   EXPECT_EQ(end["data"]["event"], "finished") << end.dump();
-  EXPECT_EQ(lift.status()["drive"]["status"]["ready"], false);
+  EXPECT_EQ(lift.status()["dcp"]["status"]["ready"], false);
   const json refused = lift.call({{"cmd", "travel"}, {"floor", 0}});
   EXPECT_EQ(refused["error"]["code"], "not_ready") << refused.dump();
   EXPECT_EQ(refused["error"]["message"], "drive not ready (S0 = 0)") << refused.dump();
   ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "not_ready"}, {"on", false}})));
   // Wait for the drive's S0 to come back (a condition, not a fixed time).
-  for (int i = 0; i < 50 && lift.status()["drive"]["status"]["ready"] != true; ++i) {
+  for (int i = 0; i < 50 && lift.status()["dcp"]["status"]["ready"] != true; ++i) {
     lift.api().drain(50ms);
   }
   ASSERT_TRUE(is_ok(lift.call({{"cmd", "travel"}, {"floor", 0}})));
@@ -200,11 +200,11 @@ TEST(DriveNotReady, DuringATravelTheTravelFinishesAndNoNewOneStarts) {
 
 TEST(LateReplies, AreCountedAsMissingWithoutALinkFault) {
   START_LIFT(lift, 4);
-  const json before = lift.call({{"cmd", "stats"}})["result"]["link"];
+  const json before = lift.call({{"cmd", "stats"}})["result"]["dcp"];
   ASSERT_TRUE(is_ok(
       lift.call({{"cmd", "sim"}, {"action", "reply_fault"}, {"fault", "late"}, {"frames", 5}})));
   lift.api().drain(1s);
-  const json after = lift.call({{"cmd", "stats"}})["result"]["link"];
+  const json after = lift.call({{"cmd", "stats"}})["result"]["dcp"];
   // Each late reply misses the window of its own frame (before the fix none did). A simulator
   // thread that itself wakes late on a loaded machine may push one past the next frame, where
   // it stands in for that frame's reply, so the count is at least one, not exactly five.

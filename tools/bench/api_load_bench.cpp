@@ -144,13 +144,13 @@ void dispatcher(const std::string& socket, std::atomic<bool>& stop, std::atomic<
   }
 }
 
-/// The DCP link's fault count (`stats` link.link_losses: DCP 7.3, ten missing replies in a row
+/// The DCP link's fault count (`stats` dcp.link_losses: DCP 7.3, ten missing replies in a row
 /// or the port lost), or -1 when the daemon did not answer.
 long long link_faults(const std::string& socket) {
   Client client(socket);
   const json s = client.call({{"cmd", "stats"}});
   if (!s.is_object() || s["ok"] != true) return -1;
-  return s["result"]["link"]["link_losses"].get<long long>();
+  return s["result"]["dcp"]["link_losses"].get<long long>();
 }
 
 /// The reference: a bare absolute clock_nanosleep loop at the cycle's period and priority

@@ -67,7 +67,7 @@ std::string drive_state_text(const json& kind, const json& state) {
   return "not_ready (" + why + ": no travel starts)";
 }
 
-/// The DCP object of a status: "dcp" since API 2, the "drive" object of API 1 before.
+/// The DCP object of a status: "dcp" since API 2, the "drive" object of an API 1 daemon.
 const json& dcp_of(const json& s) {
   const json& dcp = at(s, "dcp");
   return dcp.is_object() ? dcp : at(s, "drive");
@@ -82,7 +82,7 @@ std::string format_status(const json& s) {
   const json& travel = at(s, "travel");
   const json& rt = at(s, "rt");
   out << "link:     " << text(at(at(s, "link"), "state")) << '\n';
-  if (drive.contains("kind")) {  // API 2
+  if (drive.contains("kind")) {  // API 2 and later
     out << "drive:    " << text(at(drive, "kind")) << ", "
         << drive_state_text(at(drive, "kind"), at(drive, "state")) << '\n';
   }
@@ -208,12 +208,17 @@ std::string format_event_line(const std::string& name, const json& data) {
 }
 
 std::string format_stats(const json& stats) {
+  // API 3: the drive-neutral `link` and `cycle`, the drive kind's own counters under its name.
+  // An API 2 daemon has every counter in `link` and `cycle`: printed as they come.
   std::ostringstream out;
-  for (const char* section : {"link", "cycle", "api"}) {
+  for (const char* section : {"link", "cycle", "dcp", "sch001", "uss", "api"}) {
     const json& part = at(stats, section);
     if (!part.is_object()) continue;
     out << section << ":\n";
-    for (const auto& [key, value] : part.items()) out << "  " << key << ": " << text(value) << '\n';
+    std::ostringstream lines;
+    flatten(part, "", lines);
+    std::istringstream each(lines.str());
+    for (std::string line; std::getline(each, line);) out << "  " << line << '\n';
   }
   return out.str();
 }

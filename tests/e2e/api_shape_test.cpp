@@ -1,0 +1,125 @@
+// The keys of `status` and `stats` for each drive kind, each as `liftd --simulate`
+// (docs/api.md): the drive-neutral keys every kind has, and what only the kind has, under an
+// object named after it. Each fact once: a DCP status has its mode, status bits, extended status
+// and handshake problem under `dcp` only.
+#include <gtest/gtest.h>
+
+#include <ostream>
+#include <set>
+#include <string>
+#include <thread>
+
+#include "e2e/harness.hpp"
+
+namespace liftd::e2e {
+namespace {
+
+using Keys = std::set<std::string>;
+
+/// The keys of a JSON object (empty for anything else).
+Keys keys_of(const json& object) {
+  Keys out;
+  if (object.is_object()) {
+    for (const auto& [key, value] : object.items()) out.insert(key);
+  }
+  return out;
+}
+
+struct ShapeCase {
+  const char* kind;  ///< drive.kind, also the name of the kind's object
+  json config;       ///< merged into the lift's config
+  Keys status_keys;  ///< status.<kind>
+  Keys stats_keys;   ///< stats.<kind>
+};
+
+void PrintTo(const ShapeCase& c, std::ostream* out) {
+  *out << c.kind;
+}
+
+// Three floors 1200 mm apart for the hydraulic and USS cars, as in their own e2e tests.
+const json kThreeFloors = json::array({{{"name", "0"}, {"level_mm", 0}},
+                                       {{"name", "1"}, {"level_mm", 1200}},
+                                       {{"name", "2"}, {"level_mm", 2400}}});
+
+const ShapeCase kCases[] = {
+    {"dcp",
+     json::object(),
+     {"mode", "status", "extended", "handshake_problem"},
+     {"replies_good", "checksum_errors", "missing_replies", "repeats", "link_losses", "b7_sent",
+      "channel_resets", "decode_errors", "request_timeouts", "longest_error_run", "late_sends",
+      "overruns", "skipped_cycles", "max_lateness_us", "lateness_p99_us", "reply_p99_us",
+      "max_work_us"}},
+    {"sch001",
+     {{"drive", {{"kind", "sch001"}}},
+      {"floors", kThreeFloors},
+      {"sch001", {{"star_delta_ms", 500}, {"slowdown_up_mm", 300}, {"slowdown_down_mm", 350}}}},
+     {"card", "timeout_enabled", "commands", "current_floor", "destination_floor", "motor_on",
+      "phase", "send_failing", "foreign_sender"},
+     {"frames_received", "status_frames", "timeout_commands", "wrong_length", "unknown_first_byte",
+      "own_id_frames", "other_id_frames", "card_silences", "error_frames", "send_errors", "reopens",
+      "dropped_records"}},
+    {"uss",
+     {{"drive", {{"kind", "uss"}}},
+      {"floors", kThreeFloors},
+      {"travel", {{"dcp3_decel_distance_mm", {{"V4", 700}, {"V3", 500}}}}},
+      {"uss", {{"speeds", {{"V0", 10}, {"VN", 3}, {"VI", 30}, {"V3", 63}, {"V4", 100}}}}}},
+     {"drive_address", "profile_state", "wish", "supervision", "control_word", "status_word",
+      "control_bits", "status_bits", "setpoint", "actual", "phase", "speed", "slaves"},
+     {"baud", "expected_cycle_time_us", "last_cycle_time_us", "cycle_time_p99_us", "replies_good",
+      "replies_rejected", "port_losses", "max_lateness_us", "lateness_p99_us", "reply_p99_us",
+      "line_errors", "receive", "slaves"}},
+};
+
+class ApiShapeTest : public ::testing::TestWithParam<ShapeCase> {
+ protected:
+  void SetUp() override {
+    lift_ = std::make_unique<Lift>(std::string("api-shape-") + GetParam().kind, 4, json::object(),
+                                   std::vector<std::string>{}, GetParam().config);
+    ASSERT_EQ(lift_->setup_error(), "") << lift_->log();
+  }
+  std::unique_ptr<Lift> lift_;
+};
+
+TEST_P(ApiShapeTest, StatusHasTheNeutralKeysAndTheKindsObject) {
+  const std::string kind = GetParam().kind;
+  const json s = lift_->status();
+  EXPECT_EQ(keys_of(s), (Keys{"drive", "link", "car", "travel", "faults", "rt", kind})) << s.dump();
+  EXPECT_EQ(s["drive"]["kind"], kind);
+  EXPECT_EQ(keys_of(s["drive"]), (Keys{"kind", "state"})) << "DCP's mode, status and extended "
+                                                             "are under dcp only: "
+                                                          << s.dump();
+  EXPECT_EQ(keys_of(s["link"]), (Keys{"state"})) << "handshake_problem is under dcp only";
+  EXPECT_EQ(keys_of(s["car"]),
+            (Keys{"position_mm", "floor", "next_possible_stop", "brake_open", "contactors_on"}));
+  EXPECT_EQ(keys_of(s["travel"]),
+            (Keys{"state", "direction", "target_floor", "calls", "last_slip_mm"}));
+  EXPECT_EQ(keys_of(s["rt"]), (Keys{"realtime", "policy", "priority", "memory_locked"}));
+  EXPECT_EQ(keys_of(s[kind]), GetParam().status_keys) << s.dump();
+}
+
+TEST_P(ApiShapeTest, StatsHaveTheNeutralCountersAndTheKindsOwnUnderItsName) {
+  const std::string kind = GetParam().kind;
+  // The link is up, so frames went out; a USS pass of the polling list may still be running.
+  json stats;
+  for (int i = 0; i < 50; ++i) {
+    stats = lift_->call({{"cmd", "stats"}})["result"];
+    if (stats["cycle"]["cycles"].is_number() && stats["cycle"]["cycles"].get<long long>() > 0) {
+      break;
+    }
+    std::this_thread::sleep_for(100ms);
+  }
+  EXPECT_EQ(keys_of(stats), (Keys{"link", "cycle", "api", kind})) << stats.dump();
+  EXPECT_EQ(keys_of(stats["link"]), (Keys{"frames_sent"})) << stats.dump();
+  EXPECT_EQ(keys_of(stats["cycle"]), (Keys{"cycles", "dropped_events"})) << stats.dump();
+  EXPECT_EQ(keys_of(stats[kind]), GetParam().stats_keys) << stats.dump();
+  EXPECT_GT(stats["link"]["frames_sent"].get<long long>(), 0) << stats.dump();
+  EXPECT_GT(stats["cycle"]["cycles"].get<long long>(), 0) << stats.dump();
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryDriveKind, ApiShapeTest, ::testing::ValuesIn(kCases),
+                         [](const ::testing::TestParamInfo<ShapeCase>& param) {
+                           return std::string(param.param.kind);
+                         });
+
+}  // namespace
+}  // namespace liftd::e2e
