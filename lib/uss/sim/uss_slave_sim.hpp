@@ -73,7 +73,7 @@
 #include "uss/receiver.hpp"
 #include "uss/telegram.hpp"
 
-namespace liftd::sim {
+namespace liftd::uss::sim {
 
 /// Device-specific error numbers (C 4.2.1.1 Tabelle 4.3: "Fehlerkennung größer 100 können
 /// gerätespezifisch belegt werden").
@@ -402,4 +402,4 @@ class UssBusSim {
   std::vector<UssSlaveSim> slaves_;
 };
 
-}  // namespace liftd::sim
+}  // namespace liftd::uss::sim

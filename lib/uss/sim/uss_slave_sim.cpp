@@ -1,4 +1,4 @@
-#include "sim/uss_slave_sim.hpp"
+#include "uss/sim/uss_slave_sim.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include "uss/pzd.hpp"
 #include "uss/timing.hpp"
 
-namespace liftd::sim {
+namespace liftd::uss::sim {
 namespace {
 
 using uss::Pkw;
@@ -1270,4 +1270,4 @@ std::size_t UssBusSim::take_violations(std::span<UssViolation> out) noexcept {
   return n;
 }
 
-}  // namespace liftd::sim
+}  // namespace liftd::uss::sim

@@ -15,10 +15,10 @@
 #include "dcp/channel.hpp"
 #include "dcp/frame.hpp"
 #include "dcp/messages.hpp"
-#include "sim/profile.hpp"
-#include "sim/slave_channel.hpp"
+#include "dcp/sim/profile.hpp"
+#include "dcp/sim/slave_channel.hpp"
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 
 /// Travel speeds of the simulated installation (m/s), by DCP speed name (DCP 3.5.3.7).
 struct SpeedTable {
@@ -464,4 +464,4 @@ class DriveSim {
   SimCounters counters_{};
 };
 
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim

@@ -1,4 +1,4 @@
-#include "sim/drive_sim.hpp"
+#include "dcp/sim/drive_sim.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <type_traits>
 #include <variant>
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 
 namespace {
 
@@ -1310,4 +1310,4 @@ void DriveSim::flush_display(bool all) noexcept {
   }
 }
 
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim
