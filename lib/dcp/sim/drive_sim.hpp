@@ -2,6 +2,8 @@
 // master's 6-byte frames, runs the travel sequences of chapters 9 to 13 on a jerk-limited car
 // model, serves the communication channel (chapter 5) and injects faults on demand.
 // Sans-I/O: time comes in as an argument, no clock, file descriptor, logging or allocation.
+// Sources: drive_sim.cpp (time and car, the frames, faults), drive_sim_travel.cpp (the travel
+// sequencing), drive_sim_channel.cpp (the communication channel and display).
 #pragma once
 
 #include <array>
