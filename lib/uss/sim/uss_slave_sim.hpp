@@ -10,6 +10,8 @@
 // Structure: one UssSlaveSim per slave address (each with its own receiver, as every station on
 // the bus runs A 5.2 itself), and UssBusSim that feeds every received character to all of them and
 // hands out the replies. A single slave can also be driven alone through the same calls.
+// Sources: uss_slave_sim.cpp (the line and telegram handling, UssBusSim), uss_slave_drive.cpp (the
+// drive profile and the car), uss_slave_parameters.cpp (the PKW parameter store).
 //
 // How to drive it (one thread owns the object; nothing here is thread-safe):
 //   - every character read from the line: on_char(c, t) with t = the time it was received
