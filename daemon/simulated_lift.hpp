@@ -11,9 +11,9 @@
 #include "config/config.hpp"
 #include "daemon/lift_common.hpp"
 #include "dcp/control/dcp_controller.hpp"
+#include "dcp/sim/serial_runner.hpp"
 #include "io/pty.hpp"
 #include "lift/inputs.hpp"
-#include "dcp/sim/serial_runner.hpp"
 #include "sim/sim_io.hpp"
 
 namespace liftd::daemon {

@@ -97,12 +97,14 @@ TEST_P(ChannelFaultDuringTravel, B0StaysUntilTheCarStandsThenTheHandshakeRunsAga
 }
 
 INSTANTIATE_TEST_SUITE_P(Dcp5, ChannelFaultDuringTravel,
-                         ::testing::Values(dcp::sim::ChannelFault::Partial, dcp::sim::ChannelFault::Garbage,
+                         ::testing::Values(dcp::sim::ChannelFault::Partial,
+                                           dcp::sim::ChannelFault::Garbage,
                                            dcp::sim::ChannelFault::Silence),
                          [](const auto& p) {
-                           return std::string(p.param == dcp::sim::ChannelFault::Partial   ? "Partial"
-                                              : p.param == dcp::sim::ChannelFault::Garbage ? "Garbage"
-                                                                                      : "Silence");
+                           return std::string(p.param == dcp::sim::ChannelFault::Partial ? "Partial"
+                                              : p.param == dcp::sim::ChannelFault::Garbage
+                                                  ? "Garbage"
+                                                  : "Silence");
                          });
 
 // ---- older drives (DCP 5.12.3.1, 5.12.2.2) -----------------------------------------------------

@@ -262,8 +262,9 @@ std::string run_seed(std::uint32_t seed, Coverage& coverage) {
       const CycleRecord& r = rig.log.back();
       std::string broken = checker.check(r, api);
       if (broken.empty() && rig.sim.counters().violations != 0) {
-        broken = std::string("the simulated drive saw a spec violation: ") +
-                 (rig.sim.violations(dcp::sim::Violation::StopAtSpeed) != 0 ? "stop message at speed"
+        broken =
+            std::string("the simulated drive saw a spec violation: ") +
+            (rig.sim.violations(dcp::sim::Violation::StopAtSpeed) != 0 ? "stop message at speed"
                                                                        : "travel without I9");
       }
       ++coverage.frames;

@@ -25,9 +25,9 @@
 #include <sstream>
 
 #include "can/socket.hpp"
+#include "dcp/sim/serial_runner.hpp"
 #include "e2e/harness.hpp"
 #include "io/pty.hpp"
-#include "dcp/sim/serial_runner.hpp"
 
 namespace liftd::e2e {
 namespace {

@@ -355,8 +355,9 @@ TEST(LiveLink, TenLostRepliesFaultTheLinkStopTheTravelThenItRecoversAndReinitial
   std::size_t i0_at_drive_after = 0;
   for (const auto& e : sim_events) {
     i0_at_drive_after +=
-        e.kind == dcp::sim::SimEvent::Kind::ChannelMessage && e.value == '0' && e.at > fault_at ? 1U
-                                                                                           : 0U;
+        e.kind == dcp::sim::SimEvent::Kind::ChannelMessage && e.value == '0' && e.at > fault_at
+            ? 1U
+            : 0U;
   }
   EXPECT_GE(i0_at_drive_after, 1U);
 

@@ -21,9 +21,9 @@
 
 #include "control/controller_rig.hpp"
 #include "dcp/control/dcp_controller.hpp"
+#include "dcp/sim/serial_runner.hpp"
 #include "io/pty.hpp"
 #include "rt/cycle_runner.hpp"
-#include "dcp/sim/serial_runner.hpp"
 
 namespace liftd::integration {
 
@@ -58,7 +58,7 @@ inline io::PtyPair make_pty() {
 /// A simulator serving the master end of `pty` (through a duplicate of its descriptor, so the
 /// pair and the runner close independently).
 inline std::unique_ptr<dcp::sim::SerialDriveRunner> serve(int master_fd,
-                                                     const dcp::sim::DriveConfig& config) {
+                                                          const dcp::sim::DriveConfig& config) {
   dcp::sim::RunnerOptions options;
   options.fd = ::dup(master_fd);
   options.reconnect = false;

@@ -7,8 +7,8 @@
 #include <string>
 
 #include "dcp/frame.hpp"
-#include "dcp/travel/controller.hpp"
 #include "dcp/sim/drive_sim.hpp"
+#include "dcp/travel/controller.hpp"
 
 namespace liftd::travel {
 namespace {

@@ -20,11 +20,11 @@
 #include "io/pty.hpp"
 #include "io/serial_port.hpp"
 #include "pty_line.hpp"
-#include "uss/sim/uss_slave_sim.hpp"
 #include "uss/master/master.hpp"
 #include "uss/pkw.hpp"
 #include "uss/receiver.hpp"
 #include "uss/runner/uss_runner.hpp"
+#include "uss/sim/uss_slave_sim.hpp"
 #include "uss/telegram.hpp"
 
 namespace liftd::rt {
@@ -287,7 +287,8 @@ TEST(UssRunnerPty, MasterAgainstSimulatedSlavesOneOfThemSilent) {
   drives[0].address = 1;
   drives[1].address = 2;
   uss::sim::UssBusSim bus(drives, kBaud, mono_now());
-  uss::testing::PtyLine<uss::sim::UssBusSim, uss::sim::UssReply> line(pty.value().master_fd(), bus, kBaud);
+  uss::testing::PtyLine<uss::sim::UssBusSim, uss::sim::UssReply> line(pty.value().master_fd(), bus,
+                                                                      kBaud);
 
   MasterConfig mc;
   mc.baud = kBaud;

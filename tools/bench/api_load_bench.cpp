@@ -38,10 +38,10 @@
 #include "rt/histogram.hpp"
 #include "rt/rt_thread.hpp"
 #include "service/notify.hpp"
-#include "uss/sim/uss_slave_sim.hpp"
 #include "support/api_client.hpp"
 #include "uss/master/master.hpp"
 #include "uss/runner/uss_runner.hpp"
+#include "uss/sim/uss_slave_sim.hpp"
 #include "uss_master/pty_line.hpp"
 
 namespace {
@@ -265,8 +265,8 @@ class ReferenceLink {
       if (::poll(&pfd, 1, 20) <= 0) continue;
       const ssize_t n = ::read(fd, buf.data(), buf.size());
       if (n <= 0) continue;
-      // As the simulated drive does on a pty (dcp::sim::pty_wire_time): answer when a real RS485 line
-      // would deliver the answer, after our frame's and the reply's wire time (DCP 7.1/7.2: 6
+      // As the simulated drive does on a pty (dcp::sim::pty_wire_time): answer when a real RS485
+      // line would deliver the answer, after our frame's and the reply's wire time (DCP 7.1/7.2: 6
       // bytes of 10 bits at 38400 baud, 1.5625 ms each).
       rt::sleep_until(mono_now() + 2 * std::chrono::microseconds(1563));
       (void)!::write(fd, buf.data(), static_cast<std::size_t>(n));

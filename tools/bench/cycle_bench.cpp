@@ -21,6 +21,7 @@
 #include <unistd.h>
 
 #include "dcp/control/dcp_controller.hpp"
+#include "dcp/sim/serial_runner.hpp"
 #include "dcp/trace.hpp"
 #include "echo_engine.hpp"
 #include "fake_responder.hpp"
@@ -28,7 +29,6 @@
 #include "rt/cycle_runner.hpp"
 #include "rt/histogram.hpp"
 #include "rt/rt_thread.hpp"
-#include "dcp/sim/serial_runner.hpp"
 
 namespace {
 

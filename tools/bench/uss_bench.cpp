@@ -34,9 +34,9 @@
 
 #include "io/pty.hpp"
 #include "rt/rt_thread.hpp"
-#include "uss/sim/uss_slave_sim.hpp"
 #include "uss/master/master.hpp"
 #include "uss/runner/uss_runner.hpp"
+#include "uss/sim/uss_slave_sim.hpp"
 #include "uss/timing.hpp"
 #include "uss_master/pty_line.hpp"
 
@@ -276,7 +276,8 @@ int run_rate(const Options& o, std::uint32_t baud) {
   rc.serial = uss::uss_serial_settings(baud);
   rc.thread.priority = o.priority;
   rc.thread.lock_memory = o.lock_memory;
-  liftd::uss::testing::PtyLine<uss::sim::UssBusSim, uss::sim::UssReply> line(pty.master_fd(), *bus, baud);
+  liftd::uss::testing::PtyLine<uss::sim::UssBusSim, uss::sim::UssReply> line(pty.master_fd(), *bus,
+                                                                             baud);
   std::unique_ptr<uss::UssRunner> runner;
   try {
     runner = std::make_unique<uss::UssRunner>(rc, master, hooks);

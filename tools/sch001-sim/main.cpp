@@ -71,8 +71,8 @@ void print_status(const liftd::sch001::sim::Sch001CardSim& card) {
 }
 
 /// One stdin line; false on "quit".
-bool command(const std::string& line, liftd::sch001::sim::Sch001CardSim& card, liftd::can::CanSocket* peer,
-             bool unix_socket) {
+bool command(const std::string& line, liftd::sch001::sim::Sch001CardSim& card,
+             liftd::can::CanSocket* peer, bool unix_socket) {
   std::istringstream in(line);
   std::string word, arg;
   in >> word >> arg;

@@ -1,5 +1,5 @@
-// uss-drive-sim: simulated USS slaves (lift drives, uss::sim::UssBusSim) on a serial device or a pty,
-// 8E1 (USS B 3.2). Characters are read with their parity/framing marks (PARMRK) where the line
+// uss-drive-sim: simulated USS slaves (lift drives, uss::sim::UssBusSim) on a serial device or a
+// pty, 8E1 (USS B 3.2). Characters are read with their parity/framing marks (PARMRK) where the line
 // gives them, each telegram is answered after the slave's reply delay, the car keeps moving
 // between telegrams, and every rule of the spec the master breaks is printed. Faults are switched
 // on stdin while it runs ("help" lists them); a summary is printed on exit.
@@ -29,8 +29,8 @@
 #include "common/version.hpp"
 #include "io/pty.hpp"
 #include "io/serial_port.hpp"
-#include "uss/sim/uss_slave_sim.hpp"
 #include "uss/line.hpp"
+#include "uss/sim/uss_slave_sim.hpp"
 #include "uss/timing.hpp"
 
 namespace {

@@ -23,8 +23,8 @@
 
 #include "common/mono_time.hpp"
 #include "common/snapshot_box.hpp"
-#include "io/serial_port.hpp"
 #include "dcp/sim/drive_sim.hpp"
+#include "io/serial_port.hpp"
 
 namespace liftd::dcp::sim {
 

@@ -9,8 +9,8 @@
 #include <string>
 
 #include "uss/pzd.hpp"
-#include "uss/timing.hpp"
 #include "uss/sim/uss_slave_sim_detail.hpp"
+#include "uss/timing.hpp"
 
 namespace liftd::uss::sim {
 
