@@ -119,8 +119,8 @@ std::string card_text(const sch001::CardStatus& s, bool single_unit) {
 
 namespace {
 
-sim::CardSimConfig card_sim_config(const config::Config& c) {
-  sim::CardSimConfig out;
+sch001::sim::CardSimConfig card_sim_config(const config::Config& c) {
+  sch001::sim::CardSimConfig out;
   out.ids = *sch001::ids_for(static_cast<std::uint32_t>(c.sch001.base),
                              static_cast<std::uint32_t>(c.sch001.controller_node));
   out.fast_down_sp3 = c.sch001.fast_down == config::FastDown::sp3;
@@ -221,7 +221,7 @@ void SimulatedCard::loop() {
 }
 
 void SimulatedCard::log_violations() {
-  std::vector<sim::CardViolation> found;
+  std::vector<sch001::sim::CardViolation> found;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     found = card_.take_violations();

@@ -26,7 +26,7 @@
 #include "rt/can_runner.hpp"
 #include "rt/encoder_tap.hpp"
 #include "sch001/controller.hpp"
-#include "sim/sch001_card_sim.hpp"
+#include "sch001/sim/sch001_card_sim.hpp"
 #include "sim/sim_io.hpp"
 
 namespace liftd::daemon {
@@ -60,7 +60,7 @@ class SimulatedCard final : public SimulatorThread {
   std::string socket_path_;
   int listener_ = -1;
   std::optional<can::CanSocket> peer_;  ///< the controller's connection (simulator's thread)
-  sim::Sch001CardSim card_;             ///< guarded by mutex_
+  sch001::sim::Sch001CardSim card_;     ///< guarded by mutex_
   bool bus_off_ = false;  ///< inject one bus-off error frame (then back to normal; mutex_)
   bool drop_ = false;     ///< close the controller's connection once (mutex_)
 };

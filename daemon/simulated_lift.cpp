@@ -22,16 +22,16 @@ namespace liftd::daemon {
 /// machine, and the drive refused the distance as implausible.
 class SimulatedLift::Encoder final : public control::PositionSource {
  public:
-  explicit Encoder(const sim::SerialDriveRunner& drive) : drive_(drive) {}
+  explicit Encoder(const dcp::sim::SerialDriveRunner& drive) : drive_(drive) {}
   std::optional<std::int64_t> position_mm(MonoTime now) const noexcept override {
-    const sim::EncoderSample sample = drive_.encoder_sample();
+    const dcp::sim::EncoderSample sample = drive_.encoder_sample();
     if (now - sample.at > kMaxAge) return std::nullopt;
     return std::llround(sample.position_at_mm(now));
   }
 
  private:
   static constexpr MonoTime kMaxAge = std::chrono::milliseconds(200);
-  const sim::SerialDriveRunner& drive_;
+  const dcp::sim::SerialDriveRunner& drive_;
 };
 
 namespace {
@@ -40,20 +40,20 @@ namespace {
 // the controller's configured deceleration distance.
 constexpr int kCrawlApproachMm = 100;
 
-sim::ReplyFault to_sim(api::SimReplyFault fault) {
+dcp::sim::ReplyFault to_sim(api::SimReplyFault fault) {
   switch (fault) {
     case api::SimReplyFault::NoReply:
-      return sim::ReplyFault::NoReply;
+      return dcp::sim::ReplyFault::NoReply;
     case api::SimReplyFault::BadChecksum:
-      return sim::ReplyFault::BadChecksum;
+      return dcp::sim::ReplyFault::BadChecksum;
     case api::SimReplyFault::S7:
-      return sim::ReplyFault::MessageError;
+      return dcp::sim::ReplyFault::MessageError;
     case api::SimReplyFault::Late:
-      return sim::ReplyFault::Late;
+      return dcp::sim::ReplyFault::Late;
     case api::SimReplyFault::Garbage:
-      return sim::ReplyFault::Garbage;
+      return dcp::sim::ReplyFault::Garbage;
   }
-  return sim::ReplyFault::NoReply;
+  return dcp::sim::ReplyFault::NoReply;
 }
 
 }  // namespace
@@ -65,7 +65,7 @@ SimulatedLift::SimulatedLift(const config::Config& config) : board_(config, mono
   pty_ = std::make_unique<io::PtyPair>(std::move(pair).value());
   device_path_ = pty_->slave_path();
 
-  sim::DriveConfig drive;
+  dcp::sim::DriveConfig drive;
   drive.protocol = config.sim.dcp == 3 ? dcp::Protocol::Dcp3 : dcp::Protocol::Dcp4;
   if (!config.floors.empty()) drive.start_position_mm = config.floors.front().level_mm;
   for (const auto& [name, mm] : config.travel.dcp3_decel_distance_mm) {
@@ -78,13 +78,13 @@ SimulatedLift::SimulatedLift(const config::Config& config) : board_(config, mono
       drive.dcp3_decel_mm[travel::speed_index(*speed)] = static_cast<std::uint32_t>(ramp_mm);
     }
   }
-  sim::RunnerOptions options;
+  dcp::sim::RunnerOptions options;
   options.fd = pty_->take_master().release();
   // The simulated drive stands for a separate device that answers on time (DCP 7.2): one step
   // below the cycle's real-time priority where the system permits it, so a loaded machine
   // delays neither the master's frames nor the drive's replies.
   options.priority = std::max(1, config.rt.priority - 1);
-  drive_ = std::make_unique<sim::SerialDriveRunner>(drive, options);
+  drive_ = std::make_unique<dcp::sim::SerialDriveRunner>(drive, options);
   position_ = std::make_unique<Encoder>(*drive_);
 }
 
@@ -114,12 +114,12 @@ void SimulatedLift::stop() {
   drive_->stop();
   // What the drive saw, as the drive side of the link: a technician (and the process tests) can
   // tell from this line whether the master left the car to the drive's own link timeout.
-  const sim::RunnerStatus s = drive_->status();
+  const dcp::sim::RunnerStatus s = drive_->status();
   const bool faulted = (s.status_byte & dcp::status_bit::kGeneralFault) != 0;
   log::event(log::Level::info, "sim", "sim_stopped",
              {{"position_mm", std::to_string(std::llround(s.position_mm))},
               {"violations", std::to_string(s.sim.violations)}},
-             "simulated drive stopped: phase " + std::string(sim::to_string(s.phase)) +
+             "simulated drive stopped: phase " + std::string(dcp::sim::to_string(s.phase)) +
                  ", position " + std::to_string(std::llround(s.position_mm)) + " mm, " +
                  (faulted ? "in fault" : "no fault") + ", " + std::to_string(s.sim.violations) +
                  " spec violation(s) seen");
@@ -157,9 +157,9 @@ api::Result SimulatedLift::apply(const api::SimRequest& request, MonoTime now) {
       break;
     case SimAction::ChannelFault:
       drive_->inject_channel(
-          request.channel == api::SimChannelFault::Partial   ? sim::ChannelFault::Partial
-          : request.channel == api::SimChannelFault::Garbage ? sim::ChannelFault::Garbage
-                                                             : sim::ChannelFault::Silence);
+          request.channel == api::SimChannelFault::Partial   ? dcp::sim::ChannelFault::Partial
+          : request.channel == api::SimChannelFault::Garbage ? dcp::sim::ChannelFault::Garbage
+                                                             : dcp::sim::ChannelFault::Silence);
       break;
     case SimAction::RefuseTarget:
       drive_->refuse_next_target();
@@ -168,9 +168,9 @@ api::Result SimulatedLift::apply(const api::SimRequest& request, MonoTime now) {
       drive_->clear_reply_faults();
       break;
     case SimAction::Drift: {
-      const sim::RunnerStatus s = drive_->status();
+      const dcp::sim::RunnerStatus s = drive_->status();
       // The simulator moves a car only while its drive is idle; a moving car would not drift.
-      if (s.phase != sim::Phase::Idle || std::abs(s.velocity_mps) > 0.0) {
+      if (s.phase != dcp::sim::Phase::Idle || std::abs(s.velocity_mps) > 0.0) {
         return api::Result::fail(api::ErrorCode::Busy,
                                  "the car is moving: drift only while the drive is idle");
       }

@@ -11,9 +11,9 @@
 #include "config/config.hpp"
 #include "daemon/lift_common.hpp"
 #include "dcp/control/dcp_controller.hpp"
+#include "dcp/sim/serial_runner.hpp"
 #include "io/pty.hpp"
 #include "lift/inputs.hpp"
-#include "sim/serial_runner.hpp"
 #include "sim/sim_io.hpp"
 
 namespace liftd::daemon {
@@ -50,7 +50,7 @@ class SimulatedLift {
 
   std::unique_ptr<io::PtyPair> pty_;  ///< held open so the cycle's side never sees a hang-up
   std::string device_path_;
-  std::unique_ptr<sim::SerialDriveRunner> drive_;
+  std::unique_ptr<dcp::sim::SerialDriveRunner> drive_;
   std::unique_ptr<Encoder> position_;
   SimulatedBoard board_;  ///< safety chain, doors, shaft
   bool started_ = false;

@@ -149,9 +149,9 @@ SimulatedUssBus::SimulatedUssBus(const config::Config& config)
     const double fraction = setpoint->second / config.uss.full_scale;
     nominal_mps = std::sqrt(2.0 * kSimRampMps2 * braking_m) / std::max(0.05, fraction);
   }
-  std::vector<sim::UssSlaveConfig> slaves;
+  std::vector<uss::sim::UssSlaveConfig> slaves;
   for (const auto& s : bus_slaves(config)) {
-    sim::UssSlaveConfig sc;
+    uss::sim::UssSlaveConfig sc;
     sc.address = static_cast<std::uint8_t>(s.address);
     sc.pkw = pkw_length_of(s.pkw);
     sc.pzd_words = static_cast<std::uint8_t>(s.pzd_words);
@@ -165,7 +165,7 @@ SimulatedUssBus::SimulatedUssBus(const config::Config& config)
     for (const auto& f : config.floors) sc.car.floors_mm.push_back(f.level_mm);
     slaves.push_back(sc);
   }
-  bus_ = std::make_unique<sim::UssBusSim>(slaves, baud_, mono_now());
+  bus_ = std::make_unique<uss::sim::UssBusSim>(slaves, baud_, mono_now());
   encoder_.set(std::llround(drive().position_mm()));
 }
 
@@ -236,7 +236,7 @@ void SimulatedUssBus::loop() {
 
 void SimulatedUssBus::serve(MonoTime now) {
   bus_->on_time(now);
-  sim::UssReply reply;
+  uss::sim::UssReply reply;
   while (bus_->take_reply(now, reply)) {
     // A pseudo-terminal moves the bytes at once: the reply ends when it is written.
     (void)port_.write_frame(reply.view());
@@ -246,10 +246,10 @@ void SimulatedUssBus::serve(MonoTime now) {
 }
 
 void SimulatedUssBus::log_violations() {
-  std::vector<sim::UssViolation> found;
+  std::vector<uss::sim::UssViolation> found;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    std::array<sim::UssViolation, 16> batch{};
+    std::array<uss::sim::UssViolation, 16> batch{};
     std::size_t n = 0;
     while ((n = bus_->take_violations(batch)) > 0) {
       found.insert(found.end(), batch.begin(), batch.begin() + static_cast<std::ptrdiff_t>(n));
@@ -278,19 +278,19 @@ api::Result SimulatedUssBus::apply(const api::SimRequest& request, MonoTime now)
       drive().set_local(request.on);
       break;
     case SimAction::ReplyFault: {
-      std::optional<sim::UssReplyFault> fault;
+      std::optional<uss::sim::UssReplyFault> fault;
       switch (request.fault) {
         case api::SimReplyFault::NoReply:
-          fault = sim::UssReplyFault::Silent;
+          fault = uss::sim::UssReplyFault::Silent;
           break;
         case api::SimReplyFault::BadChecksum:
-          fault = sim::UssReplyFault::BadBcc;
+          fault = uss::sim::UssReplyFault::BadBcc;
           break;
         case api::SimReplyFault::Late:
-          fault = sim::UssReplyFault::Late;
+          fault = uss::sim::UssReplyFault::Late;
           break;
         case api::SimReplyFault::Garbage:
-          fault = sim::UssReplyFault::BadLge;
+          fault = uss::sim::UssReplyFault::BadLge;
           break;
         case api::SimReplyFault::S7:
           break;
@@ -340,7 +340,7 @@ nlohmann::json SimulatedUssBus::state_json() const {
 }
 
 nlohmann::json SimulatedUssBus::state_json_locked() const {
-  const sim::UssDriveView d = drive().drive();
+  const uss::sim::UssDriveView d = drive().drive();
   std::uint64_t violations = 0;
   nlohmann::json slaves = nlohmann::json::array();
   for (const auto& s : bus_->slaves()) {
@@ -349,7 +349,7 @@ nlohmann::json SimulatedUssBus::state_json_locked() const {
                       {"telegrams", s.stats().telegrams},
                       {"replies", s.stats().replies}});
   }
-  nlohmann::json out = {{"drive_state", std::string(sim::to_string(d.state))},
+  nlohmann::json out = {{"drive_state", std::string(uss::sim::to_string(d.state))},
                         {"control_word", d.stw},
                         {"status_word", d.zsw},
                         {"velocity_mps", d.velocity_mps},

@@ -27,10 +27,10 @@
 #include "io/pty.hpp"
 #include "log/throttle.hpp"
 #include "sim/sim_io.hpp"
-#include "sim/uss_slave_sim.hpp"
 #include "uss/drive/controller.hpp"
 #include "uss/master/master.hpp"
 #include "uss/runner/uss_runner.hpp"
+#include "uss/sim/uss_slave_sim.hpp"
 
 namespace liftd::daemon {
 
@@ -62,15 +62,16 @@ class SimulatedUssBus final : public SimulatorThread {
   void loop();
   void serve(MonoTime now);  ///< with mutex_ held
   nlohmann::json state_json_locked() const;
-  sim::UssSlaveSim& drive() { return *bus_->slave(drive_address_); }
-  const sim::UssSlaveSim& drive() const { return *bus_->slave(drive_address_); }
+  uss::sim::UssSlaveSim& drive() { return *bus_->slave(drive_address_); }
+  const uss::sim::UssSlaveSim& drive() const { return *bus_->slave(drive_address_); }
 
   std::uint32_t baud_;
   std::uint8_t drive_address_;
   int priority_;  ///< SCHED_FIFO priority of the bus thread, one below the master's
   std::unique_ptr<io::PtyPair> pty_;
-  io::SerialPort port_;                  ///< the pseudo-terminal's master end
-  std::unique_ptr<sim::UssBusSim> bus_;  ///< one simulated slave per configured address (mutex_)
+  io::SerialPort port_;  ///< the pseudo-terminal's master end
+  std::unique_ptr<uss::sim::UssBusSim>
+      bus_;  ///< one simulated slave per configured address (mutex_)
 };
 
 /// The USS lift as controller_lift.hpp names its parts.

@@ -67,7 +67,7 @@ TEST(TargetChange, RefusedByTheDriveEndsTheTravelWithB2HeldUntilS6) {
 
 // ---- the communication channel is subordinate (DCP 5.1) ----------------------------------------
 
-class ChannelFaultDuringTravel : public ::testing::TestWithParam<sim::ChannelFault> {};
+class ChannelFaultDuringTravel : public ::testing::TestWithParam<dcp::sim::ChannelFault> {};
 
 TEST_P(ChannelFaultDuringTravel, B0StaysUntilTheCarStandsThenTheHandshakeRunsAgain) {
   Rig rig;
@@ -97,12 +97,14 @@ TEST_P(ChannelFaultDuringTravel, B0StaysUntilTheCarStandsThenTheHandshakeRunsAga
 }
 
 INSTANTIATE_TEST_SUITE_P(Dcp5, ChannelFaultDuringTravel,
-                         ::testing::Values(sim::ChannelFault::Partial, sim::ChannelFault::Garbage,
-                                           sim::ChannelFault::Silence),
+                         ::testing::Values(dcp::sim::ChannelFault::Partial,
+                                           dcp::sim::ChannelFault::Garbage,
+                                           dcp::sim::ChannelFault::Silence),
                          [](const auto& p) {
-                           return std::string(p.param == sim::ChannelFault::Partial   ? "Partial"
-                                              : p.param == sim::ChannelFault::Garbage ? "Garbage"
-                                                                                      : "Silence");
+                           return std::string(p.param == dcp::sim::ChannelFault::Partial ? "Partial"
+                                              : p.param == dcp::sim::ChannelFault::Garbage
+                                                  ? "Garbage"
+                                                  : "Silence");
                          });
 
 // ---- older drives (DCP 5.12.3.1, 5.12.2.2) -----------------------------------------------------
@@ -110,7 +112,7 @@ INSTANTIATE_TEST_SUITE_P(Dcp5, ChannelFaultDuringTravel,
 TEST(OlderDrive, IgnoringI1AndOddI0FieldsStillTravels) {
   ControllerConfig config = testing::default_config(dcp::Protocol::Dcp4);
   config.link.data_info_type = dcp::DataInfoType::Decel16;  // asks for 16 bits; gets type '0'
-  sim::DriveConfig drive = testing::sim_config(dcp::Protocol::Dcp4);
+  dcp::sim::DriveConfig drive = testing::sim_config(dcp::Protocol::Dcp4);
   drive.older_drive = true;
   Rig rig(config, drive);
   ASSERT_TRUE(rig.warm_up()) << "the handshake must complete without an I1 reply";
@@ -144,7 +146,7 @@ TEST_P(PositionAfterStop, AfterFinishedAndAbortedTravelsBeforeTheNextOne) {
   // The next travel starts right away: it waits for the I9 if one is still owed.
   ASSERT_EQ(rig.command(TravelCommand{0, std::nullopt, std::nullopt, false}).code, ReplyCode::Ok);
   ASSERT_TRUE(rig.run_until([&] { return rig.finished_travels(2) && rig.idle(); }, 60s));
-  EXPECT_EQ(rig.sim.violations(sim::Violation::NoPositionAfterStop), 0U);
+  EXPECT_EQ(rig.sim.violations(dcp::sim::Violation::NoPositionAfterStop), 0U);
 }
 
 INSTANTIATE_TEST_SUITE_P(Dialects, PositionAfterStop,

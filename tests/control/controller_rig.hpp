@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "dcp/control/dcp_controller.hpp"
-#include "sim/drive_sim.hpp"
+#include "dcp/sim/drive_sim.hpp"
 
 namespace liftd::control::testing {
 
@@ -17,7 +17,7 @@ using namespace std::chrono_literals;
 /// The simulated encoder as a PositionSource.
 class SimPosition final : public PositionSource {
  public:
-  explicit SimPosition(const sim::DriveSim& sim) : sim_(sim) {}
+  explicit SimPosition(const dcp::sim::DriveSim& sim) : sim_(sim) {}
   std::optional<std::int64_t> position_mm(MonoTime) const noexcept override {
     if (!valid) return std::nullopt;
     return std::llround(sim_.position_mm());
@@ -25,7 +25,7 @@ class SimPosition final : public PositionSource {
   bool valid = true;
 
  private:
-  const sim::DriveSim& sim_;
+  const dcp::sim::DriveSim& sim_;
 };
 
 /// A six-floor building, 3 m apart (the config example's floors).
@@ -37,9 +37,9 @@ inline std::vector<std::int64_t> six_floors() {
 /// it at 0: its deceleration ramp from Vx down to crawl V0, plus 50 mm of crawl (drive_sim.hpp,
 /// DriveConfig::dcp3_decel_mm). The controller must be configured with the same figure, the way
 /// an installer sets the deceleration points from the drive's SVx parameter (DCP 8.1).
-inline std::uint32_t sim_sv_mm(const sim::DriveConfig& drive, dcp::Speed speed) {
+inline std::uint32_t sim_sv_mm(const dcp::sim::DriveConfig& drive, dcp::Speed speed) {
   const double metres =
-      sim::ramp_distance_m(drive.speeds.of(speed), drive.speeds.v0_mps, drive.decel) + 0.050;
+      dcp::sim::ramp_distance_m(drive.speeds.of(speed), drive.speeds.v0_mps, drive.decel) + 0.050;
   return static_cast<std::uint32_t>(std::ceil(metres * 1000.0));
 }
 
@@ -57,7 +57,7 @@ inline ControllerConfig default_config(dcp::Protocol protocol) {
   c.floors_mm = six_floors();
   c.link.extended_position = true;
   if (protocol == dcp::Protocol::Dcp3) {
-    const sim::DriveConfig drive;  // the simulator's defaults
+    const dcp::sim::DriveConfig drive;  // the simulator's defaults
     c.travel.dcp3_reference = travel::Dcp3Reference::Position;
     c.travel.dcp3_speed_count = 2;
     c.travel.dcp3_stop_lead_mm = kDcp3StopLeadMm;
@@ -68,8 +68,8 @@ inline ControllerConfig default_config(dcp::Protocol protocol) {
   return c;
 }
 
-inline sim::DriveConfig sim_config(dcp::Protocol protocol) {
-  sim::DriveConfig c;  // SVx derived by the simulator itself (see sim_sv_mm)
+inline dcp::sim::DriveConfig sim_config(dcp::Protocol protocol) {
+  dcp::sim::DriveConfig c;  // SVx derived by the simulator itself (see sim_sv_mm)
   c.protocol = protocol;
   return c;
 }
@@ -104,7 +104,7 @@ inline std::uint16_t word_of(const dcp::FrameBytes& f) {
 struct Rig {
   explicit Rig(dcp::Protocol protocol = dcp::Protocol::Dcp4)
       : Rig(default_config(protocol), sim_config(protocol)) {}
-  Rig(const ControllerConfig& config, const sim::DriveConfig& sim_cfg)
+  Rig(const ControllerConfig& config, const dcp::sim::DriveConfig& sim_cfg)
       : sim(sim_cfg, now), position(sim), controller(config, position) {
     inputs.valid = inputs.safety_chain_closed = inputs.doors_closed = inputs.doors_locked = true;
   }
@@ -131,7 +131,7 @@ struct Rig {
     frames.push_back({});
     std::copy(frame.begin(), frame.end(), frames.back().begin());
     rec.frame = frames.back();
-    const sim::Reply reply = sim.on_master_frame(
+    const dcp::sim::Reply reply = sim.on_master_frame(
         std::span<const std::uint8_t, dcp::kFrameSize>(frame.data(), dcp::kFrameSize), now);
     if (reply.size == dcp::kFrameSize && !drop_replies) {
       if (controller.on_reply(reply.view(), now + 4ms)) {
@@ -229,7 +229,7 @@ struct Rig {
   }
 
   MonoTime now{std::chrono::seconds(1)};
-  sim::DriveSim sim;
+  dcp::sim::DriveSim sim;
   SimPosition position;
   DcpController controller;
   lift::Inputs inputs;

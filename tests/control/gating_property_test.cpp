@@ -131,6 +131,7 @@ struct Coverage {
 };
 
 /// One seed: random actions between random runs of cycles; returns the first violation.
+// Over 120 lines: one seed read top to bottom, each random action with the checks after it.
 std::string run_seed(std::uint32_t seed, Coverage& coverage) {
   std::mt19937 rng(seed);
   auto pick = [&](int n) { return static_cast<int>(rng() % static_cast<unsigned>(n)); };
@@ -240,7 +241,7 @@ std::string run_seed(std::uint32_t seed, Coverage& coverage) {
         break;
       case 23: {
         // DCP 5.1: the communication channel is subordinate; its faults must not end a travel.
-        const auto fault = static_cast<sim::ChannelFault>(pick(3));
+        const auto fault = static_cast<dcp::sim::ChannelFault>(pick(3));
         rig.sim.inject_channel(fault, rig.now);
         what = "channel fault " + std::to_string(static_cast<int>(fault));
         break;
@@ -261,8 +262,9 @@ std::string run_seed(std::uint32_t seed, Coverage& coverage) {
       const CycleRecord& r = rig.log.back();
       std::string broken = checker.check(r, api);
       if (broken.empty() && rig.sim.counters().violations != 0) {
-        broken = std::string("the simulated drive saw a spec violation: ") +
-                 (rig.sim.violations(sim::Violation::StopAtSpeed) != 0 ? "stop message at speed"
+        broken =
+            std::string("the simulated drive saw a spec violation: ") +
+            (rig.sim.violations(dcp::sim::Violation::StopAtSpeed) != 0 ? "stop message at speed"
                                                                        : "travel without I9");
       }
       ++coverage.frames;
@@ -288,8 +290,8 @@ std::string run_seed(std::uint32_t seed, Coverage& coverage) {
   if (rig.sim.counters().violations != 0) {
     std::ostringstream out;
     out << "seed " << seed << ": the simulated drive saw "
-        << rig.sim.violations(sim::Violation::StopAtSpeed) << " stop message(s) at speed and "
-        << rig.sim.violations(sim::Violation::NoPositionAfterStop) << " travel(s) without I9"
+        << rig.sim.violations(dcp::sim::Violation::StopAtSpeed) << " stop message(s) at speed and "
+        << rig.sim.violations(dcp::sim::Violation::NoPositionAfterStop) << " travel(s) without I9"
         << "\nactions:";
     for (const auto& a : actions) out << "\n  " << a;
     return out.str();

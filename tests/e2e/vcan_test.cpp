@@ -1,3 +1,4 @@
+// Over 800 lines: the harness (candump, verdict, machine, daemon) and the cases of one vcan stage.
 // liftd on a real SocketCAN bus (a vcan interface, LIFTD_TEST_CAN): the hydraulic lift as a
 // `liftd` process with can.interface on the vcan against `sch001-sim --interface` as a process
 // of its own, and a DCP lift whose car position comes from a CAN absolute encoder on the vcan.
@@ -24,9 +25,9 @@
 #include <sstream>
 
 #include "can/socket.hpp"
+#include "dcp/sim/serial_runner.hpp"
 #include "e2e/harness.hpp"
 #include "io/pty.hpp"
-#include "sim/serial_runner.hpp"
 
 namespace liftd::e2e {
 namespace {
@@ -745,9 +746,9 @@ TEST(DcpOnVcanEncoder, TravelsOnThePositionFromTheBus) {
   ASSERT_TRUE(created.ok()) << created.error().message();
   io::PtyPair pty = std::move(created).value();
   const std::string slave = pty.slave_path();
-  sim::RunnerOptions o;
+  dcp::sim::RunnerOptions o;
   o.fd = pty.take_master().release();
-  sim::DriveConfig drive_config;
+  dcp::sim::DriveConfig drive_config;
   // The drive's DCP 7.3 supervision (10 missing frames, 150 ms) is tested on the host, where the
   // cycle runs on a real-time thread. Inside user-mode Linux the whole guest is one process of
   // the host, which a busy host holds back for 100 ms and more: the drive here allows a second
@@ -756,7 +757,7 @@ TEST(DcpOnVcanEncoder, TravelsOnThePositionFromTheBus) {
   // As in liftd --simulate: the drive's thread one step below the master's cycle (rt.priority
   // 80), so that nothing else in the guest (candump, the encoder feed, ctest) delays a reply.
   o.priority = 79;
-  sim::SerialDriveRunner drive(drive_config, o);
+  dcp::sim::SerialDriveRunner drive(drive_config, o);
   ASSERT_TRUE(drive.start()) << drive.last_error();
   json config = {{"drive", {{"device", slave}}},
                  {"can", {{"interface", can_interface()}}},

@@ -33,7 +33,7 @@ namespace record_flag = rt::record_flag;
 
 constexpr auto kCycle = 15ms;  // DCP 7.2
 
-sim::DriveConfig drive_config() {
+dcp::sim::DriveConfig drive_config() {
   return control::testing::sim_config(dcp::Protocol::Dcp4);
 }
 
@@ -156,10 +156,11 @@ struct ProxiedLink {
   io::PtyPair side_a;  // the master's port: the cycle on the slave, the proxy on the master
   io::PtyPair side_b;  // the drive's port: the simulator on the master, the proxy on the slave
   io::SerialPort b_slave;
-  std::unique_ptr<sim::SerialDriveRunner> drive;
+  std::unique_ptr<dcp::sim::SerialDriveRunner> drive;
   std::unique_ptr<FaultProxy> proxy;
 };
 
+// Over 120 lines: one live run through the plan of damaged replies, checked in order.
 TEST(LiveLink, DamagedRepliesAreCountedAsChapter6Says) {
   // Legend: from request `start` on, every 10th reply (offset 5) gets the next fault of this
   // list. What the master must do with each (DCP 6.1, 7.2):
@@ -252,7 +253,7 @@ TEST(LiveLink, DamagedRepliesAreCountedAsChapter6Says) {
   // S7: the drive got our frame corrupted and ignored it; we repeat our last channel bytes
   // (DCP 6.1 b). The simulator flags every 4th reply while I-messages (I8) run.
   const MonoTime s7_from = mono_now();
-  link.drive->set_fault_rate(sim::ReplyFault::MessageError, 0.25);
+  link.drive->set_fault_rate(dcp::sim::ReplyFault::MessageError, 0.25);
   for (int k = 0; k < 5; ++k) {
     const control::LinkCommand load{dcp::LoadRequest{static_cast<std::uint16_t>(40 + k)}};
     CommandReply lr = m.command(load);
@@ -349,13 +350,14 @@ TEST(LiveLink, TenLostRepliesFaultTheLinkStopTheTravelThenItRecoversAndReinitial
   EXPECT_FALSE(m.controller.snapshot().faults[static_cast<std::size_t>(FaultCode::LinkFault)]);
   EXPECT_GE(m.link_events_to(dcp::LinkState::Init), 2U);  // at start and after the recovery
   EXPECT_GE(count_i0(master_channel(m.runner.recorder().copy(), fault_at)), 1U);
-  std::vector<sim::SimEvent> sim_events;
+  std::vector<dcp::sim::SimEvent> sim_events;
   link.drive->drain_events(sim_events);
   std::size_t i0_at_drive_after = 0;
   for (const auto& e : sim_events) {
     i0_at_drive_after +=
-        e.kind == sim::SimEvent::Kind::ChannelMessage && e.value == '0' && e.at > fault_at ? 1U
-                                                                                           : 0U;
+        e.kind == dcp::sim::SimEvent::Kind::ChannelMessage && e.value == '0' && e.at > fault_at
+            ? 1U
+            : 0U;
   }
   EXPECT_GE(i0_at_drive_after, 1U);
 
@@ -376,7 +378,7 @@ TEST(LiveLink, DeviceLossAndReappearanceRecoverWithoutRestart) {
   auto first = std::make_unique<io::PtyPair>(make_pty());
   alias.point_to(first->slave_path());
   auto drive = serve(first->master_fd(), drive_config());
-  std::unique_ptr<sim::SerialDriveRunner> drive2;  // outlives the master reading its encoder
+  std::unique_ptr<dcp::sim::SerialDriveRunner> drive2;  // outlives the master reading its encoder
   LiveMaster m(alias.path());
   m.position.attach(drive.get());
   ASSERT_EQ(m.start(), 0);

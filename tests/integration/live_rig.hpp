@@ -1,6 +1,6 @@
 // The real stack over real pseudo-terminals: rt::CycleRunner (normal scheduling, no memory
 // lock, so it runs unprivileged) driving control::DcpController, and the drive simulator
-// (sim::SerialDriveRunner) on the far end of a pty. The test thread plays the daemon's io
+// (dcp::sim::SerialDriveRunner) on the far end of a pty. The test thread plays the daemon's io
 // thread: it posts the machine's inputs, drains events and replies, reads snapshots.
 #pragma once
 
@@ -21,9 +21,9 @@
 
 #include "control/controller_rig.hpp"
 #include "dcp/control/dcp_controller.hpp"
+#include "dcp/sim/serial_runner.hpp"
 #include "io/pty.hpp"
 #include "rt/cycle_runner.hpp"
-#include "sim/serial_runner.hpp"
 
 namespace liftd::integration {
 
@@ -33,17 +33,17 @@ using namespace std::chrono_literals;
 /// (device replaced) while the cycle runs; a missing runner reads as "position lost".
 class RunnerPosition final : public control::PositionSource {
  public:
-  void attach(const sim::SerialDriveRunner* runner) noexcept {
+  void attach(const dcp::sim::SerialDriveRunner* runner) noexcept {
     runner_.store(runner, std::memory_order_release);
   }
   std::optional<std::int64_t> position_mm(MonoTime) const noexcept override {
-    const sim::SerialDriveRunner* r = runner_.load(std::memory_order_acquire);
+    const dcp::sim::SerialDriveRunner* r = runner_.load(std::memory_order_acquire);
     if (r == nullptr) return std::nullopt;
     return std::llround(r->position_mm());
   }
 
  private:
-  std::atomic<const sim::SerialDriveRunner*> runner_{nullptr};
+  std::atomic<const dcp::sim::SerialDriveRunner*> runner_{nullptr};
 };
 
 /// A fresh pty pair (raw, no RS485 ioctl on a pty).
@@ -57,15 +57,15 @@ inline io::PtyPair make_pty() {
 
 /// A simulator serving the master end of `pty` (through a duplicate of its descriptor, so the
 /// pair and the runner close independently).
-inline std::unique_ptr<sim::SerialDriveRunner> serve(int master_fd,
-                                                     const sim::DriveConfig& config) {
-  sim::RunnerOptions options;
+inline std::unique_ptr<dcp::sim::SerialDriveRunner> serve(int master_fd,
+                                                          const dcp::sim::DriveConfig& config) {
+  dcp::sim::RunnerOptions options;
   options.fd = ::dup(master_fd);
   options.reconnect = false;
   // The drive stands for hardware that answers on time: real-time scheduling one step below
   // the master's cycle (cycle_config) where permitted, as in liftd --simulate.
   options.priority = 19;
-  auto runner = std::make_unique<sim::SerialDriveRunner>(config, options);
+  auto runner = std::make_unique<dcp::sim::SerialDriveRunner>(config, options);
   if (!runner->start()) throw std::runtime_error("simulator: " + runner->last_error());
   return runner;
 }

@@ -16,15 +16,17 @@ declare -A allowed=(
   [service]="common log"
   [can]="common io"
   [lift]="common drive"
+  # The machine inputs every kind's simulated lift shares; each kind's simulator lives in the
+  # kind's folder (lib/<kind>/sim), so lib/sim sits below the kinds.
+  [sim]="common drive lift"
   [rt]="common io log can"
-  [dcp]="common io log can drive lift rt"
-  [sch001]="common io log can drive lift rt"
-  [uss]="common io log can drive lift rt"
+  [dcp]="common io log can drive lift sim rt"
+  [sch001]="common io log can drive lift sim rt"
+  [uss]="common io log can drive lift sim rt"
   [api]="common drive log"
   # The configuration checks floor names against the DCP display character set (DCP appendix A)
   # until each drive kind validates its own section.
   [config]="common drive log dcp"
-  [sim]="common io log can drive lift rt dcp sch001 uss"
 )
 
 status=0

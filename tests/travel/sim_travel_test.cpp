@@ -1,4 +1,4 @@
-// The DCP4 sequencer against the drive simulator (lib/sim): real frames through the codec, the
+// The DCP4 sequencer against the drive simulator (lib/dcp/sim): real frames through the codec, the
 // I7 exchange over the communication channel, the simulator's own car and ramps.
 #include <gtest/gtest.h>
 
@@ -7,8 +7,8 @@
 #include <string>
 
 #include "dcp/frame.hpp"
+#include "dcp/sim/drive_sim.hpp"
 #include "dcp/travel/controller.hpp"
-#include "sim/drive_sim.hpp"
 
 namespace liftd::travel {
 namespace {
@@ -44,8 +44,8 @@ class SimRig {
     input.inputs.doors_closed = input.inputs.doors_locked = true;
   }
 
-  static sim::DriveConfig sim_config(dcp::Protocol protocol) {
-    sim::DriveConfig config;
+  static dcp::sim::DriveConfig sim_config(dcp::Protocol protocol) {
+    dcp::sim::DriveConfig config;
     config.protocol = protocol;
     config.require_init = false;
     config.dcp3_decel_mm[7] = 2500;  // SV4 (index G7), used by the DCP3 test only
@@ -73,7 +73,7 @@ class SimRig {
     frame.set_data_word(out.data_word);
     frame.comm1 = next_tx();
     frame.comm2 = next_tx();
-    const sim::Reply reply = sim.on_master_frame(dcp::encode(frame), now);
+    const dcp::sim::Reply reply = sim.on_master_frame(dcp::encode(frame), now);
     ASSERT_EQ(reply.size, dcp::kFrameSize);
     const auto slave = dcp::decode_slave(
         std::span<const std::uint8_t, dcp::kFrameSize>(reply.bytes.data(), dcp::kFrameSize));
@@ -102,7 +102,7 @@ class SimRig {
 
   TravelController controller;
   MonoTime now{};
-  sim::DriveSim sim;
+  dcp::sim::DriveSim sim;
   CycleInput input{};
   std::vector<std::uint8_t> commands;
   std::vector<Event> events;
@@ -229,7 +229,7 @@ TEST(SimTravel, Dcp4FastStartThenTravel) {
   request.fast_start = true;
   ASSERT_EQ(rig.controller.start(request), StartResult::Accepted);
   for (int i = 0; i < 60; ++i) rig.cycle();
-  EXPECT_EQ(rig.sim.phase(), sim::Phase::FastStartHold);
+  EXPECT_EQ(rig.sim.phase(), dcp::sim::Phase::FastStartHold);
   EXPECT_NEAR(rig.sim.position_mm(), 0.0, 1.0);
   rig.input.inputs.doors_locked = rig.input.inputs.doors_closed = true;
   ASSERT_TRUE(run_to_idle(rig));

@@ -28,7 +28,7 @@
 
 namespace liftd::uss::testing {
 
-/// Drives a slave simulator with the interface of sim::UssBusSim / sim::UssSlaveSim:
+/// Drives a slave simulator with the interface of uss::sim::UssBusSim / uss::sim::UssSlaveSim:
 /// on_char, on_time, deadline, next_reply_at, take_reply(now, reply) with reply.view() and
 /// reply.parity_error_at, reply_sent(end). The simulator belongs to the line's thread between
 /// start() and stop().

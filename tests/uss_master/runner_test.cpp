@@ -20,11 +20,11 @@
 #include "io/pty.hpp"
 #include "io/serial_port.hpp"
 #include "pty_line.hpp"
-#include "sim/uss_slave_sim.hpp"
 #include "uss/master/master.hpp"
 #include "uss/pkw.hpp"
 #include "uss/receiver.hpp"
 #include "uss/runner/uss_runner.hpp"
+#include "uss/sim/uss_slave_sim.hpp"
 #include "uss/telegram.hpp"
 
 namespace liftd::rt {
@@ -279,15 +279,16 @@ TEST(UssRunnerPty, TheRunnerKeepsStartPauseTransmissionAndReplyDelay) {
 }
 
 TEST(UssRunnerPty, MasterAgainstSimulatedSlavesOneOfThemSilent) {
-  // The spec-written slave simulator (lib/sim) with drives 1 and 2 on the line; address 3 is in
+  // The spec-written slave simulator (lib/uss/sim) with drives 1 and 2 on the line; address 3 is in
   // the polling list but nobody answers for it.
   auto pty = io::PtyPair::create(uss_serial_settings(kBaud));
   ASSERT_TRUE(pty.ok());
-  std::vector<sim::UssSlaveConfig> drives(2);
+  std::vector<uss::sim::UssSlaveConfig> drives(2);
   drives[0].address = 1;
   drives[1].address = 2;
-  sim::UssBusSim bus(drives, kBaud, mono_now());
-  uss::testing::PtyLine<sim::UssBusSim, sim::UssReply> line(pty.value().master_fd(), bus, kBaud);
+  uss::sim::UssBusSim bus(drives, kBaud, mono_now());
+  uss::testing::PtyLine<uss::sim::UssBusSim, uss::sim::UssReply> line(pty.value().master_fd(), bus,
+                                                                      kBaud);
 
   MasterConfig mc;
   mc.baud = kBaud;
@@ -334,7 +335,7 @@ TEST(UssRunnerPty, MasterAgainstSimulatedSlavesOneOfThemSilent) {
     EXPECT_TRUE(reported_3);
   });
   // The simulator saw no breach of the spec by the master (start pause, PKW repeats, ...).
-  std::array<sim::UssViolation, 16> violations{};
+  std::array<uss::sim::UssViolation, 16> violations{};
   const std::size_t n = bus.take_violations(violations);
   for (std::size_t i = 0; i < n; ++i) {
     ADD_FAILURE() << "slave " << static_cast<int>(violations[i].address) << ": "

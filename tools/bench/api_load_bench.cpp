@@ -38,10 +38,10 @@
 #include "rt/histogram.hpp"
 #include "rt/rt_thread.hpp"
 #include "service/notify.hpp"
-#include "sim/uss_slave_sim.hpp"
 #include "support/api_client.hpp"
 #include "uss/master/master.hpp"
 #include "uss/runner/uss_runner.hpp"
+#include "uss/sim/uss_slave_sim.hpp"
 #include "uss_master/pty_line.hpp"
 
 namespace {
@@ -53,7 +53,6 @@ using liftd::rt::HistogramData;
 using nlohmann::json;
 namespace rt = liftd::rt;
 namespace uss = liftd::uss;
-namespace sim = liftd::sim;
 
 /// A connected client that has read the greeting.
 struct Client : liftd::testing::ApiClient {
@@ -266,8 +265,8 @@ class ReferenceLink {
       if (::poll(&pfd, 1, 20) <= 0) continue;
       const ssize_t n = ::read(fd, buf.data(), buf.size());
       if (n <= 0) continue;
-      // As the simulated drive does on a pty (sim::pty_wire_time): answer when a real RS485 line
-      // would deliver the answer, after our frame's and the reply's wire time (DCP 7.1/7.2: 6
+      // As the simulated drive does on a pty (dcp::sim::pty_wire_time): answer when a real RS485
+      // line would deliver the answer, after our frame's and the reply's wire time (DCP 7.1/7.2: 6
       // bytes of 10 bits at 38400 baud, 1.5625 ms each).
       rt::sleep_until(mono_now() + 2 * std::chrono::microseconds(1563));
       (void)!::write(fd, buf.data(), static_cast<std::size_t>(n));
@@ -310,7 +309,7 @@ class UssBus {
   explicit UssBus(int priority, bool lock_memory)
       : pty_(make_pty()),
         slaves_(make_slaves()),
-        bus_(std::make_unique<sim::UssBusSim>(slaves_, kBaud, mono_now())),
+        bus_(std::make_unique<uss::sim::UssBusSim>(slaves_, kBaud, mono_now())),
         master_(std::make_unique<uss::Master>(master_config())),
         hooks_(*master_),
         line_(pty_.master_fd(), *bus_, kBaud) {
@@ -340,8 +339,8 @@ class UssBus {
     if (!created.ok()) throw std::runtime_error(created.error().message());
     return std::move(created).value();
   }
-  static std::vector<sim::UssSlaveConfig> make_slaves() {
-    std::vector<sim::UssSlaveConfig> s(3);
+  static std::vector<uss::sim::UssSlaveConfig> make_slaves() {
+    std::vector<uss::sim::UssSlaveConfig> s(3);
     for (std::size_t i = 0; i < s.size(); ++i) {
       s[i].address = static_cast<std::uint8_t>(i + 1);
       s[i].reply_delay = 1ms;
@@ -361,11 +360,11 @@ class UssBus {
   }
 
   liftd::io::PtyPair pty_;
-  std::vector<sim::UssSlaveConfig> slaves_;
-  std::unique_ptr<sim::UssBusSim> bus_;
+  std::vector<uss::sim::UssSlaveConfig> slaves_;
+  std::unique_ptr<uss::sim::UssBusSim> bus_;
   std::unique_ptr<uss::Master> master_;
   UssHooks hooks_;
-  liftd::uss::testing::PtyLine<sim::UssBusSim, sim::UssReply> line_;
+  liftd::uss::testing::PtyLine<uss::sim::UssBusSim, uss::sim::UssReply> line_;
   std::unique_ptr<uss::UssRunner> runner_;
   int line_priority_ = 1;
 };

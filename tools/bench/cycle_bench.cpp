@@ -21,6 +21,7 @@
 #include <unistd.h>
 
 #include "dcp/control/dcp_controller.hpp"
+#include "dcp/sim/serial_runner.hpp"
 #include "dcp/trace.hpp"
 #include "echo_engine.hpp"
 #include "fake_responder.hpp"
@@ -28,7 +29,6 @@
 #include "rt/cycle_runner.hpp"
 #include "rt/histogram.hpp"
 #include "rt/rt_thread.hpp"
-#include "sim/serial_runner.hpp"
 
 namespace {
 
@@ -56,7 +56,7 @@ void usage() {
       "                   [--no-mlock] [--cpu N] [--reply-delay-us US]\n"
       "                   [--device PATH [--check echo|checksum|none]] [--recorder FILE]\n"
       "  --engine dcp        the real stack (default): DcpController against the drive\n"
-      "                      simulator (lib/sim) over a pty, travelling floor 0 <-> top\n"
+      "                      simulator (lib/dcp/sim) over a pty, travelling floor 0 <-> top\n"
       "  --engine echo       the cycle alone: echo engine against the fake responder\n"
       "  --no-travel         dcp: keep the car parked (link traffic only)\n"
       "  --cycles N          cycles to run (default 20000 = 5 minutes at 15 ms)\n"
@@ -212,14 +212,14 @@ class TimedEngine final : public rt::CycleEngine {
 // The simulated encoder, read lock-free by the cycle (DCP4 travels need the position).
 class SimEncoder final : public liftd::control::PositionSource {
  public:
-  explicit SimEncoder(const liftd::sim::SerialDriveRunner* runner) : runner_(runner) {}
+  explicit SimEncoder(const liftd::dcp::sim::SerialDriveRunner* runner) : runner_(runner) {}
   std::optional<std::int64_t> position_mm(MonoTime) const noexcept override {
     if (runner_ == nullptr) return std::nullopt;
     return std::llround(runner_->position_mm());
   }
 
  private:
-  const liftd::sim::SerialDriveRunner* runner_;
+  const liftd::dcp::sim::SerialDriveRunner* runner_;
 };
 
 // The installation of the benchmark: six floors 3 m apart, DCP4, extended I9 reply.
@@ -326,6 +326,7 @@ double ratio(double a, double b) {
 
 }  // namespace
 
+// Over 120 lines: one benchmark run read top to bottom: set up, run both loops, report.
 int main(int argc, char** argv) {
   const std::optional<Options> parsed = parse(argc, argv);
   if (!parsed) return 2;
@@ -334,7 +335,7 @@ int main(int argc, char** argv) {
 
   std::unique_ptr<liftd::io::PtyPair> pty;
   std::unique_ptr<testing::FakeResponder> responder;
-  std::unique_ptr<liftd::sim::SerialDriveRunner> drive;
+  std::unique_ptr<liftd::dcp::sim::SerialDriveRunner> drive;
   rt::CycleConfig config;
   config.thread.priority = o.priority;
   config.thread.lock_memory = o.lock_memory;
@@ -350,20 +351,20 @@ int main(int argc, char** argv) {
     }
     pty = std::make_unique<liftd::io::PtyPair>(std::move(created).value());
     if (dcp) {
-      liftd::sim::DriveConfig drive_config;  // DCP4, the simulator's default installation
+      liftd::dcp::sim::DriveConfig drive_config;  // DCP4, the simulator's default installation
       if (o.reply_delay_us >= 0)
         drive_config.reply_delay = std::chrono::microseconds(o.reply_delay_us);
-      liftd::sim::RunnerOptions runner_options;
+      liftd::dcp::sim::RunnerOptions runner_options;
       runner_options.fd = ::dup(pty->master_fd());
       runner_options.quiet = true;
       runner_options.reconnect = false;
-      drive = std::make_unique<liftd::sim::SerialDriveRunner>(drive_config, runner_options);
+      drive = std::make_unique<liftd::dcp::sim::SerialDriveRunner>(drive_config, runner_options);
       if (!drive->start()) {
         std::fprintf(stderr, "cycle-bench: cannot start the drive simulator: %s\n",
                      drive->last_error().c_str());
         return 1;
       }
-      responder_text = "drive simulator (lib/sim, normal priority) over a pty, reply after " +
+      responder_text = "drive simulator (lib/dcp/sim, normal priority) over a pty, reply after " +
                        std::to_string(drive_config.reply_delay.count()) + " us";
     } else {
       const long delay_us = o.reply_delay_us >= 0 ? o.reply_delay_us : 2000;
@@ -510,8 +511,8 @@ int main(int argc, char** argv) {
         static_cast<unsigned long long>(driver->refused));
   }
   if (drive) {
-    const liftd::sim::RunnerStatus ds = drive->status();
-    std::printf("drive simulator: %s\n", liftd::sim::format_status(ds).c_str());
+    const liftd::dcp::sim::RunnerStatus ds = drive->status();
+    std::printf("drive simulator: %s\n", liftd::dcp::sim::format_status(ds).c_str());
   }
   if (!o.recorder_file.empty()) {
     const liftd::rt::FrameDecoder decoder = dcp ? liftd::dcp::trace_decoder() : rt::FrameDecoder{};

@@ -1,5 +1,5 @@
 // uss-bench: the USS master (uss::Master on uss::UssRunner) polling simulated slaves
-// (sim::UssBusSim, written from the spec) over a pty, at 38400 and 187500 baud. Prints the
+// (uss::sim::UssBusSim, written from the spec) over a pty, at 38400 and 187500 baud. Prints the
 // cycle time expected from the spec's timing rules (A 5.1.1: per exchange start pause, request,
 // reply delay, reply), the measured cycle (mean, p50, p99, max) and whether it is within 10 %,
 // allocations on the bus thread after warm-up (expected 0), and a bare clock_nanosleep loop at
@@ -34,9 +34,9 @@
 
 #include "io/pty.hpp"
 #include "rt/rt_thread.hpp"
-#include "sim/uss_slave_sim.hpp"
 #include "uss/master/master.hpp"
 #include "uss/runner/uss_runner.hpp"
+#include "uss/sim/uss_slave_sim.hpp"
 #include "uss/timing.hpp"
 #include "uss_master/pty_line.hpp"
 
@@ -48,7 +48,6 @@ using liftd::mono_now;
 using liftd::MonoTime;
 namespace rt = liftd::rt;
 namespace uss = liftd::uss;
-namespace sim = liftd::sim;
 using namespace std::chrono_literals;
 
 struct Options {
@@ -231,6 +230,7 @@ Summary reference_loop(const Options& o, std::chrono::nanoseconds period, std::u
   return summarize(lateness);
 }
 
+// Over 120 lines: one baud rate read top to bottom: the bus, the master, the run, the report.
 int run_rate(const Options& o, std::uint32_t baud) {
   std::printf("\n== %u baud, %d slave(s), slaves reply %ld us after our BCC ==\n", baud, o.slaves,
               o.reply_delay_us);
@@ -241,7 +241,7 @@ int run_rate(const Options& o, std::uint32_t baud) {
   }
   liftd::io::PtyPair pty = std::move(created).value();
 
-  std::vector<sim::UssSlaveConfig> drives(static_cast<std::size_t>(o.slaves));
+  std::vector<uss::sim::UssSlaveConfig> drives(static_cast<std::size_t>(o.slaves));
   uss::MasterConfig mc;
   mc.baud = baud;
   mc.mirror_at_start = false;
@@ -253,9 +253,9 @@ int run_rate(const Options& o, std::uint32_t baud) {
     mc.slaves.push_back(uss::SlaveConfig{address, uss::PkwLength::Four, 2});
     mc.polling_list.push_back(address);
   }
-  std::unique_ptr<sim::UssBusSim> bus;
+  std::unique_ptr<uss::sim::UssBusSim> bus;
   try {
-    bus = std::make_unique<sim::UssBusSim>(drives, baud, mono_now());
+    bus = std::make_unique<uss::sim::UssBusSim>(drives, baud, mono_now());
   } catch (const std::exception& e) {
     std::printf("simulator refused: %s\n", e.what());
     return 1;
@@ -276,7 +276,8 @@ int run_rate(const Options& o, std::uint32_t baud) {
   rc.serial = uss::uss_serial_settings(baud);
   rc.thread.priority = o.priority;
   rc.thread.lock_memory = o.lock_memory;
-  liftd::uss::testing::PtyLine<sim::UssBusSim, sim::UssReply> line(pty.master_fd(), *bus, baud);
+  liftd::uss::testing::PtyLine<uss::sim::UssBusSim, uss::sim::UssReply> line(pty.master_fd(), *bus,
+                                                                             baud);
   std::unique_ptr<uss::UssRunner> runner;
   try {
     runner = std::make_unique<uss::UssRunner>(rc, master, hooks);
@@ -324,7 +325,7 @@ int run_rate(const Options& o, std::uint32_t baud) {
   std::printf("allocations on the bus thread after warm-up: %llu (expected 0)%s\n",
               static_cast<unsigned long long>(mallocs + news),
               LIFTD_HEAP_HOOKS ? "" : " [hooks off: not counted]");
-  std::array<sim::UssViolation, 8> violations{};
+  std::array<uss::sim::UssViolation, 8> violations{};
   const std::size_t nv = bus->take_violations(violations);
   std::printf("spec violations seen by the simulated slaves: %zu\n", nv);
   for (std::size_t i = 0; i < nv; ++i) {
@@ -364,7 +365,7 @@ int main(int argc, char** argv) {
   const std::optional<Options> parsed = parse(argc, argv);
   if (!parsed) return 2;
   std::puts(
-      "uss-bench: uss::Master on uss::UssRunner over a pty against sim::UssBusSim.\n"
+      "uss-bench: uss::Master on uss::UssRunner over a pty against uss::sim::UssBusSim.\n"
       "A pty has no baud-rate timing: the cycle is made by the runner's own pacing (start pause\n"
       "after the computed end of the last telegram, transmission time of each telegram, the\n"
       "slaves' reply delay) and by the line thread, which delivers bytes one character time\n"

@@ -1,5 +1,5 @@
 // dcp-drive-sim: the simulated DCP drive on a serial device or pty at 38400 8N1, a command-line
-// front end over sim::SerialDriveRunner (which finds frames by the inter-frame gap and answers
+// front end over dcp::sim::SerialDriveRunner (which finds frames by the inter-frame gap and answers
 // them inside the DCP 7.2 window). Everything the drive does is printed; faults can be switched
 // on stdin while it runs ("help" lists them). With --encoder it is also the shaft's absolute
 // encoder on CAN: the simulated car's position, as a process beside liftd would get it from a
@@ -26,14 +26,14 @@
 #include "can/socket.hpp"
 #include "common/mono_time.hpp"
 #include "common/version.hpp"
-#include "sim/serial_runner.hpp"
+#include "dcp/sim/serial_runner.hpp"
 
 namespace {
 
 using namespace std::chrono_literals;
 using liftd::MonoTime;
-using liftd::sim::ReplyFault;
-using liftd::sim::SerialDriveRunner;
+using liftd::dcp::sim::ReplyFault;
+using liftd::dcp::sim::SerialDriveRunner;
 
 volatile sig_atomic_t g_stop = 0;
 void on_signal(int) {
@@ -41,8 +41,8 @@ void on_signal(int) {
 }
 
 struct Options {
-  liftd::sim::DriveConfig config;
-  liftd::sim::RunnerOptions runner;
+  liftd::dcp::sim::DriveConfig config;
+  liftd::dcp::sim::RunnerOptions runner;
   double status_interval_s = 0.0;
   std::string encoder;         ///< "unix:PATH" (listen there) or a CAN interface; empty: none
   long encoder_period_ms = 5;  ///< how often the encoder sends the position
@@ -204,7 +204,7 @@ bool command(SerialDriveRunner& runner, const std::string& line) {
   std::string verb, arg;
   in >> verb >> arg;
   ReplyFault f{};
-  liftd::sim::ChannelFault channel{};
+  liftd::dcp::sim::ChannelFault channel{};
   if (verb == "fault")
     runner.set_general_fault(arg == "on");
   else if (verb == "warn")
@@ -214,16 +214,16 @@ bool command(SerialDriveRunner& runner, const std::string& line) {
   else if (verb == "clear")
     runner.clear_reply_faults();
   else if (verb == "status")
-    std::printf("%s\n", liftd::sim::format_status(runner.status()).c_str());
-  else if (verb == "channel" && liftd::sim::parse_channel_fault(arg, channel))
+    std::printf("%s\n", liftd::dcp::sim::format_status(runner.status()).c_str());
+  else if (verb == "channel" && liftd::dcp::sim::parse_channel_fault(arg, channel))
     runner.inject_channel(channel);
   else if (verb == "help")
     usage(stdout);
-  else if (verb == "rate" && liftd::sim::parse_reply_fault(arg, f)) {
+  else if (verb == "rate" && liftd::dcp::sim::parse_reply_fault(arg, f)) {
     double p = 0.0;
     in >> p;
     runner.set_fault_rate(f, p);
-  } else if (liftd::sim::parse_reply_fault(verb, f)) {
+  } else if (liftd::dcp::sim::parse_reply_fault(verb, f)) {
     runner.inject(f, static_cast<std::uint32_t>(std::strtoul(arg.c_str(), nullptr, 10)));
   } else {
     return false;
@@ -300,7 +300,7 @@ int main(int argc, char** argv) {
     print_events(runner);
     const MonoTime now = liftd::mono_now();
     if (opt.status_interval_s > 0 && now >= next_status) {
-      std::printf("%s\n", liftd::sim::format_status(runner.status()).c_str());
+      std::printf("%s\n", liftd::dcp::sim::format_status(runner.status()).c_str());
       next_status = now + std::chrono::duration_cast<MonoTime>(
                               std::chrono::duration<double>(opt.status_interval_s));
     }
@@ -309,7 +309,7 @@ int main(int argc, char** argv) {
   runner.stop();
   print_events(runner);
   const auto s = runner.status();
-  if (s.state == liftd::sim::RunnerState::DeviceLost)
+  if (s.state == liftd::dcp::sim::RunnerState::DeviceLost)
     std::fprintf(stderr, "dcp-drive-sim: device lost\n");
   std::printf(
       "summary: frames %llu bad %llu replies %llu repeats %llu resyncs %llu travels %llu "

@@ -21,7 +21,7 @@
 #include "can/socket.hpp"
 #include "common/mono_time.hpp"
 #include "common/version.hpp"
-#include "sim/sch001_card_sim.hpp"
+#include "sch001/sim/sch001_card_sim.hpp"
 
 namespace {
 
@@ -58,7 +58,7 @@ std::optional<long> number(const char* text) {
   return v;
 }
 
-void print_status(const liftd::sim::Sch001CardSim& card) {
+void print_status(const liftd::sch001::sim::Sch001CardSim& card) {
   const auto& s = card.state();
   std::printf(
       "car %.0f mm %.2f m/s; card ERR=%d RDY=%d T1=%d P1=%d P2=%d%s; commands 0x%02X, "
@@ -71,8 +71,8 @@ void print_status(const liftd::sim::Sch001CardSim& card) {
 }
 
 /// One stdin line; false on "quit".
-bool command(const std::string& line, liftd::sim::Sch001CardSim& card, liftd::can::CanSocket* peer,
-             bool unix_socket) {
+bool command(const std::string& line, liftd::sch001::sim::Sch001CardSim& card,
+             liftd::can::CanSocket* peer, bool unix_socket) {
   std::istringstream in(line);
   std::string word, arg;
   in >> word >> arg;
@@ -121,6 +121,7 @@ bool command(const std::string& line, liftd::sim::Sch001CardSim& card, liftd::ca
 
 }  // namespace
 
+// Over 120 lines: the command line, the endpoint and the poll loop, read top to bottom.
 int main(int argc, char** argv) {
   std::string socket_path, interface;
   long base = 0, node = 49, start_mm = 0;
@@ -176,13 +177,13 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "sch001-sim: give exactly one of --socket PATH and --interface IFACE\n");
     return 2;
   }
-  liftd::sim::CardSimConfig config;
+  liftd::sch001::sim::CardSimConfig config;
   config.ids =
       *liftd::sch001::ids_for(static_cast<std::uint32_t>(base), static_cast<std::uint32_t>(node));
   config.fast_down_sp3 = sp3;
   config.start_mm = static_cast<double>(start_mm);
   config.bottom_mm = config.start_mm - 200.0;
-  liftd::sim::Sch001CardSim card(config, mono_now());
+  liftd::sch001::sim::Sch001CardSim card(config, mono_now());
 
   signal(SIGINT, on_signal);
   signal(SIGTERM, on_signal);

@@ -1,5 +1,5 @@
-// uss-drive-sim: simulated USS slaves (lift drives, sim::UssBusSim) on a serial device or a pty,
-// 8E1 (USS B 3.2). Characters are read with their parity/framing marks (PARMRK) where the line
+// uss-drive-sim: simulated USS slaves (lift drives, uss::sim::UssBusSim) on a serial device or a
+// pty, 8E1 (USS B 3.2). Characters are read with their parity/framing marks (PARMRK) where the line
 // gives them, each telegram is answered after the slave's reply delay, the car keeps moving
 // between telegrams, and every rule of the spec the master breaks is printed. Faults are switched
 // on stdin while it runs ("help" lists them); a summary is printed on exit.
@@ -29,8 +29,8 @@
 #include "common/version.hpp"
 #include "io/pty.hpp"
 #include "io/serial_port.hpp"
-#include "sim/uss_slave_sim.hpp"
 #include "uss/line.hpp"
+#include "uss/sim/uss_slave_sim.hpp"
 #include "uss/timing.hpp"
 
 namespace {
@@ -38,8 +38,8 @@ namespace {
 using namespace std::chrono_literals;
 using liftd::mono_now;
 using liftd::MonoTime;
-using liftd::sim::UssBusSim;
-using liftd::sim::UssSlaveConfig;
+using liftd::uss::sim::UssBusSim;
+using liftd::uss::sim::UssSlaveConfig;
 
 volatile sig_atomic_t g_stop = 0;
 void on_signal(int) {
@@ -144,9 +144,9 @@ bool parse(int argc, char** argv, Options& o) {
     } else if (a == "--special") {
       const std::string v = value();
       if (v == "echo") {
-        o.slave.special = liftd::sim::UssSpecialMode::Echo;
+        o.slave.special = liftd::uss::sim::UssSpecialMode::Echo;
       } else if (v == "ignore") {
-        o.slave.special = liftd::sim::UssSpecialMode::Ignore;
+        o.slave.special = liftd::uss::sim::UssSpecialMode::Ignore;
       } else {
         return false;
       }
@@ -171,7 +171,7 @@ bool parse(int argc, char** argv, Options& o) {
   return (o.pty != !o.device.empty()) && !o.addresses.empty();
 }
 
-void print_slave(const liftd::sim::UssSlaveSim& s) {
+void print_slave(const liftd::uss::sim::UssSlaveSim& s) {
   const auto d = s.drive();
   const auto& st = s.stats();
   std::printf(
@@ -201,14 +201,14 @@ bool command(const std::string& line, UssBusSim& bus) {
   }
   std::vector<std::string> args;
   for (std::string a; in >> a;) args.push_back(a);
-  const auto slave_at = [&](std::size_t i) -> liftd::sim::UssSlaveSim* {
+  const auto slave_at = [&](std::size_t i) -> liftd::uss::sim::UssSlaveSim* {
     if (i >= args.size()) return &bus.slaves()[0];
     const auto a = number(args[i].c_str());
     return a && *a >= 0 && *a <= 31 ? bus.slave(static_cast<std::uint8_t>(*a)) : nullptr;
   };
-  liftd::sim::UssSlaveSim* s = nullptr;
+  liftd::uss::sim::UssSlaveSim* s = nullptr;
   bool ok = true;
-  if (const auto f = liftd::sim::parse_uss_reply_fault(verb)) {
+  if (const auto f = liftd::uss::sim::parse_uss_reply_fault(verb)) {
     const auto n = args.empty() ? std::optional<long>(1) : number(args[0].c_str());
     s = slave_at(1);
     ok = n && *n >= 0 && s != nullptr;
@@ -251,7 +251,7 @@ bool command(const std::string& line, UssBusSim& bus) {
 }
 
 // Sends one reply; on a UART an injected parity error goes out as odd parity for the reply.
-void send_reply(liftd::io::SerialPort& port, const liftd::sim::UssReply& r, bool pty_line,
+void send_reply(liftd::io::SerialPort& port, const liftd::uss::sim::UssReply& r, bool pty_line,
                 UssBusSim& bus) {
   std::array<std::uint8_t, liftd::uss::kMaxTelegramBytes> bytes{};
   std::copy_n(r.bytes.begin(), r.size, bytes.begin());
@@ -277,6 +277,7 @@ void send_reply(liftd::io::SerialPort& port, const liftd::sim::UssReply& r, bool
 
 }  // namespace
 
+// Over 120 lines: the command line, the line and the read-and-reply loop, read top to bottom.
 int main(int argc, char** argv) {
   Options opt;
   if (!parse(argc, argv, opt)) {
@@ -349,8 +350,8 @@ int main(int argc, char** argv) {
   liftd::uss::ParmrkDecoder decoder;
   std::array<std::uint8_t, 512> raw{};
   std::array<liftd::uss::RxChar, 512> chars{};
-  std::array<liftd::sim::UssViolation, 64> violations{};
-  std::vector<liftd::sim::UssDriveState> states;
+  std::array<liftd::uss::sim::UssViolation, 64> violations{};
+  std::vector<liftd::uss::sim::UssDriveState> states;
   for (const auto& s : bus->slaves()) states.push_back(s.state());
   std::string pending;
   bool stdin_open = true;
@@ -403,7 +404,7 @@ int main(int argc, char** argv) {
     }
     now = mono_now();
     bus->on_time(now);
-    liftd::sim::UssReply reply;
+    liftd::uss::sim::UssReply reply;
     while (bus->take_reply(now, reply)) send_reply(port, reply, pty_line, *bus);
     const std::size_t nv = bus->take_violations(violations);
     for (std::size_t i = 0; i < nv; ++i) {

@@ -1,4 +1,4 @@
-#include "sim/sch001_card_sim.hpp"
+#include "sch001/sim/sch001_card_sim.hpp"
 
 #include <algorithm>
 #include <array>
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <variant>
 
-namespace liftd::sim {
+namespace liftd::sch001::sim {
 namespace {
 
 double seconds_between(MonoTime from, MonoTime to) {
@@ -149,4 +149,4 @@ void Sch001CardSim::drift(double mm) noexcept {
   if (state_.velocity_mps == 0.0) state_.position_mm += mm;
 }
 
-}  // namespace liftd::sim
+}  // namespace liftd::sch001::sim

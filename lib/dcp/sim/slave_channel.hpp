@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <span>
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 
 /// The drive's outgoing channel bytes: unlike dcp::ChannelTransmitter it queues several
 /// messages, because a drive may add an error message or display lines at any time and sends
@@ -35,4 +35,4 @@ class ChannelOutput {
   std::size_t size_ = 0;
 };
 
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim

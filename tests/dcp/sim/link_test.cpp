@@ -5,7 +5,7 @@
 
 #include "sim_harness.hpp"
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 namespace {
 
 using namespace testing;
@@ -376,4 +376,4 @@ TEST(SimFaults, ReplyFaultRateIsRoughlyHonoured) {
 }
 
 }  // namespace
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim

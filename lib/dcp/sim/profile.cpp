@@ -1,9 +1,9 @@
-#include "sim/profile.hpp"
+#include "dcp/sim/profile.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 
 namespace {
 // Bisection steps for peak-speed searches: 2^-60 of a few m/s is far below a micrometre.
@@ -260,4 +260,4 @@ double peak_speed_mps(double distance_m, double vmax_mps, const RampLimits& acce
   return lo;
 }
 
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim

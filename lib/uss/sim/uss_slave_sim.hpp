@@ -10,6 +10,8 @@
 // Structure: one UssSlaveSim per slave address (each with its own receiver, as every station on
 // the bus runs A 5.2 itself), and UssBusSim that feeds every received character to all of them and
 // hands out the replies. A single slave can also be driven alone through the same calls.
+// Sources: uss_slave_sim.cpp (the line and telegram handling, UssBusSim), uss_slave_drive.cpp (the
+// drive profile and the car), uss_slave_parameters.cpp (the PKW parameter store).
 //
 // How to drive it (one thread owns the object; nothing here is thread-safe):
 //   - every character read from the line: on_char(c, t) with t = the time it was received
@@ -73,7 +75,7 @@
 #include "uss/receiver.hpp"
 #include "uss/telegram.hpp"
 
-namespace liftd::sim {
+namespace liftd::uss::sim {
 
 /// Device-specific error numbers (C 4.2.1.1 Tabelle 4.3: "Fehlerkennung größer 100 können
 /// gerätespezifisch belegt werden").
@@ -402,4 +404,4 @@ class UssBusSim {
   std::vector<UssSlaveSim> slaves_;
 };
 
-}  // namespace liftd::sim
+}  // namespace liftd::uss::sim

@@ -7,7 +7,7 @@
 
 #include "sim_harness.hpp"
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 namespace {
 
 using namespace testing;
@@ -331,7 +331,7 @@ TEST(SimTravel, StopMessageAtSpeedIsAViolationAndAnEmergencyStop) {
     if (c.velocity_mps > 1.5) break;
   }
   for (int i = 0; i < 400 && m.sim.velocity_mps() != 0.0; ++i) m.cycle(cmd::kStop, 0);
-  EXPECT_EQ(m.sim.violations(sim::Violation::StopAtSpeed), 1U);
+  EXPECT_EQ(m.sim.violations(dcp::sim::Violation::StopAtSpeed), 1U);
   EXPECT_EQ(m.sim.counters().violations, 1U);
 }
 
@@ -620,4 +620,4 @@ TEST(SimTravel, TrajectoryPredictsTheCarUntilTheDriveChangesItsPlan) {
 }
 
 }  // namespace
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim

@@ -2,6 +2,8 @@
 // master's 6-byte frames, runs the travel sequences of chapters 9 to 13 on a jerk-limited car
 // model, serves the communication channel (chapter 5) and injects faults on demand.
 // Sans-I/O: time comes in as an argument, no clock, file descriptor, logging or allocation.
+// Sources: drive_sim.cpp (time and car, the frames, faults), drive_sim_travel.cpp (the travel
+// sequencing), drive_sim_channel.cpp (the communication channel and display).
 #pragma once
 
 #include <array>
@@ -15,10 +17,10 @@
 #include "dcp/channel.hpp"
 #include "dcp/frame.hpp"
 #include "dcp/messages.hpp"
-#include "sim/profile.hpp"
-#include "sim/slave_channel.hpp"
+#include "dcp/sim/profile.hpp"
+#include "dcp/sim/slave_channel.hpp"
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 
 /// Travel speeds of the simulated installation (m/s), by DCP speed name (DCP 3.5.3.7).
 struct SpeedTable {
@@ -464,4 +466,4 @@ class DriveSim {
   SimCounters counters_{};
 };
 
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim

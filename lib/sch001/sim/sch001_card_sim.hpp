@@ -19,7 +19,7 @@
 #include "common/mono_time.hpp"
 #include "sch001/protocol.hpp"
 
-namespace liftd::sim {
+namespace liftd::sch001::sim {
 
 /// The simulated card and hydraulic unit.
 struct CardSimConfig {
@@ -109,4 +109,4 @@ class Sch001CardSim {
   std::vector<CardViolation> violations_;
 };
 
-}  // namespace liftd::sim
+}  // namespace liftd::sch001::sim

@@ -4,7 +4,7 @@
 // the violations it records, and the car model. Fake clock throughout; telegrams are fed one
 // character per character time (A 6.1) after a start pause. Telegrams are built here by hand
 // (STX LGE ADR words BCC), not with the codec under test elsewhere.
-#include "sim/uss_slave_sim.hpp"
+#include "uss/sim/uss_slave_sim.hpp"
 
 #include <gtest/gtest.h>
 
@@ -20,11 +20,11 @@ namespace {
 
 using namespace std::chrono_literals;
 using liftd::MonoTime;
-using liftd::sim::UssDriveState;
-using liftd::sim::UssReply;
-using liftd::sim::UssReplyFault;
-using liftd::sim::UssSlaveConfig;
-using liftd::sim::UssSlaveSim;
+using liftd::uss::sim::UssDriveState;
+using liftd::uss::sim::UssReply;
+using liftd::uss::sim::UssReplyFault;
+using liftd::uss::sim::UssSlaveConfig;
+using liftd::uss::sim::UssSlaveSim;
 using Bytes = std::vector<std::uint8_t>;
 using Words = std::vector<std::uint16_t>;
 
@@ -111,7 +111,7 @@ struct Harness {
     return w;
   }
   std::vector<std::string_view> violations() {
-    std::array<liftd::sim::UssViolation, 64> v{};
+    std::array<liftd::uss::sim::UssViolation, 64> v{};
     const std::size_t n = sim.take_violations(v);
     std::vector<std::string_view> out;
     for (std::size_t i = 0; i < n; ++i) out.push_back(v[i].rule);
@@ -401,7 +401,7 @@ TEST(UssSlaveSim, SpecialTelegramsEchoOrIgnore) {
   EXPECT_FALSE(h.exchange(telegram(0x80 | 6, {0xCAFE, 0, 0, 0, 0, 0})));
   EXPECT_EQ(h.sim.stats().specials, 2U);
   auto c = config(PkwLength::Four, 2);
-  c.special = liftd::sim::UssSpecialMode::Ignore;
+  c.special = liftd::uss::sim::UssSpecialMode::Ignore;
   Harness ignore(c);
   EXPECT_FALSE(ignore.exchange(s));
 }
@@ -763,7 +763,7 @@ TEST(UssSlaveSim, IndexBitsTheMasterMustLeaveZero) {
 TEST(UssBusSim, RoutesByAddressAndRejectsDuplicates) {
   std::vector<UssSlaveConfig> slaves = {config(PkwLength::Four, 2, 1),
                                         config(PkwLength::Three, 2, 3)};
-  liftd::sim::UssBusSim bus(slaves, kBaud, MonoTime{1s});
+  liftd::uss::sim::UssBusSim bus(slaves, kBaud, MonoTime{1s});
   MonoTime now{2s};
   auto send = [&](const Bytes& b) {
     now += 5ms;
@@ -794,7 +794,7 @@ TEST(UssBusSim, RoutesByAddressAndRejectsDuplicates) {
   EXPECT_EQ(bus.slave(1)->state(), UssDriveState::SwitchOnInhibit);  // flag without PZD1 bit
   EXPECT_EQ(bus.slave(3)->stats().broadcasts, 0U);  // 3-word PKW: other LGE, rejected
   slaves.push_back(config(PkwLength::Four, 2, 1));
-  EXPECT_THROW(liftd::sim::UssBusSim(slaves, kBaud, MonoTime{}), std::invalid_argument);
+  EXPECT_THROW(liftd::uss::sim::UssBusSim(slaves, kBaud, MonoTime{}), std::invalid_argument);
 }
 
 }  // namespace

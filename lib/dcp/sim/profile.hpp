@@ -6,7 +6,7 @@
 #include <array>
 #include <cstddef>
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 
 /// Position, speed and acceleration along the travel direction (m, m/s, m/s^2).
 struct MotionState {
@@ -116,4 +116,4 @@ class MotionPlan {
 double peak_speed_mps(double distance_m, double vmax_mps, const RampLimits& accel,
                       const RampLimits& decel) noexcept;
 
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim

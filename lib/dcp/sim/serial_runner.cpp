@@ -1,4 +1,4 @@
-#include "sim/serial_runner.hpp"
+#include "dcp/sim/serial_runner.hpp"
 
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
@@ -18,7 +18,7 @@
 #include <system_error>
 #include <utility>
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 
 namespace {
 
@@ -520,4 +520,4 @@ void SerialDriveRunner::run() noexcept {
   running_.store(false, std::memory_order_release);
 }
 
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim

@@ -1,9 +1,9 @@
-// sim::SerialDriveRunner on a real pty pair against a small master loop and dcp::MasterLink:
+// dcp::sim::SerialDriveRunner on a real pty pair against a small master loop and dcp::MasterLink:
 // the link comes up, the encoder is readable while the car moves (also between frames), faults
 // switched through the runner reach the wire, stop() is prompt, device loss is handled.
 // Real time on shared cores: the master end waits patiently for each reply, so the counts are
 // what the runner decided (answered, corrupted, withheld), not how quickly a loaded machine ran.
-#include "sim/serial_runner.hpp"
+#include "dcp/sim/serial_runner.hpp"
 
 #include <gtest/gtest.h>
 #include <pthread.h>
@@ -21,7 +21,7 @@
 #include "io/pty.hpp"
 #include "sim_harness.hpp"
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 namespace {
 
 using namespace std::chrono_literals;
@@ -510,4 +510,4 @@ TEST(EncoderSample, ReadsTheDrivesPlanAtTheTimeAsked) {
 }
 
 }  // namespace
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim

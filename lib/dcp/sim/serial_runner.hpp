@@ -23,10 +23,10 @@
 
 #include "common/mono_time.hpp"
 #include "common/snapshot_box.hpp"
+#include "dcp/sim/drive_sim.hpp"
 #include "io/serial_port.hpp"
-#include "sim/drive_sim.hpp"
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 
 /// Where and how the runner serves the drive.
 struct RunnerOptions {
@@ -227,4 +227,4 @@ class SerialDriveRunner {
   io::PortFeatures features_{};
 };
 
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim

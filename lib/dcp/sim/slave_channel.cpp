@@ -1,8 +1,8 @@
-#include "sim/slave_channel.hpp"
+#include "dcp/sim/slave_channel.hpp"
 
 #include "dcp/channel.hpp"
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 
 bool ChannelOutput::push_message(std::uint8_t mode, std::span<const std::uint8_t> body) noexcept {
   const std::size_t need = body.size() + 3;  // STX, mode, ETX
@@ -35,4 +35,4 @@ std::uint8_t ChannelOutput::pop() noexcept {
   return b;
 }
 
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim

@@ -2,16 +2,16 @@
 // drive, with time advancing by a fuzzed step; replies must always be well formed.
 #include <cstdlib>
 
-#include "sim/drive_sim.hpp"
+#include "dcp/sim/drive_sim.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace liftd;
-  sim::DriveConfig cfg;
+  dcp::sim::DriveConfig cfg;
   cfg.protocol = (size > 0 && (data[0] & 1) != 0) ? dcp::Protocol::Dcp3 : dcp::Protocol::Dcp4;
   cfg.require_init = size > 0 && (data[0] & 2) != 0;
   cfg.fast_start_limit_ms = 1000;
   MonoTime now{};
-  sim::DriveSim drive(cfg, now);
+  dcp::sim::DriveSim drive(cfg, now);
   std::size_t i = 1;
   while (i + 7 <= size) {
     // One step byte (0..255 ms), then 6 frame bytes; every 8th frame gets a valid checksum
@@ -22,7 +22,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if ((data[i] & 0x07) != 0) {
       f[5] = static_cast<std::uint8_t>(f[0] ^ f[1] ^ f[2] ^ f[3] ^ f[4]);
     }
-    const sim::Reply r = drive.on_master_frame(f, now);
+    const dcp::sim::Reply r = drive.on_master_frame(f, now);
     if (r.size != 0 && r.size != 6 && r.size != 3) abort();
     if (r.size == 6 && !dcp::decode_slave(std::span<const std::uint8_t, 6>(r.bytes.data(), 6))) {
       abort();
@@ -32,7 +32,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     i += 7;
   }
   drive.advance(now + std::chrono::seconds(5));
-  sim::SimEvent e;
+  dcp::sim::SimEvent e;
   while (drive.pop_event(e)) {
   }
   return 0;

@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "dcp/frame.hpp"
-#include "sim/drive_sim.hpp"
+#include "dcp/sim/drive_sim.hpp"
 
-namespace liftd::sim::testing {
+namespace liftd::dcp::sim::testing {
 
 using namespace std::chrono_literals;
 
@@ -155,4 +155,4 @@ inline constexpr std::uint8_t kDown = 0x10;     // B4
 inline constexpr std::uint8_t kB7 = 0x80;       // your last reply was corrupt
 }  // namespace cmd
 
-}  // namespace liftd::sim::testing
+}  // namespace liftd::dcp::sim::testing

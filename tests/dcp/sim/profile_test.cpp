@@ -1,14 +1,14 @@
 // Car profile: the I7 examples of DCP 11.1.2.1 from the simulator's own profile, exact landing,
 // limits respected.
-#include "sim/profile.hpp"
+#include "dcp/sim/profile.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "sim/drive_sim.hpp"
+#include "dcp/sim/drive_sim.hpp"
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 namespace {
 
 TEST(SimProfile, I7ShortTravelExampleFromSpec) {
@@ -205,4 +205,4 @@ TEST(SimProfile, FixedArrivalBeyondTheHardestRampIsReported) {
 }
 
 }  // namespace
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim

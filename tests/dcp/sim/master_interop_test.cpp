@@ -6,9 +6,9 @@
 #include <cmath>
 
 #include "dcp/master_link.hpp"
-#include "sim/drive_sim.hpp"
+#include "dcp/sim/drive_sim.hpp"
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 namespace {
 
 using namespace std::chrono_literals;
@@ -99,4 +99,4 @@ TEST(SimInterop, Dcp4TravelThroughTheMasterLands) {
 }
 
 }  // namespace
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim

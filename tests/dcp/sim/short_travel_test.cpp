@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include "sim/profile.hpp"
+#include "dcp/sim/profile.hpp"
 #include "sim_harness.hpp"
 
-namespace liftd::sim {
+namespace liftd::dcp::sim {
 namespace {
 
 using namespace testing;
@@ -159,4 +159,4 @@ TEST(Dcp3ShortTravelLimits, SvxBeyondTheFastStopRampOvershootsOnThatRamp) {
 }
 
 }  // namespace
-}  // namespace liftd::sim
+}  // namespace liftd::dcp::sim
