@@ -17,13 +17,13 @@ declare -A allowed=(
   [can]="common io"
   [lift]="common drive"
   [rt]="common io log can"
-  [dcp]="common io log can drive lift rt"
-  [sch001]="common io log can drive lift rt"
-  [uss]="common io log can drive lift rt"
+  [config]="common drive log"
+  [dcp]="common io log can drive lift rt config"
+  [sch001]="common io log can drive lift rt config"
+  [uss]="common io log can drive lift rt config"
   [api]="common drive log"
-  # The configuration checks floor names against the DCP display character set (DCP appendix A)
-  # until each drive kind validates its own section.
-  [config]="common drive log dcp"
+  # The drive kinds put together (the configuration schema): the one folder that knows them all.
+  [kinds]="common drive config dcp sch001 uss"
   [sim]="common io log can drive lift rt dcp sch001 uss"
 )
 
