@@ -64,9 +64,10 @@ bool check_floor_name(const json& entry, const std::string& at, const FloorRules
       !floor.name.empty() && (floor.name.front() == ' ' || floor.name.back() == ' ');
   if (length < 1 || length > static_cast<std::size_t>(kFloorNameMaxChars) || !displayable ||
       padded) {
-    problems.push_back({at + ".name", show(entry["name"]) + " is not allowed: 1..16 printable " +
-                                          "characters of " + rules.charset_name + " (" +
-                                          rules.charset_details + "), no space at either end"});
+    problems.push_back({at + ".name", show(entry["name"]) +
+                                          " is not allowed: 1..16 printable characters of " +
+                                          rules.charset_name + " (" + rules.charset_details +
+                                          "), no space at either end"});
     return false;
   }
   return true;

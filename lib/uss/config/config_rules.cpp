@@ -19,7 +19,6 @@ using config::Key;
 using config::PositionSource;
 using config::Problems;
 using config::show;
-using config::Type;
 using config::UssConfig;
 using config::UssPkw;
 using config::UssSlave;
