@@ -34,6 +34,7 @@
 #include "daemon/lift_core.hpp"
 #include "daemon/trace_files.hpp"
 #include "drive/drive.hpp"
+#include "kinds/config_schema.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -62,7 +63,7 @@ class ControllerBackend : public api::Backend {
 
   drive::Kind drive_kind() const override { return Drive::kKind; }
   api::DisplaySnapshot display() override { return {}; }
-  nlohmann::json config() override { return config::to_json(config_); }
+  nlohmann::json config() override { return config::to_json(config_, kinds::config_schema()); }
   // Not offered by these drive kinds: the dispatcher refuses them before they get here.
   void key(int, api::Responder done) override { not_offered(done); }
   void power(api::PowerSetting, api::Responder done) override { not_offered(done); }

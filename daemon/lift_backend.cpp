@@ -9,6 +9,7 @@
 #include "daemon/simulated_lift.hpp"
 #include "dcp/charset.hpp"
 #include "dcp/trace.hpp"
+#include "kinds/config_schema.hpp"
 #include "log/log.hpp"
 
 #include <cstring>
@@ -181,7 +182,7 @@ api::DisplaySnapshot LiftBackend::display() {
 }
 
 nlohmann::json LiftBackend::config() {
-  return config::to_json(config_);
+  return config::to_json(config_, kinds::config_schema());
 }
 
 // ---- commands through the cycle ----

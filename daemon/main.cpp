@@ -18,6 +18,7 @@
 #include "daemon/daemon.hpp"
 #include "daemon/drives.hpp"
 #include "daemon/lift_app.hpp"
+#include "kinds/config_schema.hpp"
 #include "log/log.hpp"
 #include "rt/rt_thread.hpp"
 #include "service/notify.hpp"
@@ -45,13 +46,13 @@ void print_problems(std::FILE* out, std::string_view path,
 }
 
 int check_config(const std::string& path) {
-  const auto result = config::load_file(path);
+  const auto result = liftd::kinds::load_config(path);
   if (!result.ok()) {
     print_problems(stderr, path, result.problems);
     return exit_code::kBadConfig;
   }
   std::printf("%s: configuration is valid\n%s", path.c_str(),
-              config::summary(result.config).c_str());
+              config::summary(result.config, liftd::kinds::config_schema()).c_str());
   return exit_code::kOk;
 }
 
@@ -67,7 +68,7 @@ void simulate_overrides(config::Config& cfg) {
 std::optional<config::Config> load_config(const CommandLine& cl, bool to_log) {
   if (cl.simulate && !cl.config_path) return liftd::daemon::simulation_defaults();
   const std::string path = cl.config_path.value_or(std::string(liftd::daemon::kDefaultConfigPath));
-  auto result = config::load_file(path);
+  auto result = liftd::kinds::load_config(path);
   if (!result.ok()) {
     if (to_log) {
       for (const auto& problem : result.problems) {
@@ -175,7 +176,7 @@ int run_daemon(const CommandLine& cl) {
     const bool simulate = cl.simulate;
     daemon.set_config_loader(
         [path, simulate] {
-          auto result = config::load_file(path);
+          auto result = liftd::kinds::load_config(path);
           if (result.ok() && simulate) simulate_overrides(result.config);
           return result;
         },
@@ -206,14 +207,14 @@ int dispatch(const CommandLine& cl) {
       std::printf("liftd %.*s\n", static_cast<int>(liftd::kVersion.size()), liftd::kVersion.data());
       return exit_code::kOk;
     case CommandLine::Mode::print_reference:
-      std::fputs(config::reference_markdown().c_str(), stdout);
+      std::fputs(config::reference_markdown(liftd::kinds::config_schema()).c_str(), stdout);
       return exit_code::kOk;
     case CommandLine::Mode::check_config:
       return check_config(*cl.config_path);
     case CommandLine::Mode::print_config: {
       const auto cfg = load_config(cl, false);
       if (!cfg) return exit_code::kBadConfig;
-      std::printf("%s\n", config::to_json(*cfg).dump(2).c_str());
+      std::printf("%s\n", config::to_json(*cfg, liftd::kinds::config_schema()).dump(2).c_str());
       return exit_code::kOk;
     }
     case CommandLine::Mode::run:

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 
+#include "kinds/config_schema.hpp"
+
 namespace liftd::daemon {
 namespace {
 
@@ -49,7 +51,8 @@ ReloadPlan plan_reload(const config::Config& running, const config::Config& next
   ReloadPlan plan;
   plan.effective = running;
   std::vector<KeyChange> changes;
-  diff("", config::to_json(running), config::to_json(next), changes);
+  const config::Schema& schema = kinds::config_schema();
+  diff("", config::to_json(running, schema), config::to_json(next, schema), changes);
   for (auto& change : changes) {
     (is_live(change.key) ? plan.applied : plan.need_restart).push_back(std::move(change));
   }

@@ -1,5 +1,6 @@
-// liftd configuration: the typed settings, loaded from JSON and validated against one schema
-// table (schema() in config.cpp). Exceptions are used only while loading; the result is plain data.
+// liftd configuration: the typed settings, loaded from JSON and validated against a Schema
+// (config/schema.hpp: the shared sections here, each drive kind's section in its own folder,
+// put together by lib/kinds). Exceptions are used only while loading; the result is plain data.
 #pragma once
 
 #include <cstddef>
@@ -201,7 +202,7 @@ struct SimConfig {
 };
 
 /// The whole configuration; every member mirrors a key of the JSON file. The member
-/// initialisers are the defaults (the schema table reads them from a default Config).
+/// initialisers are the defaults (the schema's keys read them from a default Config).
 struct Config {
   LogConfig log;                                 ///< log.*
   DriveConfig drive;                             ///< drive.*
@@ -217,6 +218,8 @@ struct Config {
   UssConfig uss;                                 ///< uss.*
   SimConfig sim;                                 ///< sim.*
 };
+
+class Schema;
 
 /// One thing wrong with a configuration, ready to print as "<where>: <message>".
 struct Problem {
@@ -236,8 +239,9 @@ struct LoadResult {
   bool ok() const { return problems.empty(); }
 };
 
-/// Parses and validates JSON text; `origin` names it in messages (usually the file path).
-LoadResult parse(std::string_view text, std::string_view origin);
+/// Parses and validates JSON text against `schema`; `origin` names it in messages (usually the
+/// file path).
+LoadResult parse(std::string_view text, std::string_view origin, const Schema& schema);
 
 /// The largest configuration file load_file() reads, in bytes (1 MiB; a full 64-floor file is
 /// a few KiB).
@@ -248,7 +252,7 @@ inline constexpr std::size_t kMaxFileBytes = 1024 * 1024;
 /// kMaxFileBytes is read (symbolic links are followed); a FIFO, device or directory is one
 /// problem and is never read, so this never blocks. An unreadable file is one problem naming the
 /// path and the errno text.
-LoadResult load_file(const std::filesystem::path& path);
+LoadResult load_file(const std::filesystem::path& path, const Schema& schema);
 
 /// Facts about the machine a configuration must fit.
 struct HostFacts {
@@ -261,31 +265,35 @@ struct HostFacts {
 /// The problems a valid configuration has on this host: `rt.cpu` must be a usable CPU.
 std::vector<Problem> check_host(const Config& config, const HostFacts& host);
 
-/// Validates a JSON document that is already parsed (shared by parse() and tests).
-LoadResult from_json(const nlohmann::json& document);
+/// Validates a JSON document that is already parsed (shared by parse() and tests): every key of
+/// `schema` for type and range, the shared cross-checks, then the cross-check of the kind that
+/// `drive.kind` names.
+LoadResult from_json(const nlohmann::json& document, const Schema& schema);
 
-/// The effective configuration as JSON, every key present (the API's `config` command).
-nlohmann::json to_json(const Config& config);
+/// The effective configuration as JSON, every key of `schema` present (the API's `config`
+/// command).
+nlohmann::json to_json(const Config& config, const Schema& schema);
 
-/// A short human summary for `liftd --check-config`.
-std::string summary(const Config& config);
+/// A short human summary for `liftd --check-config`: the drive as its kind's rules describe it,
+/// then the shared sections.
+std::string summary(const Config& config, const Schema& schema);
 
 /// The Markdown reference of every key (type, default, allowed values, description), generated
-/// from the schema table; docs/config.md embeds it.
-std::string reference_markdown();
+/// from `schema`; docs/config.md embeds it.
+std::string reference_markdown(const Schema& schema);
 
-/// Every key path the schema knows, in table order.
-std::vector<std::string> key_paths();
+/// Every key path of `schema`, in its order.
+std::vector<std::string> key_paths(const Schema& schema);
 
 /// The name of an enum value as written in the JSON file.
 std::string_view to_string(LogLevel value);
-/// The name of an enum value as written in the JSON file.
 /// The name of an enum value as written in the JSON file.
 std::string_view to_string(Rs485Mode value);
 /// The name of an enum value as written in the JSON file.
 std::string_view to_string(PositionSource value);
 /// The name of an enum value as written in the JSON file.
 std::string_view to_string(RelevelDoors value);
+/// The name of an enum value as written in the JSON file.
 std::string_view to_string(Dcp3Reference value);
 
 /// Parses a log level name ("trace".."error").

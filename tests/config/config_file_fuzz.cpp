@@ -14,6 +14,7 @@
 #include <string_view>
 
 #include "config/config.hpp"
+#include "kinds/config_schema.hpp"
 
 namespace {
 
@@ -43,21 +44,21 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   switch (kind) {
     case 0: {  // a regular file and a link to it: the same outcome
       if (::symlink(file.c_str(), link.c_str()) != 0) std::abort();
-      const auto direct = liftd::config::load_file(file);
-      const auto via_link = liftd::config::load_file(link);
+      const auto direct = liftd::kinds::load_config(file);
+      const auto via_link = liftd::kinds::load_config(link);
       if (all(direct) != all(via_link)) std::abort();
       break;
     }
     case 1: {  // a FIFO nobody writes to
       if (::mkfifo(fifo.c_str(), 0600) != 0) std::abort();
-      if (liftd::config::load_file(fifo).problems.size() != 1) std::abort();
+      if (liftd::kinds::load_config(fifo).problems.size() != 1) std::abort();
       break;
     }
     case 2:  // a directory
-      if (liftd::config::load_file(dir).problems.size() != 1) std::abort();
+      if (liftd::kinds::load_config(dir).problems.size() != 1) std::abort();
       break;
     default:  // a character device that would never end
-      if (liftd::config::load_file("/dev/zero").problems.size() != 1) std::abort();
+      if (liftd::kinds::load_config("/dev/zero").problems.size() != 1) std::abort();
       break;
   }
   return 0;

@@ -1,6 +1,8 @@
 // The configuration schema: defaults, every kind of problem, the example file, the generated
 // reference in docs/config.md.
 #include "config/config.hpp"
+#include "config/schema.hpp"
+#include "kinds/config_schema.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -27,6 +29,10 @@ std::string read_text(const std::string& path) {
   std::ostringstream out;
   out << in.rdbuf();
   return out.str();
+}
+
+const Schema& schema() {
+  return kinds::config_schema();
 }
 
 std::string all_problems(const LoadResult& result) {
@@ -121,9 +127,9 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/uss/speeds", {{"V0", 5}, {"VN", 3}, {"VI", 30}, {"V3", 60}, {"V4", 100}}},
       {"/sim/dcp", 4},
   };
-  const LoadResult result = parse("{}", "test");
+  const LoadResult result = kinds::parse_config("{}", "test");
   ASSERT_TRUE(result.ok()) << all_problems(result);
-  const json dumped = to_json(result.config);
+  const json dumped = to_json(result.config, schema());
   for (const auto& [pointer, value] : expected) {
     EXPECT_EQ(dumped.at(json::json_pointer(pointer)), value) << pointer;
   }
@@ -131,7 +137,7 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
   EXPECT_EQ(dumped.at("floors")[5], (json{{"name", "5"}, {"level_mm", 15000}}));
   // Every schema key has a default in the dump, and nothing else is there.
   std::size_t leaves = 0;
-  for (const auto& path : key_paths()) {
+  for (const auto& path : key_paths(schema())) {
     std::string pointer = "/" + path;
     std::replace(pointer.begin(), pointer.end(), '.', '/');
     EXPECT_TRUE(dumped.contains(json::json_pointer(pointer))) << path;
@@ -141,20 +147,21 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
 }
 
 TEST(ConfigDefaults, DefaultConstructedConfigMatchesParsedDefaults) {
-  EXPECT_EQ(to_json(Config{}), to_json(parse("{}", "test").config));
+  EXPECT_EQ(to_json(Config{}, schema()),
+            to_json(kinds::parse_config("{}", "test").config, schema()));
 }
 
 TEST(ConfigExample, ShippedExampleIsValidCompleteAndAtDefaults) {
   const std::string path = std::string(LIFTD_SOURCE_DIR) + "/config/liftd.json";
-  const LoadResult result = load_file(path);
+  const LoadResult result = kinds::load_config(path);
   ASSERT_TRUE(result.ok()) << all_problems(result);
   const json file = json::parse(read_text(path));
-  for (const auto& key : key_paths()) {
+  for (const auto& key : key_paths(schema())) {
     std::string pointer = "/" + key;
     std::replace(pointer.begin(), pointer.end(), '.', '/');
     EXPECT_TRUE(file.contains(json::json_pointer(pointer))) << key << " missing from the example";
   }
-  EXPECT_EQ(to_json(result.config), to_json(Config{}));
+  EXPECT_EQ(to_json(result.config, schema()), to_json(Config{}, schema()));
 }
 
 // Every sample in config/ is a file the daemon accepts as it stands, for its drive kind.
@@ -162,7 +169,7 @@ TEST(ConfigExample, EverySampleConfigurationIsValid) {
   for (const auto& [file, kind] :
        {std::pair{"liftd.json", DriveKind::Dcp}, std::pair{"hydraulic.json", DriveKind::Sch001},
         std::pair{"uss.json", DriveKind::Uss}}) {
-    const LoadResult result = load_file(std::string(LIFTD_SOURCE_DIR) + "/config/" + file);
+    const LoadResult result = kinds::load_config(std::string(LIFTD_SOURCE_DIR) + "/config/" + file);
     EXPECT_TRUE(result.ok()) << file << ": " << all_problems(result);
     EXPECT_EQ(result.config.drive.kind, kind) << file;
   }
@@ -197,7 +204,7 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
             "speeds": {"V0": 2.5, "VN": 1, "VI": 15, "V2": 20, "V3": 40, "V4": 99.9}},
     "sim": {"dcp": 3}
   })";
-  const LoadResult r = parse(text, "test");
+  const LoadResult r = kinds::parse_config(text, "test");
   ASSERT_TRUE(r.ok()) << all_problems(r);
   const Config& c = r.config;
   EXPECT_EQ(c.log.level, LogLevel::debug);
@@ -259,9 +266,9 @@ TEST(ConfigValues, EveryKeyReachesTheTypedStruct) {
                 {"V0", 2.5}, {"VN", 1}, {"VI", 15}, {"V2", 20}, {"V3", 40}, {"V4", 99.9}}));
   EXPECT_EQ(c.sim.dcp, 3);
   // The dump reads back to the same configuration.
-  const LoadResult again = from_json(to_json(c));
+  const LoadResult again = from_json(to_json(c, schema()), schema());
   EXPECT_EQ(all_problems(again), all_problems(r));  // the same two refusals, nothing else
-  EXPECT_EQ(to_json(again.config), to_json(c));
+  EXPECT_EQ(to_json(again.config, schema()), to_json(c, schema()));
 }
 
 struct BadCase {
@@ -358,7 +365,7 @@ TEST(ConfigProblems, NameTheKeyTheValueAndWhatIsAllowed) {
        "duplicate key"},
   };
   for (const auto& c : cases) {
-    const LoadResult r = parse(c.json_text, "test.json");
+    const LoadResult r = kinds::parse_config(c.json_text, "test.json");
     ASSERT_FALSE(r.ok()) << c.legend;
     bool found = false;
     for (const auto& p : r.problems) {
@@ -370,13 +377,13 @@ TEST(ConfigProblems, NameTheKeyTheValueAndWhatIsAllowed) {
 }
 
 TEST(ConfigProblems, CollectsEveryProblemNotJustTheFirst) {
-  const LoadResult r = parse(R"({
+  const LoadResult r = kinds::parse_config(R"({
     "log": {"levl": "info"},
     "dcp": {"link_fault_frames": 0, "manufacturer": "x"},
     "rt": {"priority": "high"},
     "floors": [{"name": "0", "level_mm": 10}, {"name": "1", "level_mm": 5}]
   })",
-                             "test.json");
+                                           "test.json");
   ASSERT_EQ(r.problems.size(), 5U) << all_problems(r);
   EXPECT_EQ(r.problems[0].where, "log.levl");
 }
@@ -390,7 +397,7 @@ TEST(ConfigProblems, MalformedJsonReportsLineAndColumn) {
       {"{\"a\": tru}", "f.json:1:10"},
   };
   for (const auto& [text, where] : cases) {
-    const LoadResult r = parse(text, "f.json");
+    const LoadResult r = kinds::parse_config(text, "f.json");
     ASSERT_EQ(r.problems.size(), 1U) << text;
     EXPECT_EQ(r.problems[0].where, where) << text;
     EXPECT_THAT(r.problems[0].message, HasSubstr("malformed JSON")) << text;
@@ -400,7 +407,7 @@ TEST(ConfigProblems, MalformedJsonReportsLineAndColumn) {
 TEST(ConfigProblems, NumberTooLargeIsAProblemNotACrash) {
   // Found by config_fuzz: the JSON library throws out_of_range, not parse_error, for these.
   for (const std::string text : {"1E989299", "{\"rt\": {\"priority\": 1e400}}"}) {
-    const LoadResult r = parse(text, "f.json");
+    const LoadResult r = kinds::parse_config(text, "f.json");
     ASSERT_EQ(r.problems.size(), 1U) << text;
     EXPECT_EQ(r.problems[0].where, "f.json") << text;
     EXPECT_EQ(r.problems[0].message, "malformed JSON: a number is too large to represent");
@@ -408,12 +415,12 @@ TEST(ConfigProblems, NumberTooLargeIsAProblemNotACrash) {
 }
 
 TEST(ConfigFile, UnreadableFileNamesThePathAndTheErrnoText) {
-  const LoadResult missing = load_file("/nonexistent/liftd.json");
+  const LoadResult missing = kinds::load_config("/nonexistent/liftd.json");
   ASSERT_EQ(missing.problems.size(), 1U);
   EXPECT_EQ(missing.problems[0].where, "/nonexistent/liftd.json");
   EXPECT_THAT(missing.problems[0].message, HasSubstr("No such file or directory"));
 
-  const LoadResult directory = load_file("/");
+  const LoadResult directory = kinds::load_config("/");
   ASSERT_EQ(directory.problems.size(), 1U);
   EXPECT_EQ(directory.problems[0].where, "/");
   EXPECT_THAT(directory.problems[0].message, HasSubstr("Is a directory"));
@@ -486,7 +493,7 @@ TEST(ConfigProblems, WhatTheDaemonCannotRunIsRefused) {
        "4 must be less than api.max_clients (4)"},
   };
   for (const auto& c : cases) {
-    const LoadResult r = parse(c.json_text, "test.json");
+    const LoadResult r = kinds::parse_config(c.json_text, "test.json");
     ASSERT_FALSE(r.ok()) << c.legend;
     EXPECT_EQ(r.problems[0].where, c.where) << c.legend << "\n" << all_problems(r);
     EXPECT_THAT(r.problems[0].message, HasSubstr(c.message)) << c.legend;
@@ -523,7 +530,7 @@ TEST(ConfigFloorNames, EqualAfterNormalisationOrOnTheDisplayIsTheSameName) {
       {"trailing space", floors("1", "1 "), "floors[1].name", "no space at either end"},
   };
   for (const auto& c : cases) {
-    const LoadResult r = parse(c.text, "test.json");
+    const LoadResult r = kinds::parse_config(c.text, "test.json");
     if (std::string(c.where).empty()) {
       EXPECT_TRUE(r.ok()) << c.legend << "\n" << all_problems(r);
       continue;
@@ -553,7 +560,7 @@ TEST(ConfigHost, RtCpuMustBeAUsableCpu) {
   EXPECT_THAT(HostFacts::current().usable_cpus, ::testing::Not(::testing::IsEmpty()));
   const std::string path = ::testing::TempDir() + "/cpu1023.json";
   std::ofstream(path) << R"({"rt": {"cpu": 1023}})";
-  const LoadResult loaded = load_file(path);
+  const LoadResult loaded = kinds::load_config(path);
   ASSERT_EQ(loaded.problems.size(), 1U) << all_problems(loaded);
   EXPECT_EQ(loaded.problems[0].where, "rt.cpu");
 }
@@ -564,7 +571,7 @@ TEST(ConfigFile, OnlyRegularFilesAreReadAndNeverBlock) {
   const std::string fifo = ::testing::TempDir() + "/liftd-config-fifo";
   ::unlink(fifo.c_str());
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  auto loading = std::async(std::launch::async, [&] { return load_file(fifo); });
+  auto loading = std::async(std::launch::async, [&] { return kinds::load_config(fifo); });
   if (loading.wait_for(std::chrono::seconds(10)) != std::future_status::ready) {
     const int fd = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
     if (fd >= 0) ::close(fd);
@@ -579,7 +586,7 @@ TEST(ConfigFile, OnlyRegularFilesAreReadAndNeverBlock) {
   // A character device is never opened: /dev/zero would be read until memory runs out (that
   // one is tested on the liftd process, under a memory limit, in tests/daemon); /dev/null shows
   // the rule here without the risk.
-  const LoadResult null_device = load_file("/dev/null");
+  const LoadResult null_device = kinds::load_config("/dev/null");
   ASSERT_EQ(null_device.problems.size(), 1U);
   EXPECT_EQ(to_string(null_device.problems[0]),
             "/dev/null: cannot read the config file: it is a character device; only a regular "
@@ -590,11 +597,11 @@ TEST(ConfigFile, SizeLimitAndSymlinks) {
   const std::string dir = ::testing::TempDir();
   const std::string at_limit = dir + "/liftd-at-limit.json";
   std::ofstream(at_limit) << "{}" << std::string(kMaxFileBytes - 2, ' ');
-  EXPECT_TRUE(load_file(at_limit).ok()) << all_problems(load_file(at_limit));
+  EXPECT_TRUE(kinds::load_config(at_limit).ok()) << all_problems(kinds::load_config(at_limit));
 
   const std::string over = dir + "/liftd-over-limit.json";
   std::ofstream(over) << "{}" << std::string(kMaxFileBytes - 1, ' ');
-  const LoadResult too_big = load_file(over);
+  const LoadResult too_big = kinds::load_config(over);
   ASSERT_EQ(too_big.problems.size(), 1U);
   EXPECT_EQ(to_string(too_big.problems[0]),
             over + ": cannot read the config file: it is larger than 1048576 bytes");
@@ -605,14 +612,14 @@ TEST(ConfigFile, SizeLimitAndSymlinks) {
   const std::string link = dir + "/liftd-link.json";
   ::unlink(link.c_str());
   ASSERT_EQ(::symlink(target.c_str(), link.c_str()), 0);
-  const LoadResult via_link = load_file(link);
+  const LoadResult via_link = kinds::load_config(link);
   ASSERT_TRUE(via_link.ok()) << all_problems(via_link);
   EXPECT_EQ(via_link.config.sim.dcp, 3);
   // ... but a link to a device is refused like the device.
   const std::string to_device = dir + "/liftd-link-null.json";
   ::unlink(to_device.c_str());
   ASSERT_EQ(::symlink("/dev/null", to_device.c_str()), 0);
-  EXPECT_THAT(all_problems(load_file(to_device)), HasSubstr("it is a character device"));
+  EXPECT_THAT(all_problems(kinds::load_config(to_device)), HasSubstr("it is a character device"));
   for (const auto& p : {at_limit, over, target, link, to_device}) ::unlink(p.c_str());
 }
 
@@ -641,12 +648,12 @@ TEST(ConfigSuggestions, EditDistanceCountsInsertionsDeletionsAndSubstitutions) {
 }
 
 TEST(ConfigReference, HasOneRowPerKey) {
-  const std::string table = reference_markdown();
-  for (const auto& key : key_paths()) {
+  const std::string table = reference_markdown(schema());
+  for (const auto& key : key_paths(schema())) {
     EXPECT_THAT(table, HasSubstr("| `" + key + "` |")) << key;
   }
   EXPECT_EQ(static_cast<std::size_t>(std::count(table.begin(), table.end(), '\n')),
-            key_paths().size() + 2);
+            key_paths(schema()).size() + 2);
 }
 
 TEST(ConfigReference, DocsMatchSchema) {
@@ -657,12 +664,12 @@ TEST(ConfigReference, DocsMatchSchema) {
   const auto to = doc.find(end);
   ASSERT_NE(from, std::string::npos);
   ASSERT_NE(to, std::string::npos);
-  EXPECT_EQ(doc.substr(from + begin.size(), to - from - begin.size()), reference_markdown())
+  EXPECT_EQ(doc.substr(from + begin.size(), to - from - begin.size()), reference_markdown(schema()))
       << "docs/config.md is stale: regenerate it with liftd --print-config-reference";
 }
 
 TEST(ConfigSummary, NamesDriveFloorsAndSocket) {
-  const std::string text = summary(Config{});
+  const std::string text = summary(Config{}, schema());
   EXPECT_THAT(text, HasSubstr("dcp on /dev/ttyS1"));
   EXPECT_THAT(text, HasSubstr("6, \"0\" at 0 mm to \"5\" at 15000 mm"));
   EXPECT_THAT(text, HasSubstr("/run/liftd/api.sock"));

@@ -6,6 +6,8 @@
 
 #include <functional>
 
+#include "kinds/config_schema.hpp"
+
 namespace liftd::daemon {
 namespace {
 
@@ -99,7 +101,9 @@ TEST(ReloadPlan, ClassifiesEveryKindOfKey) {
     expected.api.inputs_group = next.api.inputs_group;
     expected.api.max_clients = next.api.max_clients;
     expected.api.idle_timeout_s = next.api.idle_timeout_s;
-    EXPECT_EQ(config::to_json(plan.effective), config::to_json(expected)) << c.legend;
+    EXPECT_EQ(config::to_json(plan.effective, kinds::config_schema()),
+              config::to_json(expected, kinds::config_schema()))
+        << c.legend;
   }
 }
 

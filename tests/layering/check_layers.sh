@@ -20,13 +20,13 @@ declare -A allowed=(
   # kind's folder (lib/<kind>/sim), so lib/sim sits below the kinds.
   [sim]="common drive lift"
   [rt]="common io log can"
-  [dcp]="common io log can drive lift sim rt"
-  [sch001]="common io log can drive lift sim rt"
-  [uss]="common io log can drive lift sim rt"
+  [config]="common drive log"
+  [dcp]="common io log can drive lift sim rt config"
+  [sch001]="common io log can drive lift sim rt config"
+  [uss]="common io log can drive lift sim rt config"
   [api]="common drive log"
-  # The configuration checks floor names against the DCP display character set (DCP appendix A)
-  # until each drive kind validates its own section.
-  [config]="common drive log dcp"
+  # The drive kinds put together (the configuration schema): the one folder that knows them all.
+  [kinds]="common drive config dcp sch001 uss"
 )
 
 status=0

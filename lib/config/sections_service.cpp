@@ -1,0 +1,153 @@
+// The shared sections about the daemon itself: log, drive, rt, api, inputs and sim.
+#include <algorithm>
+#include <array>
+
+#include "config/schema.hpp"
+
+namespace liftd::config {
+namespace {
+
+using nlohmann::json;
+
+constexpr std::array<std::string_view, 5> kLogLevelNames{"trace", "debug", "info", "warn", "error"};
+constexpr std::array<std::string_view, 3> kRs485Names{"auto", "required", "off"};
+
+// sockaddr_un::sun_path is 108 bytes on Linux, including the terminating NUL.
+constexpr std::int64_t kMaxSocketPathLength = 107;
+// useradd/groupadd: names are at most 32 characters.
+constexpr std::int64_t kMaxGroupNameLength = 32;
+
+std::string group_name_rule(const std::string& text) {
+  if (text.empty()) return {};  // no group: root and the daemon's own user only
+  // shadow-utils' default rule: a lower-case letter or _, then letters, digits, _ or -.
+  const auto ok_first = [](char c) { return (c >= 'a' && c <= 'z') || c == '_'; };
+  const auto ok_rest = [&](char c) { return ok_first(c) || (c >= '0' && c <= '9') || c == '-'; };
+  if (text.empty() || !ok_first(text.front()) ||
+      !std::all_of(text.begin() + 1, text.end(), ok_rest)) {
+    return "is not a valid group name ([a-z_][a-z0-9_-]*)";
+  }
+  return {};
+}
+
+}  // namespace
+
+std::vector<Key> log_keys() {
+  return {enum_key("log.level", kLogLevelNames,
+                   "least severe message logged (--log-level overrides it)", &Config::log,
+                   &LogConfig::level)};
+}
+
+std::vector<Key> drive_keys() {
+  std::vector<Key> t;
+  t.push_back(enum_key("drive.kind", drive::kKindNames,
+                       "protocol of the drive: DCP over RS485, SCH001 hydraulic card over CAN, or "
+                       "Siemens USS over RS485",
+                       &Config::drive, &DriveConfig::kind));
+  t.push_back(string_key("drive.device", 1, 4096, "absolute path", absolute_path_rule,
+                         "serial port of the drive link", &Config::drive, &DriveConfig::device));
+  t.push_back(enum_key("drive.rs485", kRs485Names,
+                       "kernel RS485 mode: auto = use where supported and warn where not; "
+                       "required = refuse to start without it; off = never",
+                       &Config::drive, &DriveConfig::rs485));
+  return t;
+}
+
+std::vector<Key> rt_keys() {
+  std::vector<Key> t;
+  t.push_back(int_key("rt.priority", 1, 99, "SCHED_FIFO priority of the cycle thread", &Config::rt,
+                      &RtConfig::priority));
+  t.push_back(bool_key("rt.require_realtime",
+                       "refuse to start (exit 2) when the cycle thread cannot get SCHED_FIFO at "
+                       "rt.priority; false = run with normal scheduling and warn (--simulate "
+                       "always runs)",
+                       &Config::rt, &RtConfig::require_realtime));
+  t.push_back(int_key("rt.cpu", -1, 1023,
+                      "CPU the cycle thread is pinned to; -1 = none; must be online and "
+                      "allowed for the daemon",
+                      &Config::rt, &RtConfig::cpu));
+  t.push_back(bool_key("rt.lock_memory", "lock all memory (mlockall) so the cycle never pages",
+                       &Config::rt, &RtConfig::lock_memory));
+  t.push_back(int_key("rt.flight_recorder_s", 1, 300,
+                      "seconds of link traffic kept in memory for fault analysis", &Config::rt,
+                      &RtConfig::flight_recorder_s));
+  t.push_back(int_key("rt.trace_files_kept", 1, 100,
+                      "flight-recorder files (liftd-trace-*.txt) kept in the runtime directory; "
+                      "the oldest are removed beyond it",
+                      &Config::rt, &RtConfig::trace_files_kept));
+  // DCP 7.2: the drive's reply ends by 13.625 ms, the next master frame starts at 15 ms.
+  t.push_back(int_key("rt.send_window_us", 0, 1375,
+                      "a cycle that wakes up at most this late still sends (counted as a late "
+                      "send above 500 us); later wake-ups skip the cycle. DCP 7.2 allows at "
+                      "most 15 ms - 13.625 ms = 1375 us",
+                      &Config::rt, &RtConfig::send_window_us));
+  return t;
+}
+
+std::vector<Key> api_keys() {
+  std::vector<Key> t;
+  t.push_back(string_key("api.socket", 1, kMaxSocketPathLength, "absolute path, at most 107 bytes",
+                         absolute_path_rule, "Unix socket of the JSON API", &Config::api,
+                         &ApiConfig::socket));
+  t.push_back(string_key("api.socket_group", 0, kMaxGroupNameLength, "group name", group_name_rule,
+                         "group owning the API socket (empty: the daemon's own group)",
+                         &Config::api, &ApiConfig::socket_group));
+  t.push_back(string_key(
+      "api.read_group", 0, kMaxGroupNameLength, "group name", group_name_rule,
+      "members may read state and watch events (empty: nobody but root and the daemon's user)",
+      &Config::api, &ApiConfig::read_group));
+  t.push_back(
+      string_key("api.control_group", 0, kMaxGroupNameLength, "group name", group_name_rule,
+                 "members may send calls, travels and resets (empty: root and the daemon's user)",
+                 &Config::api, &ApiConfig::control_group));
+  t.push_back(string_key("api.inputs_group", 0, kMaxGroupNameLength, "group name", group_name_rule,
+                         "members may send machine inputs, the I/O board's daemon (empty: root "
+                         "and the daemon's user)",
+                         &Config::api, &ApiConfig::inputs_group));
+  t.push_back(int_key("api.max_clients", 1, 256, "API connections served at once", &Config::api,
+                      &ApiConfig::max_clients));
+  t.push_back(int_key("api.max_clients_per_uid", 1, 256,
+                      "API connections one user (uid) may hold at once; root is exempt",
+                      &Config::api, &ApiConfig::max_clients_per_uid));
+  t.push_back(int_key("api.reserved_clients", 0, 255,
+                      "of api.max_clients, this many are kept for clients with control access "
+                      "(api.control_group, root, the daemon's user); less than api.max_clients",
+                      &Config::api, &ApiConfig::reserved_clients));
+  t.push_back(int_key("api.stalled_reader_timeout_s", 1, 3600,
+                      "drop a client whose replies have waited unread this long (a pipelining "
+                      "client that reads is never dropped: liftd stops reading from it instead)",
+                      &Config::api, &ApiConfig::stalled_reader_timeout_s));
+  t.push_back(int_key("api.idle_timeout_s", 0, 86400, "close a client silent this long; 0 = never",
+                      &Config::api, &ApiConfig::idle_timeout_s));
+  // 66 Hz is one event per 15 ms cycle (DCP 7.2).
+  t.push_back(int_key("api.state_rate_hz", 1, 66,
+                      "`state` watch events that only carry new position or speed go out at "
+                      "most this often; discrete changes (drive status, link, travel, faults, "
+                      "calls) go out from the cycle that saw them",
+                      &Config::api, &ApiConfig::state_rate_hz));
+  return t;
+}
+
+std::vector<Key> inputs_keys() {
+  return {int_key("inputs.timeout_ms", 50, 10000,
+                  "machine inputs older than this count as lost (safe stop)", &Config::inputs,
+                  &InputsConfig::timeout_ms)};
+}
+
+std::vector<Key> sim_keys() {
+  return {int_key("sim.dcp", 3, 4, "DCP version the simulated drive speaks (--simulate)",
+                  &Config::sim, &SimConfig::dcp)};
+}
+
+std::string_view to_string(LogLevel value) {
+  return enum_name(value, kLogLevelNames);
+}
+
+std::string_view to_string(Rs485Mode value) {
+  return enum_name(value, kRs485Names);
+}
+
+std::optional<LogLevel> parse_log_level(std::string_view name) {
+  return enum_from<LogLevel>(name, kLogLevelNames);
+}
+
+}  // namespace liftd::config
