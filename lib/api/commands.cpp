@@ -64,13 +64,9 @@ T arg_or(const nlohmann::json& request, const char* name, T fallback) {
   return it == request.end() ? fallback : it->get<T>();
 }
 
-}  // namespace
-
-void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
-                          std::function<nlohmann::json()> api_stats) {
-  Backend* b = &backend;
-  dispatcher.set_drive_kind(backend.drive_kind());
-
+/// The commands that read the lift's state: status, watch (the event stream), stats, trace.
+void add_state_commands(Dispatcher& dispatcher, Backend* b,
+                        const std::function<nlohmann::json()>& api_stats) {
   dispatcher.add({"status",
                   Access::Read,
                   {},
@@ -143,7 +139,10 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
          done(Result::ok(std::move(result)));
        },
        kEveryDriveKind});
+}
 
+/// The commands that read the drive's display and the daemon's configuration and version.
+void add_info_commands(Dispatcher& dispatcher, Backend* b) {
   dispatcher.add({"display",
                   Access::Read,
                   {},
@@ -168,7 +167,10 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                     done(Result::ok({{"version", std::string(kVersion)}, {"api", kApiVersion}}));
                   },
                   kEveryDriveKind});
+}
 
+/// The commands to the drive outside a travel: keypad, fault reset, power supply, car load.
+void add_drive_commands(Dispatcher& dispatcher, Backend* b) {
   // DCP 5.6.3: the remote keypad has buttons "1" to "5".
   dispatcher.add({"key",
                   Access::Control,
@@ -209,7 +211,10 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                     b->load(call.request.at("percent").get<int>(), std::move(done));
                   },
                   drive::Capability::Load});
+}
 
+/// `inputs`: a client sets machine inputs (kInputFlags) and the car position.
+void add_inputs_command(Dispatcher& dispatcher, Backend* b) {
   ArgSchema input_args;
   for (const auto& flag : kInputFlags) {
     input_args.push_back(flag_arg(std::string(flag.name), std::string(flag.description)));
@@ -231,7 +236,18 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                     b->update_inputs(update, std::move(done));
                   },
                   kEveryDriveKind});
+}
 
+}  // namespace
+
+void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
+                          std::function<nlohmann::json()> api_stats) {
+  Backend* b = &backend;
+  dispatcher.set_drive_kind(backend.drive_kind());
+  add_state_commands(dispatcher, b, api_stats);
+  add_info_commands(dispatcher, b);
+  add_drive_commands(dispatcher, b);
+  add_inputs_command(dispatcher, b);
   add_travel_commands(dispatcher, *b);
   add_sim_command(dispatcher, *b);
   add_parameter_commands(dispatcher, *b);

@@ -410,8 +410,103 @@ double ratio(const HistogramData& d, const HistogramData& ref) {
 /// The criterion for one loaded window: p99 at most 1.1 times the reference's.
 constexpr double kMaxRatio = 1.1;
 
+/// Whether the real-time criterion was met under 8 and 32 clients, and liftd's own share.
+struct Verdict {
+  bool all_ok = true;
+  bool own_all_ok = true;
+};
+
+/// The lateness, missing-reply and API-load tables, one row per window.
+void print_window_tables(const std::vector<Window>& windows, bool with_uss_bus) {
+  std::printf(
+      "\nwake-up lateness per window (us): the DCP cycle, the USS bus and the reference loop\n");
+  std::printf("  %-11s %9s %9s %9s %6s %6s %9s %9s  %8s %8s %7s %6s  %8s %6s\n", "window",
+              "cycle p99", "ref p99", "uss p99", "cyc/r", "uss/r", "cyc max", "ref max", "skipped",
+              "ref skip", "missing", "faults", "uss tmo", "uss ex");
+  for (const Window& w : windows) {
+    std::printf(
+        "  %-11s %9s %9s %9s %6.2f %6.2f %9.1f %9.1f  %8llu %8llu %7llu %6lld  %8llu %6llu\n",
+        w.name.c_str(), w.cycle.percentile_text(0.99).c_str(),
+        w.reference.percentile_text(0.99).c_str(),
+        with_uss_bus ? w.uss.percentile_text(0.99).c_str() : "-", ratio(w.cycle, w.reference),
+        with_uss_bus ? ratio(w.uss, w.reference) : 0.0, w.cycle.max_us(), w.reference.max_us(),
+        static_cast<unsigned long long>(w.cycle_counters.skipped_cycles),
+        static_cast<unsigned long long>(w.reference_skipped),
+        static_cast<unsigned long long>(w.cycle_counters.missing_replies), w.link_faults,
+        static_cast<unsigned long long>(w.uss_counters.reply_timeouts),
+        static_cast<unsigned long long>(w.uss_counters.exchanges));
+  }
+  std::printf(
+      "\nmissing replies per window: the DCP cycle, the reference link (same period and deadline, "
+      "bare pty echo), the USS bus (reply timeouts)\n  %-11s %9s %9s %9s %9s %9s\n",
+      "window", "cycle", "of", "ref link", "of", "uss");
+  for (const Window& w : windows) {
+    std::printf("  %-11s %9llu %9llu %9llu %9llu %9llu\n", w.name.c_str(),
+                static_cast<unsigned long long>(w.cycle_counters.missing_replies),
+                static_cast<unsigned long long>(w.cycle_counters.cycles),
+                static_cast<unsigned long long>(w.link_missing),
+                static_cast<unsigned long long>(w.link_exchanges),
+                static_cast<unsigned long long>(w.uss_counters.reply_timeouts));
+  }
+  std::printf("\nAPI load per window\n  %-11s %9s %9s %9s %9s\n", "window", "req/s", "req p50",
+              "req p99", "fairness");
+  for (const Window& w : windows) {
+    if (w.clients == 0) continue;
+    std::printf("  %-11s %9.0f %9.1f %9.1f %9.2f\n", w.name.c_str(), w.load.requests_per_s,
+                w.load.latency_p50_us, w.load.latency_p99_us, w.load.fairness);
+  }
+}
+
+/// One verdict line per loaded window and link, for tools/bench.sh. The criterion
+/// (p99 at most 1.1 x the reference loop's, no skipped cycle it does not also show, no missing
+/// reply, no link fault), and beside it liftd's own share: misses the reference link also had
+/// in the same window are the platform's (the tty's flip-buffer worker), as are the link faults
+/// they cause.
+/// Returns whether the criterion and liftd's own share were met under 8 and 32 clients.
+Verdict print_verdicts(const std::vector<Window>& windows, bool with_uss_bus) {
+  std::printf("\n");
+  bool all_ok = true;
+  bool own_all_ok = true;
+  for (const Window& w : windows) {
+    if (w.clients == 0) continue;
+    const double rc = ratio(w.cycle, w.reference);
+    const bool timing_ok =
+        rc <= kMaxRatio && w.cycle_counters.skipped_cycles <= w.reference_skipped;
+    const bool dcp_ok = timing_ok && w.cycle_counters.missing_replies == 0 && w.link_faults == 0;
+    const bool dcp_own_ok = timing_ok && w.cycle_counters.missing_replies <= w.link_missing;
+    std::printf(
+        "verdict dcp %d clients: p99 %.2f x reference, skipped %llu (reference %llu), missing "
+        "%llu (reference link %llu), link faults %lld: %s (own share %s)\n",
+        w.clients, rc, static_cast<unsigned long long>(w.cycle_counters.skipped_cycles),
+        static_cast<unsigned long long>(w.reference_skipped),
+        static_cast<unsigned long long>(w.cycle_counters.missing_replies),
+        static_cast<unsigned long long>(w.link_missing), w.link_faults, dcp_ok ? "ok" : "MISS",
+        dcp_own_ok ? "ok" : "MISS");
+    bool uss_ok = true;
+    bool uss_own_ok = true;
+    if (with_uss_bus) {
+      const double ru = ratio(w.uss, w.reference);
+      uss_ok = ru <= kMaxRatio && w.uss_counters.reply_timeouts == 0;
+      uss_own_ok = ru <= kMaxRatio && w.uss_counters.reply_timeouts <= w.link_missing;
+      std::printf(
+          "verdict uss %d clients: p99 %.2f x reference, reply timeouts %llu (reference link "
+          "%llu): %s (own share %s)\n",
+          w.clients, ru, static_cast<unsigned long long>(w.uss_counters.reply_timeouts),
+          static_cast<unsigned long long>(w.link_missing), uss_ok ? "ok" : "MISS",
+          uss_own_ok ? "ok" : "MISS");
+    }
+    if (w.clients >= 8) {
+      all_ok = all_ok && dcp_ok && uss_ok;
+      own_all_ok = own_all_ok && dcp_own_ok && uss_own_ok;
+    }
+  }
+  return {all_ok, own_all_ok};
+}
+
 }  // namespace
 
+// Over 120 lines: one benchmark run read top to bottom: the daemon, the reference loop and
+// link, the USS bus, the windows under load.
 int main(int argc, char** argv) {
   std::chrono::seconds phase{20};
   bool with_uss = true;
@@ -540,84 +635,8 @@ int main(int argc, char** argv) {
   if (uss_bus) uss_bus->stop();
   const auto counters = app.cycle().stats().counters;
 
-  std::printf(
-      "\nwake-up lateness per window (us): the DCP cycle, the USS bus and the reference loop\n");
-  std::printf("  %-11s %9s %9s %9s %6s %6s %9s %9s  %8s %8s %7s %6s  %8s %6s\n", "window",
-              "cycle p99", "ref p99", "uss p99", "cyc/r", "uss/r", "cyc max", "ref max", "skipped",
-              "ref skip", "missing", "faults", "uss tmo", "uss ex");
-  for (const Window& w : windows) {
-    std::printf(
-        "  %-11s %9s %9s %9s %6.2f %6.2f %9.1f %9.1f  %8llu %8llu %7llu %6lld  %8llu %6llu\n",
-        w.name.c_str(), w.cycle.percentile_text(0.99).c_str(),
-        w.reference.percentile_text(0.99).c_str(),
-        uss_bus ? w.uss.percentile_text(0.99).c_str() : "-", ratio(w.cycle, w.reference),
-        uss_bus ? ratio(w.uss, w.reference) : 0.0, w.cycle.max_us(), w.reference.max_us(),
-        static_cast<unsigned long long>(w.cycle_counters.skipped_cycles),
-        static_cast<unsigned long long>(w.reference_skipped),
-        static_cast<unsigned long long>(w.cycle_counters.missing_replies), w.link_faults,
-        static_cast<unsigned long long>(w.uss_counters.reply_timeouts),
-        static_cast<unsigned long long>(w.uss_counters.exchanges));
-  }
-  std::printf(
-      "\nmissing replies per window: the DCP cycle, the reference link (same period and deadline, "
-      "bare pty echo), the USS bus (reply timeouts)\n  %-11s %9s %9s %9s %9s %9s\n",
-      "window", "cycle", "of", "ref link", "of", "uss");
-  for (const Window& w : windows) {
-    std::printf("  %-11s %9llu %9llu %9llu %9llu %9llu\n", w.name.c_str(),
-                static_cast<unsigned long long>(w.cycle_counters.missing_replies),
-                static_cast<unsigned long long>(w.cycle_counters.cycles),
-                static_cast<unsigned long long>(w.link_missing),
-                static_cast<unsigned long long>(w.link_exchanges),
-                static_cast<unsigned long long>(w.uss_counters.reply_timeouts));
-  }
-  std::printf("\nAPI load per window\n  %-11s %9s %9s %9s %9s\n", "window", "req/s", "req p50",
-              "req p99", "fairness");
-  for (const Window& w : windows) {
-    if (w.clients == 0) continue;
-    std::printf("  %-11s %9.0f %9.1f %9.1f %9.2f\n", w.name.c_str(), w.load.requests_per_s,
-                w.load.latency_p50_us, w.load.latency_p99_us, w.load.fairness);
-  }
-  // One verdict line per loaded window and link, for tools/bench.sh. The criterion
-  // (p99 at most 1.1 x the reference loop's, no skipped cycle it does not also show, no missing
-  // reply, no link fault), and beside it liftd's own share: misses the reference link also had
-  // in the same window are the platform's (the tty's flip-buffer worker), as are the link faults
-  // they cause.
-  std::printf("\n");
-  bool all_ok = true;
-  bool own_all_ok = true;
-  for (const Window& w : windows) {
-    if (w.clients == 0) continue;
-    const double rc = ratio(w.cycle, w.reference);
-    const bool timing_ok =
-        rc <= kMaxRatio && w.cycle_counters.skipped_cycles <= w.reference_skipped;
-    const bool dcp_ok = timing_ok && w.cycle_counters.missing_replies == 0 && w.link_faults == 0;
-    const bool dcp_own_ok = timing_ok && w.cycle_counters.missing_replies <= w.link_missing;
-    std::printf(
-        "verdict dcp %d clients: p99 %.2f x reference, skipped %llu (reference %llu), missing "
-        "%llu (reference link %llu), link faults %lld: %s (own share %s)\n",
-        w.clients, rc, static_cast<unsigned long long>(w.cycle_counters.skipped_cycles),
-        static_cast<unsigned long long>(w.reference_skipped),
-        static_cast<unsigned long long>(w.cycle_counters.missing_replies),
-        static_cast<unsigned long long>(w.link_missing), w.link_faults, dcp_ok ? "ok" : "MISS",
-        dcp_own_ok ? "ok" : "MISS");
-    bool uss_ok = true;
-    bool uss_own_ok = true;
-    if (uss_bus) {
-      const double ru = ratio(w.uss, w.reference);
-      uss_ok = ru <= kMaxRatio && w.uss_counters.reply_timeouts == 0;
-      uss_own_ok = ru <= kMaxRatio && w.uss_counters.reply_timeouts <= w.link_missing;
-      std::printf(
-          "verdict uss %d clients: p99 %.2f x reference, reply timeouts %llu (reference link "
-          "%llu): %s (own share %s)\n",
-          w.clients, ru, static_cast<unsigned long long>(w.uss_counters.reply_timeouts),
-          static_cast<unsigned long long>(w.link_missing), uss_ok ? "ok" : "MISS",
-          uss_own_ok ? "ok" : "MISS");
-    }
-    if (w.clients >= 8) {
-      all_ok = all_ok && dcp_ok && uss_ok;
-      own_all_ok = own_all_ok && dcp_own_ok && uss_own_ok;
-    }
-  }
+  print_window_tables(windows, uss_bus != nullptr);
+  const auto [all_ok, own_all_ok] = print_verdicts(windows, uss_bus != nullptr);
   for (const Window& w : windows) {
     if (w.clients == 8) {
       // The older figure: how much 8 busy clients make the cycle later than quiet.

@@ -78,6 +78,8 @@ struct Figures {
 
 }  // namespace
 
+// Over 120 lines: one benchmark run read top to bottom: the daemon, the watcher, the travels,
+// the report.
 int main(int argc, char** argv) {
   int travels = 10;
   for (int i = 1; i < argc; ++i) {

@@ -264,17 +264,20 @@ std::optional<long> parse_int(const std::string& s) {
   return v;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+/// What the command line selects: the socket, the output form and the subcommand with its words.
+struct Options {
   std::string socket_path;
-  if (const char* env = std::getenv("LIFTD_SOCKET"); env != nullptr && *env != '\0') {
-    socket_path = env;
-  } else {
-    socket_path = "/run/liftd/api.sock";
-  }
   bool raw_json = false;
-  std::vector<std::string> args;
+  std::vector<std::string> args;  ///< args[0] is the subcommand
+};
+
+/// Reads the options into `options`; an exit status when liftctl ends here (help, usage error).
+std::optional<int> parse_options(int argc, char** argv, Options& options) {
+  if (const char* env = std::getenv("LIFTD_SOCKET"); env != nullptr && *env != '\0') {
+    options.socket_path = env;
+  } else {
+    options.socket_path = "/run/liftd/api.sock";
+  }
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--socket" || arg.rfind("--socket=", 0) == 0) {
@@ -285,179 +288,277 @@ int main(int argc, char** argv) {
                      "/run/liftd/api.sock)\n");
         return kExitUsage;
       }
-      socket_path = inline_value ? arg.substr(9) : argv[++i];
-      if (socket_path.empty()) {
+      options.socket_path = inline_value ? arg.substr(9) : argv[++i];
+      if (options.socket_path.empty()) {
         std::fprintf(stderr, "liftctl: --socket needs a PATH, got an empty one\n");
         return kExitUsage;
       }
     } else if (arg == "--json") {
-      raw_json = true;
+      options.raw_json = true;
     } else if (arg == "-h" || arg == "--help") {
       usage(stdout);
       return kExitOk;
-    } else if (arg.size() > 1 && arg[0] == '-' && args.empty()) {
+    } else if (arg.size() > 1 && arg[0] == '-' && options.args.empty()) {
       std::fprintf(stderr, "liftctl: unknown option %s\n", arg.c_str());
       usage(stderr);
       return kExitUsage;
     } else {
-      args.push_back(arg);
+      options.args.push_back(arg);
     }
   }
-  if (args.empty()) {
+  if (options.args.empty()) {
     usage(stderr);
     return kExitUsage;
   }
-  const std::string command = args[0];
-  const auto bad_usage = [](const char* message) {
-    std::fprintf(stderr, "liftctl: %s\n", message);
-    return kExitUsage;
-  };
+  return std::nullopt;
+}
 
-  json request;
-  if (command == "status" || command == "stats" || command == "display" || command == "config" ||
-      command == "version") {
-    if (args.size() != 1) return bad_usage("this command takes no arguments");
-    request = {{"cmd", command}};
-  } else if (command == "watch") {
-    if (args.size() != 1) return bad_usage("watch takes no arguments");
-  } else if (command == "trace") {
-    request = {{"cmd", "trace"}};
-    if (args.size() == 2) {
-      const auto count = parse_int(args[1]);
-      if (!count) return bad_usage("trace COUNT: COUNT must be a number");
-      request["count"] = *count;
-    } else if (args.size() > 2) {
-      return bad_usage("usage: trace [COUNT]");
-    }
-  } else if (command == "key") {
-    const auto key = args.size() == 2 ? parse_int(args[1]) : std::nullopt;
-    if (!key) return bad_usage("usage: key N (N = 1..5)");
-    request = {{"cmd", "key"}, {"key", *key}};
-  } else if (command == "reset") {
-    if (args.size() != 1) return bad_usage("reset takes no arguments");
-    request = {{"cmd", "drive_reset"}};
-  } else if (command == "power") {
-    if (args.size() < 2 || args.size() > 3)
-      return bad_usage("usage: power mains|emergency [SAVING]");
-    request = {{"cmd", "power"}, {"supply", args[1]}};
-    if (args.size() == 3) {
-      const auto saving = parse_int(args[2]);
-      if (!saving) return bad_usage("power: SAVING must be 0, 1 or 2");
-      request["saving"] = *saving;
-    }
-  } else if (command == "load") {
-    const auto percent = args.size() == 2 ? parse_int(args[1]) : std::nullopt;
-    if (!percent) return bad_usage("usage: load PERCENT");
-    request = {{"cmd", "load"}, {"percent", *percent}};
-  } else if (command == "travel") {
-    const auto floor = args.size() >= 2 ? parse_int(args[1]) : std::nullopt;
-    if (!floor || args.size() > 3) return bad_usage("usage: travel FLOOR [V4|V3|...]");
-    request = {{"cmd", "travel"}, {"floor", *floor}};
-    if (args.size() == 3) request["speed"] = args[2];
-  } else if (command == "stop" || command == "fast-stop" || command == "relevel") {
-    if (args.size() != 1) return bad_usage("this command takes no arguments");
-    request = {{"cmd", command == "fast-stop" ? "fast_stop" : command}};
-  } else if (command == "calls") {
-    request = {{"cmd", "calls"}};
-    if (args.size() == 3) {
-      const auto floor = parse_int(args[2]);
-      if (!floor || (args[1] != "add" && args[1] != "cancel")) {
-        return bad_usage("usage: calls [add|cancel FLOOR]");
-      }
-      request["action"] = args[1];
-      request["floor"] = *floor;
-    } else if (args.size() != 1) {
+using Args = std::vector<std::string>;
+/// A subcommand's request built from its words; nullopt after a usage error was printed.
+using Request = std::optional<json>;
+
+Request bad_usage(const char* message) {
+  std::fprintf(stderr, "liftctl: %s\n", message);
+  return std::nullopt;
+}
+
+/// status, stats, display, config, version: the request is the command alone.
+Request request_plain(const Args& args) {
+  if (args.size() != 1) return bad_usage("this command takes no arguments");
+  return json{{"cmd", args[0]}};
+}
+
+/// watch sends its own request once connected (run_watch).
+Request request_watch(const Args& args) {
+  if (args.size() != 1) return bad_usage("watch takes no arguments");
+  return json{};
+}
+
+Request request_trace(const Args& args) {
+  json request = {{"cmd", "trace"}};
+  if (args.size() == 2) {
+    const auto count = parse_int(args[1]);
+    if (!count) return bad_usage("trace COUNT: COUNT must be a number");
+    request["count"] = *count;
+  } else if (args.size() > 2) {
+    return bad_usage("usage: trace [COUNT]");
+  }
+  return request;
+}
+
+Request request_key(const Args& args) {
+  const auto key = args.size() == 2 ? parse_int(args[1]) : std::nullopt;
+  if (!key) return bad_usage("usage: key N (N = 1..5)");
+  return json{{"cmd", "key"}, {"key", *key}};
+}
+
+Request request_reset(const Args& args) {
+  if (args.size() != 1) return bad_usage("reset takes no arguments");
+  return json{{"cmd", "drive_reset"}};
+}
+
+Request request_power(const Args& args) {
+  if (args.size() < 2 || args.size() > 3) return bad_usage("usage: power mains|emergency [SAVING]");
+  json request = {{"cmd", "power"}, {"supply", args[1]}};
+  if (args.size() == 3) {
+    const auto saving = parse_int(args[2]);
+    if (!saving) return bad_usage("power: SAVING must be 0, 1 or 2");
+    request["saving"] = *saving;
+  }
+  return request;
+}
+
+Request request_load(const Args& args) {
+  const auto percent = args.size() == 2 ? parse_int(args[1]) : std::nullopt;
+  if (!percent) return bad_usage("usage: load PERCENT");
+  return json{{"cmd", "load"}, {"percent", *percent}};
+}
+
+Request request_travel(const Args& args) {
+  const auto floor = args.size() >= 2 ? parse_int(args[1]) : std::nullopt;
+  if (!floor || args.size() > 3) return bad_usage("usage: travel FLOOR [V4|V3|...]");
+  json request = {{"cmd", "travel"}, {"floor", *floor}};
+  if (args.size() == 3) request["speed"] = args[2];
+  return request;
+}
+
+/// stop, fast-stop, relevel: no arguments; the API spells fast-stop "fast_stop".
+Request request_stop(const Args& args) {
+  if (args.size() != 1) return bad_usage("this command takes no arguments");
+  return json{{"cmd", args[0] == "fast-stop" ? "fast_stop" : args[0]}};
+}
+
+Request request_calls(const Args& args) {
+  json request = {{"cmd", "calls"}};
+  if (args.size() == 3) {
+    const auto floor = parse_int(args[2]);
+    if (!floor || (args[1] != "add" && args[1] != "cancel")) {
       return bad_usage("usage: calls [add|cancel FLOOR]");
     }
-  } else if (command == "inspection") {
-    if (args.size() < 2 || args.size() > 3) return bad_usage("usage: inspection on|off [up|down]");
-    request = {{"cmd", "inspection"}, {"mode", args[1]}};
-    if (args.size() == 3) request["direction"] = args[2];
-  } else if (command == "fast-start") {
-    if (args.size() < 2) return bad_usage("usage: fast-start arm FLOOR|go|abort");
-    request = {{"cmd", "fast_start"}, {"action", args[1]}};
-    if (args[1] == "arm") {
-      const auto floor = args.size() == 3 ? parse_int(args[2]) : std::nullopt;
-      if (!floor) return bad_usage("usage: fast-start arm FLOOR");
-      request["floor"] = *floor;
-    } else if (args.size() != 2) {
-      return bad_usage("usage: fast-start arm FLOOR|go|abort");
-    }
-  } else if (command == "uss-read" || command == "uss-write") {
-    const bool write = command == "uss-write";
-    const char* use = write ? "usage: uss-write PNU VALUE [dword] [eeprom] [array INDEX] [@ADDRESS]"
-                            : "usage: uss-read PNU [array|description|text INDEX] [@ADDRESS]";
-    const std::size_t first_option = write ? 3 : 2;
-    const auto pnu = args.size() >= first_option ? parse_int(args[1]) : std::nullopt;
-    if (!pnu) return bad_usage(use);
-    request = {{"cmd", write ? "uss_write" : "uss_read"}, {"pnu", *pnu}};
-    if (write) {
-      const auto value = parse_int(args[2]);
-      if (!value) return bad_usage(use);
-      request["value"] = *value;
-    }
-    for (std::size_t i = first_option; i < args.size(); ++i) {
-      const std::string& word = args[i];
-      if (write && (word == "dword" || word == "eeprom")) {
-        if (word == "dword") request["width"] = "dword";
-        if (word == "eeprom") request["eeprom"] = true;
-      } else if (word == "array" || (!write && (word == "description" || word == "text"))) {
-        const auto index = i + 1 < args.size() ? parse_int(args[i + 1]) : std::nullopt;
-        if (!index) return bad_usage(use);
-        request["target"] = word;
-        request["index"] = *index;
-        ++i;
-      } else if (word.size() > 1 && word[0] == '@' && parse_int(word.substr(1))) {
-        request["address"] = *parse_int(word.substr(1));
-      } else {
-        return bad_usage(use);
-      }
-    }
-  } else if (command == "uss-mirror") {
-    request = {{"cmd", "uss_mirror"}};
-    if (args.size() > 2) return bad_usage("usage: uss-mirror [ADDRESS]");
-    if (args.size() == 2) {
-      const auto address = parse_int(args[1]);
-      if (!address) return bad_usage("usage: uss-mirror [ADDRESS]");
-      request["address"] = *address;
-    }
-  } else if (command == "raw") {
-    if (args.size() != 2) return bad_usage("usage: raw '{\"cmd\":...}'");
-    request = json::parse(args[1], nullptr, false);
-    if (request.is_discarded() || !request.is_object()) {
-      return bad_usage("raw: the argument must be one JSON object");
-    }
-  } else {
-    std::fprintf(stderr, "liftctl: unknown command \"%s\"\n", command.c_str());
-    usage(stderr);
-    return kExitUsage;
+    request["action"] = args[1];
+    request["floor"] = *floor;
+  } else if (args.size() != 1) {
+    return bad_usage("usage: calls [add|cancel FLOOR]");
   }
+  return request;
+}
 
-  Connection conn;
-  if (!conn.open(socket_path)) return kExitNoDaemon;
+Request request_inspection(const Args& args) {
+  if (args.size() < 2 || args.size() > 3) return bad_usage("usage: inspection on|off [up|down]");
+  json request = {{"cmd", "inspection"}, {"mode", args[1]}};
+  if (args.size() == 3) request["direction"] = args[2];
+  return request;
+}
+
+Request request_fast_start(const Args& args) {
+  if (args.size() < 2) return bad_usage("usage: fast-start arm FLOOR|go|abort");
+  json request = {{"cmd", "fast_start"}, {"action", args[1]}};
+  if (args[1] == "arm") {
+    const auto floor = args.size() == 3 ? parse_int(args[2]) : std::nullopt;
+    if (!floor) return bad_usage("usage: fast-start arm FLOOR");
+    request["floor"] = *floor;
+  } else if (args.size() != 2) {
+    return bad_usage("usage: fast-start arm FLOOR|go|abort");
+  }
+  return request;
+}
+
+/// uss-read and uss-write: PNU (and VALUE), then option words in any order.
+Request request_uss_parameter(const Args& args) {
+  const bool write = args[0] == "uss-write";
+  const char* use = write ? "usage: uss-write PNU VALUE [dword] [eeprom] [array INDEX] [@ADDRESS]"
+                          : "usage: uss-read PNU [array|description|text INDEX] [@ADDRESS]";
+  const std::size_t first_option = write ? 3 : 2;
+  const auto pnu = args.size() >= first_option ? parse_int(args[1]) : std::nullopt;
+  if (!pnu) return bad_usage(use);
+  json request = {{"cmd", write ? "uss_write" : "uss_read"}, {"pnu", *pnu}};
+  if (write) {
+    const auto value = parse_int(args[2]);
+    if (!value) return bad_usage(use);
+    request["value"] = *value;
+  }
+  for (std::size_t i = first_option; i < args.size(); ++i) {
+    const std::string& word = args[i];
+    if (write && (word == "dword" || word == "eeprom")) {
+      if (word == "dword") request["width"] = "dword";
+      if (word == "eeprom") request["eeprom"] = true;
+    } else if (word == "array" || (!write && (word == "description" || word == "text"))) {
+      const auto index = i + 1 < args.size() ? parse_int(args[i + 1]) : std::nullopt;
+      if (!index) return bad_usage(use);
+      request["target"] = word;
+      request["index"] = *index;
+      ++i;
+    } else if (word.size() > 1 && word[0] == '@' && parse_int(word.substr(1))) {
+      request["address"] = *parse_int(word.substr(1));
+    } else {
+      return bad_usage(use);
+    }
+  }
+  return request;
+}
+
+Request request_uss_mirror(const Args& args) {
+  json request = {{"cmd", "uss_mirror"}};
+  if (args.size() > 2) return bad_usage("usage: uss-mirror [ADDRESS]");
+  if (args.size() == 2) {
+    const auto address = parse_int(args[1]);
+    if (!address) return bad_usage("usage: uss-mirror [ADDRESS]");
+    request["address"] = *address;
+  }
+  return request;
+}
+
+Request request_raw(const Args& args) {
+  if (args.size() != 2) return bad_usage("usage: raw '{\"cmd\":...}'");
+  json request = json::parse(args[1], nullptr, false);
+  if (request.is_discarded() || !request.is_object()) {
+    return bad_usage("raw: the argument must be one JSON object");
+  }
+  return request;
+}
+
+std::string print_status(const json&, const json& result) {
+  return liftctl::format_status(result);
+}
+std::string print_stats(const json&, const json& result) {
+  return liftctl::format_stats(result);
+}
+std::string print_trace(const json&, const json& result) {
+  return liftctl::format_trace(result);
+}
+std::string print_display(const json&, const json& result) {
+  return liftctl::format_display(result);
+}
+std::string print_config(const json&, const json& result) {
+  return result.value("config", json::object()).dump(2) + "\n";
+}
+std::string print_generic(const json&, const json& result) {
+  return liftctl::format_generic(result);
+}
+
+/// One subcommand: how its words become a request, and how the result is printed (watch and
+/// raw print what they receive themselves).
+struct Subcommand {
+  const char* name;
+  Request (*request)(const Args& args);
+  std::string (*print)(const json& request, const json& result);
+};
+
+constexpr Subcommand kSubcommands[] = {
+    {"status", request_plain, print_status},
+    {"watch", request_watch, nullptr},
+    {"stats", request_plain, print_stats},
+    {"trace", request_trace, print_trace},
+    {"display", request_plain, print_display},
+    {"key", request_key, print_generic},
+    {"reset", request_reset, print_generic},
+    {"power", request_power, print_generic},
+    {"load", request_load, print_generic},
+    {"travel", request_travel, liftctl::format_travel_result},
+    {"stop", request_stop, liftctl::format_travel_result},
+    {"fast-stop", request_stop, liftctl::format_travel_result},
+    {"relevel", request_stop, liftctl::format_travel_result},
+    {"calls", request_calls, liftctl::format_travel_result},
+    {"inspection", request_inspection, liftctl::format_travel_result},
+    {"fast-start", request_fast_start, liftctl::format_travel_result},
+    {"uss-read", request_uss_parameter, print_generic},
+    {"uss-write", request_uss_parameter, print_generic},
+    {"uss-mirror", request_uss_mirror, print_generic},
+    {"config", request_plain, print_config},
+    {"version", request_plain, print_generic},
+    {"raw", request_raw, nullptr},
+};
+
+/// Connects and waits for liftd's greeting; false (reported) when that fails.
+bool connect_to_liftd(Connection& conn, const std::string& socket_path) {
+  if (!conn.open(socket_path)) return false;
   const auto hello = conn.read_json(kReplyTimeoutMs);
   if (!hello || hello->value("event", "") != "hello") {
     if (hello && hello->contains("error")) {
       report_error(*hello);  // e.g. busy: too many clients
-      return kExitNoDaemon;
+      return false;
     }
     std::fprintf(stderr, "liftctl: %s did not greet like liftd\n", socket_path.c_str());
-    return kExitNoDaemon;
+    return false;
   }
-  if (command == "watch") return run_watch(conn, raw_json);
+  return true;
+}
 
-  if (command == "raw") {
-    // The caller's id (if any) is kept; the reply is printed as received.
-    if (!conn.send_line(request.dump())) return kExitNoDaemon;
-    for (;;) {
-      const auto message = conn.read_json(kReplyTimeoutMs);
-      if (!message) return kExitNoDaemon;
-      if (!message->contains("ok")) continue;
-      std::printf("%s\n", message->dump().c_str());
-      return message->value("ok", false) ? kExitOk : kExitFailed;
-    }
+/// raw: the caller's id (if any) is kept; the reply is printed as received.
+int run_raw(Connection& conn, const json& request) {
+  if (!conn.send_line(request.dump())) return kExitNoDaemon;
+  for (;;) {
+    const auto message = conn.read_json(kReplyTimeoutMs);
+    if (!message) return kExitNoDaemon;
+    if (!message->contains("ok")) continue;
+    std::printf("%s\n", message->dump().c_str());
+    return message->value("ok", false) ? kExitOk : kExitFailed;
   }
+}
 
+/// Every other subcommand: one request, its result printed by the subcommand (or as JSON).
+int run_request(Connection& conn, const Subcommand& subcommand, const json& request,
+                bool raw_json) {
   const auto reply = call(conn, request);
   if (!reply) return kExitNoDaemon;
   if (reply->value("ok", false) != true) return report_error(*reply);
@@ -466,24 +567,34 @@ int main(int argc, char** argv) {
     std::printf("%s\n", result.dump(2).c_str());
     return kExitOk;
   }
-  std::string out;
-  if (command == "status") {
-    out = liftctl::format_status(result);
-  } else if (command == "stats") {
-    out = liftctl::format_stats(result);
-  } else if (command == "trace") {
-    out = liftctl::format_trace(result);
-  } else if (command == "display") {
-    out = liftctl::format_display(result);
-  } else if (command == "config") {
-    out = result.value("config", json::object()).dump(2) + "\n";
-  } else if (command == "travel" || command == "stop" || command == "fast-stop" ||
-             command == "relevel" || command == "inspection" || command == "fast-start" ||
-             command == "calls") {
-    out = liftctl::format_travel_result(request, result);
-  } else {
-    out = liftctl::format_generic(result);
-  }
-  std::fputs(out.c_str(), stdout);
+  std::fputs(subcommand.print(request, result).c_str(), stdout);
   return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  if (const auto exit_status = parse_options(argc, argv, options)) return *exit_status;
+  const std::string& command = options.args[0];
+  const Subcommand* subcommand = nullptr;
+  for (const auto& candidate : kSubcommands) {
+    if (command == candidate.name) {
+      subcommand = &candidate;
+      break;
+    }
+  }
+  if (subcommand == nullptr) {
+    std::fprintf(stderr, "liftctl: unknown command \"%s\"\n", command.c_str());
+    usage(stderr);
+    return kExitUsage;
+  }
+  const Request request = subcommand->request(options.args);
+  if (!request) return kExitUsage;
+
+  Connection conn;
+  if (!connect_to_liftd(conn, options.socket_path)) return kExitNoDaemon;
+  if (command == "watch") return run_watch(conn, options.raw_json);
+  if (command == "raw") return run_raw(conn, *request);
+  return run_request(conn, *subcommand, *request, options.raw_json);
 }

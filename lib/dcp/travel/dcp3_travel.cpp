@@ -90,6 +90,8 @@ void Dcp3Travel::finish(StepContext& ctx) noexcept {
   state_ = State::Idle;
 }
 
+// Over 120 lines: one switch over the DCP3 travel states (DCP 10, 12, 13): split, it would
+// hide the sequence.
 Demand Dcp3Travel::step(StepContext& ctx) noexcept {
   const CycleInput& in = ctx.in;
   const TravelConfig& config = ctx.config;

@@ -203,6 +203,8 @@ void Dcp4Travel::finish(StepContext& ctx) noexcept {
   state_ = State::Idle;
 }
 
+// Over 120 lines: one switch over the DCP4 travel states (DCP 11.1, 12, 13): split, it would
+// hide the sequence.
 Demand Dcp4Travel::step(StepContext& ctx) noexcept {
   const CycleInput& in = ctx.in;
   const TravelConfig& config = ctx.config;
