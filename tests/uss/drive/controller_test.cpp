@@ -11,7 +11,7 @@
 #include "uss/drive/controller.hpp"
 #include "uss/telegram.hpp"
 #include "uss/timing.hpp"
-#include "uss_drive/bus.hpp"
+#include "uss/drive/bus.hpp"
 
 namespace liftd::uss {
 namespace {
