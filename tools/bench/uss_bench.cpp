@@ -35,10 +35,10 @@
 #include "io/pty.hpp"
 #include "rt/rt_thread.hpp"
 #include "uss/master/master.hpp"
+#include "uss/runner/pty_line.hpp"
 #include "uss/runner/uss_runner.hpp"
 #include "uss/sim/uss_slave_sim.hpp"
 #include "uss/timing.hpp"
-#include "uss/runner/pty_line.hpp"
 
 #include "support/heap_hooks.hpp"
 
