@@ -54,14 +54,38 @@ function(liftd_executable name)
   endif()
 endfunction()
 
-# liftd_test(<name> SOURCES ... [DEPS ...] [LABELS ...] [RUN_SERIAL]): a GoogleTest binary whose
-# cases are registered with CTest one by one, each carrying every label given (so `ctest -LE slow`
-# works); RUN_SERIAL: each case runs with no other test beside it.
+# The test tiers (the table of test labels in README.md): every test carries exactly one of them.
+#   unit     in-process, on a fake clock or with no time at all
+#   process  starts a process, opens a pty or a socket, or waits on real time
+#   slow     a long real-time end-to-end run, about a minute or more (not in the sanitizer run)
+set(LIFTD_TEST_TIERS unit process slow)
+
+# liftd_check_tier(<name> <labels...>): stops the configure step unless exactly one tier is given.
+function(liftd_check_tier name)
+  set(tiers "")
+  foreach(label IN LISTS ARGN)
+    if(label IN_LIST LIFTD_TEST_TIERS)
+      list(APPEND tiers ${label})
+    endif()
+  endforeach()
+  list(LENGTH tiers count)
+  if(NOT count EQUAL 1)
+    list(JOIN LIFTD_TEST_TIERS ", " all)
+    list(JOIN tiers ", " given)
+    message(FATAL_ERROR "test ${name}: give exactly one tier label (${all}), not '${given}'")
+  endif()
+endfunction()
+
+# liftd_test(<name> SOURCES ... [DEPS ...] LABELS <tier> ... [RUN_SERIAL]): a GoogleTest binary
+# whose cases are registered with CTest one by one, each carrying every label given (so
+# `ctest -LE slow` works): exactly one tier, the kind (dcp, sch001, uss) where it tests one, and
+# its folder's labels; RUN_SERIAL: each case runs with no other test beside it.
 function(liftd_test name)
+  cmake_parse_arguments(ARG "RUN_SERIAL" "" "SOURCES;DEPS;LABELS" ${ARGN})
+  liftd_check_tier(${name} ${ARG_LABELS})
   if(NOT LIFTD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "RUN_SERIAL" "" "SOURCES;DEPS;LABELS" ${ARGN})
   set(serial FALSE)
   if(ARG_RUN_SERIAL)
     set(serial TRUE)
@@ -78,8 +102,9 @@ function(liftd_test name)
                        PROPERTIES LABELS "${labels}" TIMEOUT 300 RUN_SERIAL ${serial})
 endfunction()
 
-# liftd_fuzzer(<name> SOURCES ... [DEPS ...]): a libFuzzer target, built only with LIFTD_FUZZ,
-# run for LIFTD_FUZZ_SECONDS under ctest with the label "fuzz". Its committed seed corpus is
+# liftd_fuzzer(<name> SOURCES ... [DEPS ...] [LABELS ...]): a libFuzzer target, built only with
+# LIFTD_FUZZ, run for LIFTD_FUZZ_SECONDS under ctest with the labels "fuzz", "unit" (in-process,
+# no clock) and those given (its kind). Its committed seed corpus is
 # tests/fuzz/corpus/<name>/ (required: replayed first on every run, so a crash input kept there
 # is a regression test) and its dictionary tests/fuzz/dict/<name>.dict (optional). New inputs go
 # to <build>/fuzz/corpus/<name>/, never into the source tree; tools/fuzz.sh runs campaigns.
@@ -87,7 +112,7 @@ function(liftd_fuzzer name)
   if(NOT LIFTD_FUZZ)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS" ${ARGN})
   set(seeds ${PROJECT_SOURCE_DIR}/tests/fuzz/corpus/${name})
   set(dict ${PROJECT_SOURCE_DIR}/tests/fuzz/dict/${name}.dict)
   if(NOT IS_DIRECTORY ${seeds})
@@ -106,5 +131,5 @@ function(liftd_fuzzer name)
   set(work ${CMAKE_BINARY_DIR}/fuzz/corpus/${name})
   file(MAKE_DIRECTORY ${work})
   add_test(NAME ${name} COMMAND ${name} ${args} ${work} ${seeds})
-  set_tests_properties(${name} PROPERTIES LABELS fuzz TIMEOUT 600)
+  set_tests_properties(${name} PROPERTIES LABELS "fuzz;unit;${ARG_LABELS}" TIMEOUT 600)
 endfunction()

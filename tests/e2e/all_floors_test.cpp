@@ -33,14 +33,14 @@ const std::array<std::vector<int>, 5> kTrips = {{
 }};
 
 // DCP 11.1.2: a DCP4 distance travel ends on the level without crawl; our acceptance is 2 mm
-// (as in tests/control/travel_test.cpp).
+// (as in tests/dcp/control/travel_test.cpp).
 constexpr double kDcp4LandingMm = 2.0;
 // DCP3 by position as `liftd --simulate` runs it by default (B2 withdrawn 8 mm before the level,
-// the simulated drive's stop from crawl): tests/control/travel_test.cpp measures landings within
-// about 1 mm on its fake clock and accepts 2 mm. Here the cycle wakes a few ms late now and then,
-// and the decision to drop B1 at the deceleration point (DCP 10.1.2) is taken at full speed with
-// no crawl distance to absorb it: 1.6 m/s for 2 ms is 3 mm more before the drive reaches V0. We
-// accept 5 mm.
+// the simulated drive's stop from crawl): tests/dcp/control/travel_test.cpp measures landings
+// within about 1 mm on its fake clock and accepts 2 mm. Here the cycle wakes a few ms late now and
+// then, and the decision to drop B1 at the deceleration point (DCP 10.1.2) is taken at full speed
+// with no crawl distance to absorb it: 1.6 m/s for 2 ms is 3 mm more before the drive reaches V0.
+// We accept 5 mm.
 constexpr double kDcp3LandingMm = 5.0;
 
 /// What one travel of a trip did.

@@ -18,7 +18,7 @@ namespace liftd::e2e {
 namespace {
 
 // DCP 11.1.2: a DCP4 distance travel ends on the level; our acceptance is 2 mm (as in
-// tests/control/travel_test.cpp).
+// tests/dcp/control/travel_test.cpp).
 constexpr double kLandingMm = 2.0;
 
 bool is_ok(const json& reply) {

@@ -19,7 +19,7 @@
 #include <thread>
 #include <vector>
 
-#include "control/controller_rig.hpp"
+#include "dcp/control/controller_rig.hpp"
 #include "dcp/control/dcp_controller.hpp"
 #include "dcp/sim/serial_runner.hpp"
 #include "io/pty.hpp"

@@ -40,9 +40,9 @@
 #include "service/notify.hpp"
 #include "support/api_client.hpp"
 #include "uss/master/master.hpp"
+#include "uss/runner/pty_line.hpp"
 #include "uss/runner/uss_runner.hpp"
 #include "uss/sim/uss_slave_sim.hpp"
-#include "uss_master/pty_line.hpp"
 
 namespace {
 

@@ -1,6 +1,6 @@
 // travel-bench: floor-to-floor times and landing accuracy, DCP4 against DCP3, with the real
 // DcpController against the drive simulator at its default parameters, in process on a fake
-// clock (tests/control/controller_rig.hpp). Times run from the cycle that takes the travel
+// clock (tests/dcp/control/controller_rig.hpp). Times run from the cycle that takes the travel
 // command to the first reply with S1 = 0 (DCP 9.1.4: travel over), so they are simulated
 // seconds at the 15 ms cycle's resolution, independent of the machine running the program.
 //
@@ -13,7 +13,7 @@
 #include <optional>
 #include <vector>
 
-#include "control/controller_rig.hpp"
+#include "dcp/control/controller_rig.hpp"
 
 namespace {
 

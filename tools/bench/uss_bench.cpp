@@ -8,7 +8,7 @@
 // A pty has no baud rate: bytes move at once. The cycle measured here is made by the runner's
 // own pacing (it keeps the start pause after the computed end of the last telegram, counts our
 // telegram as on the line for its transmission time, and takes a reply as occupying the line
-// for its characters) and by the line thread (tests/uss_master/pty_line.hpp), which hands each
+// for its characters) and by the line thread (tests/uss/runner/pty_line.hpp), which hands each
 // byte to the slaves one character time after the previous one and writes a reply when its
 // STX would be complete. So the figure shows the master keeps the spec's timing and what the
 // threads add; it does not measure a UART. What the threads add is printed as well: four
@@ -35,10 +35,10 @@
 #include "io/pty.hpp"
 #include "rt/rt_thread.hpp"
 #include "uss/master/master.hpp"
+#include "uss/runner/pty_line.hpp"
 #include "uss/runner/uss_runner.hpp"
 #include "uss/sim/uss_slave_sim.hpp"
 #include "uss/timing.hpp"
-#include "uss_master/pty_line.hpp"
 
 #include "support/heap_hooks.hpp"
 

@@ -17,9 +17,9 @@
 #include <vector>
 
 #include "uss/drive/controller.hpp"
+#include "uss/drive/fake_drive.hpp"
 #include "uss/telegram.hpp"
 #include "uss/timing.hpp"
-#include "uss_drive/fake_drive.hpp"
 
 namespace liftd::uss::test {
 

@@ -1,7 +1,8 @@
 // The USS bus thread over a real pty pair (8E1 on both ends, parity and framing errors marked)
 // against simulated slaves on a line thread (pty_line.hpp). A pty has no parity bit: parity
 // and framing marks cannot happen on it; the PARMRK escape of a data byte 0xFF does, and the
-// parity path is covered by feeding marked bytes through the decoder (master_test.cpp).
+// parity path is covered by feeding marked bytes through the decoder
+// (tests/uss/master/master_test.cpp).
 #include <gtest/gtest.h>
 
 #include <fcntl.h>

@@ -8,8 +8,8 @@
 #include <functional>
 #include <vector>
 
+#include "uss/drive/fake_drive.hpp"
 #include "uss/drive/lift_travel.hpp"
-#include "uss_drive/fake_drive.hpp"
 
 namespace liftd::uss {
 namespace {

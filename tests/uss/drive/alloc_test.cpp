@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "support/heap_hooks.hpp"
-#include "uss_drive/bus.hpp"
+#include "uss/drive/bus.hpp"
 
 namespace liftd::uss {
 namespace {

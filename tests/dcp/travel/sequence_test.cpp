@@ -32,7 +32,7 @@ TEST(Dcp4Travel, LongV4TravelFollowsFigure11_3) {
   ASSERT_TRUE(rig.run_to_idle());
 
   // I7 first (DCP 11.1.2.1 example 2: V4, 1000 cm); the I9 after the stop is the DCP
-  // controller's (tests/control, DCP 5.12.9).
+  // controller's (tests/dcp/control, DCP 5.12.9).
   ASSERT_TRUE(rig.records[1].channel_request.has_value());
   EXPECT_EQ(body_text(*rig.records[1].channel_request), "I7201000");
   // Step 1 speed message V4 (G7 = 0x0080), steps 2..4 B2+B0, then B0 until S1 = 0, then idle.

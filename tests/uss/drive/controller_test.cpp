@@ -8,10 +8,10 @@
 #include <functional>
 #include <vector>
 
+#include "uss/drive/bus.hpp"
 #include "uss/drive/controller.hpp"
 #include "uss/telegram.hpp"
 #include "uss/timing.hpp"
-#include "uss_drive/bus.hpp"
 
 namespace liftd::uss {
 namespace {
