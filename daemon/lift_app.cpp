@@ -1,6 +1,5 @@
 #include "daemon/lift_app.hpp"
 
-#include <sys/eventfd.h>
 #include <unistd.h>
 
 #include <algorithm>
