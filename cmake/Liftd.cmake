@@ -31,24 +31,62 @@ function(liftd_add_subdirectories dir)
   endforeach()
 endfunction()
 
-# liftd_library(<name> SOURCES ... [DEPS ...]): a static library liftd_<name> with the project's
-# warnings, the lib/ folder as include root (#include "dcp/frame.hpp") and alias liftd::<name>.
+# Precompiled headers (LIFTD_PCH). Two hosts compile the headers once each; the targets reuse
+# them (REUSE_FROM), so every user must compile with the host's flags: the same warnings and, for
+# the tests, the same test options. Position-independent code is the compiler's default (PIE)
+# everywhere, for the same reason. GCC refuses a header compiled with other flags, and CMake's
+# -Winvalid-pch with -Werror makes that a build error, never a silent slow build.
+#   liftd_pch_app    nlohmann-json and Asio: the API, config, daemon and tool targets (PCH)
+#   liftd_pch_tests  GoogleTest, GoogleMock, nlohmann-json and Asio: every test binary
+function(liftd_add_pch_hosts)
+  if(NOT LIFTD_PCH OR NOT LIFTD_UNITY_BUILD OR LIFTD_FUZZ)
+    return()
+  endif()
+  set(common <nlohmann/json.hpp> <asio.hpp> <algorithm> <array> <chrono> <cstdint> <filesystem>
+             <functional> <map> <optional> <string> <string_view> <thread> <vector>)
+  add_library(liftd_pch_app OBJECT ${PROJECT_SOURCE_DIR}/cmake/pch_host.cpp)
+  target_compile_options(liftd_pch_app PRIVATE ${LIFTD_WARNINGS})
+  target_link_libraries(liftd_pch_app PRIVATE nlohmann_json::nlohmann_json)
+  target_precompile_headers(liftd_pch_app PRIVATE ${common})
+  if(LIFTD_TESTS)
+    add_library(liftd_pch_tests OBJECT ${PROJECT_SOURCE_DIR}/cmake/pch_host.cpp)
+    target_compile_options(liftd_pch_tests PRIVATE ${LIFTD_WARNINGS} ${LIFTD_TEST_COMPILE_OPTIONS})
+    target_link_libraries(liftd_pch_tests PRIVATE nlohmann_json::nlohmann_json GTest::gtest GTest::gmock)
+    target_precompile_headers(liftd_pch_tests PRIVATE <gtest/gtest.h> <gmock/gmock.h> ${common})
+  endif()
+endfunction()
+
+# liftd_use_pch(<target> <host>): <target> reuses the host's precompiled headers, if there is one.
+function(liftd_use_pch target host)
+  if(TARGET ${host})
+    target_precompile_headers(${target} REUSE_FROM ${host})
+  endif()
+endfunction()
+
+# liftd_library(<name> SOURCES ... [DEPS ...] [PCH]): a static library liftd_<name> with the
+# project's warnings, the lib/ folder as include root (#include "dcp/frame.hpp") and alias
+# liftd::<name>. PCH: it uses nlohmann-json or Asio and reuses their precompiled headers.
 function(liftd_library name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "PCH" "" "SOURCES;DEPS" ${ARGN})
   add_library(liftd_${name} STATIC ${ARG_SOURCES})
   add_library(liftd::${name} ALIAS liftd_${name})
   target_include_directories(liftd_${name} PUBLIC ${PROJECT_SOURCE_DIR}/lib)
   target_compile_options(liftd_${name} PRIVATE ${LIFTD_WARNINGS})
   target_link_libraries(liftd_${name} PUBLIC ${ARG_DEPS})
-  set_target_properties(liftd_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  if(ARG_PCH)
+    liftd_use_pch(liftd_${name} liftd_pch_app)
+  endif()
 endfunction()
 
-# liftd_executable(<name> SOURCES ... [DEPS ...] [INSTALL]): a program in build/bin.
+# liftd_executable(<name> SOURCES ... [DEPS ...] [INSTALL] [PCH]): a program in build/bin.
 function(liftd_executable name)
-  cmake_parse_arguments(ARG "INSTALL" "" "SOURCES;DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "INSTALL;PCH" "" "SOURCES;DEPS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_compile_options(${name} PRIVATE ${LIFTD_WARNINGS})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS})
+  if(ARG_PCH)
+    liftd_use_pch(${name} liftd_pch_app)
+  endif()
   if(ARG_INSTALL)
     install(TARGETS ${name} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
   endif()
@@ -94,12 +132,27 @@ function(liftd_test name)
   target_compile_options(${name} PRIVATE ${LIFTD_WARNINGS} ${LIFTD_TEST_COMPILE_OPTIONS})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gmock GTest::gtest_main)
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+  liftd_use_pch(${name} liftd_pch_tests)
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tests)
   # gtest_discover_tests expands its PROPERTIES list three more times before it writes the test
   # file; the separators between labels are escaped for each of those expansions.
   string(REPLACE ";" "\\\\\\\\\\\\\\;" labels "${ARG_LABELS}")
   gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
                        PROPERTIES LABELS "${labels}" TIMEOUT 300 RUN_SERIAL ${serial})
+endfunction()
+
+# liftd_test_library(<name> SOURCES ... [DEPS ...]): code several test binaries share, compiled
+# once, like the tests (their options, the tests/ include root, GoogleTest).
+function(liftd_test_library name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  if(NOT LIFTD_TESTS)
+    return()
+  endif()
+  add_library(${name} STATIC ${ARG_SOURCES})
+  target_compile_options(${name} PRIVATE ${LIFTD_WARNINGS} ${LIFTD_TEST_COMPILE_OPTIONS})
+  target_link_libraries(${name} PUBLIC ${ARG_DEPS} GTest::gtest)
+  target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR}/tests ${PROJECT_SOURCE_DIR}/lib)
+  liftd_use_pch(${name} liftd_pch_tests)
 endfunction()
 
 # liftd_fuzzer(<name> SOURCES ... [DEPS ...] [LABELS ...]): a libFuzzer target, built only with

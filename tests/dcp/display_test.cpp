@@ -38,7 +38,7 @@ TEST(DcpDisplay, WritesSingleCharactersAtPositionsAsInExample2) {
   const std::vector<std::uint8_t> p{0x04, 0x0A, 'A', 0x07, 0x1B, 'Z', 0x06, 0x08, 0x84};
   EXPECT_EQ(d.apply(p), DisplayError::None);
   EXPECT_EQ(row(d, 0), "  A                 ");
-  EXPECT_EQ(row(d, 3), std::string(19, ' ') + "Z");
+  EXPECT_EQ(row(d, 3), "                   Z");  // 19 spaces, Z in the last column
   EXPECT_EQ(d.row(2)[0], 0x84);
   EXPECT_EQ(d.row_utf8(2), "\xC3\xA4" + std::string(19, ' '));
 }
@@ -53,7 +53,7 @@ TEST(DcpDisplay, LineByteHomesTheCursor) {
 TEST(DcpDisplay, DropsCharactersPastColumn20) {
   DisplayModel d;
   EXPECT_EQ(d.apply(payload({0x04, 0x1A}, "XYZ")), DisplayError::PastLineEnd);
-  EXPECT_EQ(row(d, 0), std::string(18, ' ') + "XY");
+  EXPECT_EQ(row(d, 0), "                  XY");  // 18 spaces
   EXPECT_EQ(row(d, 1), std::string(20, ' '));  // no wrap into the next line
 }
 
