@@ -29,20 +29,10 @@ lift::Cause CommandGate::forbidding(const CycleInput& in, const GateProfile& pro
     return drive;
   }
   // The machine's rules, common to every drive kind (DCP 9.1.1: the safety chain).
-  switch (lift::machine_refusal(
+  const lift::Cause machine = lift::refusal_cause(lift::machine_refusal(
       in.inputs, in.position_mm.has_value(),
-      {profile.doors_locked_required, profile.door_bridge_allowed, profile.position_required})) {
-    case lift::MachineRefusal::InputsLost:
-      return lift::Cause::InputsLost;
-    case lift::MachineRefusal::SafetyChainOpen:
-      return lift::Cause::SafetyChainOpen;
-    case lift::MachineRefusal::DoorsNotLocked:
-      return lift::Cause::DoorsNotLocked;
-    case lift::MachineRefusal::PositionLost:
-      return lift::Cause::PositionLost;
-    case lift::MachineRefusal::None:
-      break;
-  }
+      {profile.doors_locked_required, profile.door_bridge_allowed, profile.position_required}));
+  if (machine != lift::Cause::None) return machine;
   return drive;
 }
 
