@@ -340,10 +340,8 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
       // As every lift reports its travels (daemon/lift_core); a DCP travel also tells its
       // target changes, fast start and drive faults (DCP 4.1, 12, 9.1.6).
       const travel::Event& t = event.travel;
-      report_travel(
-          *server_, travel::to_string(t.type), travel::to_string(t.kind),
-          t.cause == travel::AbortCause::None ? std::string_view{} : travel::to_string(t.cause),
-          t.type == travel::Event::Type::Aborted, t.target_mm, t.position_mm);
+      report_travel(*server_, travel::to_string(t.type), travel::to_string(t.kind), t.cause,
+                    t.type == travel::Event::Type::Aborted, t.target_mm, t.position_mm);
       return;
     }
     case Kind::DriveError: {

@@ -144,13 +144,15 @@ void report_fault(api::Server& server, lift::FaultCode code, std::string_view te
 }
 
 void report_travel(api::Server& server, std::string_view type, std::string_view kind,
-                   std::string_view cause, bool aborted, std::int64_t target_mm,
+                   lift::Cause cause, bool aborted, std::int64_t target_mm,
                    std::optional<std::int64_t> position_mm) {
+  const std::string_view cause_name =
+      cause == lift::Cause::None ? std::string_view{} : lift::to_string(cause);
   std::string text = "travel " + std::string(type) + " (" + std::string(kind) + ")";
   log::Fields fields{{"kind", std::string(kind)}};
   if (aborted) {
-    text += ": " + std::string(cause);
-    fields.push_back({"cause", std::string(cause)});
+    text += ": " + std::string(cause_name);
+    fields.push_back({"cause", std::string(cause_name)});
   }
   if (position_mm) {
     text += " at " + std::to_string(*position_mm) + " mm";
@@ -162,7 +164,7 @@ void report_travel(api::Server& server, std::string_view type, std::string_view 
       "travel",
       {{"event", std::string(type)},
        {"kind", std::string(kind)},
-       {"cause", cause.empty() ? nlohmann::json(nullptr) : nlohmann::json(cause)},
+       {"cause", cause_name.empty() ? nlohmann::json(nullptr) : nlohmann::json(cause_name)},
        {"target_mm", target_mm},
        {"position_mm", position_mm ? nlohmann::json(*position_mm) : nlohmann::json(nullptr)}});
 }

@@ -20,6 +20,7 @@
 #include "api/server.hpp"
 #include "common/mono_time.hpp"
 #include "daemon/daemon.hpp"
+#include "lift/cause.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/rules.hpp"
@@ -271,13 +272,13 @@ std::vector<api::FaultInfo> active_faults(const std::array<bool, N>& active,
 }
 /// Journals and publishes a fault that became active or ended.
 void report_fault(api::Server& server, lift::FaultCode code, std::string_view text, bool active);
-/// Journals and publishes a travel that started, finished or was aborted (`cause` empty when
-/// there is none; the journal names it only for an aborted travel).
+/// Journals and publishes a travel event of any drive kind with the API name of its `cause`
+/// (lift::to_string; null when None, and the journal names it only for an aborted travel).
 void report_travel(api::Server& server, std::string_view type, std::string_view kind,
-                   std::string_view cause, bool aborted, std::int64_t target_mm,
+                   lift::Cause cause, bool aborted, std::int64_t target_mm,
                    std::optional<std::int64_t> position_mm);
 /// report_travel() for a controller's travel event (`type` Started/Finished/Aborted, `kind`,
-/// `cause` with None, `floor`; to_string() of kind and cause found beside their types).
+/// `cause`, `floor`; to_string() of the kind found beside its type).
 template <typename TravelEvent, typename Controller>
 void report_travel(api::Server& server, const TravelEvent& t, Controller& controller) {
   using Type = decltype(t.type);
@@ -286,10 +287,8 @@ void report_travel(api::Server& server, const TravelEvent& t, Controller& contro
                      : t.type == Type::Finished ? "finished"
                                                 : "aborted";
   const auto floors = controller.floors_mm();
-  report_travel(server, type, to_string(t.kind),
-                t.cause == decltype(t.cause)::None ? std::string_view{} : to_string(t.cause),
-                aborted, t.floor < floors.size() ? floors[t.floor] : 0,
-                controller.snapshot().position_mm);
+  report_travel(server, type, to_string(t.kind), t.cause, aborted,
+                t.floor < floors.size() ? floors[t.floor] : 0, controller.snapshot().position_mm);
 }
 /// Journals and publishes a served call.
 void report_call_served(api::Server& server, std::size_t floor);

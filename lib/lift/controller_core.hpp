@@ -11,9 +11,8 @@
 // that drive the travel sequencer (handle_travel, the stop and shutdown handling, inspection,
 // drain_travel, fill_lift_snapshot) need one with kind(), phase(), direction(), target(),
 // busy(), stop(floors, in), abort(cause, now), drive_forbidding(in), poll_event() and
-// dropped_events(), whose Cause enum has None, Shutdown, SafetyChain, DoorsUnlocked, InputsLost
-// and PositionLost; the DCP controller sequences its travels itself (DCP 10-13) and uses the
-// rest.
+// dropped_events(), reporting causes as lift::Cause (lift/cause.hpp); the DCP controller
+// sequences its travels itself (DCP 10-13) and uses the rest.
 //
 // Threads: the real-time thread calls the protected members; ONE other thread (the daemon's io
 // thread) calls post(), poll_reply(), poll_event(), snapshot() and dropped_events().
@@ -34,6 +33,7 @@
 #include "common/snapshot_box.hpp"
 #include "common/spsc_queue.hpp"
 #include "lift/calls.hpp"
+#include "lift/cause.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
@@ -94,10 +94,9 @@ inline constexpr std::size_t kReplyQueueSize = 64;
 inline constexpr std::size_t kEventQueueSize = 256;
 
 /// The reply code of a refusal for a cause both drives' travels know; NotReady for the others.
-template <typename Cause>
 constexpr ReplyCode shared_cause_code(Cause cause) noexcept {
   switch (cause) {
-    case Cause::SafetyChain:
+    case Cause::SafetyChainOpen:
     case Cause::InputsLost:
     case Cause::PositionLost:
       return ReplyCode::Fault;
@@ -107,12 +106,11 @@ constexpr ReplyCode shared_cause_code(Cause cause) noexcept {
 }
 
 /// The reply text of a refusal for a cause both drives' travels know.
-template <typename Cause>
 constexpr std::string_view shared_cause_text(Cause cause) noexcept {
   switch (cause) {
-    case Cause::SafetyChain:
+    case Cause::SafetyChainOpen:
       return "safety chain open";
-    case Cause::DoorsUnlocked:
+    case Cause::DoorsNotLocked:
       return "doors not locked";
     case Cause::InputsLost:
       return "machine inputs lost";
@@ -227,7 +225,7 @@ class ControllerCore {
     shutting_down_ = true;
     lift_.calls().clear();
     if (body.force) {
-      travel_.abort(Types::Cause::Shutdown, in.now);
+      travel_.abort(Cause::ShuttingDown, in.now);
     } else {
       (void)travel_.stop(lift_.floors(), in);
     }
@@ -267,8 +265,8 @@ class ControllerCore {
     if (at_level(in, body.floor)) {
       return refuse(tag, ReplyCode::NotReady, "the car is already at that level");
     }
-    const typename Types::Cause why = start();
-    if (why != Types::Cause::None) return refuse(tag, code_for(why), text_for(why));
+    const Cause why = start();
+    if (why != Cause::None) return refuse(tag, code_for(why), text_for(why));
     reply(tag, ReplyCode::Ok);
     return true;
   }
@@ -302,7 +300,7 @@ class ControllerCore {
   /// relevelling running when it comes on ends with `abort_cause`. `inspect(direction)` hands the
   /// wanted direction to the travel (None: stand still).
   template <typename Inspect>
-  void follow_inspection(const typename Types::Input& in, typename Types::Cause abort_cause,
+  void follow_inspection(const typename Types::Input& in, Cause abort_cause,
                          Inspect inspect) noexcept {
     if (in.inputs.inspection) {
       if (travel_.kind() == Types::TravelKind::Travel ||
@@ -395,7 +393,7 @@ class ControllerCore {
   void fill_lift_snapshot(typename Types::Snapshot& s, MonoTime now,
                           const typename Types::Input& in) const noexcept {
     const Inputs& inputs = in.inputs;
-    s.drive_allows_travel = travel_.drive_forbidding(in) == Types::Cause::None;
+    s.drive_allows_travel = travel_.drive_forbidding(in) == Cause::None;
     s.at = now;
     s.steps = steps_;
     s.position_mm = lift_.position_mm();

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 
+#include "lift/cause.hpp"
 #include "lift/inputs.hpp"
 
 namespace liftd::lift {
@@ -54,17 +55,15 @@ constexpr MachineNeeds run_needs(Kind kind, bool relevel_doors_open,
   return needs;
 }
 
-/// A machine refusal as a travel's Cause (whose enum names None, InputsLost, SafetyChain,
-/// DoorsUnlocked and PositionLost).
-template <typename Cause>
+/// A machine refusal as the Cause a travel reports.
 constexpr Cause refusal_cause(MachineRefusal refusal) noexcept {
   switch (refusal) {
     case MachineRefusal::InputsLost:
       return Cause::InputsLost;
     case MachineRefusal::SafetyChainOpen:
-      return Cause::SafetyChain;
+      return Cause::SafetyChainOpen;
     case MachineRefusal::DoorsNotLocked:
-      return Cause::DoorsUnlocked;
+      return Cause::DoorsNotLocked;
     case MachineRefusal::PositionLost:
       return Cause::PositionLost;
     case MachineRefusal::None:

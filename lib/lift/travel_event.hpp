@@ -8,12 +8,13 @@
 
 #include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
+#include "lift/cause.hpp"
 #include "lift/inputs.hpp"
 
 namespace liftd::lift {
 
-/// One event of a run of kind `Kind` (the travel's TravelKind) ending for a `Cause`.
-template <typename Kind, typename Cause>
+/// One event of a run of kind `Kind` (the travel's TravelKind), an abort with its `cause`.
+template <typename Kind>
 struct BasicTravelEvent {
   enum class Type : std::uint8_t { Started, Finished, Aborted };
   Type type = Type::Started;

@@ -156,7 +156,8 @@ void Sch001Controller::step(MonoTime now) noexcept {
     in = build_input(now);  // an inputs command changes what follows
   }
   locate_car(in);  // 3c: the current floor is the one the car last stopped at
-  follow_inspection(in, Cause::Stopped, [&](lift::Direction d) { (void)travel_.inspect(d, in); });
+  follow_inspection(in, lift::Cause::StopRequested,
+                    [&](lift::Direction d) { (void)travel_.inspect(d, in); });
   update_faults(in, now);
   last_output_ = travel_.tick(lift_.floors(), in);
   drain_travel(now);
@@ -177,27 +178,27 @@ void Sch001Controller::step(MonoTime now) noexcept {
 
 // ---- commands ----
 
-ReplyCode Sch001Controller::code_for(Cause cause) noexcept {
+ReplyCode Sch001Controller::code_for(lift::Cause cause) noexcept {
   switch (cause) {
-    case Cause::CardError:
-    case Cause::CardSilent:
-    case Cause::BusFault:
+    case lift::Cause::DriveFault:
+    case lift::Cause::CardSilent:
+    case lift::Cause::BusFault:
       return ReplyCode::Fault;
     default:
       return lift::shared_cause_code(cause);
   }
 }
 
-std::string_view Sch001Controller::text_for(Cause cause) noexcept {
+std::string_view Sch001Controller::text_for(lift::Cause cause) noexcept {
   switch (cause) {
-    case Cause::CardError:
+    case lift::Cause::DriveFault:
       return "the SCH001 card reports ERR (card document 3d)";
-    case Cause::CardNotReady:
+    case lift::Cause::DriveNotReady:
       return "the SCH001 card is not ready (RDY = 0, or no status frame heard yet; card document "
              "3e)";
-    case Cause::CardSilent:
+    case lift::Cause::CardSilent:
       return "no frame from the SCH001 card for 10 s (card document 3f)";
-    case Cause::BusFault:
+    case lift::Cause::BusFault:
       return "the CAN bus or socket is not working";
     default:
       return lift::shared_cause_text(cause);
@@ -216,15 +217,17 @@ void Sch001Controller::handle(const ControllerCommand& command, TickInput& in) n
               code_for, text_for);
         } else if constexpr (std::is_same_v<T, RelevelCommand>) {
           if (relevel_refused(tag)) return;
-          if (!in.position_mm) return reply(tag, ReplyCode::Fault, text_for(Cause::PositionLost));
+          if (!in.position_mm) {
+            return reply(tag, ReplyCode::Fault, text_for(lift::Cause::PositionLost));
+          }
           const auto nearest = lift_.floors().nearest(*in.position_mm);
           if (!nearest) return reply(tag, ReplyCode::NotReady, "no floor");
           if (std::llabs(*in.position_mm - lift_.floors().level_mm(*nearest)) <=
               static_cast<std::int64_t>(config_.hydraulic.stop_tolerance_mm)) {
             return reply(tag, ReplyCode::NotReady, "the car is level: nothing to relevel");
           }
-          const Cause why = travel_.start_relevel(lift_.floors(), *nearest, in);
-          if (why != Cause::None) return reply(tag, code_for(why), text_for(why));
+          const lift::Cause why = travel_.start_relevel(lift_.floors(), *nearest, in);
+          if (why != lift::Cause::None) return reply(tag, code_for(why), text_for(why));
           reply(tag, ReplyCode::Ok, {}, nearest);
         } else {
           handle_shared(tag, body, in);
@@ -250,7 +253,7 @@ void Sch001Controller::maybe_relevel(TickInput& in) noexcept {
       lift_.floors(), *in.position_mm, config_.hydraulic.relevel_start_mm, lift::kRelevelZoneMm);
   if (!nearest)
     return;  // Only where it may start now; otherwise it waits (a refused relevel is no event).
-  if (travel_.forbidding(TravelKind::Relevel, in) == Cause::None) {
+  if (travel_.forbidding(TravelKind::Relevel, in) == lift::Cause::None) {
     (void)travel_.start_relevel(lift_.floors(), *nearest, in);
   }
 }

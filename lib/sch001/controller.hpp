@@ -153,7 +153,6 @@ struct Sch001CoreTypes {
   using TravelKind = sch001::TravelKind;
   using TravelCommand = sch001::TravelCommand;
   using Input = TickInput;
-  using Cause = sch001::Cause;
 };
 
 class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore<Sch001CoreTypes> {
@@ -182,8 +181,8 @@ class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore
   void serve_calls(TickInput& in) noexcept;
   void maybe_relevel(TickInput& in) noexcept;
   void publish(MonoTime now) noexcept;
-  static ReplyCode code_for(Cause cause) noexcept;
-  static std::string_view text_for(Cause cause) noexcept;
+  static ReplyCode code_for(lift::Cause cause) noexcept;
+  static std::string_view text_for(lift::Cause cause) noexcept;
 
   ControllerConfig config_;
   const PositionSource& position_;

@@ -52,57 +52,26 @@ std::string_view to_string(Phase phase) noexcept {
   return "idle";
 }
 
-std::string_view to_string(Cause cause) noexcept {
-  switch (cause) {
-    case Cause::None:
-      return "none";
-    case Cause::Stopped:
-      return "stop_requested";
-    case Cause::SafetyChain:
-      return "safety_chain_open";
-    case Cause::DoorsUnlocked:
-      return "doors_not_locked";
-    case Cause::InputsLost:
-      return "inputs_lost";
-    case Cause::PositionLost:
-      return "position_lost";
-    case Cause::CardError:
-      return "drive_fault";
-    case Cause::CardNotReady:
-      return "drive_not_ready";
-    case Cause::CardSilent:
-      return "card_silent";
-    case Cause::BusFault:
-      return "bus_fault";
-    case Cause::TravelTimeout:
-      return "travel_timeout";
-    case Cause::Shutdown:
-      return "shutting_down";
-  }
-  return "none";
+lift::Cause HydraulicTravel::drive_forbidding(const TickInput& in) const noexcept {
+  if (!in.bus_ok) return lift::Cause::BusFault;
+  if (in.card_silent) return lift::Cause::CardSilent;
+  if (in.card_error) return lift::Cause::DriveFault;
+  if (!in.card_allows_travel) return lift::Cause::DriveNotReady;  // no status yet, or RDY = 0 (3e)
+  return lift::Cause::None;
 }
 
-Cause HydraulicTravel::drive_forbidding(const TickInput& in) const noexcept {
-  if (!in.bus_ok) return Cause::BusFault;
-  if (in.card_silent) return Cause::CardSilent;
-  if (in.card_error) return Cause::CardError;
-  if (!in.card_allows_travel) return Cause::CardNotReady;  // no status yet, or RDY = 0 (3e)
-  return Cause::None;
-}
-
-Cause HydraulicTravel::forbidding(TravelKind kind, const TickInput& in) const noexcept {
-  if (const Cause why = drive_forbidding(in); why != Cause::None) return why;
+lift::Cause HydraulicTravel::forbidding(TravelKind kind, const TickInput& in) const noexcept {
+  if (const lift::Cause why = drive_forbidding(in); why != lift::Cause::None) return why;
   // The machine's rules, common to every drive kind (lib/lift/gate.hpp). Inspection: the
   // safety chain holds the door contacts.
   const lift::MachineNeeds needs =
       lift::run_needs(kind, config_.relevel_doors_open, /*steers_by_position=*/true);
-  return lift::refusal_cause<Cause>(
-      lift::machine_refusal(in.inputs, in.position_mm.has_value(), needs));
+  return lift::refusal_cause(lift::machine_refusal(in.inputs, in.position_mm.has_value(), needs));
 }
 
-Cause HydraulicTravel::begin(TravelKind kind, const lift::FloorTable& floors, std::size_t floor,
-                             const TickInput& in) noexcept {
-  if (const Cause why = forbidding(kind, in); why != Cause::None) return why;
+lift::Cause HydraulicTravel::begin(TravelKind kind, const lift::FloorTable& floors,
+                                   std::size_t floor, const TickInput& in) noexcept {
+  if (const lift::Cause why = forbidding(kind, in); why != lift::Cause::None) return why;
   const std::int64_t level = floors.level_mm(floor);
   kind_ = kind;
   target_ = floor;
@@ -112,12 +81,12 @@ Cause HydraulicTravel::begin(TravelKind kind, const lift::FloorTable& floors, st
   motor_on_ = up;  // up by the pump, down by the valve alone
   motor_on_at_ = in.now;
   phase_ = up ? Phase::MotorStart : (kind == TravelKind::Relevel ? Phase::Slow : Phase::Fast);
-  push({TravelEvent::Type::Started, kind_, direction_, target_, Cause::None, in.now});
-  return Cause::None;
+  push({TravelEvent::Type::Started, kind_, direction_, target_, lift::Cause::None, in.now});
+  return lift::Cause::None;
 }
 
-Cause HydraulicTravel::start_travel(const lift::FloorTable& floors, std::size_t floor, Speed speed,
-                                    const TickInput& in) noexcept {
+lift::Cause HydraulicTravel::start_travel(const lift::FloorTable& floors, std::size_t floor,
+                                          Speed speed, const TickInput& in) noexcept {
   // Speeds the unit lacks fall back to the next lower one it has.
   if (speed == Speed::V4 && !config_.has_v4) speed = Speed::V3;
   if (speed == Speed::V3 && !config_.has_v3) speed = Speed::Fast;
@@ -125,28 +94,32 @@ Cause HydraulicTravel::start_travel(const lift::FloorTable& floors, std::size_t 
   return begin(TravelKind::Travel, floors, floor, in);
 }
 
-Cause HydraulicTravel::start_relevel(const lift::FloorTable& floors, std::size_t floor,
-                                     const TickInput& in) noexcept {
+lift::Cause HydraulicTravel::start_relevel(const lift::FloorTable& floors, std::size_t floor,
+                                           const TickInput& in) noexcept {
   speed_ = Speed::Fast;
   return begin(TravelKind::Relevel, floors, floor, in);
 }
 
-Cause HydraulicTravel::inspect(lift::Direction direction, const TickInput& in) noexcept {
+lift::Cause HydraulicTravel::inspect(lift::Direction direction, const TickInput& in) noexcept {
   if (direction == lift::Direction::None) {
-    if (kind_ == TravelKind::Inspection) end(TravelEvent::Type::Finished, Cause::None, in.now);
-    return Cause::None;
+    if (kind_ == TravelKind::Inspection) {
+      end(TravelEvent::Type::Finished, lift::Cause::None, in.now);
+    }
+    return lift::Cause::None;
   }
-  if (kind_ == TravelKind::Inspection && direction == direction_) return Cause::None;
-  if (kind_ == TravelKind::Inspection) end(TravelEvent::Type::Finished, Cause::None, in.now);
-  if (const Cause why = forbidding(TravelKind::Inspection, in); why != Cause::None) return why;
+  if (kind_ == TravelKind::Inspection && direction == direction_) return lift::Cause::None;
+  if (kind_ == TravelKind::Inspection) end(TravelEvent::Type::Finished, lift::Cause::None, in.now);
+  if (const lift::Cause why = forbidding(TravelKind::Inspection, in); why != lift::Cause::None) {
+    return why;
+  }
   kind_ = TravelKind::Inspection;
   direction_ = direction;
   started_at_ = in.now;
   motor_on_ = direction == lift::Direction::Up;
   motor_on_at_ = in.now;
   phase_ = motor_on_ ? Phase::MotorStart : Phase::Slow;
-  push({TravelEvent::Type::Started, kind_, direction_, current_floor_, Cause::None, in.now});
-  return Cause::None;
+  push({TravelEvent::Type::Started, kind_, direction_, current_floor_, lift::Cause::None, in.now});
+  return lift::Cause::None;
 }
 
 std::optional<std::size_t> HydraulicTravel::stop(const lift::FloorTable& floors,
@@ -155,7 +128,7 @@ std::optional<std::size_t> HydraulicTravel::stop(const lift::FloorTable& floors,
     case TravelKind::None:
       return std::nullopt;
     case TravelKind::Inspection:
-      end(TravelEvent::Type::Finished, Cause::None, in.now);
+      end(TravelEvent::Type::Finished, lift::Cause::None, in.now);
       return std::nullopt;
     case TravelKind::Relevel:
       return target_;  // a few millimetres at the slow speed: let it land
@@ -164,7 +137,7 @@ std::optional<std::size_t> HydraulicTravel::stop(const lift::FloorTable& floors,
   }
   if (phase_ == Phase::MotorStart || !in.position_mm) {
     // Not moving yet (or blind): nothing to land, drop everything now.
-    end(TravelEvent::Type::Aborted, Cause::Stopped, in.now);
+    end(TravelEvent::Type::Aborted, lift::Cause::StopRequested, in.now);
     return std::nullopt;
   }
   if (phase_ == Phase::Fast) {
@@ -184,7 +157,7 @@ std::optional<std::size_t> HydraulicTravel::stop(const lift::FloorTable& floors,
   return target_;
 }
 
-void HydraulicTravel::abort(Cause cause, MonoTime now) noexcept {
+void HydraulicTravel::abort(lift::Cause cause, MonoTime now) noexcept {
   if (kind_ != TravelKind::None) end(TravelEvent::Type::Aborted, cause, now);
 }
 
@@ -227,10 +200,10 @@ CommandBits HydraulicTravel::signals() const noexcept {
 
 TickOutput HydraulicTravel::tick(const lift::FloorTable& floors, const TickInput& in) noexcept {
   if (kind_ != TravelKind::None) {
-    if (const Cause why = forbidding(kind_, in); why != Cause::None) {
+    if (const lift::Cause why = forbidding(kind_, in); why != lift::Cause::None) {
       end(TravelEvent::Type::Aborted, why, in.now);
     } else if (in.now - started_at_ > milliseconds(config_.max_travel_ms)) {
-      end(TravelEvent::Type::Aborted, Cause::TravelTimeout, in.now);
+      end(TravelEvent::Type::Aborted, lift::Cause::TravelTimeout, in.now);
     }
   }
   if (phase_ == Phase::MotorStart && in.now - motor_on_at_ >= milliseconds(config_.star_delta_ms)) {
@@ -253,7 +226,7 @@ TickOutput HydraulicTravel::tick(const lift::FloorTable& floors, const TickInput
   // The inspection run stops at the terminal levels (the limit switches' job in the shaft).
   if (kind_ == TravelKind::Inspection && in.position_mm &&
       lift::at_terminal_level(floors, direction_, *in.position_mm)) {
-    end(TravelEvent::Type::Finished, Cause::None, in.now);
+    end(TravelEvent::Type::Finished, lift::Cause::None, in.now);
   }
   TickOutput out;
   out.bits = signals();
@@ -266,10 +239,10 @@ TickOutput HydraulicTravel::tick(const lift::FloorTable& floors, const TickInput
 
 void HydraulicTravel::finish(MonoTime now) noexcept {
   current_floor_ = target_;  // 3c: the current floor is updated at each stop
-  end(TravelEvent::Type::Finished, Cause::None, now);
+  end(TravelEvent::Type::Finished, lift::Cause::None, now);
 }
 
-void HydraulicTravel::end(TravelEvent::Type type, Cause cause, MonoTime now) noexcept {
+void HydraulicTravel::end(TravelEvent::Type type, lift::Cause cause, MonoTime now) noexcept {
   const std::size_t floor = type == TravelEvent::Type::Finished && kind_ != TravelKind::Inspection
                                 ? target_
                                 : current_floor_;

@@ -21,6 +21,7 @@
 
 #include "common/defaults.hpp"
 #include "common/mono_time.hpp"
+#include "lift/cause.hpp"
 #include "lift/floors.hpp"
 #include "lift/inputs.hpp"
 #include "lift/travel_event.hpp"
@@ -70,25 +71,6 @@ enum class Phase : std::uint8_t {
 /// "idle", "motor_start", "fast", "slow".
 std::string_view to_string(Phase phase) noexcept;
 
-/// Why a travel ended early or was refused.
-enum class Cause : std::uint8_t {
-  None,
-  Stopped,        ///< the `stop` command with no floor left to stop at
-  SafetyChain,    ///< the safety chain opened
-  DoorsUnlocked,  ///< the doors unlocked during a travel
-  InputsLost,     ///< the input provider went silent
-  PositionLost,   ///< the car position is unknown
-  CardError,      ///< the card reports ERR (3d)
-  CardNotReady,   ///< the card dropped RDY (3e)
-  CardSilent,     ///< nothing from the card for 10 s (3f)
-  BusFault,       ///< CAN bus-off, error passive, or the socket failed
-  TravelTimeout,  ///< the motor run-time limit passed
-  Shutdown,       ///< the service is stopping and the deadline passed
-};
-/// The API's abort cause names, shared with the DCP travels where the meaning is the same
-/// ("safety_chain_open", "drive_fault" for ERR, "drive_not_ready" for RDY = 0, ...).
-std::string_view to_string(Cause cause) noexcept;
-
 /// The facts of one tick.
 struct TickInput {
   MonoTime now{};
@@ -109,7 +91,7 @@ struct TickOutput {
 };
 
 /// Something that happened, drained by the controller.
-using TravelEvent = lift::BasicTravelEvent<TravelKind, Cause>;
+using TravelEvent = lift::BasicTravelEvent<TravelKind>;
 
 /// The sequencer. Floors are the installation's; the car's current floor is the last one it
 /// stopped at (3c: "updated each time the stop contact is reached").
@@ -118,30 +100,30 @@ class HydraulicTravel {
   explicit HydraulicTravel(const HydraulicConfig& config) noexcept : config_(config) {}
 
   /// Starts a travel to `floor` at `speed` (V3/V4 fall back to fast where the unit lacks them).
-  /// Cause::None when it started; else why not (conditions of `in`).
-  Cause start_travel(const lift::FloorTable& floors, std::size_t floor, Speed speed,
-                     const TickInput& in) noexcept;
+  /// lift::Cause::None when it started; else why not (conditions of `in`).
+  lift::Cause start_travel(const lift::FloorTable& floors, std::size_t floor, Speed speed,
+                           const TickInput& in) noexcept;
   /// Starts relevelling to `floor` (slow speed, doors may be open where allowed).
-  Cause start_relevel(const lift::FloorTable& floors, std::size_t floor,
-                      const TickInput& in) noexcept;
+  lift::Cause start_relevel(const lift::FloorTable& floors, std::size_t floor,
+                            const TickInput& in) noexcept;
   /// Inspection: hold-to-run `direction` (None: stand still). The run ends when released.
-  Cause inspect(lift::Direction direction, const TickInput& in) noexcept;
+  lift::Cause inspect(lift::Direction direction, const TickInput& in) noexcept;
   /// Stop at the next floor ahead the car can still reach by the slow approach; a car already
   /// slowing keeps its floor; with no floor ahead reachable, every signal drops now.
   /// Returns the floor the car will stop at (nullopt: stopped at once between floors).
   std::optional<std::size_t> stop(const lift::FloorTable& floors, const TickInput& in) noexcept;
   /// Ends whatever runs at once, with `cause` (reported once).
-  void abort(Cause cause, MonoTime now) noexcept;
+  void abort(lift::Cause cause, MonoTime now) noexcept;
 
   /// One step: checks the conditions, moves through the phases, returns the signals.
   TickOutput tick(const lift::FloorTable& floors, const TickInput& in) noexcept;
 
   /// The condition of `in` that forbids moving now, for a run of `kind`, or None: the drive's
   /// (drive_forbidding()), then the machine's.
-  Cause forbidding(TravelKind kind, const TickInput& in) const noexcept;
+  lift::Cause forbidding(TravelKind kind, const TickInput& in) const noexcept;
   /// The card's side of forbidding(): the bus, a silent card, ERR, RDY (3d, 3e, 3f). Status
   /// `drive.state` is `ready` only when it is None.
-  Cause drive_forbidding(const TickInput& in) const noexcept;
+  lift::Cause drive_forbidding(const TickInput& in) const noexcept;
 
   TravelKind kind() const noexcept { return kind_; }
   /// Something runs: no new run may start.
@@ -165,10 +147,10 @@ class HydraulicTravel {
   std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
 
  private:
-  Cause begin(TravelKind kind, const lift::FloorTable& floors, std::size_t floor,
-              const TickInput& in) noexcept;
+  lift::Cause begin(TravelKind kind, const lift::FloorTable& floors, std::size_t floor,
+                    const TickInput& in) noexcept;
   void finish(MonoTime now) noexcept;
-  void end(TravelEvent::Type type, Cause cause, MonoTime now) noexcept;
+  void end(TravelEvent::Type type, lift::Cause cause, MonoTime now) noexcept;
   void push(const TravelEvent& event) noexcept { events_.push(event); }
   std::uint32_t slowdown_mm() const noexcept;
   CommandBits signals() const noexcept;

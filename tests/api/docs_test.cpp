@@ -237,13 +237,9 @@ const std::vector<std::string> kAbortCauses = {
     "bus_fault",           "travel_timeout",     "speed_not_configured"};
 
 TEST(ApiDocs, AbortCausesMatchTheTravelLibrary) {
-  // The DCP travels' causes, the hydraulic and the USS travels' (which reuse the names where the
-  // meaning is the same).
-  std::set<std::string> causes =
-      returned_names("lib/dcp/travel/types.cpp", "to_string(AbortCause cause)", {"none"});
-  causes.merge(
-      returned_names("lib/sch001/hydraulic_travel.cpp", "to_string(Cause cause)", {"none"}));
-  causes.merge(returned_names("lib/uss/drive/lift_travel.cpp", "to_string(Cause cause)", {"none"}));
+  // Every drive kind's causes: one enum, one name table (lib/lift/cause).
+  const std::set<std::string> causes =
+      returned_names("lib/lift/cause.cpp", "to_string(Cause cause)", {"none"});
   EXPECT_EQ(causes, as_set(kAbortCauses));
   expect_table_rows(kAbortCauses, "abort cause");
   const auto schema = read_schema();

@@ -18,19 +18,10 @@ namespace {
 
 using std::chrono::milliseconds;
 
-enum class StubCause : std::uint8_t {
-  None,
-  SafetyChain,
-  DoorsUnlocked,
-  InputsLost,
-  PositionLost,
-  Shutdown,
-  Refused
-};
 enum class StubKind : std::uint8_t { None, Travel, Relevel, Inspection };
 enum class StubPhase : std::uint8_t { Idle, Run };
 enum class StubSpeed : std::uint8_t { V1, V4 };
-using StubEvent = BasicTravelEvent<StubKind, StubCause>;
+using StubEvent = BasicTravelEvent<StubKind>;
 
 struct StubInput {
   MonoTime now{};
@@ -41,7 +32,7 @@ struct StubInput {
 /// A travel that starts when asked (or refuses with `refuse`), and lands when told.
 class StubTravel {
  public:
-  explicit StubTravel(StubCause refuse) noexcept : refuse_(refuse) {}
+  explicit StubTravel(Cause refuse) noexcept : refuse_(refuse) {}
   StubKind kind() const noexcept { return kind_; }
   StubPhase phase() const noexcept {
     return kind_ == StubKind::None ? StubPhase::Idle : StubPhase::Run;
@@ -54,24 +45,24 @@ class StubTravel {
   void set_current_floor(std::size_t floor) noexcept { current_floor_ = floor; }
   std::size_t current_floor() const noexcept { return current_floor_; }
   /// The drive's side of a start, as the real travels check it first.
-  StubCause drive_forbidding(const StubInput&) const noexcept { return drive_refuse_; }
-  StubCause start_travel(std::size_t floor, MonoTime now) noexcept {
-    if (drive_refuse_ != StubCause::None) return drive_refuse_;
-    if (refuse_ != StubCause::None) return refuse_;
+  Cause drive_forbidding(const StubInput&) const noexcept { return drive_refuse_; }
+  Cause start_travel(std::size_t floor, MonoTime now) noexcept {
+    if (drive_refuse_ != Cause::None) return drive_refuse_;
+    if (refuse_ != Cause::None) return refuse_;
     kind_ = StubKind::Travel;
     target_ = floor;
-    events_.push({StubEvent::Type::Started, kind_, Direction::Up, floor, StubCause::None, now});
-    return StubCause::None;
+    events_.push({StubEvent::Type::Started, kind_, Direction::Up, floor, Cause::None, now});
+    return Cause::None;
   }
   void land(MonoTime now) noexcept {
     current_floor_ = target_;
-    events_.push({StubEvent::Type::Finished, kind_, Direction::Up, target_, StubCause::None, now});
+    events_.push({StubEvent::Type::Finished, kind_, Direction::Up, target_, Cause::None, now});
     kind_ = StubKind::None;
   }
   std::optional<std::size_t> stop(const FloorTable&, const StubInput&) noexcept {
     return busy() ? std::optional<std::size_t>(target_) : std::nullopt;
   }
-  void abort(StubCause cause, MonoTime now) noexcept {
+  void abort(Cause cause, MonoTime now) noexcept {
     if (kind_ == StubKind::None) return;
     events_.push({StubEvent::Type::Aborted, kind_, Direction::None, current_floor_, cause, now});
     kind_ = StubKind::None;
@@ -79,8 +70,8 @@ class StubTravel {
   bool poll_event(StubEvent& out) noexcept { return events_.poll(out); }
   std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
 
-  StubCause refuse_ = StubCause::None;
-  StubCause drive_refuse_ = StubCause::None;  ///< the drive's own refusal (drive_forbidding)
+  Cause refuse_ = Cause::None;
+  Cause drive_refuse_ = Cause::None;  ///< the drive's own refusal (drive_forbidding)
 
  private:
   StubKind kind_ = StubKind::None;
@@ -130,7 +121,6 @@ struct StubTypes {
   using TravelKind = StubKind;
   using TravelCommand = StubTravelCommand;
   using Input = StubInput;
-  using Cause = StubCause;
 };
 
 const std::vector<std::int64_t> kLevels = {0, 3000, 6000, 9000};
@@ -148,7 +138,7 @@ ControllerCoreConfig core_config() {
 /// A controller of the stub travel: V1 has no setpoint (the drive's own gate).
 class StubController : public ControllerCore<StubTypes> {
  public:
-  StubController() : ControllerCore(core_config(), StubCause::None) {}
+  StubController() : ControllerCore(core_config(), Cause::None) {}
 
   void step(MonoTime now) {
     ++steps_;
@@ -167,8 +157,8 @@ class StubController : public ControllerCore<StubTypes> {
                     }
                     return std::nullopt;
                   },
-                  [&] { return travel_.start_travel(body.floor, now); },
-                  shared_cause_code<StubCause>, shared_cause_text<StubCause>);
+                  [&] { return travel_.start_travel(body.floor, now); }, shared_cause_code,
+                  shared_cause_text);
             } else {
               handle_shared(command.tag, body, in);
             }
@@ -189,9 +179,9 @@ class StubController : public ControllerCore<StubTypes> {
     publish_snapshot(s);
   }
   void land(MonoTime now) { travel_.land(now); }
-  void abort(StubCause cause, MonoTime now) { travel_.abort(cause, now); }
-  void refuse_starts(StubCause cause) { travel_.refuse_ = cause; }
-  void drive_refuses(StubCause cause) { travel_.drive_refuse_ = cause; }
+  void abort(Cause cause, MonoTime now) { travel_.abort(cause, now); }
+  void refuse_starts(Cause cause) { travel_.refuse_ = cause; }
+  void drive_refuses(Cause cause) { travel_.drive_refuse_ = cause; }
 
   std::optional<std::int64_t> position_mm = 0;
 
@@ -236,11 +226,11 @@ TEST_F(ControllerCoreTest, TravelCommandGatesInOrder) {
   const CommandReply here = command(3, StubTravelCommand{0, StubSpeed::V4});
   EXPECT_EQ(here.code, ReplyCode::NotReady);
   EXPECT_EQ(here.detail, "the car is already at that level");
-  controller.refuse_starts(StubCause::SafetyChain);
+  controller.refuse_starts(Cause::SafetyChainOpen);
   const CommandReply refused = command(4, StubTravelCommand{2, StubSpeed::V4});
   EXPECT_EQ(refused.code, ReplyCode::Fault);
   EXPECT_EQ(refused.detail, "safety chain open");
-  controller.refuse_starts(StubCause::None);
+  controller.refuse_starts(Cause::None);
   EXPECT_EQ(command(5, StubTravelCommand{2, StubSpeed::V4}).code, ReplyCode::Ok);
   EXPECT_EQ(command(6, StubTravelCommand{3, StubSpeed::V4}).code, ReplyCode::Busy);
   EXPECT_EQ(command(7, InspectionCommand{true, Direction::Up}).code, ReplyCode::Ok);
@@ -257,13 +247,13 @@ TEST_F(ControllerCoreTest, TheSnapshotSaysTheDriveAllowsATravelExactlyWhenItsSta
   // is refused for the drive exactly while the snapshot says the drive does not allow one.
   good_inputs();
   EXPECT_TRUE(controller.snapshot().drive_allows_travel);
-  controller.drive_refuses(StubCause::Refused);
+  controller.drive_refuses(Cause::DriveNotReady);
   controller.step(now);
   EXPECT_FALSE(controller.snapshot().drive_allows_travel);
   const CommandReply refused = command(1, StubTravelCommand{2, StubSpeed::V4});
   EXPECT_EQ(refused.code, ReplyCode::NotReady);
   EXPECT_FALSE(controller.snapshot().drive_allows_travel);
-  controller.drive_refuses(StubCause::None);
+  controller.drive_refuses(Cause::None);
   controller.step(now);
   EXPECT_TRUE(controller.snapshot().drive_allows_travel);
   EXPECT_EQ(command(2, StubTravelCommand{2, StubSpeed::V4}).code, ReplyCode::Ok);
@@ -358,12 +348,12 @@ TEST(TravelHelpers, MachineNeedsAndRefusalCauses) {
   const MachineNeeds inspection = run_needs(StubKind::Inspection, true, true);
   EXPECT_FALSE(inspection.doors_locked);
   EXPECT_FALSE(inspection.position);
-  EXPECT_EQ(refusal_cause<StubCause>(MachineRefusal::SafetyChainOpen), StubCause::SafetyChain);
-  EXPECT_EQ(refusal_cause<StubCause>(MachineRefusal::DoorsNotLocked), StubCause::DoorsUnlocked);
-  EXPECT_EQ(refusal_cause<StubCause>(MachineRefusal::None), StubCause::None);
-  EXPECT_EQ(shared_cause_code(StubCause::InputsLost), ReplyCode::Fault);
-  EXPECT_EQ(shared_cause_code(StubCause::DoorsUnlocked), ReplyCode::NotReady);
-  EXPECT_EQ(shared_cause_text(StubCause::Refused), "not possible now");
+  EXPECT_EQ(refusal_cause(MachineRefusal::SafetyChainOpen), Cause::SafetyChainOpen);
+  EXPECT_EQ(refusal_cause(MachineRefusal::DoorsNotLocked), Cause::DoorsNotLocked);
+  EXPECT_EQ(refusal_cause(MachineRefusal::None), Cause::None);
+  EXPECT_EQ(shared_cause_code(Cause::InputsLost), ReplyCode::Fault);
+  EXPECT_EQ(shared_cause_code(Cause::DoorsNotLocked), ReplyCode::NotReady);
+  EXPECT_EQ(shared_cause_text(Cause::DriveNotReady), "not possible now");
 }
 
 TEST_F(ControllerCoreTest, ATravelThatEndsEarlyEmptiesTheCallsQueue) {
@@ -374,7 +364,7 @@ TEST_F(ControllerCoreTest, ATravelThatEndsEarlyEmptiesTheCallsQueue) {
   EXPECT_EQ(command(1, CallCommand{true, 2}).code, ReplyCode::Ok);
   EXPECT_EQ(command(2, CallCommand{true, 3}).code, ReplyCode::Ok);
   ASSERT_EQ(controller.snapshot().travel_kind, StubKind::Travel);
-  controller.abort(StubCause::SafetyChain, now);
+  controller.abort(Cause::SafetyChainOpen, now);
   controller.step(now);
   const StubSnapshot after = controller.snapshot();
   EXPECT_EQ(after.call_count, 0U);

@@ -58,7 +58,7 @@ class HydraulicTest : public ::testing::Test {
 };
 
 TEST_F(HydraulicTest, UpTravelStartsTheMotorThenFastThenSlowThenStopsAtTheLevel) {
-  ASSERT_EQ(travel_.start_travel(floors_, 2, Speed::Fast, in_), Cause::None);
+  ASSERT_EQ(travel_.start_travel(floors_, 2, Speed::Fast, in_), lift::Cause::None);
   EXPECT_EQ(tick(0, 0), 0) << "star-delta start: no signal before the motor runs";
   EXPECT_EQ(tick(1499, 0), 0);
   EXPECT_EQ(tick(1500, 0), kUp | kHsp | kSfy);
@@ -87,7 +87,7 @@ TEST_F(HydraulicTest, DownTravelByTheValveAloneWithTheConfiguredFastSignal) {
     travel_.set_current_floor(3);
     in_.now = MonoTime{};
     in_.position_mm = 9000;
-    ASSERT_EQ(travel_.start_travel(floors_, 0, Speed::Fast, in_), Cause::None);
+    ASSERT_EQ(travel_.start_travel(floors_, 0, Speed::Fast, in_), lift::Cause::None);
     EXPECT_EQ(tick(0, 9000), c.fast) << "no motor start going down";
     EXPECT_EQ(tick(5000, 701), c.fast);
     EXPECT_EQ(tick(5100, 700), kDw) << "slowdown 700 mm above the level";
@@ -113,11 +113,11 @@ TEST_F(HydraulicTest, FasterSpeedsWhereTheUnitHasThem) {
     travel_ = HydraulicTravel(config_);
     in_.now = MonoTime{};
     in_.position_mm = 0;
-    ASSERT_EQ(travel_.start_travel(floors_, 3, c.asked, in_), Cause::None);
+    ASSERT_EQ(travel_.start_travel(floors_, 3, c.asked, in_), lift::Cause::None);
     tick(0, 0);
     EXPECT_EQ(tick(2000, c.slow_at - 1), c.fast);
     EXPECT_EQ(tick(2100, c.slow_at), kUp | kSfy);
-    travel_.abort(Cause::Stopped, milliseconds(2200));
+    travel_.abort(lift::Cause::StopRequested, milliseconds(2200));
   }
 }
 
@@ -125,27 +125,27 @@ TEST_F(HydraulicTest, EveryFaultEndsTheTravelAtOnceReportedOnce) {
   struct Case {
     const char* name;
     void (*inject)(TickInput&);
-    Cause cause;
+    lift::Cause cause;
   };
   const std::vector<Case> cases = {
-      {"RDY drops", [](TickInput& i) { i.card_allows_travel = false; }, Cause::CardNotReady},
+      {"RDY drops", [](TickInput& i) { i.card_allows_travel = false; }, lift::Cause::DriveNotReady},
       {"ERR",
        [](TickInput& i) {
          i.card_error = true;
          i.card_allows_travel = false;
        },
-       Cause::CardError},
+       lift::Cause::DriveFault},
       {"card silent",
        [](TickInput& i) {
          i.card_silent = true;
          i.card_allows_travel = false;
        },
-       Cause::CardSilent},
-      {"bus-off", [](TickInput& i) { i.bus_ok = false; }, Cause::BusFault},
+       lift::Cause::CardSilent},
+      {"bus-off", [](TickInput& i) { i.bus_ok = false; }, lift::Cause::BusFault},
       {"safety chain", [](TickInput& i) { i.inputs.safety_chain_closed = false; },
-       Cause::SafetyChain},
-      {"doors", [](TickInput& i) { i.inputs.doors_locked = false; }, Cause::DoorsUnlocked},
-      {"inputs lost", [](TickInput& i) { i.inputs.valid = false; }, Cause::InputsLost},
+       lift::Cause::SafetyChainOpen},
+      {"doors", [](TickInput& i) { i.inputs.doors_locked = false; }, lift::Cause::DoorsNotLocked},
+      {"inputs lost", [](TickInput& i) { i.inputs.valid = false; }, lift::Cause::InputsLost},
   };
   for (const Case& c : cases) {
     travel_ = HydraulicTravel(config_);
@@ -154,7 +154,7 @@ TEST_F(HydraulicTest, EveryFaultEndsTheTravelAtOnceReportedOnce) {
     in_.inputs.doors_closed = in_.inputs.doors_locked = true;
     in_.card_allows_travel = true;
     in_.position_mm = 0;
-    ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), Cause::None) << c.name;
+    ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), lift::Cause::None) << c.name;
     tick(0, 0);
     ASSERT_EQ(tick(2000, 1000), kUp | kHsp | kSfy) << c.name;
     c.inject(in_);
@@ -175,29 +175,29 @@ TEST_F(HydraulicTest, EveryFaultEndsTheTravelAtOnceReportedOnce) {
 }
 
 TEST_F(HydraulicTest, PositionLostAndTheRunTimeLimiterEndTravels) {
-  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), Cause::None);
+  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), lift::Cause::None);
   tick(0, 0);
   EXPECT_EQ(tick(2000, std::nullopt), 0);
-  EXPECT_EQ(events().back().cause, Cause::PositionLost);
+  EXPECT_EQ(events().back().cause, lift::Cause::PositionLost);
   config_.max_travel_ms = 10000;
   travel_ = HydraulicTravel(config_);
   in_.now = MonoTime{};
   in_.position_mm = 0;
-  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), Cause::None);
+  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), lift::Cause::None);
   EXPECT_EQ(tick(10000, 100), kUp | kHsp | kSfy);
   EXPECT_EQ(tick(10001, 100), 0) << "the car hardly moved in 10 s: pump or valve fault";
-  EXPECT_EQ(events().back().cause, Cause::TravelTimeout);
+  EXPECT_EQ(events().back().cause, lift::Cause::TravelTimeout);
 }
 
 TEST_F(HydraulicTest, NothingStartsWhileAConditionForbidsIt) {
   in_.card_allows_travel = false;
-  EXPECT_EQ(travel_.start_travel(floors_, 1, Speed::Fast, in_), Cause::CardNotReady);
+  EXPECT_EQ(travel_.start_travel(floors_, 1, Speed::Fast, in_), lift::Cause::DriveNotReady);
   in_.card_allows_travel = true;
   in_.inputs.doors_locked = false;
-  EXPECT_EQ(travel_.start_travel(floors_, 1, Speed::Fast, in_), Cause::DoorsUnlocked);
+  EXPECT_EQ(travel_.start_travel(floors_, 1, Speed::Fast, in_), lift::Cause::DoorsNotLocked);
   in_.position_mm.reset();
   in_.inputs.doors_locked = true;
-  EXPECT_EQ(travel_.start_travel(floors_, 1, Speed::Fast, in_), Cause::PositionLost);
+  EXPECT_EQ(travel_.start_travel(floors_, 1, Speed::Fast, in_), lift::Cause::PositionLost);
   EXPECT_TRUE(events().empty());
   EXPECT_EQ(tick(0, std::nullopt), 0);
 }
@@ -207,39 +207,39 @@ TEST_F(HydraulicTest, RelevellingAtTheSlowSpeedWithDoorsOpenWhereAllowed) {
   in_.inputs.doors_locked = in_.inputs.doors_closed = false;
   in_.inputs.door_zone_bridge = true;
   in_.position_mm = 2985;  // sank 15 mm
-  ASSERT_EQ(travel_.start_relevel(floors_, 1, in_), Cause::None);
+  ASSERT_EQ(travel_.start_relevel(floors_, 1, in_), lift::Cause::None);
   EXPECT_EQ(tick(0, 2985), 0);
   EXPECT_EQ(tick(1500, 2985), kUp | kSfy) << "up by the pump at the slow speed only";
   EXPECT_EQ(tick(3000, 2998), 0);
   EXPECT_EQ(travel_.current_floor(), 1U);
   // Above the level: down by the valve at the slow speed.
   in_.position_mm = 3020;
-  ASSERT_EQ(travel_.start_relevel(floors_, 1, in_), Cause::None);
+  ASSERT_EQ(travel_.start_relevel(floors_, 1, in_), lift::Cause::None);
   EXPECT_EQ(tick(4000, 3020), kDw);
   // Without the bridge, or with relevelling at open doors not allowed: refused.
-  travel_.abort(Cause::Stopped, milliseconds(4100));
+  travel_.abort(lift::Cause::StopRequested, milliseconds(4100));
   in_.inputs.door_zone_bridge = false;
-  EXPECT_EQ(travel_.start_relevel(floors_, 1, in_), Cause::DoorsUnlocked);
+  EXPECT_EQ(travel_.start_relevel(floors_, 1, in_), lift::Cause::DoorsNotLocked);
   config_.relevel_doors_open = false;
   travel_ = HydraulicTravel(config_);
   in_.inputs.door_zone_bridge = true;
-  EXPECT_EQ(travel_.start_relevel(floors_, 1, in_), Cause::DoorsUnlocked);
+  EXPECT_EQ(travel_.start_relevel(floors_, 1, in_), lift::Cause::DoorsNotLocked);
 }
 
 TEST_F(HydraulicTest, InspectionRunsWhileHeldAndStopsAtTheTerminalLevels) {
-  ASSERT_EQ(travel_.inspect(lift::Direction::Up, in_), Cause::None);
+  ASSERT_EQ(travel_.inspect(lift::Direction::Up, in_), lift::Cause::None);
   EXPECT_EQ(tick(0, 0), 0);
   EXPECT_EQ(tick(1500, 10), kUp | kSfy | kMsp);
   EXPECT_EQ(tick(9000, 8999), kUp | kSfy | kMsp);
   EXPECT_EQ(tick(9100, 9000), 0) << "the top level ends an inspection run up";
-  ASSERT_EQ(travel_.inspect(lift::Direction::Down, in_), Cause::None);
+  ASSERT_EQ(travel_.inspect(lift::Direction::Down, in_), lift::Cause::None);
   EXPECT_EQ(tick(9200, 9000), kDw | kMsp);
-  ASSERT_EQ(travel_.inspect(lift::Direction::None, in_), Cause::None);
+  ASSERT_EQ(travel_.inspect(lift::Direction::None, in_), lift::Cause::None);
   EXPECT_EQ(tick(9300, 8990), 0) << "released";
 }
 
 TEST_F(HydraulicTest, StopLandsAtTheNextReachableFloor) {
-  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), Cause::None);
+  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), lift::Cause::None);
   tick(0, 0);
   tick(1500, 0);
   ASSERT_EQ(tick(2000, 2000), kUp | kHsp | kSfy);
@@ -249,13 +249,13 @@ TEST_F(HydraulicTest, StopLandsAtTheNextReachableFloor) {
   EXPECT_EQ(tick(2200, 2998), 0);
   EXPECT_EQ(travel_.current_floor(), 1U);
   // Before the motor runs there is nothing to land: everything drops.
-  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), Cause::None);
+  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), lift::Cause::None);
   EXPECT_EQ(travel_.stop(floors_, in_), std::nullopt);
-  EXPECT_EQ(events().back().cause, Cause::Stopped);
+  EXPECT_EQ(events().back().cause, lift::Cause::StopRequested);
 }
 
 TEST_F(HydraulicTest, ShaftSignalsSlowAndStopWhereTheyAreMet) {
-  ASSERT_EQ(travel_.start_travel(floors_, 1, Speed::Fast, in_), Cause::None);
+  ASSERT_EQ(travel_.start_travel(floors_, 1, Speed::Fast, in_), lift::Cause::None);
   tick(0, 0);
   EXPECT_EQ(tick(1500, 100), kUp | kHsp | kSfy);
   in_.inputs.decel_up[0] = true;  // V1 (fast) up

@@ -7,28 +7,27 @@
 namespace liftd::control {
 namespace {
 
-using travel::AbortCause;
 using travel::TravelKind;
 
-std::string_view abort_text(AbortCause cause) noexcept {
+std::string_view abort_text(lift::Cause cause) noexcept {
   switch (cause) {
-    case AbortCause::LinkDown:
+    case lift::Cause::LinkDown:
       return "link to the drive is not up";
-    case AbortCause::NoHandshake:
+    case lift::Cause::NoHandshake:
       return "no valid I0 handshake with the drive yet";
-    case AbortCause::DriveNotReady:
+    case lift::Cause::DriveNotReady:
       return "drive not ready (S0 = 0)";
-    case AbortCause::AdvanceWarning:
+    case lift::Cause::AdvanceWarning:
       return "drive advance warning (S2 = 1)";
-    case AbortCause::DriveFault:
+    case lift::Cause::DriveFault:
       return "drive general fault (S3 = 1)";
-    case AbortCause::SafetyChainOpen:
+    case lift::Cause::SafetyChainOpen:
       return "safety chain open";
-    case AbortCause::DoorsNotLocked:
+    case lift::Cause::DoorsNotLocked:
       return "doors not locked";
-    case AbortCause::PositionLost:
+    case lift::Cause::PositionLost:
       return "no valid car position";
-    case AbortCause::InputsLost:
+    case lift::Cause::InputsLost:
       return "machine inputs missing or stale";
     default:
       return "not ready";
@@ -277,8 +276,8 @@ std::optional<std::string_view> DcpController::not_ready_reason(bool fast_start)
   travel::GateProfile profile;
   profile.doors_locked_required = !fast_start;
   profile.position_required = last_input_.protocol == dcp::Protocol::Dcp4;
-  const AbortCause cause = travel::CommandGate::forbidding(last_input_, profile, true);
-  if (cause == AbortCause::None) return std::nullopt;
+  const lift::Cause cause = travel::CommandGate::forbidding(last_input_, profile, true);
+  if (cause == lift::Cause::None) return std::nullopt;
   return abort_text(cause);
 }
 
@@ -298,7 +297,7 @@ void DcpController::handle_travel(std::uint32_t tag, const TravelCommand& cmd) n
     return;
   }
   if (!link_.travel_allowed()) {
-    reply(tag, ReplyCode::NotReady, abort_text(AbortCause::LinkDown));
+    reply(tag, ReplyCode::NotReady, abort_text(lift::Cause::LinkDown));
     return;
   }
   const std::int64_t target_mm = lift_.floors().level_mm(cmd.floor);
@@ -429,7 +428,7 @@ void DcpController::settle_extension(const travel::Event& event) noexcept {
 
 void DcpController::handle_relevel(std::uint32_t tag) noexcept {
   if (!link_.travel_allowed()) {
-    reply(tag, ReplyCode::NotReady, abort_text(AbortCause::LinkDown));
+    reply(tag, ReplyCode::NotReady, abort_text(lift::Cause::LinkDown));
     return;
   }
   if (!last_input_.position_mm) {
@@ -693,7 +692,7 @@ void DcpController::publish(MonoTime now) noexcept {
   travel::CycleInput now_in = last_input_;
   read_drive(now_in);
   s.drive_allows_travel =
-      travel::CommandGate::drive_forbidding(now_in, /*starting=*/true) == AbortCause::None;
+      travel::CommandGate::drive_forbidding(now_in, /*starting=*/true) == lift::Cause::None;
   publish_snapshot(s);
 }
 

@@ -194,7 +194,6 @@ struct DcpCoreTypes {
   using TravelKind = travel::TravelKind;
   using TravelCommand = control::TravelCommand;
   using Input = travel::CycleInput;
-  using Cause = travel::AbortCause;
 };
 
 /// The DCP side of one lift, run by an rt::CycleRunner.

@@ -132,16 +132,16 @@ void TravelController::begin_pending(const CycleInput& in) noexcept {
 
 void TravelController::stop() noexcept {
   pending_.reset();
-  dcp4_.request_stop(AbortCause::StopRequested);
-  dcp3_.request_stop(AbortCause::StopRequested);
-  relevel_.request_stop(AbortCause::StopRequested);
+  dcp4_.request_stop(lift::Cause::StopRequested);
+  dcp3_.request_stop(lift::Cause::StopRequested);
+  relevel_.request_stop(lift::Cause::StopRequested);
 }
 
 void TravelController::fast_stop() noexcept {
   pending_.reset();
   if (dcp4_.active()) dcp4_.request_fast_stop();
   if (dcp3_.active()) dcp3_.request_fast_stop();
-  relevel_.request_stop(AbortCause::StopRequested);
+  relevel_.request_stop(lift::Cause::StopRequested);
 }
 
 ExtendResult TravelController::extend_target(std::int64_t target_mm) noexcept {
@@ -152,7 +152,7 @@ ExtendResult TravelController::extend_target(std::int64_t target_mm) noexcept {
   }
   if (result == ExtendResult::Accepted) {  // before the start: goes out with the first distance
     StepContext ctx{config_, last_, events_};
-    ctx.emit(Event::Type::TargetExtended, dcp4_.kind(), AbortCause::None, target_mm);
+    ctx.emit(Event::Type::TargetExtended, dcp4_.kind(), lift::Cause::None, target_mm);
   }
   return result;  // Pending: the machine reports S5's verdict
 }
@@ -190,7 +190,7 @@ void TravelController::shut_down(bool force) noexcept {
     const TravelKind kind = active_kind();
     abort_all_immediately();
     StepContext ctx{config_, last_, events_};
-    ctx.emit(Event::Type::Aborted, kind, AbortCause::ShuttingDown, 0);
+    ctx.emit(Event::Type::Aborted, kind, lift::Cause::ShuttingDown, 0);
   }
 }
 
@@ -217,7 +217,7 @@ void TravelController::maybe_auto_relevel(const CycleInput& in) noexcept {
   GateProfile profile;
   profile.door_bridge_allowed = true;
   profile.position_required = true;
-  if (CommandGate::forbidding(in, profile, true) != AbortCause::None) {
+  if (CommandGate::forbidding(in, profile, true) != lift::Cause::None) {
     relevel_blocked_until_ = in.now + kRelevelRetry;
     return;
   }
@@ -234,7 +234,7 @@ void TravelController::relevel_by_shaft_signals(const CycleInput& in) noexcept {
   if (in.inputs.relevel_up == in.inputs.relevel_down) return;
   GateProfile profile;
   profile.door_bridge_allowed = true;
-  if (CommandGate::forbidding(in, profile, true) != AbortCause::None) {
+  if (CommandGate::forbidding(in, profile, true) != lift::Cause::None) {
     relevel_blocked_until_ = in.now + kRelevelRetry;
     return;
   }
@@ -252,7 +252,7 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
   if (fault != fault_seen_) {  // DCP 9.1.6: report S3 edges
     fault_seen_ = fault;
     ctx.emit(fault ? Event::Type::DriveFault : Event::Type::DriveFaultCleared, active_kind(),
-             fault ? AbortCause::DriveFault : AbortCause::None, 0);
+             fault ? lift::Cause::DriveFault : lift::Cause::None, 0);
     // DCP 9.1.6: S3 resets B0 and ends the travel at once, whatever its machine is waiting for.
     // Without this a machine that sees S6/S1 drop in the same reply ends "normally" off the
     // level, and the event would blame the position instead of the drive.
@@ -263,7 +263,7 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
       dcp3_.abort_immediate();
       relevel_.abort_immediate();
       if (kind != TravelKind::None) {
-        ctx.emit(Event::Type::Aborted, kind, AbortCause::DriveFault, 0);
+        ctx.emit(Event::Type::Aborted, kind, lift::Cause::DriveFault, 0);
       }
     }
   }
@@ -276,7 +276,7 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
     dcp4_.abort_immediate();
     dcp3_.abort_immediate();
     relevel_.abort_immediate();
-    if (kind != TravelKind::None) ctx.emit(Event::Type::Aborted, kind, AbortCause::ModeChanged, 0);
+    if (kind != TravelKind::None) ctx.emit(Event::Type::Aborted, kind, lift::Cause::ModeChanged, 0);
   }
   begin_pending(in);
   maybe_auto_relevel(in);
@@ -295,7 +295,7 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
 
   const TravelKind kind = active_kind();
   GateResult gated = gate_.apply(demand, in);
-  if (gated.violation != AbortCause::None) {
+  if (gated.violation != lift::Cause::None) {
     if (kind == TravelKind::Dcp4Relevel || kind == TravelKind::Relevel) {
       relevel_blocked_until_ = in.now + kRelevelRetry;
     }

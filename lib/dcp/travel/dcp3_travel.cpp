@@ -12,7 +12,7 @@ void Dcp3Travel::begin(const TravelRequest& request, Direction direction,
   go_sent_ = false;
   brake_seen_open_ = false;
   travel_seen_ = false;
-  end_cause_ = AbortCause::None;
+  end_cause_ = lift::Cause::None;
   protocol_ = in.protocol;
   now_ = in.now;
   enter(fast_start_ ? State::FastStartHold : State::SpeedMessage, in.now);
@@ -24,7 +24,7 @@ void Dcp3Travel::enter(State state, MonoTime now) noexcept {
   cycles_in_state_ = 0;
 }
 
-void Dcp3Travel::request_stop(AbortCause cause) noexcept {
+void Dcp3Travel::request_stop(lift::Cause cause) noexcept {
   // A fast stop (DCP 13) already ends the travel on its own ramp.
   if (state_ == State::Idle || state_ == State::TravelEnd || state_ == State::ControlledAbort ||
       state_ == State::FastStop) {
@@ -46,10 +46,10 @@ bool Dcp3Travel::stop_at(std::int64_t target_mm) noexcept {
 
 void Dcp3Travel::request_fast_stop() noexcept {
   if (state_ == State::Travel || state_ == State::Creep || state_ == State::FastStartGo) {
-    end_cause_ = AbortCause::StopRequested;
+    end_cause_ = lift::Cause::StopRequested;
     enter(State::FastStop, now_);
   } else {
-    request_stop(AbortCause::StopRequested);
+    request_stop(lift::Cause::StopRequested);
   }
 }
 
@@ -100,7 +100,7 @@ Demand Dcp3Travel::step(StepContext& ctx) noexcept {
   if (in.status.travel_active && !travel_seen_ &&
       (state_ == State::Travel || state_ == State::FastStartGo || state_ == State::Creep)) {
     travel_seen_ = true;
-    ctx.emit(Event::Type::Started, kind_, AbortCause::None, target_mm_);
+    ctx.emit(Event::Type::Started, kind_, lift::Cause::None, target_mm_);
   }
   ++cycles_in_state_;
   const auto since_ms = elapsed_ms(in.now, entered_);
@@ -113,19 +113,19 @@ Demand Dcp3Travel::step(StepContext& ctx) noexcept {
     case State::FastStartHold:
       if (cycles_in_state_ == 1 && in.inputs.door_reversal) {
         // Reversal before the VF message went out: nothing to stop, no B0 at all.
-        end_cause_ = AbortCause::DoorReversal;
+        end_cause_ = lift::Cause::DoorReversal;
         finish(ctx);
         return {};
       }
       if (cycles_in_state_ == 1) {
-        ctx.emit(Event::Type::FastStartArmed, kind_, AbortCause::None, target_mm_);
+        ctx.emit(Event::Type::FastStartArmed, kind_, lift::Cause::None, target_mm_);
       }
       if (in.inputs.door_reversal) {  // DCP 12.2: stop sequence on door reversal
-        request_stop(AbortCause::DoorReversal);
+        request_stop(lift::Cause::DoorReversal);
         return demand(nibble::kStop, 0);
       }
       if (since_ms >= config.fast_start_timeout_ms) {  // DCP 12.1.2
-        request_stop(AbortCause::FastStartTimeout);
+        request_stop(lift::Cause::FastStartTimeout);
         return demand(nibble::kStop, 0);
       }
       if (cycles_in_state_ > speed_cycles(config) && in.inputs.doors_locked &&
@@ -151,7 +151,7 @@ Demand Dcp3Travel::step(StepContext& ctx) noexcept {
       // DCP 4.1 S5: the drive confirms the speed message before the travel command follows.
       if (!(in.reply_fresh && in.status.accepted)) {
         if (since_ms >= config.start_timeout_ms) {
-          request_stop(AbortCause::TargetRefused);
+          request_stop(lift::Cause::TargetRefused);
           return demand(nibble::kStop, 0);
         }
         return demand(nibble::kSpeed, dcp::speed_word(speed_));
@@ -162,12 +162,12 @@ Demand Dcp3Travel::step(StepContext& ctx) noexcept {
 
     case State::Travel:
       if (!brake_seen_open_ && since_ms >= config.start_timeout_ms) {
-        request_stop(AbortCause::DriveDidNotStart);
+        request_stop(lift::Cause::DriveDidNotStart);
         return demand(nibble::kStop, 0);
       }
       if (speed_ == dcp::Speed::V0) {
         if (since_ms >= config.crawl_timeout_ms) {
-          request_stop(AbortCause::LevelNotReached);
+          request_stop(lift::Cause::LevelNotReached);
           return demand(nibble::kStop, 0);
         }
         // DCP 10.3 step 3: B1 and B2 withdrawn together at the level; the drive positions.
@@ -188,7 +188,7 @@ Demand Dcp3Travel::step(StepContext& ctx) noexcept {
 
     case State::Creep:
       if (since_ms >= config.crawl_timeout_ms) {
-        request_stop(AbortCause::LevelNotReached);
+        request_stop(lift::Cause::LevelNotReached);
         return demand(nibble::kStop, 0);
       }
       if (at_level(ctx)) {  // DCP 10.1.1 steps 4, 5: B2 off at the level, B0 until S1 = 0

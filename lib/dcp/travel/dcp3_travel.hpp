@@ -32,7 +32,7 @@ class Dcp3Travel {
   /// Gate refused: forget the travel.
   void abort_immediate() noexcept { state_ = State::Idle; }
   /// Controlled stop (stop message).
-  void request_stop(AbortCause cause) noexcept;
+  void request_stop(lift::Cause cause) noexcept;
   /// DCP 13: fast stop during the travel.
   void request_fast_stop() noexcept;
   /// A user stop with a known position: crawl from `target_mm`'s deceleration point SVx on
@@ -68,7 +68,7 @@ class Dcp3Travel {
   bool go_sent_ = false;
   bool brake_seen_open_ = false;
   bool travel_seen_ = false;
-  AbortCause end_cause_ = AbortCause::None;
+  lift::Cause end_cause_ = lift::Cause::None;
   MonoTime entered_{};
   MonoTime now_{};
   std::uint32_t cycles_in_state_ = 0;

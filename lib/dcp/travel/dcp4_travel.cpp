@@ -24,7 +24,7 @@ void Dcp4Travel::begin(const TravelRequest& request, const CycleInput& in,
   go_sent_ = false;
   start_reported_ = false;
   unconfirmed_target_mm_.reset();
-  end_cause_ = AbortCause::None;
+  end_cause_ = lift::Cause::None;
   i7_decel_mm_.reset();
   i7_reply_.reset();
   last_position_mm_.reset();
@@ -46,7 +46,7 @@ void Dcp4Travel::enter(State state, MonoTime now) noexcept {
   cycles_in_state_ = 0;
 }
 
-void Dcp4Travel::request_stop(AbortCause cause) noexcept {
+void Dcp4Travel::request_stop(lift::Cause cause) noexcept {
   // A fast stop (DCP 13) already ends the travel on its own ramp: a stop message now would drop
   // B2 while the brake is still open (DCP 11.1.1 d).
   if (state_ == State::Idle || state_ == State::TravelEnd || state_ == State::ControlledAbort ||
@@ -61,12 +61,12 @@ void Dcp4Travel::request_stop(AbortCause cause) noexcept {
 
 void Dcp4Travel::request_fast_stop() noexcept {
   if (state_ == State::Distance || state_ == State::FastStartGo) {
-    end_cause_ = AbortCause::StopRequested;
+    end_cause_ = lift::Cause::StopRequested;
     state_ = State::FastStop;
     cycles_in_state_ = 0;
     entered_ = last_time_;
   } else {
-    request_stop(AbortCause::StopRequested);
+    request_stop(lift::Cause::StopRequested);
   }
 }
 
@@ -172,16 +172,16 @@ void Dcp4Travel::track_acceptance(StepContext& ctx) noexcept {
   // The reply to the first frame that carried the change tells (DCP 4.1, 7.2).
   const bool answered = unconfirmed_target_mm_ && cycles_since_change_ >= 2 && in.reply_fresh;
   if (answered && in.status.accepted) {
-    ctx.emit(Event::Type::TargetExtended, kind_, AbortCause::None, *unconfirmed_target_mm_);
+    ctx.emit(Event::Type::TargetExtended, kind_, lift::Cause::None, *unconfirmed_target_mm_);
     unconfirmed_target_mm_.reset();
   }
   // DCP 4.1 note: a plausibility error makes the drive stop on its emergency ramp with S5
   // cleared "until the lift has stopped". B2 stays until S6 falls (DCP 11.1.2 step 4).
   if (travel_seen_ && in.reply_fresh && in.status.brake_open && !in.status.accepted &&
-      end_cause_ == AbortCause::None) {
-    end_cause_ = AbortCause::TargetRefused;
+      end_cause_ == lift::Cause::None) {
+    end_cause_ = lift::Cause::TargetRefused;
     if (unconfirmed_target_mm_) {
-      ctx.emit(Event::Type::TargetRefused, kind_, AbortCause::TargetRefused,
+      ctx.emit(Event::Type::TargetRefused, kind_, lift::Cause::TargetRefused,
                *unconfirmed_target_mm_);
       unconfirmed_target_mm_.reset();
     }
@@ -189,10 +189,10 @@ void Dcp4Travel::track_acceptance(StepContext& ctx) noexcept {
 }
 
 void Dcp4Travel::finish(StepContext& ctx) noexcept {
-  if (end_cause_ == AbortCause::None && ctx.in.position_mm) {
+  if (end_cause_ == lift::Cause::None && ctx.in.position_mm) {
     const std::int64_t off = remaining_mm(target_mm_, *ctx.in.position_mm, direction_);
     if ((off < 0 ? -off : off) > static_cast<std::int64_t>(ctx.config.arrival_tolerance_mm)) {
-      end_cause_ = AbortCause::StoppedOffLevel;
+      end_cause_ = lift::Cause::StoppedOffLevel;
     }
   }
   if (unconfirmed_target_mm_) {  // ended before the drive answered the change
@@ -224,9 +224,9 @@ Demand Dcp4Travel::step(StepContext& ctx) noexcept {
   }
   // DCP 4.1 S5 "Desired distance / speed accepted": the travel counts as started only once the
   // drive runs (S1) and has accepted it.
-  if (travel_seen_ && !start_reported_ && in.status.accepted && end_cause_ == AbortCause::None) {
+  if (travel_seen_ && !start_reported_ && in.status.accepted && end_cause_ == lift::Cause::None) {
     start_reported_ = true;
-    ctx.emit(Event::Type::Started, kind_, AbortCause::None, target_mm_);
+    ctx.emit(Event::Type::Started, kind_, lift::Cause::None, target_mm_);
   }
   ++cycles_in_state_;
   const auto since_ms = elapsed_ms(in.now, entered_);
@@ -280,19 +280,19 @@ Demand Dcp4Travel::step(StepContext& ctx) noexcept {
     case State::FastStartHold: {
       if (cycles_in_state_ == 1 && in.inputs.door_reversal) {
         // Reversal before the VF message went out: nothing to stop, no B0 at all.
-        end_cause_ = AbortCause::DoorReversal;
+        end_cause_ = lift::Cause::DoorReversal;
         finish(ctx);
         return {};
       }
       if (cycles_in_state_ == 1) {
-        ctx.emit(Event::Type::FastStartArmed, kind_, AbortCause::None, target_mm_);
+        ctx.emit(Event::Type::FastStartArmed, kind_, lift::Cause::None, target_mm_);
       }
       if (in.inputs.door_reversal) {  // DCP 12.2: doors reopening, stop sequence
-        request_stop(AbortCause::DoorReversal);
+        request_stop(lift::Cause::DoorReversal);
         return distance_demand(nibble::kStop, ctx);
       }
       if (since_ms >= config.fast_start_timeout_ms) {  // DCP 12.1.2: time limited
-        request_stop(AbortCause::FastStartTimeout);
+        request_stop(lift::Cause::FastStartTimeout);
         return distance_demand(nibble::kStop, ctx);
       }
       if (cycles_in_state_ > speed_cycles(config) && in.inputs.doors_locked &&
@@ -327,7 +327,7 @@ Demand Dcp4Travel::step(StepContext& ctx) noexcept {
       // DCP 4.1 S5: the drive confirms the speed message before the travel starts.
       if (!(in.reply_fresh && in.status.accepted)) {
         if (since_ms >= config.start_timeout_ms) {
-          request_stop(AbortCause::TargetRefused);
+          request_stop(lift::Cause::TargetRefused);
           return distance_demand(nibble::kStop, ctx);
         }
         return speed_demand(nibble::kSpeed, speed_);
@@ -339,7 +339,7 @@ Demand Dcp4Travel::step(StepContext& ctx) noexcept {
     case State::Distance:
       track_acceptance(ctx);
       if (!brake_seen_open_ && since_ms >= config.start_timeout_ms) {
-        request_stop(AbortCause::DriveDidNotStart);
+        request_stop(lift::Cause::DriveDidNotStart);
         return distance_demand(nibble::kStop, ctx);
       }
       // DCP 11.1.2 step 4: B2 withdrawn only once S6 fell at the level.

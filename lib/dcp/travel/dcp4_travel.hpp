@@ -34,7 +34,7 @@ class Dcp4Travel {
   /// Gate refused: the command byte is already clear; forget the travel.
   void abort_immediate() noexcept { state_ = State::Idle; }
   /// Controlled stop (DCP 12.2.2 stop message, also for a user stop).
-  void request_stop(AbortCause cause) noexcept;
+  void request_stop(lift::Cause cause) noexcept;
   /// DCP 13: fast stop during the travel.
   void request_fast_stop() noexcept;
   /// Target extension (DCP 9.1.5, 11.1.2 note, 7.2: 30 ms before the deceleration point).
@@ -88,7 +88,7 @@ class Dcp4Travel {
   bool start_reported_ = false;                        ///< Started sent (S1 with S5, DCP 4.1)
   std::optional<std::int64_t> unconfirmed_target_mm_;  ///< a change S5 has not confirmed yet
   std::uint32_t cycles_since_change_ = 0;
-  AbortCause end_cause_ = AbortCause::None;
+  lift::Cause end_cause_ = lift::Cause::None;
   std::optional<std::uint32_t> i7_decel_mm_;
   std::optional<ChannelReply> i7_reply_;
   std::optional<std::int64_t> last_position_mm_;

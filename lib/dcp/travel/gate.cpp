@@ -10,39 +10,29 @@ namespace {
 constexpr std::uint8_t kMotionBits = cb::kDriveEnable | cb::kTravel | cb::kStopSwitch;
 }  // namespace
 
-AbortCause CommandGate::drive_forbidding(const CycleInput& in, bool starting) noexcept {
-  if (!in.link_up) return AbortCause::LinkDown;                                  // DCP 7.3
-  if (!in.handshake_done) return AbortCause::NoHandshake;                        // DCP 5.12.2
-  if (in.status.general_fault) return AbortCause::DriveFault;                    // DCP 9.1.6
-  if (starting && !in.status.ready) return AbortCause::DriveNotReady;            // DCP 9.1.3
-  if (starting && in.status.advance_warning) return AbortCause::AdvanceWarning;  // DCP 9.1.5
-  return AbortCause::None;
+lift::Cause CommandGate::drive_forbidding(const CycleInput& in, bool starting) noexcept {
+  if (!in.link_up) return lift::Cause::LinkDown;                                  // DCP 7.3
+  if (!in.handshake_done) return lift::Cause::NoHandshake;                        // DCP 5.12.2
+  if (in.status.general_fault) return lift::Cause::DriveFault;                    // DCP 9.1.6
+  if (starting && !in.status.ready) return lift::Cause::DriveNotReady;            // DCP 9.1.3
+  if (starting && in.status.advance_warning) return lift::Cause::AdvanceWarning;  // DCP 9.1.5
+  return lift::Cause::None;
 }
 
-AbortCause CommandGate::forbidding(const CycleInput& in, const GateProfile& profile,
-                                   bool starting) noexcept {
+lift::Cause CommandGate::forbidding(const CycleInput& in, const GateProfile& profile,
+                                    bool starting) noexcept {
   // The link and a drive fault come first; the drive's start conditions (S0, S2) after the
   // machine's, so a refusal names an open safety chain or door before a drive not ready.
-  const AbortCause drive = drive_forbidding(in, starting);
-  if (drive == AbortCause::LinkDown || drive == AbortCause::NoHandshake ||
-      drive == AbortCause::DriveFault) {
+  const lift::Cause drive = drive_forbidding(in, starting);
+  if (drive == lift::Cause::LinkDown || drive == lift::Cause::NoHandshake ||
+      drive == lift::Cause::DriveFault) {
     return drive;
   }
   // The machine's rules, common to every drive kind (DCP 9.1.1: the safety chain).
-  switch (lift::machine_refusal(
+  const lift::Cause machine = lift::refusal_cause(lift::machine_refusal(
       in.inputs, in.position_mm.has_value(),
-      {profile.doors_locked_required, profile.door_bridge_allowed, profile.position_required})) {
-    case lift::MachineRefusal::InputsLost:
-      return AbortCause::InputsLost;
-    case lift::MachineRefusal::SafetyChainOpen:
-      return AbortCause::SafetyChainOpen;
-    case lift::MachineRefusal::DoorsNotLocked:
-      return AbortCause::DoorsNotLocked;
-    case lift::MachineRefusal::PositionLost:
-      return AbortCause::PositionLost;
-    case lift::MachineRefusal::None:
-      break;
-  }
+      {profile.doors_locked_required, profile.door_bridge_allowed, profile.position_required}));
+  if (machine != lift::Cause::None) return machine;
   return drive;
 }
 
@@ -53,7 +43,7 @@ GateResult CommandGate::apply(const Demand& demand, const CycleInput& in) noexce
   if ((command & kMotionBits) != 0) {
     result.violation = forbidding(in, demand.profile, !enable_on_);
   }
-  if (result.violation == AbortCause::None) {
+  if (result.violation == lift::Cause::None) {
     result.output.command = command;
     result.output.data_word = demand.data_word;
   }

@@ -23,8 +23,8 @@ struct Demand {
 
 /// The gate's verdict for one cycle.
 struct GateResult {
-  CycleOutput output{};                     ///< what may go on the wire
-  AbortCause violation = AbortCause::None;  ///< set when a demand for B0/B1/B2 was refused
+  CycleOutput output{};                       ///< what may go on the wire
+  lift::Cause violation = lift::Cause::None;  ///< set when a demand for B0/B1/B2 was refused
 };
 
 /// Refuses B0/B1/B2 unless every condition holds: link up, handshake done, inputs valid, S3 = 0,
@@ -36,12 +36,12 @@ class CommandGate {
   /// Filters one demand.
   GateResult apply(const Demand& demand, const CycleInput& in) noexcept;
   /// The first condition that forbids B0/B1/B2 now, or None. `starting` adds S0 and S2.
-  static AbortCause forbidding(const CycleInput& in, const GateProfile& profile,
-                               bool starting) noexcept;
+  static lift::Cause forbidding(const CycleInput& in, const GateProfile& profile,
+                                bool starting) noexcept;
   /// The drive's side of forbidding(): link up, handshake done, S3 = 0 and, when `starting`,
   /// S0 = 1 and S2 = 0 (DCP 7.3, 5.12.2, 9.1.6, 9.1.3, 9.1.5). With `starting` it is the drive's
   /// verdict on a new travel that status `drive.state` reports (`ready` only when None).
-  static AbortCause drive_forbidding(const CycleInput& in, bool starting) noexcept;
+  static lift::Cause drive_forbidding(const CycleInput& in, bool starting) noexcept;
   /// Whether the last frame let out had B0 set.
   bool enable_on() const noexcept { return enable_on_; }
 

@@ -36,7 +36,7 @@ Demand InspectionTravel::step(StepContext& ctx) noexcept {
   ++cycles_in_state_;
   if (in.status.travel_active && !travel_seen_ && (state_ == State::Vi || state_ == State::Crawl)) {
     travel_seen_ = true;
-    ctx.emit(Event::Type::Started, kind_, AbortCause::None, 0);
+    ctx.emit(Event::Type::Started, kind_, lift::Cause::None, 0);
   }
   // DCP 9.2.1 step 4: B0 off the moment the button is released (or the direction changes).
   if ((state_ == State::SpeedMessage || state_ == State::Vi || state_ == State::Crawl) &&
@@ -80,7 +80,7 @@ Demand InspectionTravel::step(StepContext& ctx) noexcept {
 
     case State::Released:
       if (!in.status.travel_active || !in.link_up) {
-        if (!aborted_) ctx.emit(Event::Type::Finished, kind_, AbortCause::None, 0);
+        if (!aborted_) ctx.emit(Event::Type::Finished, kind_, lift::Cause::None, 0);
         state_ = State::Idle;
         direction_ = Direction::None;
       }

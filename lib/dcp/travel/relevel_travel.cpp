@@ -8,7 +8,7 @@ void RelevelTravel::begin(const TravelRequest& request, Direction direction,
   target_mm_ = request.target_mm;
   brake_seen_open_ = false;
   travel_seen_ = false;
-  end_cause_ = AbortCause::None;
+  end_cause_ = lift::Cause::None;
   now_ = in.now;
   enter(State::SpeedMessage, in.now);
 }
@@ -19,7 +19,7 @@ void RelevelTravel::enter(State state, MonoTime now) noexcept {
   cycles_in_state_ = 0;
 }
 
-void RelevelTravel::request_stop(AbortCause cause) noexcept {
+void RelevelTravel::request_stop(lift::Cause cause) noexcept {
   if (state_ != State::SpeedMessage && state_ != State::Relevel) return;
   end_cause_ = cause;
   enter(State::ControlledAbort, now_);
@@ -54,7 +54,7 @@ Demand RelevelTravel::step(StepContext& ctx) noexcept {
   if (in.status.brake_open) brake_seen_open_ = true;
   if (in.status.travel_active && !travel_seen_ && state_ == State::Relevel) {
     travel_seen_ = true;
-    ctx.emit(Event::Type::Started, TravelKind::Relevel, AbortCause::None, target_mm_);
+    ctx.emit(Event::Type::Started, TravelKind::Relevel, lift::Cause::None, target_mm_);
   }
   ++cycles_in_state_;
   const auto since_ms = elapsed_ms(in.now, entered_);
@@ -72,11 +72,11 @@ Demand RelevelTravel::step(StepContext& ctx) noexcept {
 
     case State::Relevel:
       if (!brake_seen_open_ && since_ms >= ctx.config.start_timeout_ms) {
-        request_stop(AbortCause::DriveDidNotStart);
+        request_stop(lift::Cause::DriveDidNotStart);
         return demand(nibble::kStop, 0);
       }
       if (since_ms >= ctx.config.crawl_timeout_ms) {
-        request_stop(AbortCause::LevelNotReached);
+        request_stop(lift::Cause::LevelNotReached);
         return demand(nibble::kStop, 0);
       }
       if (at_level(ctx)) {
@@ -91,7 +91,7 @@ Demand RelevelTravel::step(StepContext& ctx) noexcept {
 
     case State::Coast:
       if (!in.status.travel_active || since_ms >= ctx.config.stop_timeout_ms) {
-        if (in.status.travel_active) end_cause_ = AbortCause::DriveDidNotStop;
+        if (in.status.travel_active) end_cause_ = lift::Cause::DriveDidNotStop;
         finish(ctx);
       }
       return {};

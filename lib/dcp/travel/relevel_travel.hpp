@@ -29,7 +29,7 @@ class RelevelTravel {
   /// Gate refused: forget the travel.
   void abort_immediate() noexcept { state_ = State::Idle; }
   /// Controlled stop.
-  void request_stop(AbortCause cause) noexcept;
+  void request_stop(lift::Cause cause) noexcept;
   /// Whether a travel is in progress.
   bool active() const noexcept { return state_ != State::Idle; }
   /// Current state.
@@ -51,7 +51,7 @@ class RelevelTravel {
   std::uint32_t cycles_in_state_ = 0;
   bool brake_seen_open_ = false;
   bool travel_seen_ = false;
-  AbortCause end_cause_ = AbortCause::None;
+  lift::Cause end_cause_ = lift::Cause::None;
 };
 
 }  // namespace liftd::travel

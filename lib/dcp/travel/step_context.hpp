@@ -23,7 +23,7 @@ struct StepContext {
   std::optional<ChannelRequest> channel_request{};  ///< at most one channel request per cycle
 
   /// Queues an event stamped with this cycle's time and position.
-  void emit(Event::Type type, TravelKind kind, AbortCause cause, std::int64_t target_mm) noexcept {
+  void emit(Event::Type type, TravelKind kind, lift::Cause cause, std::int64_t target_mm) noexcept {
     Event event;
     event.type = type;
     event.kind = kind;
@@ -34,8 +34,8 @@ struct StepContext {
     static_cast<void>(events.push(event));
   }
   /// The end of a travel: Finished when `cause` is None, else Aborted with the cause.
-  void emit_end(TravelKind kind, AbortCause cause, std::int64_t target_mm) noexcept {
-    emit(cause == AbortCause::None ? Event::Type::Finished : Event::Type::Aborted, kind, cause,
+  void emit_end(TravelKind kind, lift::Cause cause, std::int64_t target_mm) noexcept {
+    emit(cause == lift::Cause::None ? Event::Type::Finished : Event::Type::Aborted, kind, cause,
          target_mm);
   }
 };
@@ -79,10 +79,10 @@ constexpr std::int64_t elapsed_ms(MonoTime now, MonoTime since) noexcept {
 /// travel is over: at rest, or `stop_timeout_ms` passed, in which case `end_cause` becomes
 /// DriveDidNotStop.
 constexpr bool stop_tail_done(const CycleInput& in, std::int64_t since_ms,
-                              const TravelConfig& config, AbortCause& end_cause) noexcept {
+                              const TravelConfig& config, lift::Cause& end_cause) noexcept {
   if (!in.status.brake_open && !in.status.travel_active) return true;
   if (since_ms >= static_cast<std::int64_t>(config.stop_timeout_ms)) {
-    end_cause = AbortCause::DriveDidNotStop;
+    end_cause = lift::Cause::DriveDidNotStop;
     return true;
   }
   return false;

@@ -124,52 +124,6 @@ std::string_view to_string(TravelKind kind) noexcept {
   return "none";
 }
 
-std::string_view to_string(AbortCause cause) noexcept {
-  switch (cause) {
-    case AbortCause::None:
-      return "none";
-    case AbortCause::LinkDown:
-      return "link_down";
-    case AbortCause::NoHandshake:
-      return "no_handshake";
-    case AbortCause::DriveNotReady:
-      return "drive_not_ready";
-    case AbortCause::AdvanceWarning:
-      return "advance_warning";
-    case AbortCause::DriveFault:
-      return "drive_fault";
-    case AbortCause::SafetyChainOpen:
-      return "safety_chain_open";
-    case AbortCause::DoorsNotLocked:
-      return "doors_not_locked";
-    case AbortCause::PositionLost:
-      return "position_lost";
-    case AbortCause::InputsLost:
-      return "inputs_lost";
-    case AbortCause::DoorReversal:
-      return "door_reversal";
-    case AbortCause::FastStartTimeout:
-      return "fast_start_timeout";
-    case AbortCause::StopRequested:
-      return "stop_requested";
-    case AbortCause::DriveDidNotStart:
-      return "drive_did_not_start";
-    case AbortCause::DriveDidNotStop:
-      return "drive_did_not_stop";
-    case AbortCause::ModeChanged:
-      return "mode_changed";
-    case AbortCause::StoppedOffLevel:
-      return "stopped_off_level";
-    case AbortCause::LevelNotReached:
-      return "level_not_reached";
-    case AbortCause::TargetRefused:
-      return "target_refused";
-    case AbortCause::ShuttingDown:
-      return "shutting_down";
-  }
-  return "none";
-}
-
 std::string_view to_string(Event::Type type) noexcept {
   switch (type) {
     case Event::Type::Started:

@@ -12,6 +12,7 @@
 #include "common/defaults.hpp"
 #include "common/mono_time.hpp"
 #include "dcp/frame.hpp"
+#include "lift/cause.hpp"
 #include "lift/floors.hpp"
 #include "lift/inputs.hpp"
 
@@ -29,30 +30,6 @@ enum class TravelKind : std::uint8_t {
   Inspection,    ///< DCP 9.2.1: inspection travel (VI, V0 from an end zone)
   Recall,        ///< DCP 9.2.2: test control travel, same as inspection
   Relevel,       ///< DCP 9.2.3: relevelling without remaining distance
-};
-
-/// Why a travel ended early (or could not start).
-enum class AbortCause : std::uint8_t {
-  None,
-  LinkDown,          ///< link fault / no good replies
-  NoHandshake,       ///< no valid I0 exchange
-  DriveNotReady,     ///< S0 = 0 at start
-  AdvanceWarning,    ///< S2 = 1 at start
-  DriveFault,        ///< S3 = 1
-  SafetyChainOpen,   ///< safety circuit interrupted
-  DoorsNotLocked,    ///< doors not locked (outside the exceptions)
-  PositionLost,      ///< DCP4 absolute position invalid
-  InputsLost,        ///< input provider silent / invalid
-  DoorReversal,      ///< fast start: doors reopened
-  FastStartTimeout,  ///< fast start: doors not locked in time
-  StopRequested,     ///< stop or fast stop requested by the user
-  DriveDidNotStart,  ///< S6 / S1 did not come after enabling the drive
-  DriveDidNotStop,   ///< S1 did not clear after the stop
-  ModeChanged,       ///< inspection / recall switched during a normal travel
-  StoppedOffLevel,   ///< DCP4: the drive ended the travel farther than the arrival tolerance
-  LevelNotReached,   ///< crawl / relevelling ran longer than crawl_timeout_ms
-  TargetRefused,     ///< the drive cleared S5: speed or target not accepted (DCP 4.1)
-  ShuttingDown,      ///< liftd stopped before the car came to rest; drive enable withdrawn
 };
 
 /// Fixed-capacity ASCII text of an I-message body (between 0x1C and ETX).
@@ -123,7 +100,7 @@ struct Event {
   };
   Type type = Type::Started;
   TravelKind kind = TravelKind::None;
-  AbortCause cause = AbortCause::None;
+  lift::Cause cause = lift::Cause::None;
   MonoTime at{};
   std::int64_t target_mm = 0;               ///< destination level, where it applies
   std::optional<std::int64_t> position_mm;  ///< position at the event
@@ -226,7 +203,6 @@ enum class StartResult : std::uint8_t {
 
 /// snake_case names for the API and the journal.
 std::string_view to_string(TravelKind kind) noexcept;
-std::string_view to_string(AbortCause cause) noexcept;
 std::string_view to_string(Event::Type type) noexcept;
 std::string_view to_string(StartResult result) noexcept;
 std::string_view to_string(ExtendResult result) noexcept;

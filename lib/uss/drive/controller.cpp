@@ -115,7 +115,7 @@ void UssController::step(MonoTime now) noexcept {
     in = build_input(now);  // an inputs command changes what follows
   }
   locate_car(in);
-  follow_inspection(in, Cause::ModeChanged,
+  follow_inspection(in, lift::Cause::ModeChanged,
                     [&](lift::Direction d) { (void)travel_.inspect(lift_.floors(), d, in); });
   if (!shutting_down_) {
     serve_calls(in);
@@ -204,32 +204,32 @@ void UssController::drain_master(MonoTime now) noexcept {
 
 // ---- commands ----
 
-ReplyCode UssController::code_for(Cause cause) noexcept {
+ReplyCode UssController::code_for(lift::Cause cause) noexcept {
   switch (cause) {
-    case Cause::LinkFault:
-    case Cause::DriveFault:
-    case Cause::DriveDidNotStart:
-    case Cause::DriveDidNotStop:
+    case lift::Cause::LinkDown:
+    case lift::Cause::DriveFault:
+    case lift::Cause::DriveDidNotStart:
+    case lift::Cause::DriveDidNotStop:
       return ReplyCode::Fault;
-    case Cause::BadSpeed:
+    case lift::Cause::SpeedNotConfigured:
       return ReplyCode::BadRequest;
     default:
       return lift::shared_cause_code(cause);
   }
 }
 
-std::string_view UssController::text_for(Cause cause) noexcept {
+std::string_view UssController::text_for(lift::Cause cause) noexcept {
   switch (cause) {
-    case Cause::LinkFault:
+    case lift::Cause::LinkDown:
       return "the USS link to the drive is down (no current reply)";
-    case Cause::DriveFault:
+    case lift::Cause::DriveFault:
       return "the drive reports a fault (ZSW bit 3) or missed a state in time: drive_reset "
              "acknowledges it";
-    case Cause::DriveNotReady:
+    case lift::Cause::DriveNotReady:
       return "the drive is not ready (not ready to switch on, or ZSW bit 9 = 0: local control)";
-    case Cause::AdvanceWarning:
+    case lift::Cause::AdvanceWarning:
       return "the drive reports a warning (ZSW bit 7)";
-    case Cause::BadSpeed:
+    case lift::Cause::SpeedNotConfigured:
       return "that speed has no setpoint in this installation (uss.speeds)";
     default:
       return lift::shared_cause_text(cause);
@@ -244,7 +244,8 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
         if constexpr (std::is_same_v<T, TravelCommand>) {
           const auto speed_refusal = [&]() -> std::optional<lift::Refusal> {
             if (speed_number(body.speed) == 0 || !travel_.speed_available(body.speed)) {
-              return lift::Refusal{ReplyCode::BadRequest, text_for(Cause::BadSpeed)};
+              return lift::Refusal{ReplyCode::BadRequest,
+                                   text_for(lift::Cause::SpeedNotConfigured)};
             }
             return std::nullopt;
           };
@@ -271,8 +272,8 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
             return reply(tag, ReplyCode::NotReady,
                          "no position and no relevelling signal: nothing to relevel");
           }
-          const Cause why = travel_.start_relevel(lift_.floors(), floor, direction, in);
-          if (why != Cause::None) return reply(tag, code_for(why), text_for(why));
+          const lift::Cause why = travel_.start_relevel(lift_.floors(), floor, direction, in);
+          if (why != lift::Cause::None) return reply(tag, code_for(why), text_for(why));
           reply(tag, ReplyCode::Ok, {}, floor);
         } else if constexpr (std::is_same_v<T, DriveResetCommand>) {
           if (travel_.busy()) {
@@ -328,14 +329,14 @@ void UssController::maybe_relevel(const DriveInput& in) noexcept {
         lift_.floors(), *in.position_mm, config_.relevel_threshold_mm, config_.relevel_zone_mm);
     if (!nearest) return;
     // Only where it may start now; otherwise it waits (a refused relevel is no event).
-    if (travel_.forbidding(TravelKind::Relevel, in) == Cause::None) {
+    if (travel_.forbidding(TravelKind::Relevel, in) == lift::Cause::None) {
       (void)travel_.start_relevel(lift_.floors(), *nearest, lift::Direction::None, in);
     }
     return;
   }
   // Without a position the shaft's relevelling zones say it: exactly one of them asks.
   if (in.inputs.relevel_up == in.inputs.relevel_down) return;
-  if (travel_.forbidding(TravelKind::Relevel, in) == Cause::None) {
+  if (travel_.forbidding(TravelKind::Relevel, in) == lift::Cause::None) {
     (void)travel_.start_relevel(lift_.floors(), travel_.current_floor(),
                                 in.inputs.relevel_up ? lift::Direction::Up : lift::Direction::Down,
                                 in);

@@ -207,7 +207,6 @@ struct UssCoreTypes {
   using TravelKind = uss::TravelKind;
   using TravelCommand = uss::TravelCommand;
   using Input = DriveInput;
-  using Cause = uss::Cause;
 };
 
 class UssController final : public uss::UssHooks, public lift::ControllerCore<UssCoreTypes> {
@@ -233,8 +232,8 @@ class UssController final : public uss::UssHooks, public lift::ControllerCore<Us
   void serve_calls(const DriveInput& in) noexcept;
   void maybe_relevel(const DriveInput& in) noexcept;
   void publish(MonoTime now) noexcept;
-  static ReplyCode code_for(Cause cause) noexcept;
-  static std::string_view text_for(Cause cause) noexcept;
+  static ReplyCode code_for(lift::Cause cause) noexcept;
+  static std::string_view text_for(lift::Cause cause) noexcept;
 
   UssControllerConfig config_;
   Master& master_;

@@ -140,71 +140,40 @@ std::string_view to_string(Phase phase) noexcept {
   return "idle";
 }
 
-std::string_view to_string(Cause cause) noexcept {
-  switch (cause) {
-    case Cause::None:
-      return "none";
-    case Cause::Stopped:
-      return "stop_requested";
-    case Cause::SafetyChain:
-      return "safety_chain_open";
-    case Cause::DoorsUnlocked:
-      return "doors_not_locked";
-    case Cause::InputsLost:
-      return "inputs_lost";
-    case Cause::PositionLost:
-      return "position_lost";
-    case Cause::LinkFault:
-      return "link_down";
-    case Cause::DriveFault:
-      return "drive_fault";
-    case Cause::DriveNotReady:
-      return "drive_not_ready";
-    case Cause::AdvanceWarning:
-      return "advance_warning";
-    case Cause::DriveDidNotStart:
-      return "drive_did_not_start";
-    case Cause::DriveDidNotStop:
-      return "drive_did_not_stop";
-    case Cause::LevelNotReached:
-      return "level_not_reached";
-    case Cause::TravelTimeout:
-      return "travel_timeout";
-    case Cause::ModeChanged:
-      return "mode_changed";
-    case Cause::Shutdown:
-      return "shutting_down";
-    case Cause::BadSpeed:
-      return "speed_not_configured";
-  }
-  return "none";
-}
-
-ProfileWish abort_wish(Cause cause) noexcept {
+ProfileWish abort_wish(lift::Cause cause) noexcept {
   switch (cause) {
     // The safety circuit or the drive itself says stop now: pulses off, brake falls (C 5.2.1
     // table 5.2, OFF2: "Motor trudelt aus").
-    case Cause::SafetyChain:
-    case Cause::DoorsUnlocked:
-    case Cause::LinkFault:
-    case Cause::DriveFault:
-    case Cause::DriveNotReady:
-    case Cause::DriveDidNotStop:
-    case Cause::TravelTimeout:
-    case Cause::Shutdown:
+    case lift::Cause::SafetyChainOpen:
+    case lift::Cause::DoorsNotLocked:
+    case lift::Cause::LinkDown:
+    case lift::Cause::DriveFault:
+    case lift::Cause::DriveNotReady:
+    case lift::Cause::DriveDidNotStop:
+    case lift::Cause::TravelTimeout:
+    case lift::Cause::ShuttingDown:
+    // Causes only the DCP and SCH001 travels raise never end a USS run; should one, it is a link,
+    // door or drive refusal like those above.
+    case lift::Cause::NoHandshake:
+    case lift::Cause::DoorReversal:
+    case lift::Cause::FastStartTimeout:
+    case lift::Cause::StoppedOffLevel:
+    case lift::Cause::TargetRefused:
+    case lift::Cause::CardSilent:
+    case lift::Cause::BusFault:
       return ProfileWish::Coast;
     // The lift controller lost what it steers by: quickest controlled stop (OFF3, "Schnellhalt").
-    case Cause::InputsLost:
-    case Cause::PositionLost:
-    case Cause::LevelNotReached:
-    case Cause::ModeChanged:
+    case lift::Cause::InputsLost:
+    case lift::Cause::PositionLost:
+    case lift::Cause::LevelNotReached:
+    case lift::Cause::ModeChanged:
       return ProfileWish::QuickStop;
     // Not moving yet, or a user stop between floors: the normal ramp (OFF1).
-    case Cause::None:
-    case Cause::Stopped:
-    case Cause::AdvanceWarning:
-    case Cause::DriveDidNotStart:
-    case Cause::BadSpeed:
+    case lift::Cause::None:
+    case lift::Cause::StopRequested:
+    case lift::Cause::AdvanceWarning:
+    case lift::Cause::DriveDidNotStart:
+    case lift::Cause::SpeedNotConfigured:
       break;
   }
   return ProfileWish::Stop;
@@ -212,50 +181,49 @@ ProfileWish abort_wish(Cause cause) noexcept {
 
 // ---- gating ----
 
-Cause LiftTravel::drive_forbidding(const DriveInput& in) const noexcept {
-  if (!in.link_ok) return Cause::LinkFault;
+lift::Cause LiftTravel::drive_forbidding(const DriveInput& in) const noexcept {
+  if (!in.link_ok) return lift::Cause::LinkDown;
   if ((in.zsw & zsw::kFault) != 0 || profile_.supervision() != Supervision::None) {
-    return Cause::DriveFault;
+    return lift::Cause::DriveFault;
   }
-  if (!profile_.plc_control(in.zsw)) return Cause::DriveNotReady;  // C 5.2.1 ZSW bit 9
-  if (decode_status(in.zsw) == ProfileState::NotReadyToSwitchOn) return Cause::DriveNotReady;
+  if (!profile_.plc_control(in.zsw)) return lift::Cause::DriveNotReady;  // C 5.2.1 ZSW bit 9
+  if (decode_status(in.zsw) == ProfileState::NotReadyToSwitchOn) return lift::Cause::DriveNotReady;
   if (config_.warning_blocks_start && (in.zsw & zsw::kWarning) != 0) {
-    return Cause::AdvanceWarning;
+    return lift::Cause::AdvanceWarning;
   }
-  return Cause::None;
+  return lift::Cause::None;
 }
 
-Cause LiftTravel::forbidding(TravelKind kind, const DriveInput& in) const noexcept {
-  if (const Cause why = drive_forbidding(in); why != Cause::None) return why;
+lift::Cause LiftTravel::forbidding(TravelKind kind, const DriveInput& in) const noexcept {
+  if (const lift::Cause why = drive_forbidding(in); why != lift::Cause::None) return why;
   return ending(kind, in);
 }
 
-Cause LiftTravel::ending(TravelKind kind, const DriveInput& in) const noexcept {
-  if (!in.link_ok) return Cause::LinkFault;
-  if ((in.zsw & zsw::kFault) != 0) return Cause::DriveFault;  // C 5.2.1 ZSW bit 3
+lift::Cause LiftTravel::ending(TravelKind kind, const DriveInput& in) const noexcept {
+  if (!in.link_ok) return lift::Cause::LinkDown;
+  if ((in.zsw & zsw::kFault) != 0) return lift::Cause::DriveFault;  // C 5.2.1 ZSW bit 3
   switch (profile_.supervision()) {
     case Supervision::NotSwitchedOn:
-      return Cause::DriveDidNotStart;
+      return lift::Cause::DriveDidNotStart;
     case Supervision::NotStopped:
-      return Cause::DriveDidNotStop;
+      return lift::Cause::DriveDidNotStop;
     case Supervision::None:
       break;
   }
-  if (!profile_.plc_control(in.zsw)) return Cause::DriveNotReady;
+  if (!profile_.plc_control(in.zsw)) return lift::Cause::DriveNotReady;
   // The machine's rules, common to every drive kind (lib/lift/gate.hpp). Inspection: the
   // safety chain holds the door contacts.
   const lift::MachineNeeds needs =
       lift::run_needs(kind, config_.relevel_doors_open, config_.reference == Reference::Position);
-  return lift::refusal_cause<Cause>(
-      lift::machine_refusal(in.inputs, in.position_mm.has_value(), needs));
+  return lift::refusal_cause(lift::machine_refusal(in.inputs, in.position_mm.has_value(), needs));
 }
 
 // ---- starting and stopping ----
 
-Cause LiftTravel::begin(TravelKind kind, std::size_t floor, SpeedName speed,
-                        lift::Direction direction, const DriveInput& in) noexcept {
-  if (!speed_available(speed)) return Cause::BadSpeed;
-  if (const Cause why = forbidding(kind, in); why != Cause::None) return why;
+lift::Cause LiftTravel::begin(TravelKind kind, std::size_t floor, SpeedName speed,
+                              lift::Direction direction, const DriveInput& in) noexcept {
+  if (!speed_available(speed)) return lift::Cause::SpeedNotConfigured;
+  if (const lift::Cause why = forbidding(kind, in); why != lift::Cause::None) return why;
   kind_ = kind;
   target_ = floor;
   speed_ = speed;
@@ -263,13 +231,13 @@ Cause LiftTravel::begin(TravelKind kind, std::size_t floor, SpeedName speed,
   started_at_ = in.now;
   inspect_stop_ = false;
   enter(Phase::Contactors, in.now);
-  push(TravelEvent::Type::Started, Cause::None, in.now);
-  return Cause::None;
+  push(TravelEvent::Type::Started, lift::Cause::None, in.now);
+  return lift::Cause::None;
 }
 
-Cause LiftTravel::start_travel(const lift::FloorTable& floors, std::size_t floor, SpeedName speed,
-                               const DriveInput& in) noexcept {
-  if (!is_travel_speed(speed)) return Cause::BadSpeed;
+lift::Cause LiftTravel::start_travel(const lift::FloorTable& floors, std::size_t floor,
+                                     SpeedName speed, const DriveInput& in) noexcept {
+  if (!is_travel_speed(speed)) return lift::Cause::SpeedNotConfigured;
   lift::Direction direction = lift::Direction::None;
   if (in.position_mm) {
     direction =
@@ -278,32 +246,32 @@ Cause LiftTravel::start_travel(const lift::FloorTable& floors, std::size_t floor
     // Shaft signals without a position: from the floor the car last stopped at.
     direction = floor > current_floor_ ? lift::Direction::Up : lift::Direction::Down;
   } else {
-    return Cause::PositionLost;  // no way to tell which way
+    return lift::Cause::PositionLost;  // no way to tell which way
   }
   return begin(TravelKind::Travel, floor, speed, direction, in);
 }
 
-Cause LiftTravel::start_relevel(const lift::FloorTable& floors, std::size_t floor,
-                                lift::Direction direction, const DriveInput& in) noexcept {
+lift::Cause LiftTravel::start_relevel(const lift::FloorTable& floors, std::size_t floor,
+                                      lift::Direction direction, const DriveInput& in) noexcept {
   if (in.position_mm) {
     direction =
         floors.level_mm(floor) >= *in.position_mm ? lift::Direction::Up : lift::Direction::Down;
   }
-  if (direction == lift::Direction::None) return Cause::PositionLost;
+  if (direction == lift::Direction::None) return lift::Cause::PositionLost;
   return begin(TravelKind::Relevel, floor, SpeedName::VN, direction, in);
 }
 
-Cause LiftTravel::inspect(const lift::FloorTable& floors, lift::Direction direction,
-                          const DriveInput& in) noexcept {
+lift::Cause LiftTravel::inspect(const lift::FloorTable& floors, lift::Direction direction,
+                                const DriveInput& in) noexcept {
   if (kind_ == TravelKind::Inspection) {
     // Hold-to-run: released or reversed, the run stops first (a reversal starts afresh once
     // this run has ended and the button is still held).
     if (direction != direction_) normal_stop(in.now);
-    return Cause::None;
+    return lift::Cause::None;
   }
-  if (direction == lift::Direction::None || busy()) return Cause::None;
+  if (direction == lift::Direction::None || busy()) return lift::Cause::None;
   if (in.position_mm && lift::at_terminal_level(floors, direction, *in.position_mm)) {
-    return Cause::None;  // a button held at the terminal level moves nothing
+    return lift::Cause::None;  // a button held at the terminal level moves nothing
   }
   return begin(TravelKind::Inspection, current_floor_, SpeedName::VI, direction, in);
 }
@@ -344,12 +312,12 @@ std::optional<std::size_t> LiftTravel::stop(const lift::FloorTable& floors,
       break;
   }
   if (phase_ == Phase::Contactors || phase_ == Phase::SwitchOn || phase_ == Phase::BrakeRelease) {
-    abort(Cause::Stopped, in.now);  // not moving yet: nothing to land
+    abort(lift::Cause::StopRequested, in.now);  // not moving yet: nothing to land
     return std::nullopt;
   }
   if (phase_ != Phase::Run || config_.reference != Reference::Position) return target_;
   if (!in.position_mm) {
-    abort(Cause::Stopped, in.now);
+    abort(lift::Cause::StopRequested, in.now);
     return std::nullopt;
   }
   // The first floor ahead still beyond this speed's slowdown distance.
@@ -364,11 +332,11 @@ std::optional<std::size_t> LiftTravel::stop(const lift::FloorTable& floors,
       return target_;
     }
   }
-  abort(Cause::Stopped, in.now);
+  abort(lift::Cause::StopRequested, in.now);
   return std::nullopt;
 }
 
-void LiftTravel::abort(Cause cause, MonoTime now) noexcept {
+void LiftTravel::abort(lift::Cause cause, MonoTime now) noexcept {
   const ProfileWish wish = abort_wish(cause);
   if (kind_ == TravelKind::None) {
     // A halt tail already runs: a coast overrides its ramp (no second report).
@@ -398,14 +366,14 @@ void LiftTravel::enter(Phase phase, MonoTime now) noexcept {
 
 void LiftTravel::finish(MonoTime now) noexcept {
   if (kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel) current_floor_ = target_;
-  push(TravelEvent::Type::Finished, Cause::None, now);
+  push(TravelEvent::Type::Finished, lift::Cause::None, now);
   kind_ = TravelKind::None;
   direction_ = lift::Direction::None;
   inspect_stop_ = false;
   enter(Phase::Idle, now);
 }
 
-void LiftTravel::push(TravelEvent::Type type, Cause cause, MonoTime now) noexcept {
+void LiftTravel::push(TravelEvent::Type type, lift::Cause cause, MonoTime now) noexcept {
   const bool landed = type == TravelEvent::Type::Finished && kind_ != TravelKind::Inspection;
   const std::size_t floor = type == TravelEvent::Type::Started && kind_ != TravelKind::Inspection
                                 ? target_
@@ -473,11 +441,11 @@ void LiftTravel::sequence(const lift::FloorTable& floors, const DriveInput& in) 
       }
       return;
     case Phase::BrakeRelease:
-      if (!running) return abort(Cause::DriveNotReady, in.now);
+      if (!running) return abort(lift::Cause::DriveNotReady, in.now);
       if (since >= milliseconds(config_.brake_release_ms)) enter(Phase::Run, in.now);
       return;
     case Phase::Run:
-      if (!running) return abort(Cause::DriveNotReady, in.now);
+      if (!running) return abort(lift::Cause::DriveNotReady, in.now);
       if (kind_ == TravelKind::Travel) {
         if (decel_point(floors, in)) enter(Phase::Crawl, in.now);
       } else if (kind_ == TravelKind::Relevel) {
@@ -485,7 +453,7 @@ void LiftTravel::sequence(const lift::FloorTable& floors, const DriveInput& in) 
         if (at_level(floors, in)) {
           enter(Phase::Stopping, in.now);
         } else if (since >= milliseconds(config_.crawl_timeout_ms)) {
-          abort(Cause::LevelNotReached, in.now);
+          abort(lift::Cause::LevelNotReached, in.now);
         }
       } else if (in.position_mm && floors.size() > 0 &&
                  lift::at_terminal_level(floors, direction_, *in.position_mm)) {
@@ -494,23 +462,23 @@ void LiftTravel::sequence(const lift::FloorTable& floors, const DriveInput& in) 
       }
       return;
     case Phase::Crawl:
-      if (!running) return abort(Cause::DriveNotReady, in.now);
+      if (!running) return abort(lift::Cause::DriveNotReady, in.now);
       if (at_level(floors, in)) {
         enter(Phase::Stopping, in.now);
       } else if (since >= milliseconds(config_.crawl_timeout_ms)) {
-        abort(Cause::LevelNotReached, in.now);
+        abort(lift::Cause::LevelNotReached, in.now);
       }
       return;
     case Phase::Stopping:
-      if (!running) return abort(Cause::DriveNotReady, in.now);
+      if (!running) return abort(lift::Cause::DriveNotReady, in.now);
       if (standstill) {
         enter(Phase::BrakeApply, in.now);
       } else if (since >= milliseconds(config_.standstill_timeout_ms)) {
-        abort(Cause::DriveDidNotStop, in.now);
+        abort(lift::Cause::DriveDidNotStop, in.now);
       }
       return;
     case Phase::BrakeApply:
-      if (!running) return abort(Cause::DriveNotReady, in.now);
+      if (!running) return abort(lift::Cause::DriveNotReady, in.now);
       if (since >= milliseconds(config_.brake_apply_ms)) enter(Phase::SwitchOff, in.now);
       return;
     case Phase::SwitchOff:
@@ -523,18 +491,18 @@ void LiftTravel::sequence(const lift::FloorTable& floors, const DriveInput& in) 
 
 DriveOutput LiftTravel::tick(const lift::FloorTable& floors, const DriveInput& in) noexcept {
   if (kind_ != TravelKind::None) {
-    Cause why = ending(kind_, in);
+    lift::Cause why = ending(kind_, in);
     // Motor run-time limiter; as common practice has it, not on inspection runs (a technician
     // may walk the whole shaft at VI, and lets go of the button to stop).
-    if (why == Cause::None && kind_ != TravelKind::Inspection &&
+    if (why == lift::Cause::None && kind_ != TravelKind::Inspection &&
         in.now - started_at_ > milliseconds(config_.max_travel_ms)) {
-      why = Cause::TravelTimeout;  // motor run-time limiter
+      why = lift::Cause::TravelTimeout;  // motor run-time limiter
     }
-    if (why != Cause::None) abort(why, in.now);
+    if (why != lift::Cause::None) abort(why, in.now);
   } else if (phase_ == Phase::Halt) {
     // A halt on a ramp turns into a coast when a safety condition comes on top.
-    if (const Cause why = ending(TravelKind::Inspection, in);
-        why != Cause::None && abort_wish(why) == ProfileWish::Coast) {
+    if (const lift::Cause why = ending(TravelKind::Inspection, in);
+        why != lift::Cause::None && abort_wish(why) == ProfileWish::Coast) {
       abort(why, in.now);
     }
   }

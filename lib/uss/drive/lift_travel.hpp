@@ -38,6 +38,7 @@
 
 #include "common/defaults.hpp"
 #include "common/mono_time.hpp"
+#include "lift/cause.hpp"
 #include "lift/floors.hpp"
 #include "lift/inputs.hpp"
 #include "lift/travel_event.hpp"
@@ -152,32 +153,9 @@ enum class Phase : std::uint8_t {
 /// "brake_apply", "switch_off", "halt".
 std::string_view to_string(Phase phase) noexcept;
 
-/// Why a run ended early or was refused.
-enum class Cause : std::uint8_t {
-  None,
-  Stopped,           ///< the `stop` command with no floor left to stop at
-  SafetyChain,       ///< the safety chain opened: OFF2
-  DoorsUnlocked,     ///< the doors unlocked: OFF2
-  InputsLost,        ///< the input provider went silent: OFF3
-  PositionLost,      ///< the car position is unknown: OFF3
-  LinkFault,         ///< the drive missed link_fault_replies replies in a row (or the port): OFF2
-  DriveFault,        ///< ZSW bit 3, or a latched profile supervision: OFF2
-  DriveNotReady,     ///< not heard yet, not ready to switch on, local control (ZSW bit 9 = 0),
-                     ///< or operation enabled lost mid-run
-  AdvanceWarning,    ///< ZSW bit 7 at start (warning_blocks_start)
-  DriveDidNotStart,  ///< no "operation enabled" within switch_on_timeout_ms: OFF1
-  DriveDidNotStop,   ///< no standstill / ZSW bit 2 still 1 in time: OFF2
-  LevelNotReached,   ///< crawl longer than crawl_timeout_ms: OFF3
-  TravelTimeout,     ///< the motor run-time limit passed: OFF2
-  ModeChanged,       ///< inspection switched on during a travel: OFF3
-  Shutdown,          ///< the service is stopping at once: OFF2
-  BadSpeed,          ///< the speed has no setpoint in this installation (refusal only)
-};
-/// The API's abort cause names, those of the DCP travels where the meaning is the same
-/// ("safety_chain_open", "link_down", "drive_fault", ...).
-std::string_view to_string(Cause cause) noexcept;
-/// The wish an abort for `cause` leaves the drive with (see each Cause).
-ProfileWish abort_wish(Cause cause) noexcept;
+/// The wish an abort for `cause` leaves the drive with: OFF2, OFF3 or OFF1 as the abort wishes
+/// in the comment at the top of this file say.
+ProfileWish abort_wish(lift::Cause cause) noexcept;
 
 /// The facts of one step (after one USS exchange).
 struct DriveInput {
@@ -202,7 +180,7 @@ struct DriveOutput {
 };
 
 /// Something that happened, drained by the controller.
-using TravelEvent = lift::BasicTravelEvent<TravelKind, Cause>;
+using TravelEvent = lift::BasicTravelEvent<TravelKind>;
 
 /// The sequencer. The car's current floor is the one it last stopped at.
 class LiftTravel {
@@ -210,25 +188,26 @@ class LiftTravel {
   explicit LiftTravel(const LiftTravelConfig& config) noexcept
       : config_(config), profile_(config.profile) {}
 
-  /// Starts a travel to `floor` at `speed` (one of V1..V7 with a setpoint; else BadSpeed).
-  /// Cause::None when it started; else why not (conditions of `in`). The caller checks busy().
-  Cause start_travel(const lift::FloorTable& floors, std::size_t floor, SpeedName speed,
-                     const DriveInput& in) noexcept;
+  /// Starts a travel to `floor` at `speed` (one of V1..V7 with a setpoint; else
+  /// SpeedNotConfigured). lift::Cause::None when it started; else why not (conditions of `in`). The
+  /// caller checks busy().
+  lift::Cause start_travel(const lift::FloorTable& floors, std::size_t floor, SpeedName speed,
+                           const DriveInput& in) noexcept;
   /// Starts relevelling to `floor` at VN. By position the direction is the level's; without a
   /// position `direction` (from the shaft's relevel signals) is used.
-  Cause start_relevel(const lift::FloorTable& floors, std::size_t floor, lift::Direction direction,
-                      const DriveInput& in) noexcept;
+  lift::Cause start_relevel(const lift::FloorTable& floors, std::size_t floor,
+                            lift::Direction direction, const DriveInput& in) noexcept;
   /// Inspection: hold-to-run `direction` (None: stop). A change of direction stops first; no
   /// run starts towards a terminal level the car is at.
-  Cause inspect(const lift::FloorTable& floors, lift::Direction direction,
-                const DriveInput& in) noexcept;
+  lift::Cause inspect(const lift::FloorTable& floors, lift::Direction direction,
+                      const DriveInput& in) noexcept;
   /// Stop at the next floor ahead the car can still reach at its speed's slowdown distance (by
   /// position; by shaft signals the target stays); a car already crawling keeps its floor; a car
   /// not yet moving, or with no floor reachable, stops at once by OFF1 (the drive's ramp).
   /// Inspection: the normal stop sequence. Returns the floor the car will stop at.
   std::optional<std::size_t> stop(const lift::FloorTable& floors, const DriveInput& in) noexcept;
   /// Ends whatever runs at once with `cause` (reported once), leaving abort_wish(cause).
-  void abort(Cause cause, MonoTime now) noexcept;
+  void abort(lift::Cause cause, MonoTime now) noexcept;
   /// Arms a fault acknowledge (DriveProfile::acknowledge).
   void acknowledge() noexcept { profile_.acknowledge(); }
 
@@ -237,13 +216,13 @@ class LiftTravel {
 
   /// The condition of `in` that forbids starting a run of `kind` now, or None: the drive's
   /// (drive_forbidding()), then what would end a run.
-  Cause forbidding(TravelKind kind, const DriveInput& in) const noexcept;
+  lift::Cause forbidding(TravelKind kind, const DriveInput& in) const noexcept;
   /// The drive's side of forbidding(): the link, a fault or a latched supervision, local control
   /// (ZSW bit 9 = 0), not ready to switch on, a warning where it blocks a start (C 5.2.1).
   /// Status `drive.state` is `ready` only when it is None.
-  Cause drive_forbidding(const DriveInput& in) const noexcept;
+  lift::Cause drive_forbidding(const DriveInput& in) const noexcept;
   /// The condition of `in` that ends a running run of `kind`, or None.
-  Cause ending(TravelKind kind, const DriveInput& in) const noexcept;
+  lift::Cause ending(TravelKind kind, const DriveInput& in) const noexcept;
   /// The speed has a setpoint.
   bool speed_available(SpeedName speed) const noexcept {
     return config_.speed_percent[speed_index(speed)] > 0.0;
@@ -271,11 +250,11 @@ class LiftTravel {
   std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
 
  private:
-  Cause begin(TravelKind kind, std::size_t floor, SpeedName speed, lift::Direction direction,
-              const DriveInput& in) noexcept;
+  lift::Cause begin(TravelKind kind, std::size_t floor, SpeedName speed, lift::Direction direction,
+                    const DriveInput& in) noexcept;
   void enter(Phase phase, MonoTime now) noexcept;
   void finish(MonoTime now) noexcept;
-  void push(TravelEvent::Type type, Cause cause, MonoTime now) noexcept;
+  void push(TravelEvent::Type type, lift::Cause cause, MonoTime now) noexcept;
   void normal_stop(MonoTime now) noexcept;
   bool decel_point(const lift::FloorTable& floors, const DriveInput& in) const noexcept;
   bool at_level(const lift::FloorTable& floors, const DriveInput& in) const noexcept;

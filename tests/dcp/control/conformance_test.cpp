@@ -52,7 +52,7 @@ TEST(TargetChange, RefusedByTheDriveEndsTheTravelWithB2HeldUntilS6) {
   ASSERT_EQ(rig.travel_events(travel::Event::Type::TargetRefused).size(), 1U);
   const auto aborted = rig.travel_events(travel::Event::Type::Aborted);
   ASSERT_EQ(aborted.size(), 1U);
-  EXPECT_EQ(aborted[0].cause, travel::AbortCause::TargetRefused);
+  EXPECT_EQ(aborted[0].cause, lift::Cause::TargetRefused);
   // The drive stopped on its emergency ramp; we kept B2 until it dropped S6 (DCP 11.1.1 d).
   for (std::size_t i = 1; i < rig.log.size(); ++i) {
     const bool dropped = (rig.log[i - 1].frame[0] & cb::kStopSwitch) != 0 &&
@@ -240,7 +240,7 @@ TEST(ServiceStop, ForcedEndsTheTravelAtOnceWithB0Off) {
   EXPECT_FALSE(enable_of(rig.frames.back()));
   const auto aborted = rig.travel_events(travel::Event::Type::Aborted);
   ASSERT_EQ(aborted.size(), 1U);
-  EXPECT_EQ(aborted[0].cause, travel::AbortCause::ShuttingDown);
+  EXPECT_EQ(aborted[0].cause, lift::Cause::ShuttingDown);
 }
 
 TEST(ServiceStop, AtRestQuiescesWithinOneSupervisionWindow) {

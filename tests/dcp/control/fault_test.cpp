@@ -26,7 +26,7 @@ struct FaultCase {
   dcp::Protocol protocol;
   std::function<void(Rig&)> inject;
   BoundFn bound;
-  travel::AbortCause cause;
+  lift::Cause cause;
   FaultCode fault;
 };
 
@@ -90,7 +90,7 @@ TEST_P(FaultMidTravel, DropsB0EndsTravelRaisesOnce) {
   }
   const auto aborted = rig.travel_events(travel::Event::Type::Aborted);
   ASSERT_EQ(aborted.size(), 1U) << c.legend;
-  EXPECT_EQ(aborted[0].cause, c.cause) << c.legend << ": " << travel::to_string(aborted[0].cause);
+  EXPECT_EQ(aborted[0].cause, c.cause) << c.legend << ": " << lift::to_string(aborted[0].cause);
   EXPECT_TRUE(rig.travel_events(travel::Event::Type::Finished).empty()) << c.legend;
   EXPECT_EQ(rig.raised(c.fault), 1U) << c.legend;
   EXPECT_TRUE(rig.sim.stationary()) << c.legend;
@@ -107,24 +107,24 @@ std::vector<FaultCase> fault_cases() {
     const bool d4 = p == dcp::Protocol::Dcp4;
     cases.push_back({d4 ? "DCP4 drive fault S3" : "DCP3 drive fault S3", p,
                      [](Rig& r) { r.sim.set_general_fault(true, r.now); }, after_s3,
-                     travel::AbortCause::DriveFault, FaultCode::DriveFault});
+                     lift::Cause::DriveFault, FaultCode::DriveFault});
     cases.push_back({d4 ? "DCP4 safety chain opens" : "DCP3 safety chain opens", p,
                      [](Rig& r) { r.inputs.safety_chain_closed = false; }, after_chain,
-                     travel::AbortCause::SafetyChainOpen, FaultCode::SafetyChain});
+                     lift::Cause::SafetyChainOpen, FaultCode::SafetyChain});
     cases.push_back({d4 ? "DCP4 replies stop for 1 s" : "DCP3 replies stop for 1 s", p,
                      [](Rig& r) {
                        r.drop_replies = true;
                        r.run(1s);
                        r.drop_replies = false;
                      },
-                     after_ten_missing, travel::AbortCause::LinkDown, FaultCode::LinkFault});
+                     after_ten_missing, lift::Cause::LinkDown, FaultCode::LinkFault});
     cases.push_back({d4 ? "DCP4 input provider falls silent" : "DCP3 input provider silent", p,
-                     [](Rig& r) { r.post_inputs = false; }, after_inputs,
-                     travel::AbortCause::InputsLost, FaultCode::InputsLost});
+                     [](Rig& r) { r.post_inputs = false; }, after_inputs, lift::Cause::InputsLost,
+                     FaultCode::InputsLost});
   }
   cases.push_back({"DCP4 position source lost", dcp::Protocol::Dcp4,
                    [](Rig& r) { r.position.valid = false; }, after_position,
-                   travel::AbortCause::PositionLost, FaultCode::PositionLost});
+                   lift::Cause::PositionLost, FaultCode::PositionLost});
   return cases;
 }
 

@@ -361,7 +361,7 @@ TEST_P(FastStopDuringTravel, StopsOnTheFastStopRamp) {
   ASSERT_TRUE(rig.run_until([&] { return rig.idle(); }, 30s)) << c.legend;
   const auto aborted = rig.travel_events(travel::Event::Type::Aborted);
   ASSERT_EQ(aborted.size(), 1U) << c.legend;
-  EXPECT_EQ(aborted[0].cause, travel::AbortCause::StopRequested) << c.legend;
+  EXPECT_EQ(aborted[0].cause, lift::Cause::StopRequested) << c.legend;
   EXPECT_LT(rig.sim.position_mm(), 15000.0 - 1000.0) << c.legend;
   EXPECT_FALSE(enable_of(rig.frames.back())) << c.legend;
 }
@@ -558,7 +558,7 @@ TEST_P(FastStart, DoorReversalAbortsControlled) {
   EXPECT_EQ(*rig.log[log_at + (off - at)].seen & dcp::status_bit::kBrakeOpen, 0) << c.legend;
   const auto aborted = rig.travel_events(travel::Event::Type::Aborted);
   ASSERT_EQ(aborted.size(), 1U);
-  EXPECT_EQ(aborted[0].cause, travel::AbortCause::DoorReversal);
+  EXPECT_EQ(aborted[0].cause, lift::Cause::DoorReversal);
   EXPECT_NEAR(rig.sim.position_mm(), 0.0, 1.0) << "the car never moved";
 }
 
@@ -581,7 +581,7 @@ TEST_P(FastStart, HoldEndsAfterItsTimeLimit) {
   ASSERT_TRUE(rig.run_until([&] { return rig.idle(); }, 5s));
   const auto aborted = rig.travel_events(travel::Event::Type::Aborted);
   ASSERT_EQ(aborted.size(), 1U);
-  EXPECT_EQ(aborted[0].cause, travel::AbortCause::FastStartTimeout);
+  EXPECT_EQ(aborted[0].cause, lift::Cause::FastStartTimeout);
   EXPECT_EQ(rig.raised(FaultCode::DriveFault), 0U) << "the drive's own limit never tripped";
   EXPECT_FALSE(enable_of(rig.frames.back()));
 }

@@ -126,7 +126,7 @@ bool begin(Rig& rig, Scenario s) {
 /// A forbidding condition, how to inject it and which scenarios it applies to.
 struct Condition {
   const char* name;
-  AbortCause cause;
+  lift::Cause cause;
   void (*inject)(Rig&);
   bool (*applies)(Scenario);
 };
@@ -142,25 +142,25 @@ bool needs_position(Scenario s) {
 }
 
 const std::vector<Condition> kConditions = {
-    {"link down", AbortCause::LinkDown, [](Rig& r) { r.input.link_up = false; }, always},
-    {"no handshake", AbortCause::NoHandshake, [](Rig& r) { r.input.handshake_done = false; },
+    {"link down", lift::Cause::LinkDown, [](Rig& r) { r.input.link_up = false; }, always},
+    {"no handshake", lift::Cause::NoHandshake, [](Rig& r) { r.input.handshake_done = false; },
      always},
-    {"inputs lost", AbortCause::InputsLost, [](Rig& r) { r.input.inputs.valid = false; }, always},
-    {"S3 general fault", AbortCause::DriveFault,
+    {"inputs lost", lift::Cause::InputsLost, [](Rig& r) { r.input.inputs.valid = false; }, always},
+    {"S3 general fault", lift::Cause::DriveFault,
      [](Rig& r) { r.drive.status().general_fault = true; }, always},
-    {"safety chain open", AbortCause::SafetyChainOpen,
+    {"safety chain open", lift::Cause::SafetyChainOpen,
      [](Rig& r) { r.input.inputs.safety_chain_closed = false; }, always},
-    {"doors unlocked", AbortCause::DoorsNotLocked,
+    {"doors unlocked", lift::Cause::DoorsNotLocked,
      [](Rig& r) {
        r.input.inputs.doors_locked = false;
        r.input.inputs.door_zone_bridge = false;
      },
      needs_doors},
-    {"position lost", AbortCause::PositionLost, [](Rig& r) { r.with_position = false; },
+    {"position lost", lift::Cause::PositionLost, [](Rig& r) { r.with_position = false; },
      needs_position},
 };
 
-bool saw_abort(const Rig& rig, AbortCause cause) {
+bool saw_abort(const Rig& rig, lift::Cause cause) {
   for (const auto& e : rig.events) {
     if (e.type == Event::Type::Aborted && e.cause == cause) return true;
   }
@@ -217,10 +217,10 @@ TEST(Gate, DriveNotReadyOrAdvanceWarningBlockOnlyTheStart) {
   struct Case {
     bool ready;
     bool advance_warning;
-    AbortCause cause;
+    lift::Cause cause;
   };
-  const std::vector<Case> cases = {{false, false, AbortCause::DriveNotReady},
-                                   {true, true, AbortCause::AdvanceWarning}};
+  const std::vector<Case> cases = {{false, false, lift::Cause::DriveNotReady},
+                                   {true, true, lift::Cause::AdvanceWarning}};
   for (const Scenario s : kScenarios) {
     for (const auto& c : cases) {
       SCOPED_TRACE(name(s));
@@ -271,8 +271,8 @@ TEST(Gate, DoorBridgeStandsInForLockedDoorsOnlyWhereAllowed) {
   GateProfile normal;
   GateProfile relevel;
   relevel.door_bridge_allowed = true;
-  EXPECT_EQ(CommandGate::forbidding(in, normal, true), AbortCause::DoorsNotLocked);
-  EXPECT_EQ(CommandGate::forbidding(in, relevel, true), AbortCause::None);
+  EXPECT_EQ(CommandGate::forbidding(in, normal, true), lift::Cause::DoorsNotLocked);
+  EXPECT_EQ(CommandGate::forbidding(in, relevel, true), lift::Cause::None);
 }
 
 // Property: whatever the sequence of requests and injected faults, no frame carries B0/B1/B2
@@ -376,7 +376,7 @@ TEST(GateProperty, RandomCommandsAndFaultsNeverLeakMotionBits) {
       previous_enable = (out.command & 0x01) != 0;
     }
     for (const auto& e : rig.events) {
-      gate_aborts += e.type == Event::Type::Aborted && e.cause <= AbortCause::PositionLost ? 1 : 0;
+      gate_aborts += e.type == Event::Type::Aborted && e.cause <= lift::Cause::PositionLost ? 1 : 0;
     }
   }
   // Not vacuous: the random runs did travel, and the gate did step in.

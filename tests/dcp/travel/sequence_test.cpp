@@ -345,7 +345,7 @@ TEST(Dcp4Travel, NoTravelCommandUntilTheDriveAcceptsTheSpeed) {
   while (auto e = controller.pop_event()) last = e;
   ASSERT_TRUE(last);
   EXPECT_EQ(last->type, Type::Aborted);
-  EXPECT_EQ(last->cause, AbortCause::TargetRefused);
+  EXPECT_EQ(last->cause, lift::Cause::TargetRefused);
 }
 
 TEST(Dcp4Travel, DriveStoppingShortIsReportedAsOffLevel) {
@@ -384,7 +384,7 @@ TEST(Dcp4Travel, DriveStoppingShortIsReportedAsOffLevel) {
   while (auto e = controller.pop_event()) last = e;
   ASSERT_TRUE(last.has_value());
   EXPECT_EQ(last->type, Type::Aborted);
-  EXPECT_EQ(last->cause, AbortCause::StoppedOffLevel);
+  EXPECT_EQ(last->cause, lift::Cause::StoppedOffLevel);
 }
 
 TEST(Dcp4Relevel, AutoRelevelOnDriftWithVnAndRemainingDistance) {
@@ -551,7 +551,7 @@ TEST(Dcp3Travel, CrawlWithoutLevelSignalStopsAfterCrawlTimeout) {
   ASSERT_TRUE(rig.run_to_idle());
   EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x19, 0x17, 0x11, 0x00}));
   EXPECT_EQ(rig.count(0x17), 100U);  // 1500 ms of B1 + B2
-  EXPECT_EQ(rig.events.back().cause, AbortCause::LevelNotReached);
+  EXPECT_EQ(rig.events.back().cause, lift::Cause::LevelNotReached);
 }
 
 TEST(Dcp3Travel, Dcp4DriveRunsDcp3TravelWithV4Only) {
@@ -628,7 +628,7 @@ TEST(Inspection, SwitchingToInspectionEndsANormalTravelAtOnce) {
   rig.cycle();
   EXPECT_EQ(rig.records.back().command, 0x00);
   ASSERT_FALSE(rig.events.empty());
-  EXPECT_EQ(rig.events.back().cause, AbortCause::ModeChanged);
+  EXPECT_EQ(rig.events.back().cause, lift::Cause::ModeChanged);
 }
 
 TravelRequest relevel_request(Direction direction) {
@@ -758,7 +758,7 @@ TEST(FastStart, DoorReversalAbortsControlledAndWaitsForS6) {
   EXPECT_FALSE(rig.records[idle_at].status.brake_open);
   ASSERT_FALSE(rig.events.empty());
   EXPECT_EQ(rig.events.back().type, Type::Aborted);
-  EXPECT_EQ(rig.events.back().cause, AbortCause::DoorReversal);
+  EXPECT_EQ(rig.events.back().cause, lift::Cause::DoorReversal);
 }
 
 TEST(FastStart, TimeoutAbortsControlled) {
@@ -775,7 +775,7 @@ TEST(FastStart, TimeoutAbortsControlled) {
   EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x09, 0x01, 0x00}));
   // 1500 ms = 100 cycles of VF hold.
   EXPECT_EQ(rig.count(0x09), 100U);
-  EXPECT_EQ(rig.events.back().cause, AbortCause::FastStartTimeout);
+  EXPECT_EQ(rig.events.back().cause, lift::Cause::FastStartTimeout);
 }
 
 TEST(FastStop, Dcp4SendsSpeedAfterFastStartWithVf) {
@@ -790,7 +790,7 @@ TEST(FastStop, Dcp4SendsSpeedAfterFastStartWithVf) {
   EXPECT_EQ(rig.command_runs(1), (std::vector<std::uint8_t>{0x09, 0x05, 0x0D, 0x01, 0x00}));
   EXPECT_EQ(rig.records[rig.first(0x0D)].data_word, 0x0004);  // DCP 13.1
   EXPECT_LT(rig.drive.position_mm(), 20000.0 - 500.0);
-  EXPECT_EQ(rig.events.back().cause, AbortCause::StopRequested);
+  EXPECT_EQ(rig.events.back().cause, lift::Cause::StopRequested);
 }
 
 TEST(FastStop, Dcp3SendsSpeedAfterFastStartWithVf) {
@@ -816,7 +816,7 @@ TEST(Supervision, DriveThatNeverOpensTheBrakeIsStoppedAfterStartTimeout) {
   ASSERT_TRUE(rig.run_until([&] { return rig.records.back().command == 0x01; }));
   EXPECT_EQ(rig.count(0x05), 40U);  // 600 ms of B2 + B0
   ASSERT_TRUE(rig.run_to_idle());
-  EXPECT_EQ(rig.events.back().cause, AbortCause::DriveDidNotStart);
+  EXPECT_EQ(rig.events.back().cause, lift::Cause::DriveDidNotStart);
 }
 
 TEST(StartChecks, RequestsThatCannotRunAreRefused) {

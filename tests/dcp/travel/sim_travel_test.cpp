@@ -251,7 +251,7 @@ TEST(SimTravel, Dcp4FastStartDoorReversalControlledAbort) {
   rig.input.inputs.door_reversal = true;
   ASSERT_TRUE(run_to_idle(rig));
   EXPECT_NEAR(rig.sim.position_mm(), 0.0, 1.0);
-  EXPECT_EQ(rig.events.back().cause, AbortCause::DoorReversal);
+  EXPECT_EQ(rig.events.back().cause, lift::Cause::DoorReversal);
   EXPECT_FALSE(rig.input.status.general_fault);
 }
 
@@ -267,7 +267,7 @@ TEST(SimTravel, Dcp4FastStopDuringTravel) {
   rig.controller.fast_stop();
   ASSERT_TRUE(run_to_idle(rig));
   EXPECT_LT(rig.sim.position_mm(), 19000.0);
-  EXPECT_EQ(rig.events.back().cause, AbortCause::StopRequested);
+  EXPECT_EQ(rig.events.back().cause, lift::Cause::StopRequested);
 }
 
 TEST(SimTravel, Dcp4AutoRelevel) {

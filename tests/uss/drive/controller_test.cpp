@@ -126,7 +126,7 @@ TEST(UssController, SafetyChainOpenIsOff2InTheVeryNextTelegram) {
   EXPECT_EQ(bus.count(ControllerEvent::Kind::FaultRaised, FaultCode::SafetyChain), 1);
   const auto travel = bus.travel_events();
   ASSERT_EQ(travel.size(), 2U);
-  EXPECT_EQ(travel[1].travel.cause, Cause::SafetyChain);
+  EXPECT_EQ(travel[1].travel.cause, lift::Cause::SafetyChainOpen);
   EXPECT_EQ(bus.command(2, TravelCommand{0, SpeedName::V4}).code, ReplyCode::Fault);
 }
 
@@ -143,7 +143,7 @@ TEST(UssController, ReplyFailuresEndTheTravelAtTheConfiguredCount) {
   bus.exchange();  // the third
   auto travel = bus.travel_events();
   ASSERT_EQ(travel.size(), 2U);
-  EXPECT_EQ(travel[1].travel.cause, Cause::LinkFault);
+  EXPECT_EQ(travel[1].travel.cause, lift::Cause::LinkDown);
   EXPECT_EQ(to_string(travel[1].travel.cause), "link_down");
   EXPECT_EQ(bus.count(ControllerEvent::Kind::FaultRaised, FaultCode::LinkFault), 1);
   EXPECT_FALSE(bus.controller.snapshot().brake_open);
@@ -195,7 +195,7 @@ TEST(UssController, DriveFaultEndsTheTravelAndDriveResetAcknowledgesOnARisingEdg
   bus.exchange();
   auto travel = bus.travel_events();
   ASSERT_EQ(travel.size(), 2U);
-  EXPECT_EQ(travel[1].travel.cause, Cause::DriveFault);
+  EXPECT_EQ(travel[1].travel.cause, lift::Cause::DriveFault);
   EXPECT_EQ(bus.count(ControllerEvent::Kind::FaultRaised, FaultCode::DriveFault), 1);
   EXPECT_EQ(bus.controller.snapshot().drive_state, ProfileState::Fault);
   EXPECT_EQ(bus.command(2, TravelCommand{0, SpeedName::V4}).code, ReplyCode::Fault);
@@ -246,7 +246,7 @@ TEST(UssController, ForcedShutdownCoastsAtOnce) {
   EXPECT_EQ(bus.stw_sent.back(), 0x0404);
   const auto travel = bus.travel_events();
   ASSERT_EQ(travel.size(), 2U);
-  EXPECT_EQ(travel[1].travel.cause, Cause::Shutdown);
+  EXPECT_EQ(travel[1].travel.cause, lift::Cause::ShuttingDown);
   ASSERT_TRUE(bus.run_until([&] { return bus.controller.snapshot().quiesced; }, 500));
 }
 

@@ -148,7 +148,7 @@ TEST(LiftTravel, IdleSendsOff1AndTakesTheDriveOutOfItsInhibit) {
 TEST(LiftTravel, TravelUpRunsThroughEveryPhaseAndLandsWithinTolerance) {
   Rig rig;
   const std::size_t from = rig.outputs.size();
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 2, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 2, SpeedName::V4, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_idle());
   EXPECT_LE(std::abs(rig.car.position_mm - 6000.0), 5.0) << rig.car.position_mm;
   // Contactors and OFF1, then the run word until the brake is applied, then OFF1 again.
@@ -190,7 +190,7 @@ TEST(LiftTravel, TravelDownLandsWithinToleranceWithANegativeSetpoint) {
   rig.car.position_mm = 9000.0;
   rig.travel.set_current_floor(3);
   const std::size_t from = rig.outputs.size();
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_idle());
   EXPECT_LE(std::abs(rig.car.position_mm - 3000.0), 5.0) << rig.car.position_mm;
   bool saw_run = false;
@@ -215,7 +215,7 @@ TEST(LiftTravel, SlowdownToCrawlAtEachSpeedsDistance) {
   };
   for (const Case c : {Case{SpeedName::V4, 100.0, 700}, Case{SpeedName::V3, 60.0, 400}}) {
     Rig rig;
-    ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, c.speed, rig.input()), Cause::None);
+    ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, c.speed, rig.input()), lift::Cause::None);
     ASSERT_TRUE(rig.run_until([&] { return rig.travel.phase() == Phase::Crawl; }));
     // The crawl starts in the first exchange that sees the car within the slowdown distance,
     // at the travel's full speed until then.
@@ -237,7 +237,7 @@ TEST(LiftTravel, ShaftSignalsGiveTheDecelerationPointAndTheLevel) {
   config.reference = Reference::ShaftSignals;
   Rig rig(config);
   rig.position_known = false;
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V3, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V3, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_until([&] { return rig.travel.phase() == Phase::Run; }));
   // The V3 point of another speed does not count; the travel's own does.
   rig.inputs.decel_up[3] = true;  // V4
@@ -262,7 +262,7 @@ TEST(LiftTravel, InspectionIsHoldToRunAtViBothWaysWithV0InTheEndZone) {
   rig.car.position_mm = 4000.0;
   rig.inputs.inspection = true;
   rig.inputs.doors_locked = false;  // inspection: the safety chain holds the door contacts
-  ASSERT_EQ(rig.travel.inspect(rig.floors, lift::Direction::Up, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.inspect(rig.floors, lift::Direction::Up, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_until([&] { return rig.travel.phase() == Phase::Run; }));
   rig.exchange();
   EXPECT_EQ(rig.outputs.back().setpoint_percent, 30.0) << "VI";
@@ -271,13 +271,13 @@ TEST(LiftTravel, InspectionIsHoldToRunAtViBothWaysWithV0InTheEndZone) {
   EXPECT_EQ(rig.outputs.back().setpoint_percent, 5.0) << "V0 in the top end zone";
   rig.inputs.end_zone_top = false;
   for (int i = 0; i < 50; ++i) {
-    ASSERT_EQ(rig.travel.inspect(rig.floors, lift::Direction::Up, rig.input()), Cause::None);
+    ASSERT_EQ(rig.travel.inspect(rig.floors, lift::Direction::Up, rig.input()), lift::Cause::None);
     rig.exchange();
   }
   const double moved_to = rig.car.position_mm;
   EXPECT_GT(moved_to, 4000.0);
   // Released: the normal stop (setpoint 0, standstill, brake, OFF1).
-  ASSERT_EQ(rig.travel.inspect(rig.floors, lift::Direction::None, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.inspect(rig.floors, lift::Direction::None, rig.input()), lift::Cause::None);
   rig.exchange();
   EXPECT_EQ(rig.travel.phase(), Phase::Stopping);
   EXPECT_EQ(rig.outputs.back().setpoint_percent, 0.0);
@@ -285,11 +285,11 @@ TEST(LiftTravel, InspectionIsHoldToRunAtViBothWaysWithV0InTheEndZone) {
   // From VI (300 mm/s) on the 100 %/s ramp: 0.3 s, about 45 mm.
   EXPECT_LT(rig.car.position_mm - moved_to, 55.0) << "stopped on the drive's ramp";
   // Down, at -VI.
-  ASSERT_EQ(rig.travel.inspect(rig.floors, lift::Direction::Down, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.inspect(rig.floors, lift::Direction::Down, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_until([&] { return rig.travel.phase() == Phase::Run; }));
   rig.exchange();
   EXPECT_EQ(rig.outputs.back().setpoint_percent, -30.0);
-  ASSERT_EQ(rig.travel.inspect(rig.floors, lift::Direction::None, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.inspect(rig.floors, lift::Direction::None, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_idle());
   const auto ev = rig.take_events();
   ASSERT_EQ(ev.size(), 4U);
@@ -324,7 +324,7 @@ TEST(LiftTravel, RelevellingAtVnBackIntoTheLevel) {
   rig.inputs.doors_locked = false;
   rig.inputs.door_zone_bridge = true;  // relevelling with open doors, door zone bridged
   ASSERT_EQ(rig.travel.start_relevel(rig.floors, 2, lift::Direction::None, rig.input()),
-            Cause::None);
+            lift::Cause::None);
   ASSERT_TRUE(rig.run_until([&] { return rig.travel.phase() == Phase::Run; }));
   rig.exchange();
   EXPECT_EQ(rig.outputs.back().setpoint_percent, -3.0) << "VN down";
@@ -338,7 +338,7 @@ TEST(LiftTravel, RelevellingAtVnBackIntoTheLevel) {
 
 TEST(LiftTravel, SafetyChainOpenIsOff2InTheVeryNextTelegramWithTheBrakeFalling) {
   Rig rig;
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_until([&] { return rig.car.position_mm > 2000.0; }));
   ASSERT_TRUE(rig.outputs.back().brake_open);
   rig.take_events();
@@ -353,13 +353,14 @@ TEST(LiftTravel, SafetyChainOpenIsOff2InTheVeryNextTelegramWithTheBrakeFalling) 
   const auto ev = rig.take_events();
   ASSERT_EQ(ev.size(), 1U) << "reported once";
   EXPECT_EQ(ev[0].type, TravelEvent::Type::Aborted);
-  EXPECT_EQ(ev[0].cause, Cause::SafetyChain);
-  EXPECT_EQ(rig.travel.start_travel(rig.floors, 0, SpeedName::V4, rig.input()), Cause::SafetyChain);
+  EXPECT_EQ(ev[0].cause, lift::Cause::SafetyChainOpen);
+  EXPECT_EQ(rig.travel.start_travel(rig.floors, 0, SpeedName::V4, rig.input()),
+            lift::Cause::SafetyChainOpen);
   // Closed again: OFF1, the drive goes from inhibit to ready to switch on, a travel runs.
   rig.inputs.safety_chain_closed = true;
   EXPECT_EQ(rig.exchange().stw, 0x047E);
   rig.exchange();
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_idle());
   EXPECT_LE(std::abs(rig.car.position_mm - 9000.0), 5.0);
 }
@@ -367,25 +368,27 @@ TEST(LiftTravel, SafetyChainOpenIsOff2InTheVeryNextTelegramWithTheBrakeFalling) 
 TEST(LiftTravel, DoorsUnlockedIsOff2AndInputsLostIsAQuickStopOnTheBrake) {
   {
     Rig rig;
-    ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), Cause::None);
+    ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()),
+              lift::Cause::None);
     ASSERT_TRUE(rig.run_until([&] { return rig.car.position_mm > 2000.0; }));
     rig.inputs.doors_locked = false;
     const DriveOutput out = rig.exchange();
     EXPECT_EQ(out.stw, 0x0404);
     EXPECT_FALSE(out.brake_open);
     ASSERT_FALSE(rig.events.empty());
-    EXPECT_EQ(rig.events.back().cause, Cause::DoorsUnlocked);
+    EXPECT_EQ(rig.events.back().cause, lift::Cause::DoorsNotLocked);
   }
   {
     Rig rig;
-    ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), Cause::None);
+    ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()),
+              lift::Cause::None);
     ASSERT_TRUE(rig.run_until([&] { return rig.car.position_mm > 2000.0; }));
     rig.inputs.valid = false;
     DriveOutput out = rig.exchange();
     EXPECT_EQ(out.stw, 0x040A) << "OFF3";
     EXPECT_TRUE(out.brake_open) << "the drive brakes the car on its quick-stop ramp";
     ASSERT_FALSE(rig.events.empty());
-    EXPECT_EQ(rig.events.back().cause, Cause::InputsLost);
+    EXPECT_EQ(rig.events.back().cause, lift::Cause::InputsLost);
     // The brake falls at standstill; the halt ends when the drive reports its pulses off.
     ASSERT_TRUE(rig.run_until([&] { return !rig.outputs.back().brake_open; }));
     EXPECT_LE(std::abs(rig.actual), 0.5) << "standstill";
@@ -396,23 +399,23 @@ TEST(LiftTravel, DoorsUnlockedIsOff2AndInputsLostIsAQuickStopOnTheBrake) {
 
 TEST(LiftTravel, PositionLostIsAQuickStop) {
   Rig rig;
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 2, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 2, SpeedName::V4, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_until([&] { return rig.travel.phase() == Phase::Run; }));
   rig.position_known = false;
   EXPECT_EQ(rig.exchange().stw, 0x040A);
-  EXPECT_EQ(rig.events.back().cause, Cause::PositionLost);
+  EXPECT_EQ(rig.events.back().cause, lift::Cause::PositionLost);
 }
 
 TEST(LiftTravel, LinkFaultEndsTheTravelAndHoldsOff2UntilTheDriveIsSeenOff) {
   Rig rig;
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_until([&] { return rig.car.position_mm > 2000.0; }));
   rig.link_ok = false;  // the controller's verdict after link_fault_replies failures
   rig.drive_hears = false;
   DriveOutput out = rig.exchange();
   EXPECT_EQ(out.stw, 0x0404);
   EXPECT_FALSE(out.brake_open);
-  EXPECT_EQ(rig.events.back().cause, Cause::LinkFault);
+  EXPECT_EQ(rig.events.back().cause, lift::Cause::LinkDown);
   for (int i = 0; i < 10; ++i) EXPECT_EQ(rig.exchange().stw, 0x0404);
   // The link returns: the first telegram the drive hears is OFF2.
   rig.drive_hears = true;
@@ -424,7 +427,7 @@ TEST(LiftTravel, LinkFaultEndsTheTravelAndHoldsOff2UntilTheDriveIsSeenOff) {
 
 TEST(LiftTravel, DriveFaultEndsTheTravelAndNeedsTheAcknowledgeEdge) {
   Rig rig;
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_until([&] { return rig.car.position_mm > 2000.0; }));
   rig.drive.trip();
   rig.exchange();  // the telegram whose reply shows the fault
@@ -433,12 +436,14 @@ TEST(LiftTravel, DriveFaultEndsTheTravelAndNeedsTheAcknowledgeEdge) {
   EXPECT_FALSE(out.contactors_on);
   ASSERT_FALSE(rig.events.empty());
   EXPECT_EQ(rig.events.back().type, TravelEvent::Type::Aborted);
-  EXPECT_EQ(rig.events.back().cause, Cause::DriveFault);
-  EXPECT_EQ(rig.travel.start_travel(rig.floors, 0, SpeedName::V4, rig.input()), Cause::DriveFault);
+  EXPECT_EQ(rig.events.back().cause, lift::Cause::DriveFault);
+  EXPECT_EQ(rig.travel.start_travel(rig.floors, 0, SpeedName::V4, rig.input()),
+            lift::Cause::DriveFault);
   // The cause goes, but the drive stays in fault until acknowledged (table 5.5 bit 3).
   rig.drive.clear_fault_cause();
   for (int i = 0; i < 10; ++i) rig.exchange();
-  EXPECT_EQ(rig.travel.start_travel(rig.floors, 0, SpeedName::V4, rig.input()), Cause::DriveFault);
+  EXPECT_EQ(rig.travel.start_travel(rig.floors, 0, SpeedName::V4, rig.input()),
+            lift::Cause::DriveFault);
   const std::size_t from = rig.drive.stw_log.size();
   rig.travel.acknowledge();
   for (int i = 0; i < 10; ++i) rig.exchange();
@@ -450,7 +455,7 @@ TEST(LiftTravel, DriveFaultEndsTheTravelAndNeedsTheAcknowledgeEdge) {
   }
   EXPECT_EQ(bit7, (std::vector<bool>{false, true, false}));
   EXPECT_EQ(rig.zsw & zsw::kFault, 0);
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 0, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 0, SpeedName::V4, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_idle());
   EXPECT_LE(std::abs(rig.car.position_mm), 5.0);
 }
@@ -458,19 +463,20 @@ TEST(LiftTravel, DriveFaultEndsTheTravelAndNeedsTheAcknowledgeEdge) {
 TEST(LiftTravel, DriveThatDoesNotSwitchOnEndsTheStartAndIsAFaultUntilAcknowledged) {
   Rig rig;
   rig.drive.never_enables = true;
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_idle());
   const auto ev = rig.take_events();
   ASSERT_EQ(ev.size(), 2U);
-  EXPECT_EQ(ev[1].cause, Cause::DriveDidNotStart);
+  EXPECT_EQ(ev[1].cause, lift::Cause::DriveDidNotStart);
   EXPECT_EQ(rig.car.position_mm, 0.0);
   for (const DriveOutput& out : rig.outputs) EXPECT_FALSE(out.brake_open);
   EXPECT_EQ(rig.travel.profile().supervision(), Supervision::NotSwitchedOn);
-  EXPECT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()), Cause::DriveFault);
+  EXPECT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()),
+            lift::Cause::DriveFault);
   rig.travel.acknowledge();
   rig.drive.never_enables = false;
   rig.exchange();
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_idle());
   EXPECT_LE(std::abs(rig.car.position_mm - 3000.0), 5.0);
 }
@@ -479,10 +485,10 @@ TEST(LiftTravel, MotorRunTimeLimiterCoasts) {
   LiftTravelConfig config = test_config();
   config.max_travel_ms = 2000;
   Rig rig(config);
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_idle());
   ASSERT_EQ(rig.events.size(), 2U);
-  EXPECT_EQ(rig.events[1].cause, Cause::TravelTimeout);
+  EXPECT_EQ(rig.events[1].cause, lift::Cause::TravelTimeout);
   EXPECT_EQ(rig.events[1].at - rig.events[0].at, milliseconds(2010));
   EXPECT_EQ(rig.drive.stw_log.back(), 0x047E);
   bool coasted = false;
@@ -496,7 +502,7 @@ TEST(LiftTravel, CrawlThatFindsNoLevelEndsWithAQuickStop) {
   config.crawl_timeout_ms = 1000;
   Rig rig(config);
   rig.position_known = false;
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_until([&] { return rig.travel.phase() == Phase::Run; }));
   rig.inputs.decel_up[3] = true;  // V4's point; the level zone never comes
   ASSERT_TRUE(rig.run_until([&] { return rig.travel.phase() == Phase::Crawl; }));
@@ -504,7 +510,7 @@ TEST(LiftTravel, CrawlThatFindsNoLevelEndsWithAQuickStop) {
   ASSERT_TRUE(rig.run_until([&] { return rig.travel.phase() == Phase::Halt; }));
   EXPECT_EQ(rig.now - kPeriod - crawl_from, milliseconds(1000));
   EXPECT_EQ(rig.outputs.back().stw, 0x040A) << "OFF3";
-  EXPECT_EQ(rig.events.back().cause, Cause::LevelNotReached);
+  EXPECT_EQ(rig.events.back().cause, lift::Cause::LevelNotReached);
   ASSERT_TRUE(rig.run_idle());
 }
 
@@ -514,7 +520,7 @@ TEST(LiftTravel, TheRunTimeLimiterDoesNotActOnInspection) {
   Rig rig(config);
   rig.inputs.inspection = true;
   for (int i = 0; i < 300; ++i) {
-    ASSERT_EQ(rig.travel.inspect(rig.floors, lift::Direction::Up, rig.input()), Cause::None);
+    ASSERT_EQ(rig.travel.inspect(rig.floors, lift::Direction::Up, rig.input()), lift::Cause::None);
     rig.exchange();
   }
   EXPECT_EQ(rig.travel.kind(), TravelKind::Inspection);
@@ -524,7 +530,7 @@ TEST(LiftTravel, TheRunTimeLimiterDoesNotActOnInspection) {
 
 TEST(LiftTravel, StopRetargetsTheNextReachableFloorAhead) {
   Rig rig;
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), lift::Cause::None);
   ASSERT_TRUE(rig.run_until([&] { return rig.car.position_mm > 1500.0; }));
   // Floor 1 (3000) is still beyond V4's 700 mm: the car stops there.
   EXPECT_EQ(rig.travel.stop(rig.floors, rig.input()), std::optional<std::size_t>(1));
@@ -536,39 +542,42 @@ TEST(LiftTravel, StopRetargetsTheNextReachableFloorAhead) {
 
 TEST(LiftTravel, StopBeforeTheCarMovesSwitchesOffAtOnce) {
   Rig rig;
-  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), Cause::None);
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), lift::Cause::None);
   rig.exchange();
   EXPECT_EQ(rig.travel.stop(rig.floors, rig.input()), std::nullopt);
   EXPECT_EQ(rig.exchange().stw, 0x047E);
-  EXPECT_EQ(rig.events.back().cause, Cause::Stopped);
+  EXPECT_EQ(rig.events.back().cause, lift::Cause::StopRequested);
   EXPECT_FALSE(rig.travel.busy());
 }
 
 TEST(LiftTravel, RefusalsAtStart) {
   Rig rig;
-  EXPECT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V7, rig.input()), Cause::BadSpeed);
-  EXPECT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V0, rig.input()), Cause::BadSpeed);
+  EXPECT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V7, rig.input()),
+            lift::Cause::SpeedNotConfigured);
+  EXPECT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V0, rig.input()),
+            lift::Cause::SpeedNotConfigured);
   rig.drive.warning = true;
   rig.exchange();
   EXPECT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()),
-            Cause::AdvanceWarning);
+            lift::Cause::AdvanceWarning);
   rig.drive.warning = false;
   rig.drive.plc_control = false;
   rig.exchange();
   EXPECT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()),
-            Cause::DriveNotReady);
+            lift::Cause::DriveNotReady);
   rig.drive.plc_control = true;
   rig.exchange();
   rig.link_ok = false;
-  EXPECT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()), Cause::LinkFault);
+  EXPECT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()),
+            lift::Cause::LinkDown);
   rig.link_ok = true;
   rig.position_known = false;
   EXPECT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()),
-            Cause::PositionLost);
+            lift::Cause::PositionLost);
   rig.position_known = true;
   rig.inputs.doors_locked = false;
   EXPECT_EQ(rig.travel.start_travel(rig.floors, 1, SpeedName::V4, rig.input()),
-            Cause::DoorsUnlocked);
+            lift::Cause::DoorsNotLocked);
   EXPECT_TRUE(rig.events.empty());
 }
 
