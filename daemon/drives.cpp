@@ -8,14 +8,14 @@
 
 namespace liftd::daemon {
 
-std::unique_ptr<LiftRunner> make_lift(Daemon& daemon, const config::Config& config, bool simulate) {
+std::unique_ptr<LiftRunner> make_lift(Host& host, const config::Config& config, bool simulate) {
   switch (config.drive.kind) {
     case drive::Kind::Dcp:
-      return std::make_unique<LiftApp>(daemon, config, simulate);
+      return std::make_unique<LiftApp>(host, config, simulate);
     case drive::Kind::Sch001:
-      return std::make_unique<HydraulicLift>(daemon, config, simulate);
+      return std::make_unique<HydraulicLift>(host, config, simulate);
     case drive::Kind::Uss:
-      return std::make_unique<UssLift>(daemon, config, simulate);
+      return std::make_unique<UssLift>(host, config, simulate);
   }
   throw std::invalid_argument("drive.kind \"" + std::string(drive::to_string(config.drive.kind)) +
                               "\" is not available in this build");

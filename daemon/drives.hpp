@@ -8,21 +8,12 @@
 #include <string>
 
 #include "config/config.hpp"
+#include "host/host.hpp"
 
 namespace liftd::daemon {
 
-class Daemon;
-
-/// A running lift of any drive kind, as main() holds it.
-class LiftRunner {
- public:
-  virtual ~LiftRunner() = default;
-  /// The API socket path in use.
-  virtual const std::string& socket_path() const = 0;
-};
-
 /// The lift for config.drive.kind. Throws std::invalid_argument / std::runtime_error with a
 /// clear message on a configuration the parts refuse or a kind this build cannot run.
-std::unique_ptr<LiftRunner> make_lift(Daemon& daemon, const config::Config& config, bool simulate);
+std::unique_ptr<LiftRunner> make_lift(Host& host, const config::Config& config, bool simulate);
 
 }  // namespace liftd::daemon

@@ -17,11 +17,10 @@
 #include "can/socket.hpp"
 #include "common/position_source.hpp"
 #include "config/config.hpp"
-#include "daemon/controller_lift.hpp"
-#include "daemon/daemon.hpp"
-#include "daemon/drives.hpp"
-#include "daemon/lift_common.hpp"
-#include "daemon/lift_core.hpp"
+#include "host/controller_lift.hpp"
+#include "host/host.hpp"
+#include "host/lift_common.hpp"
+#include "host/lift_core.hpp"
 #include "log/throttle.hpp"
 #include "rt/can_runner.hpp"
 #include "rt/encoder_tap.hpp"
@@ -110,7 +109,7 @@ class Sch001Backend final : public ControllerBackend<Sch001Drive> {
 /// The hydraulic lift as one piece, registered with the daemon.
 class HydraulicLift final : public ControllerLift<Sch001Drive> {
  public:
-  HydraulicLift(Daemon& daemon, const config::Config& config, bool simulate);
+  HydraulicLift(Host& daemon, const config::Config& config, bool simulate);
   ~HydraulicLift() override;
 
  private:

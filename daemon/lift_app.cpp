@@ -13,11 +13,11 @@
 #include "api/commands.hpp"
 #include "common/mono_time.hpp"
 #include "common/version.hpp"
-#include "daemon/lift_common.hpp"
-#include "daemon/lift_core.hpp"
 #include "daemon/simulated_lift.hpp"
 #include "dcp/charset.hpp"
 #include "dcp/messages.hpp"
+#include "host/lift_common.hpp"
+#include "host/lift_core.hpp"
 #include "log/log.hpp"
 #include "service/notify.hpp"
 
@@ -122,7 +122,7 @@ config::Config simulation_defaults() {
   return cfg;
 }
 
-LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
+LiftApp::LiftApp(Host& daemon, const config::Config& config, bool simulate)
     : daemon_(daemon),
       config_(config),
       simulate_(simulate),
@@ -162,7 +162,7 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
   runner_ = std::make_unique<rt::CycleRunner>(cycle_config(config, device), *controller_);
   runner_->set_notify_fd(wake_.fd());
   backend_ = std::make_unique<LiftBackend>(
-      config, *controller_, *runner_,
+      config, daemon.config_schema(), *controller_, *runner_,
       config.position.source == config::PositionSource::api ? position_feed_.get() : nullptr,
       runtime_dir_, sim_.get());
 

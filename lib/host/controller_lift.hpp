@@ -28,13 +28,11 @@
 #include "api/server.hpp"
 #include "common/position_source.hpp"
 #include "config/config.hpp"
-#include "daemon/daemon.hpp"
-#include "daemon/drives.hpp"
-#include "daemon/lift_common.hpp"
-#include "daemon/lift_core.hpp"
-#include "daemon/trace_files.hpp"
 #include "drive/drive.hpp"
-#include "kinds/config_schema.hpp"
+#include "host/host.hpp"
+#include "host/lift_common.hpp"
+#include "host/lift_core.hpp"
+#include "host/trace_files.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -48,9 +46,11 @@ class ControllerBackend : public api::Backend {
   using Runner = typename Drive::Runner;
   using Simulator = typename Drive::Simulator;
 
-  ControllerBackend(const config::Config& config, Controller& controller, Runner& runner,
-                    PositionFeed* position_feed, Simulator* sim)
+  ControllerBackend(const config::Config& config, const config::Schema& schema,
+                    Controller& controller, Runner& runner, PositionFeed* position_feed,
+                    Simulator* sim)
       : config_(config),
+        schema_(schema),
         controller_(controller),
         runner_(runner),
         sim_(sim),
@@ -63,7 +63,7 @@ class ControllerBackend : public api::Backend {
 
   drive::Kind drive_kind() const override { return Drive::kKind; }
   api::DisplaySnapshot display() override { return {}; }
-  nlohmann::json config() override { return config::to_json(config_, kinds::config_schema()); }
+  nlohmann::json config() override { return config::to_json(config_, schema_); }
   // Not offered by these drive kinds: the dispatcher refuses them before they get here.
   void key(int, api::Responder done) override { not_offered(done); }
   void power(api::PowerSetting, api::Responder done) override { not_offered(done); }
@@ -171,6 +171,7 @@ class ControllerBackend : public api::Backend {
   }
 
   const config::Config& config_;
+  const config::Schema& schema_;  ///< the configuration file's, for the `config` dump
   Controller& controller_;
   Runner& runner_;
   Simulator* sim_;
@@ -201,7 +202,7 @@ class ControllerLift : public LiftRunner {
 
  protected:
   /// `continuous`: the status details that change while moving, published at the state rate.
-  ControllerLift(Daemon& daemon, const config::Config& config, bool simulate,
+  ControllerLift(Host& daemon, const config::Config& config, bool simulate,
                  std::vector<std::string> continuous = {})
       : daemon_(daemon),
         config_(config),
@@ -287,7 +288,7 @@ class ControllerLift : public LiftRunner {
     }
   }
 
-  Daemon& daemon_;
+  Host& daemon_;
   const config::Config& config_;
   bool simulate_;
   std::unique_ptr<typename Drive::Simulator> sim_;

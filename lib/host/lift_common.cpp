@@ -1,4 +1,4 @@
-#include "daemon/lift_common.hpp"
+#include "host/lift_common.hpp"
 
 #include <unistd.h>
 
