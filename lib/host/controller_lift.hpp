@@ -3,7 +3,8 @@
 // the API backend's drive-neutral commands and `status` fields, the flight recorder's files (the
 // API's `trace` with `save`, SIGUSR1), and the lift's start and stop, its io-thread poll and its
 // service-stop wind-down. What only one drive has (its link and events, its status details,
-// stats and trace) stays in hydraulic_lift.* and uss_lift.*.
+// stats and trace) stays in the kind's lift (lib/sch001/host/hydraulic_lift.*,
+// lib/uss/host/uss_lift.*).
 //
 // `Drive` names the parts of one drive kind (see Sch001Drive, UssDrive):
 //   Controller, Runner, Simulator, Snapshot, Command, CommandReply, Event, TravelKind,

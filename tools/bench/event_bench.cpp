@@ -26,7 +26,7 @@
 
 #include "common/mono_time.hpp"
 #include "daemon/daemon.hpp"
-#include "daemon/lift_app.hpp"
+#include "dcp/host/lift_app.hpp"
 #include "log/log.hpp"
 #include "rt/flight_recorder.hpp"
 #include "service/notify.hpp"

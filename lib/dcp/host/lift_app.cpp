@@ -1,4 +1,4 @@
-#include "daemon/lift_app.hpp"
+#include "dcp/host/lift_app.hpp"
 
 #include <unistd.h>
 
@@ -13,13 +13,12 @@
 #include "api/commands.hpp"
 #include "common/mono_time.hpp"
 #include "common/version.hpp"
-#include "daemon/simulated_lift.hpp"
 #include "dcp/charset.hpp"
+#include "dcp/host/simulated_lift.hpp"
 #include "dcp/messages.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
 #include "log/log.hpp"
-#include "service/notify.hpp"
 
 namespace liftd::daemon {
 namespace {

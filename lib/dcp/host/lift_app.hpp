@@ -16,8 +16,8 @@
 
 #include "api/server.hpp"
 #include "config/config.hpp"
-#include "daemon/lift_backend.hpp"
 #include "dcp/control/dcp_controller.hpp"
+#include "dcp/host/lift_backend.hpp"
 #include "host/host.hpp"
 #include "host/lift_core.hpp"
 #include "io/pty.hpp"

@@ -1,11 +1,11 @@
-#include "daemon/lift_backend.hpp"
+#include "dcp/host/lift_backend.hpp"
 
 #include <algorithm>
 #include <ctime>
 
 #include "common/mono_time.hpp"
-#include "daemon/simulated_lift.hpp"
 #include "dcp/charset.hpp"
+#include "dcp/host/simulated_lift.hpp"
 #include "dcp/trace.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"

@@ -1,4 +1,4 @@
-#include "daemon/hydraulic_lift.hpp"
+#include "sch001/host/hydraulic_lift.hpp"
 
 #include <poll.h>
 

@@ -1,4 +1,4 @@
-#include "daemon/uss_lift.hpp"
+#include "uss/host/uss_lift.hpp"
 
 #include <pthread.h>
 #include <sched.h>
