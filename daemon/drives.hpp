@@ -1,7 +1,8 @@
-// One factory turns drive.kind into the daemon's lift: the DCP lift (lift_app.*), the
-// hydraulic SCH001 lift (hydraulic_lift.*) or the USS lift (uss_lift.*). Each builds its
-// controller, its runner, its API backend and, with --simulate, its simulated drive, and registers
-// them with the daemon.
+// The registry of drive kinds: drive.kind -> the daemon's lift, each in its kind's folder (the DCP
+// lift lib/dcp/host/lift_app.*, the hydraulic SCH001 lift lib/sch001/host/hydraulic_lift.*, the
+// USS lift lib/uss/host/uss_lift.*). Each builds its controller, its runner, its API backend and,
+// with --simulate, its simulated drive, and registers them with the daemon (lib/host/host.hpp).
+// drives.cpp is the only file of daemon/ that includes a kind's header.
 #pragma once
 
 #include <memory>

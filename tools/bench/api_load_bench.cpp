@@ -32,6 +32,7 @@
 #include "common/mono_time.hpp"
 #include "daemon/daemon.hpp"
 #include "dcp/host/lift_app.hpp"
+#include "host/lift_common.hpp"
 #include "io/pty.hpp"
 #include "log/log.hpp"
 #include "rt/cycle_runner.hpp"

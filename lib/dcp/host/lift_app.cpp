@@ -106,21 +106,6 @@ log::Level level_for(const control::ControllerEvent& event) {
 
 }  // namespace
 
-config::Config simulation_defaults() {
-  config::Config cfg;
-  cfg.position.source = config::PositionSource::sim;
-  const char* runtime = std::getenv("XDG_RUNTIME_DIR");
-  cfg.api.socket =
-      std::string(runtime != nullptr && *runtime != '\0' ? runtime : ".") + "/liftd-sim.sock";
-  cfg.api.socket_group.clear();
-  cfg.api.read_group.clear();
-  cfg.api.control_group.clear();
-  cfg.api.inputs_group.clear();
-  cfg.rt.lock_memory = false;       // an ordinary user may not lock memory; say nothing about it
-  cfg.rt.require_realtime = false;  // nor get SCHED_FIFO: the simulation runs anyway, warned
-  return cfg;
-}
-
 LiftApp::LiftApp(Host& daemon, const config::Config& config, bool simulate)
     : daemon_(daemon),
       config_(config),

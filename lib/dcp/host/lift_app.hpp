@@ -32,11 +32,6 @@ control::ControllerConfig dcp_controller_config(const config::Config& config);
 
 class SimulatedLift;
 
-/// The configuration of `liftd --simulate` without a config file: the defaults, the API socket in
-/// $XDG_RUNTIME_DIR (else the current directory) as liftd-sim.sock, no access groups (root and
-/// the user who started it may do everything), no memory locking.
-config::Config simulation_defaults();
-
 /// Everything between the configuration and the running components.
 class LiftApp final : public LiftRunner {
  public:
