@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "daemon/reload.hpp"
+#include "kinds/config_schema.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -209,6 +210,10 @@ void Daemon::set_config_applier(std::function<std::string(const config::Config&)
 
 void Daemon::set_dump_handler(std::function<void()> dump) {
   dump_ = std::move(dump);
+}
+
+const config::Schema& Daemon::config_schema() const {
+  return kinds::config_schema();
 }
 
 ReloadOutcome Daemon::refuse_reload(std::vector<std::string> problems) {

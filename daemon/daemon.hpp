@@ -21,19 +21,10 @@
 #include <vector>
 
 #include "config/config.hpp"
+#include "host/host.hpp"
 #include "service/notify.hpp"
 
 namespace liftd::daemon {
-
-/// One part of the daemon with a start and a stop step, run on the io_context's thread.
-struct Component {
-  std::string name;             ///< shown in logs ("dcp", "sim", "api")
-  std::function<bool()> start;  ///< returns false (after logging why) when it cannot start
-  std::function<void()> stop;   ///< undoes start; called only for started components
-  /// Optional, before any stop: brings the part to a safe rest (a moving car to a floor) while
-  /// the io_context keeps running; calls `done` once finished.
-  std::function<void(std::function<void()> done)> wind_down = nullptr;
-};
 
 /// Exit codes of the liftd process.
 namespace exit_code {
@@ -58,43 +49,45 @@ void ignore_sigpipe();
 std::vector<int> handled_signals();
 
 /// Runs the daemon: owns the io_context (run on the calling thread), the signal set, the
-/// notifier and the watchdog.
-class Daemon {
+/// notifier and the watchdog; hosts the lift (Host).
+class Daemon final : public Host {
  public:
   /// A daemon for `config`, notifying through `notifier`, with the watchdog timeout systemd
   /// asked for (nullopt: no watchdog).
   Daemon(config::Config config, service::Notifier notifier,
          std::optional<std::chrono::microseconds> watchdog_timeout);
-  ~Daemon();
+  ~Daemon() override;
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
 
   /// The io_context every component posts its work to.
-  asio::io_context& io() { return io_; }
+  asio::io_context& io() override { return io_; }
   /// The configuration in effect (after a reload: the running values of keys that need a
   /// restart, the new values of the others). Stays at the same address for the daemon's life.
   const config::Config& config() const { return config_; }
 
   /// Adds a component; components start in the order added, stop in reverse.
-  void add_component(Component component);
+  void add_component(Component component) override;
   /// Sets the probe that gates WATCHDOG=1 (e.g. "the DCP cycle advanced since last time").
   /// Without one, every period counts as progress.
-  void set_progress_probe(std::function<bool()> probe);
+  void set_progress_probe(std::function<bool()> probe) override;
   /// The STATUS= text sent with READY=1 once every component has started.
-  void set_running_status(std::string status);
+  void set_running_status(std::string status) override;
   /// Sends a STATUS= line now (e.g. "link fault: drive not answering").
-  void report_status(std::string_view status);
+  void report_status(std::string_view status) override;
 
   /// How to read the configuration file again on SIGHUP, and the file's name for messages.
   /// Without a loader (`--simulate` without `--config`) a reload has nothing to read.
   void set_config_loader(std::function<config::LoadResult()> load, std::string origin);
   /// Applies the settings a reload may change (API access groups and limits) to the running
   /// parts; returns "" when done, or why it cannot (then nothing may have changed).
-  void set_config_applier(std::function<std::string(const config::Config&)> apply);
+  void set_config_applier(std::function<std::string(const config::Config&)> apply) override;
   /// Keeps the log level a reload would otherwise set from log.level (--log-level given).
   void keep_log_level(bool keep) { keep_log_level_ = keep; }
   /// What SIGUSR1 does: write the flight recorder.
-  void set_dump_handler(std::function<void()> dump);
+  void set_dump_handler(std::function<void()> dump) override;
+  /// Every drive kind's configuration schema (lib/kinds).
+  const config::Schema& config_schema() const override;
 
   /// Re-reads the configuration (RELOADING=1 ... READY=1): applies what can change while the
   /// drive link runs, names in the journal each changed key that needs a restart and keeps its

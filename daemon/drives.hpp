@@ -1,28 +1,20 @@
-// One factory turns drive.kind into the daemon's lift: the DCP lift (lift_app.*), the
-// hydraulic SCH001 lift (hydraulic_lift.*) or the USS lift (uss_lift.*). Each builds its
-// controller, its runner, its API backend and, with --simulate, its simulated drive, and registers
-// them with the daemon.
+// The registry of drive kinds: drive.kind -> the daemon's lift, each in its kind's folder (the DCP
+// lift lib/dcp/host/lift_app.*, the hydraulic SCH001 lift lib/sch001/host/hydraulic_lift.*, the
+// USS lift lib/uss/host/uss_lift.*). Each builds its controller, its runner, its API backend and,
+// with --simulate, its simulated drive, and registers them with the daemon (lib/host/host.hpp).
+// drives.cpp is the only file of daemon/ that includes a kind's header.
 #pragma once
 
 #include <memory>
 #include <string>
 
 #include "config/config.hpp"
+#include "host/host.hpp"
 
 namespace liftd::daemon {
 
-class Daemon;
-
-/// A running lift of any drive kind, as main() holds it.
-class LiftRunner {
- public:
-  virtual ~LiftRunner() = default;
-  /// The API socket path in use.
-  virtual const std::string& socket_path() const = 0;
-};
-
 /// The lift for config.drive.kind. Throws std::invalid_argument / std::runtime_error with a
 /// clear message on a configuration the parts refuse or a kind this build cannot run.
-std::unique_ptr<LiftRunner> make_lift(Daemon& daemon, const config::Config& config, bool simulate);
+std::unique_ptr<LiftRunner> make_lift(Host& host, const config::Config& config, bool simulate);
 
 }  // namespace liftd::daemon

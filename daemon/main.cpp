@@ -17,7 +17,7 @@
 #include "daemon/cli.hpp"
 #include "daemon/daemon.hpp"
 #include "daemon/drives.hpp"
-#include "daemon/lift_app.hpp"
+#include "host/lift_common.hpp"
 #include "kinds/config_schema.hpp"
 #include "log/log.hpp"
 #include "rt/rt_thread.hpp"

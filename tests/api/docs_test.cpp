@@ -190,8 +190,8 @@ const std::vector<std::string> kEvents = {
 
 TEST(ApiDocs, EventListMatchesWhatTheDaemonPublishes) {
   std::set<std::string> published;
-  for (const char* lift : {"daemon/lift_app.cpp", "daemon/hydraulic_lift.cpp",
-                           "daemon/uss_lift.cpp", "daemon/lift_core.cpp"}) {
+  for (const char* lift : {"lib/dcp/host/lift_app.cpp", "lib/sch001/host/hydraulic_lift.cpp",
+                           "lib/uss/host/uss_lift.cpp", "lib/host/lift_core.cpp"}) {
     const std::string app = read_source(lift);
     for (const auto& pattern : {R"re(\bname = "([a-z_]+)";)re", R"re(publish\(\s*"([a-z_]+)")re"}) {
       published.merge(matches(app, pattern));

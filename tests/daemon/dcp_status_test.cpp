@@ -2,7 +2,7 @@
 // status (DCP 4.2.1.1) under its documented name.
 #include <gtest/gtest.h>
 
-#include "daemon/dcp_status.hpp"
+#include "dcp/host/dcp_status.hpp"
 
 namespace liftd::daemon {
 namespace {

@@ -3,9 +3,9 @@
 // builds a sequencer directly runs the lift the daemon runs.
 #include <gtest/gtest.h>
 
-#include "daemon/hydraulic_lift.hpp"
-#include "daemon/lift_app.hpp"
-#include "daemon/uss_lift.hpp"
+#include "dcp/host/lift_app.hpp"
+#include "sch001/host/hydraulic_lift.hpp"
+#include "uss/host/uss_lift.hpp"
 
 namespace liftd::daemon {
 namespace {

@@ -3,7 +3,7 @@
 // shaft signals without its defaults overriding the simulated machine.
 #include <gtest/gtest.h>
 
-#include "daemon/lift_common.hpp"
+#include "host/lift_common.hpp"
 
 namespace liftd::daemon {
 namespace {

@@ -1,4 +1,4 @@
-// The requests every lift's io thread keeps until its controller answers (daemon/lift_core.hpp):
+// The requests every lift's io thread keeps until its controller answers (lib/host/lift_core.hpp):
 // one reply answers one request, an ok reply goes through the request's own completion, every
 // other reply code is the API's error of the same meaning, tags stay clear of 0 and of a
 // controller's own, and a request the controller never answers fails at its deadline.
@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-#include "daemon/lift_core.hpp"
+#include "host/lift_core.hpp"
 #include "lift/rules.hpp"
 
 namespace liftd::daemon {

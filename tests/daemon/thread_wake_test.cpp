@@ -1,4 +1,4 @@
-// The io thread's wake-up for a lift's real-time thread (daemon/lift_core.hpp): a write to the
+// The io thread's wake-up for a lift's real-time thread (lib/host/lift_core.hpp): a write to the
 // eventfd runs the poll at once, without waiting for the fallback timer; the fallback timer runs
 // it when the thread says nothing; after stop() nothing runs.
 #include <gtest/gtest.h>
@@ -9,7 +9,7 @@
 
 #include <asio.hpp>
 
-#include "daemon/lift_core.hpp"
+#include "host/lift_core.hpp"
 
 namespace liftd::daemon {
 namespace {

@@ -1,6 +1,6 @@
 // Flight-recorder files: never through a planted link, at most N kept, requests rate-limited,
 // only in a directory that is ours alone.
-#include "daemon/trace_files.hpp"
+#include "host/trace_files.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -21,10 +21,13 @@ declare -A allowed=(
   [sim]="common drive lift"
   [rt]="common io log can"
   [config]="common drive log"
-  [dcp]="common io log can drive lift sim rt config"
-  [sch001]="common io log can drive lift sim rt config"
-  [uss]="common io log can drive lift sim rt config"
   [api]="common drive log"
+  # What every kind's lift shares on the daemon's io thread, below the kinds' own lifts
+  # (lib/<kind>/host).
+  [host]="common drive log service can lift sim rt config api"
+  [dcp]="common io log can drive lift sim rt config api host"
+  [sch001]="common io log can drive lift sim rt config api host"
+  [uss]="common io log can drive lift sim rt config api host"
   # The drive kinds put together (the configuration schema): the one folder that knows them all.
   [kinds]="common drive config dcp sch001 uss"
 )

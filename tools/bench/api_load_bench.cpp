@@ -31,7 +31,8 @@
 
 #include "common/mono_time.hpp"
 #include "daemon/daemon.hpp"
-#include "daemon/lift_app.hpp"
+#include "dcp/host/lift_app.hpp"
+#include "host/lift_common.hpp"
 #include "io/pty.hpp"
 #include "log/log.hpp"
 #include "rt/cycle_runner.hpp"

@@ -26,7 +26,8 @@
 
 #include "common/mono_time.hpp"
 #include "daemon/daemon.hpp"
-#include "daemon/lift_app.hpp"
+#include "dcp/host/lift_app.hpp"
+#include "host/lift_common.hpp"
 #include "log/log.hpp"
 #include "rt/flight_recorder.hpp"
 #include "service/notify.hpp"

@@ -3,7 +3,8 @@
 // the API backend's drive-neutral commands and `status` fields, the flight recorder's files (the
 // API's `trace` with `save`, SIGUSR1), and the lift's start and stop, its io-thread poll and its
 // service-stop wind-down. What only one drive has (its link and events, its status details,
-// stats and trace) stays in hydraulic_lift.* and uss_lift.*.
+// stats and trace) stays in the kind's lift (lib/sch001/host/hydraulic_lift.*,
+// lib/uss/host/uss_lift.*).
 //
 // `Drive` names the parts of one drive kind (see Sch001Drive, UssDrive):
 //   Controller, Runner, Simulator, Snapshot, Command, CommandReply, Event, TravelKind,
@@ -28,13 +29,11 @@
 #include "api/server.hpp"
 #include "common/position_source.hpp"
 #include "config/config.hpp"
-#include "daemon/daemon.hpp"
-#include "daemon/drives.hpp"
-#include "daemon/lift_common.hpp"
-#include "daemon/lift_core.hpp"
-#include "daemon/trace_files.hpp"
 #include "drive/drive.hpp"
-#include "kinds/config_schema.hpp"
+#include "host/host.hpp"
+#include "host/lift_common.hpp"
+#include "host/lift_core.hpp"
+#include "host/trace_files.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -48,9 +47,11 @@ class ControllerBackend : public api::Backend {
   using Runner = typename Drive::Runner;
   using Simulator = typename Drive::Simulator;
 
-  ControllerBackend(const config::Config& config, Controller& controller, Runner& runner,
-                    PositionFeed* position_feed, Simulator* sim)
+  ControllerBackend(const config::Config& config, const config::Schema& schema,
+                    Controller& controller, Runner& runner, PositionFeed* position_feed,
+                    Simulator* sim)
       : config_(config),
+        schema_(schema),
         controller_(controller),
         runner_(runner),
         sim_(sim),
@@ -63,7 +64,7 @@ class ControllerBackend : public api::Backend {
 
   drive::Kind drive_kind() const override { return Drive::kKind; }
   api::DisplaySnapshot display() override { return {}; }
-  nlohmann::json config() override { return config::to_json(config_, kinds::config_schema()); }
+  nlohmann::json config() override { return config::to_json(config_, schema_); }
   // Not offered by these drive kinds: the dispatcher refuses them before they get here.
   void key(int, api::Responder done) override { not_offered(done); }
   void power(api::PowerSetting, api::Responder done) override { not_offered(done); }
@@ -171,6 +172,7 @@ class ControllerBackend : public api::Backend {
   }
 
   const config::Config& config_;
+  const config::Schema& schema_;  ///< the configuration file's, for the `config` dump
   Controller& controller_;
   Runner& runner_;
   Simulator* sim_;
@@ -201,7 +203,7 @@ class ControllerLift : public LiftRunner {
 
  protected:
   /// `continuous`: the status details that change while moving, published at the state rate.
-  ControllerLift(Daemon& daemon, const config::Config& config, bool simulate,
+  ControllerLift(Host& daemon, const config::Config& config, bool simulate,
                  std::vector<std::string> continuous = {})
       : daemon_(daemon),
         config_(config),
@@ -287,7 +289,7 @@ class ControllerLift : public LiftRunner {
     }
   }
 
-  Daemon& daemon_;
+  Host& daemon_;
   const config::Config& config_;
   bool simulate_;
   std::unique_ptr<typename Drive::Simulator> sim_;

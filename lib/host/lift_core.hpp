@@ -19,7 +19,7 @@
 #include "api/backend.hpp"
 #include "api/server.hpp"
 #include "common/mono_time.hpp"
-#include "daemon/daemon.hpp"
+#include "host/host.hpp"
 #include "lift/cause.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
@@ -101,7 +101,7 @@ struct RestFacts {
 class WindDown {
  public:
   /// `send_shutdown(force)` posts the controller's shutdown command (false: its queue was full).
-  WindDown(Daemon& daemon, std::function<bool(bool force)> send_shutdown,
+  WindDown(Host& daemon, std::function<bool(bool force)> send_shutdown,
            std::chrono::nanoseconds deadline, std::chrono::nanoseconds grace)
       : daemon_(daemon),
         send_shutdown_(std::move(send_shutdown)),
@@ -114,7 +114,7 @@ class WindDown {
   void check(const RestFacts& facts, MonoTime now);
 
  private:
-  Daemon& daemon_;
+  Host& daemon_;
   std::function<bool(bool)> send_shutdown_;
   std::chrono::nanoseconds deadline_;
   std::chrono::nanoseconds grace_;
@@ -242,7 +242,7 @@ nlohmann::json calls_list(const Snapshot& s) {
 }
 
 /// The API server as a daemon component ("api") with reloads applied to it.
-void register_api(Daemon& daemon, api::Server& server);
+void register_api(Host& daemon, api::Server& server);
 /// The daemon's watchdog probe over a counter a live real-time thread keeps raising.
 std::function<bool()> progress_probe(std::function<std::uint64_t()> progress);
 /// After a real-time thread started: journals what it lacks, and false (the caller stops it)

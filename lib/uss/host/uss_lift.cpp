@@ -1,4 +1,4 @@
-#include "daemon/uss_lift.hpp"
+#include "uss/host/uss_lift.hpp"
 
 #include <pthread.h>
 #include <sched.h>
@@ -639,7 +639,7 @@ void UssBackend::mirror(std::optional<int> address, api::Responder done) {
 
 // ---- the lift ----
 
-UssLift::UssLift(Daemon& daemon, const config::Config& config, bool simulate)
+UssLift::UssLift(Host& daemon, const config::Config& config, bool simulate)
     : ControllerLift(daemon, config, simulate, {"actual"}) {
   uss::UssRunnerConfig rc;
   rc.device_path = config.drive.device;
@@ -664,8 +664,8 @@ UssLift::UssLift(Daemon& daemon, const config::Config& config, bool simulate)
   controller_ = std::make_unique<uss::UssController>(uss_controller_config(config), *master_,
                                                      *position, mono_now());
   runner_ = std::make_unique<uss::UssRunner>(rc, *master_, *controller_);
-  register_parts(std::make_unique<UssBackend>(config, *controller_, *runner_, *master_,
-                                              api_position_feed(), sim_.get()),
+  register_parts(std::make_unique<UssBackend>(config, daemon.config_schema(), *controller_,
+                                              *runner_, *master_, api_position_feed(), sim_.get()),
                  simulate_ ? "simulated USS lift running; API on " + socket_path()
                            : "USS master starting on " + config.drive.device);
 }

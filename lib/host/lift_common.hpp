@@ -21,6 +21,11 @@
 
 namespace liftd::daemon {
 
+/// The configuration of `liftd --simulate` without a config file: the defaults, the API socket in
+/// $XDG_RUNTIME_DIR (else the current directory) as liftd-sim.sock, no access groups (root and
+/// the user who started it may do everything), no memory locking.
+config::Config simulation_defaults();
+
 /// systemd's RuntimeDirectory, else the API socket's directory.
 std::string default_runtime_dir(const config::Config& config);
 /// The API server's configuration, with the socket systemd passed (or -1: created here).

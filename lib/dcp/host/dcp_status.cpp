@@ -1,4 +1,4 @@
-#include "daemon/dcp_status.hpp"
+#include "dcp/host/dcp_status.hpp"
 
 #include <string>
 #include <utility>

@@ -1,4 +1,4 @@
-#include "daemon/simulated_lift.hpp"
+#include "dcp/host/simulated_lift.hpp"
 
 #include <algorithm>
 #include <atomic>

@@ -1,4 +1,4 @@
-#include "daemon/lift_common.hpp"
+#include "host/lift_common.hpp"
 
 #include <unistd.h>
 
@@ -51,6 +51,21 @@ int take_listen_fd(const std::string& socket_path) {
 }
 
 }  // namespace
+
+config::Config simulation_defaults() {
+  config::Config cfg;
+  cfg.position.source = config::PositionSource::sim;
+  const char* runtime = std::getenv("XDG_RUNTIME_DIR");
+  cfg.api.socket =
+      std::string(runtime != nullptr && *runtime != '\0' ? runtime : ".") + "/liftd-sim.sock";
+  cfg.api.socket_group.clear();
+  cfg.api.read_group.clear();
+  cfg.api.control_group.clear();
+  cfg.api.inputs_group.clear();
+  cfg.rt.lock_memory = false;       // an ordinary user may not lock memory; say nothing about it
+  cfg.rt.require_realtime = false;  // nor get SCHED_FIFO: the simulation runs anyway, warned
+  return cfg;
+}
 
 std::string default_runtime_dir(const config::Config& c) {
   if (const char* dir = std::getenv("RUNTIME_DIRECTORY")) return dir;  // systemd RuntimeDirectory

@@ -11,16 +11,15 @@
 #include <optional>
 #include <string>
 #include "can/encoder.hpp"
-#include "daemon/drives.hpp"
 #include "rt/can_runner.hpp"
 #include "rt/encoder_tap.hpp"
 
 #include "api/server.hpp"
 #include "config/config.hpp"
-#include "daemon/daemon.hpp"
-#include "daemon/lift_backend.hpp"
-#include "daemon/lift_core.hpp"
 #include "dcp/control/dcp_controller.hpp"
+#include "dcp/host/lift_backend.hpp"
+#include "host/host.hpp"
+#include "host/lift_core.hpp"
 #include "io/pty.hpp"
 #include "rt/cycle_runner.hpp"
 #include "rt/overrun_journal.hpp"
@@ -33,17 +32,12 @@ control::ControllerConfig dcp_controller_config(const config::Config& config);
 
 class SimulatedLift;
 
-/// The configuration of `liftd --simulate` without a config file: the defaults, the API socket in
-/// $XDG_RUNTIME_DIR (else the current directory) as liftd-sim.sock, no access groups (root and
-/// the user who started it may do everything), no memory locking.
-config::Config simulation_defaults();
-
 /// Everything between the configuration and the running components.
 class LiftApp final : public LiftRunner {
  public:
   /// Builds the parts (throws std::invalid_argument / std::runtime_error with a clear message
   /// on a configuration the parts refuse) and registers them with `daemon`.
-  LiftApp(Daemon& daemon, const config::Config& config, bool simulate);
+  LiftApp(Host& daemon, const config::Config& config, bool simulate);
   ~LiftApp() override;
   LiftApp(const LiftApp&) = delete;
   LiftApp& operator=(const LiftApp&) = delete;
@@ -67,7 +61,7 @@ class LiftApp final : public LiftRunner {
   void check_wind_down(MonoTime now);
   std::string apply_config(const config::Config& next);
 
-  Daemon& daemon_;
+  Host& daemon_;
   const config::Config& config_;
   bool simulate_;
   std::string socket_path_;

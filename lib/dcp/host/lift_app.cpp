@@ -1,4 +1,4 @@
-#include "daemon/lift_app.hpp"
+#include "dcp/host/lift_app.hpp"
 
 #include <unistd.h>
 
@@ -13,13 +13,12 @@
 #include "api/commands.hpp"
 #include "common/mono_time.hpp"
 #include "common/version.hpp"
-#include "daemon/lift_common.hpp"
-#include "daemon/lift_core.hpp"
-#include "daemon/simulated_lift.hpp"
 #include "dcp/charset.hpp"
+#include "dcp/host/simulated_lift.hpp"
 #include "dcp/messages.hpp"
+#include "host/lift_common.hpp"
+#include "host/lift_core.hpp"
 #include "log/log.hpp"
-#include "service/notify.hpp"
 
 namespace liftd::daemon {
 namespace {
@@ -107,22 +106,7 @@ log::Level level_for(const control::ControllerEvent& event) {
 
 }  // namespace
 
-config::Config simulation_defaults() {
-  config::Config cfg;
-  cfg.position.source = config::PositionSource::sim;
-  const char* runtime = std::getenv("XDG_RUNTIME_DIR");
-  cfg.api.socket =
-      std::string(runtime != nullptr && *runtime != '\0' ? runtime : ".") + "/liftd-sim.sock";
-  cfg.api.socket_group.clear();
-  cfg.api.read_group.clear();
-  cfg.api.control_group.clear();
-  cfg.api.inputs_group.clear();
-  cfg.rt.lock_memory = false;       // an ordinary user may not lock memory; say nothing about it
-  cfg.rt.require_realtime = false;  // nor get SCHED_FIFO: the simulation runs anyway, warned
-  return cfg;
-}
-
-LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
+LiftApp::LiftApp(Host& daemon, const config::Config& config, bool simulate)
     : daemon_(daemon),
       config_(config),
       simulate_(simulate),
@@ -162,7 +146,7 @@ LiftApp::LiftApp(Daemon& daemon, const config::Config& config, bool simulate)
   runner_ = std::make_unique<rt::CycleRunner>(cycle_config(config, device), *controller_);
   runner_->set_notify_fd(wake_.fd());
   backend_ = std::make_unique<LiftBackend>(
-      config, *controller_, *runner_,
+      config, daemon.config_schema(), *controller_, *runner_,
       config.position.source == config::PositionSource::api ? position_feed_.get() : nullptr,
       runtime_dir_, sim_.get());
 

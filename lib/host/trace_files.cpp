@@ -1,5 +1,5 @@
 // Flight-recorder files: safe creation, a cap on their number, a rate limit on requests.
-#include "daemon/trace_files.hpp"
+#include "host/trace_files.hpp"
 
 #include <dirent.h>
 #include <fcntl.h>

@@ -1,6 +1,7 @@
 // The daemon's hydraulic lift (drive.kind "sch001"): the SCH001 controller on its CAN runner, the
 // API backend over it, and with --simulate the simulated card, hydraulic car and I/O board on the
-// other end of a socketpair. The DCP lift is lift_app.*; drives.* picks one by drive.kind.
+// other end of a socketpair. The DCP lift is lib/dcp/host/lift_app.*; daemon/drives.cpp picks one
+// by drive.kind.
 #pragma once
 
 #include <map>
@@ -17,11 +18,10 @@
 #include "can/socket.hpp"
 #include "common/position_source.hpp"
 #include "config/config.hpp"
-#include "daemon/controller_lift.hpp"
-#include "daemon/daemon.hpp"
-#include "daemon/drives.hpp"
-#include "daemon/lift_common.hpp"
-#include "daemon/lift_core.hpp"
+#include "host/controller_lift.hpp"
+#include "host/host.hpp"
+#include "host/lift_common.hpp"
+#include "host/lift_core.hpp"
 #include "log/throttle.hpp"
 #include "rt/can_runner.hpp"
 #include "rt/encoder_tap.hpp"
@@ -110,7 +110,7 @@ class Sch001Backend final : public ControllerBackend<Sch001Drive> {
 /// The hydraulic lift as one piece, registered with the daemon.
 class HydraulicLift final : public ControllerLift<Sch001Drive> {
  public:
-  HydraulicLift(Daemon& daemon, const config::Config& config, bool simulate);
+  HydraulicLift(Host& daemon, const config::Config& config, bool simulate);
   ~HydraulicLift() override;
 
  private:

@@ -1,8 +1,8 @@
 // The daemon's USS lift (drive.kind "uss"): the USS master and the lift controller on the USS
 // runner's real-time thread, the API backend over them and, with --simulate, the simulated USS
 // slaves (the lift drive with its car, and every other configured slave) on the far end of a
-// pseudo-terminal. The DCP lift is lift_app.*, the hydraulic one hydraulic_lift.*; drives.*
-// picks one by drive.kind.
+// pseudo-terminal. The DCP lift is lib/dcp/host/lift_app.*, the hydraulic one
+// lib/sch001/host/hydraulic_lift.*; daemon/drives.cpp picks one by drive.kind.
 #pragma once
 
 #include <atomic>
@@ -19,11 +19,10 @@
 #include "api/server.hpp"
 #include "common/position_source.hpp"
 #include "config/config.hpp"
-#include "daemon/controller_lift.hpp"
-#include "daemon/daemon.hpp"
-#include "daemon/drives.hpp"
-#include "daemon/lift_common.hpp"
-#include "daemon/lift_core.hpp"
+#include "host/controller_lift.hpp"
+#include "host/host.hpp"
+#include "host/lift_common.hpp"
+#include "host/lift_core.hpp"
 #include "io/pty.hpp"
 #include "log/throttle.hpp"
 #include "sim/sim_io.hpp"
@@ -107,9 +106,11 @@ struct UssDrive {
 /// api::Backend over the USS lift controller.
 class UssBackend final : public ControllerBackend<UssDrive> {
  public:
-  UssBackend(const config::Config& config, uss::UssController& controller, uss::UssRunner& runner,
-             uss::Master& master, PositionFeed* position_feed, SimulatedUssBus* sim)
-      : ControllerBackend(config, controller, runner, position_feed, sim), master_(master) {}
+  UssBackend(const config::Config& config, const config::Schema& schema,
+             uss::UssController& controller, uss::UssRunner& runner, uss::Master& master,
+             PositionFeed* position_feed, SimulatedUssBus* sim)
+      : ControllerBackend(config, schema, controller, runner, position_feed, sim),
+        master_(master) {}
 
   api::StatusSnapshot status() override;
   api::StatsSnapshot stats() override;
@@ -136,7 +137,7 @@ class UssBackend final : public ControllerBackend<UssDrive> {
 /// The USS lift as one piece, registered with the daemon.
 class UssLift final : public ControllerLift<UssDrive> {
  public:
-  UssLift(Daemon& daemon, const config::Config& config, bool simulate);
+  UssLift(Host& daemon, const config::Config& config, bool simulate);
   ~UssLift() override;
 
  private:

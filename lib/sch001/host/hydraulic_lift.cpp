@@ -1,4 +1,4 @@
-#include "daemon/hydraulic_lift.hpp"
+#include "sch001/host/hydraulic_lift.hpp"
 
 #include <poll.h>
 
@@ -14,7 +14,7 @@
 
 #include "api/commands.hpp"
 #include "can/interface_info.hpp"
-#include "daemon/lift_common.hpp"
+#include "host/lift_common.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -393,7 +393,7 @@ void Sch001Backend::travel(const api::TravelArgs& args, api::Responder done) {
 
 // ---- the lift ----
 
-HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool simulate)
+HydraulicLift::HydraulicLift(Host& daemon, const config::Config& config, bool simulate)
     : ControllerLift(daemon, config, simulate),
       card_status_lines_(kBurstLines, kBurstInterval),
       bus_error_lines_(kBurstLines, kBurstInterval) {
@@ -431,8 +431,8 @@ HydraulicLift::HydraulicLift(Daemon& daemon, const config::Config& config, bool 
     engine = tap_.get();
   }
   runner_ = std::make_unique<rt::CanRunner>(rc, *engine);
-  register_parts(std::make_unique<Sch001Backend>(config, *controller_, *runner_,
-                                                 api_position_feed(), sim_.get()),
+  register_parts(std::make_unique<Sch001Backend>(config, daemon.config_schema(), *controller_,
+                                                 *runner_, api_position_feed(), sim_.get()),
                  simulate_ ? "simulated hydraulic lift running; API on " + socket_path()
                            : "SCH001 card link starting on " + config.can.interface);
 }

@@ -1,15 +1,14 @@
-#include "daemon/lift_backend.hpp"
+#include "dcp/host/lift_backend.hpp"
 
 #include <algorithm>
 #include <ctime>
 
 #include "common/mono_time.hpp"
-#include "daemon/lift_common.hpp"
-#include "daemon/lift_core.hpp"
-#include "daemon/simulated_lift.hpp"
 #include "dcp/charset.hpp"
+#include "dcp/host/simulated_lift.hpp"
 #include "dcp/trace.hpp"
-#include "kinds/config_schema.hpp"
+#include "host/lift_common.hpp"
+#include "host/lift_core.hpp"
 #include "log/log.hpp"
 
 #include <cstring>
@@ -47,10 +46,12 @@ std::string utf8_row(const std::array<std::uint8_t, dcp::kDisplayColumns>& row) 
 
 }  // namespace
 
-LiftBackend::LiftBackend(const config::Config& config, control::DcpController& controller,
-                         rt::CycleRunner& runner, control::PositionFeed* position_feed,
-                         std::string runtime_dir, SimulatedLift* sim)
+LiftBackend::LiftBackend(const config::Config& config, const config::Schema& schema,
+                         control::DcpController& controller, rt::CycleRunner& runner,
+                         control::PositionFeed* position_feed, std::string runtime_dir,
+                         SimulatedLift* sim)
     : config_(config),
+      schema_(schema),
       controller_(controller),
       runner_(runner),
       flight_recorder_(
@@ -182,7 +183,7 @@ api::DisplaySnapshot LiftBackend::display() {
 }
 
 nlohmann::json LiftBackend::config() {
-  return config::to_json(config_, kinds::config_schema());
+  return config::to_json(config_, schema_);
 }
 
 // ---- commands through the cycle ----

@@ -1,4 +1,4 @@
-#include "daemon/lift_core.hpp"
+#include "host/lift_core.hpp"
 
 #include <sys/eventfd.h>
 #include <unistd.h>
@@ -7,7 +7,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "daemon/lift_common.hpp"
+#include "host/lift_common.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -181,7 +181,7 @@ lift::Direction direction_of(std::string_view name) noexcept {
                           : lift::Direction::None;
 }
 
-void register_api(Daemon& daemon, api::Server& server) {
+void register_api(Host& daemon, api::Server& server) {
   api::Server* s = &server;
   daemon.add_component({"api",
                         [s] {

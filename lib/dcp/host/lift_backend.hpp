@@ -13,11 +13,11 @@
 #include "api/backend.hpp"
 #include "api/dispatcher.hpp"
 #include "config/config.hpp"
-#include "daemon/dcp_status.hpp"
-#include "daemon/lift_common.hpp"
-#include "daemon/lift_core.hpp"
-#include "daemon/trace_files.hpp"
 #include "dcp/control/dcp_controller.hpp"
+#include "dcp/host/dcp_status.hpp"
+#include "host/lift_common.hpp"
+#include "host/lift_core.hpp"
+#include "host/trace_files.hpp"
 #include "rt/cycle_runner.hpp"
 
 namespace liftd::daemon {
@@ -29,9 +29,9 @@ class LiftBackend final : public api::Backend {
  public:
   /// `position_feed` is written by `inputs` when position.source is "api" (else nullptr);
   /// `sim` is the simulated lift with --simulate (else nullptr: the `sim` command is refused).
-  LiftBackend(const config::Config& config, control::DcpController& controller,
-              rt::CycleRunner& runner, control::PositionFeed* position_feed,
-              std::string runtime_dir, SimulatedLift* sim);
+  LiftBackend(const config::Config& config, const config::Schema& schema,
+              control::DcpController& controller, rt::CycleRunner& runner,
+              control::PositionFeed* position_feed, std::string runtime_dir, SimulatedLift* sim);
 
   // ---- api::Backend ----
   drive::Kind drive_kind() const override { return drive::Kind::Dcp; }
@@ -85,6 +85,7 @@ class LiftBackend final : public api::Backend {
   void send_inputs(const lift::Inputs& inputs);
 
   const config::Config& config_;
+  const config::Schema& schema_;  ///< the configuration file's, for the `config` dump
   control::DcpController& controller_;
   rt::CycleRunner& runner_;
   FlightRecorderFiles flight_recorder_;  ///< its files in the runtime directory
