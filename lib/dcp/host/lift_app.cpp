@@ -321,7 +321,7 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
       break;
     }
     case Kind::Travel: {
-      // As every lift reports its travels (daemon/lift_core); a DCP travel also tells its
+      // As every lift reports its travels (host/lift_core); a DCP travel also tells its
       // target changes, fast start and drive faults (DCP 4.1, 12, 9.1.6).
       const travel::Event& t = event.travel;
       report_travel(*server_, travel::to_string(t.type), travel::to_string(t.kind), t.cause,
