@@ -54,7 +54,7 @@ TEST(DcpDisplay, DropsCharactersPastColumn20) {
   DisplayModel d;
   EXPECT_EQ(d.apply(payload({0x04, 0x1A}, "XYZ")), DisplayError::PastLineEnd);
   EXPECT_EQ(row(d, 0), "                  XY");  // 18 spaces
-  EXPECT_EQ(row(d, 1), std::string(20, ' '));  // no wrap into the next line
+  EXPECT_EQ(row(d, 1), std::string(20, ' '));    // no wrap into the next line
 }
 
 TEST(DcpDisplay, ReportsStrayControlBytesAndAppliesTheRest) {

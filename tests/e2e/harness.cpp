@@ -177,9 +177,8 @@ bool Lift::b0_off_in_newest(int count) {
   const auto end = Clock::now() + 2s;
   while (true) {
     const auto frames = newest_commands(count);
-    const bool off = !frames.empty() && std::all_of(frames.begin(), frames.end(), [](auto& f) {
-      return (f.second & 0x01) == 0;
-    });
+    const bool off = !frames.empty() && std::all_of(frames.begin(), frames.end(),
+                                                    [](auto& f) { return (f.second & 0x01) == 0; });
     if (off || Clock::now() >= end) return off;
     client_->drain(50ms);
   }
