@@ -5,6 +5,7 @@
 #include <csignal>
 #include <cstring>
 
+#include "daemon/drives.hpp"
 #include "daemon/reload.hpp"
 #include "kinds/config_schema.hpp"
 #include "log/log.hpp"
@@ -210,6 +211,10 @@ void Daemon::set_config_applier(std::function<std::string(const config::Config&)
 
 void Daemon::set_dump_handler(std::function<void()> dump) {
   dump_ = std::move(dump);
+}
+
+void Daemon::add_drive_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
+  add_drive_kind_commands(dispatcher, backend);
 }
 
 const config::Schema& Daemon::config_schema() const {

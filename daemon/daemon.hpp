@@ -86,6 +86,8 @@ class Daemon final : public Host {
   void keep_log_level(bool keep) { keep_log_level_ = keep; }
   /// What SIGUSR1 does: write the flight recorder.
   void set_dump_handler(std::function<void()> dump) override;
+  /// Every drive kind's own commands, from the registry of drive kinds (drives.cpp).
+  void add_drive_commands(api::Dispatcher& dispatcher, api::Backend& backend) override;
   /// Every drive kind's configuration schema (lib/kinds).
   const config::Schema& config_schema() const override;
 

@@ -4,17 +4,21 @@
 #include <cstddef>
 #include <stdexcept>
 
+#include "dcp/host/commands.hpp"
 #include "dcp/host/lift_app.hpp"
 #include "sch001/host/hydraulic_lift.hpp"
+#include "uss/host/commands.hpp"
 #include "uss/host/uss_lift.hpp"
 
 namespace liftd::daemon {
 namespace {
 
-/// How one drive kind's lift is made.
+/// How one drive kind's lift is made and which API commands only it has.
 struct DriveKindEntry {
   drive::Kind kind;
   std::unique_ptr<LiftRunner> (*make)(Host& host, const config::Config& config, bool simulate);
+  /// Adds the kind's own commands (served when `backend` is the kind's); nullptr: none.
+  void (*add_commands)(api::Dispatcher& dispatcher, api::Backend& backend);
 };
 
 template <typename Lift>
@@ -24,9 +28,9 @@ std::unique_ptr<LiftRunner> make(Host& host, const config::Config& config, bool 
 
 /// Every drive kind, in the order of drive::Kind: the one place the daemon names a kind's lift.
 constexpr std::array kDriveKinds = {
-    DriveKindEntry{drive::Kind::Dcp, make<LiftApp>},
-    DriveKindEntry{drive::Kind::Sch001, make<HydraulicLift>},
-    DriveKindEntry{drive::Kind::Uss, make<UssLift>},
+    DriveKindEntry{drive::Kind::Dcp, make<LiftApp>, add_dcp_commands},
+    DriveKindEntry{drive::Kind::Sch001, make<HydraulicLift>, nullptr},
+    DriveKindEntry{drive::Kind::Uss, make<UssLift>, add_uss_commands},
 };
 
 constexpr bool in_kind_order() {
@@ -45,6 +49,12 @@ std::unique_ptr<LiftRunner> make_lift(Host& host, const config::Config& config, 
   if (index < kDriveKinds.size()) return kDriveKinds[index].make(host, config, simulate);
   throw std::invalid_argument("drive.kind \"" + std::string(drive::to_string(config.drive.kind)) +
                               "\" is not available in this build");
+}
+
+void add_drive_kind_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
+  for (const auto& entry : kDriveKinds) {
+    if (entry.add_commands != nullptr) entry.add_commands(dispatcher, backend);
+  }
 }
 
 }  // namespace liftd::daemon

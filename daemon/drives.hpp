@@ -2,12 +2,15 @@
 // lift lib/dcp/host/lift_app.*, the hydraulic SCH001 lift lib/sch001/host/hydraulic_lift.*, the
 // USS lift lib/uss/host/uss_lift.*). Each builds its controller, its runner, its API backend and,
 // with --simulate, its simulated drive, and registers them with the daemon (lib/host/host.hpp).
+// A kind with API commands of its own adds them from its folder (lib/<kind>/host/commands.*).
 // drives.cpp is the only file of daemon/ that includes a kind's header.
 #pragma once
 
 #include <memory>
 #include <string>
 
+#include "api/backend.hpp"
+#include "api/dispatcher.hpp"
 #include "config/config.hpp"
 #include "host/host.hpp"
 
@@ -16,5 +19,10 @@ namespace liftd::daemon {
 /// The lift for config.drive.kind. Throws std::invalid_argument / std::runtime_error with a
 /// clear message on a configuration the parts refuse or a kind this build cannot run.
 std::unique_ptr<LiftRunner> make_lift(Host& host, const config::Config& config, bool simulate);
+
+/// Adds every drive kind's own API commands to `dispatcher`: those of backend.drive_kind()
+/// served by `backend`, the others' only known, so that the dispatcher answers them
+/// `not_offered` as on every lift.
+void add_drive_kind_commands(api::Dispatcher& dispatcher, api::Backend& backend);
 
 }  // namespace liftd::daemon

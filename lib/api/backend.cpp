@@ -151,18 +151,6 @@ nlohmann::json to_json(const TraceEntry& e) {
           {"rx", e.rx ? nlohmann::json(hex_bytes(*e.rx)) : nlohmann::json(nullptr)}};
 }
 
-nlohmann::json to_json(const DisplaySnapshot& d) {
-  nlohmann::json cursor = nullptr;
-  if (d.cursor_line && d.cursor_column) {
-    cursor = {{"line", *d.cursor_line}, {"column", *d.cursor_column}};
-  }
-  return {{"lines", d.lines}, {"cursor", std::move(cursor)}};
-}
-
-nlohmann::json to_json(const PowerSetting& p) {
-  return {{"supply", p.emergency ? "emergency" : "mains"}, {"saving", p.saving}};
-}
-
 nlohmann::json to_json(const Inputs& inputs) {
   nlohmann::json out = nlohmann::json::object();
   for (const auto& flag : kInputFlags) out[std::string(flag.name)] = inputs.*(flag.member);
@@ -186,16 +174,10 @@ void Backend::travel(const TravelArgs&, Responder done) {
 void Backend::stop(Responder done) {
   no_travel(done);
 }
-void Backend::fast_stop(Responder done) {
-  no_travel(done);
-}
 void Backend::relevel(Responder done) {
   no_travel(done);
 }
 void Backend::inspection(bool, const std::string&, Responder done) {
-  no_travel(done);
-}
-void Backend::fast_start(const std::string&, const TravelArgs&, Responder done) {
   no_travel(done);
 }
 void Backend::calls(const std::string&, std::optional<int>, Responder done) {
@@ -204,12 +186,6 @@ void Backend::calls(const std::string&, std::optional<int>, Responder done) {
 
 void Backend::sim(const SimRequest&, Responder done) {
   done(Result::fail(ErrorCode::NotReady, "only with liftd --simulate"));
-}
-void Backend::parameter(const ParameterArgs&, Responder done) {
-  done(Result::fail(ErrorCode::NotOffered, "this lift's drive has no parameter channel"));
-}
-void Backend::mirror(std::optional<int>, Responder done) {
-  done(Result::fail(ErrorCode::NotOffered, "this lift's drive has no mirror telegram"));
 }
 
 }  // namespace liftd::api

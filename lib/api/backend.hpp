@@ -86,19 +86,6 @@ struct TraceEntry {
   std::optional<std::vector<std::uint8_t>> rx;  ///< the drive's answer; nullopt if none in time
 };
 
-/// Contents of the drive's remote display (DCP 5.7: up to 4 lines of 20 characters).
-struct DisplaySnapshot {
-  std::vector<std::string> lines;    ///< UTF-8, one string per line
-  std::optional<int> cursor_line;    ///< 0-based; nullopt when no cursor is shown
-  std::optional<int> cursor_column;  ///< 0-based
-};
-
-/// Power supply state for I6 (DCP 5.12.6).
-struct PowerSetting {
-  bool emergency = false;  ///< false: mains 'N', true: emergency 'U'
-  int saving = 0;          ///< energy saving mode '0', '1' or '2'
-};
-
 /// Inputs from the machine (safety chain, doors, switches, DCP3 shaft signals, position).
 struct Inputs {
   bool safety_chain = false;                ///< safety chain closed
@@ -154,25 +141,6 @@ struct TravelArgs {
   int floor = 0;                     ///< floor index, 0 = lowest
   std::optional<std::string> speed;  ///< "V4", "V3", ... (nullopt: the fastest allowed)
   std::optional<int> load_percent;   ///< car load for I8
-};
-
-/// What a parameter request addresses (USS C 4.2.2: IND selects an array element, a
-/// description element or a text element).
-enum class ParameterTarget : std::uint8_t { Value, Array, Description, Text };
-/// Wire names of ParameterTarget, in enum order.
-inline constexpr std::array<std::string_view, 4> kParameterTargets = {"value", "array",
-                                                                      "description", "text"};
-
-/// Arguments of `uss_read` and `uss_write` (USS C 4: one PKW request to one slave).
-struct ParameterArgs {
-  std::optional<int> address;  ///< USS slave 0..31; nullopt: the drive (uss.drive_address)
-  int pnu = 0;                 ///< parameter number 0..2047 (PKE bits 0..10)
-  ParameterTarget target = ParameterTarget::Value;
-  int index = 0;           ///< element of an array, description or text, passed unchanged (IND)
-  bool write = false;      ///< uss_write
-  std::int64_t value = 0;  ///< uss_write: the value
-  bool dword = false;      ///< uss_write: a double word (else a word)
-  bool eeprom = false;     ///< uss_write: also into the drive's EEPROM
 };
 
 /// What `sim` does to the simulated lift (only a daemon started with --simulate has one).
@@ -245,8 +213,10 @@ struct SimRequest {
 /// millimetres (DCP 5.12.9), the narrowest of the position paths.
 inline constexpr std::int64_t kMaxPositionMm = 999'999;
 
-/// The daemon's side of the API. Every method is called on the io_context's thread; every
-/// Responder must be called exactly once on that thread.
+/// The daemon's side of the API for the commands in lib/api. A drive kind's backend also
+/// implements its kind's own interface (lib/<kind>/host/commands.hpp) for its own commands.
+/// Every method is called on the io_context's thread; every Responder must be called exactly
+/// once on that thread.
 class Backend {
  public:
   virtual ~Backend() = default;
@@ -262,18 +232,10 @@ class Backend {
   /// Writes the whole flight recorder, decoded, to a file; the result names it ({"file": path,
   /// "records": n}). A backend without a recorder refuses.
   virtual Result save_trace();
-  /// Current contents of the drive's remote display.
-  virtual DisplaySnapshot display() = 0;
   /// The effective configuration (as loaded and defaulted) for `config`.
   virtual nlohmann::json config() = 0;
-  /// Sends a keypad button (DCP 5.8; button 1..5 is bit 0x04 << (button - 1)).
-  virtual void key(int button, Responder done) = 0;
   /// Asks the drive for a fault reset (I2 'R', DCP 5.12.4).
   virtual void drive_reset(Responder done) = 0;
-  /// Sets the power supply mode (I6, DCP 5.12.6); the result is the mode the drive reports.
-  virtual void power(PowerSetting setting, Responder done) = 0;
-  /// Sends the car load for the next travel (I8, DCP 5.12.8), percent of rated load.
-  virtual void load(int percent, Responder done) = 0;
   /// Applies an input update from the I/O board; the result is to_json() of all inputs after it.
   virtual void update_inputs(const InputUpdate& update, Responder done) = 0;
 
@@ -282,14 +244,10 @@ class Backend {
   virtual void travel(const TravelArgs& args, Responder done);
   /// Controlled stop of the running travel; clears the calls queue.
   virtual void stop(Responder done);
-  /// DCP 13 fast stop.
-  virtual void fast_stop(Responder done);
   /// Relevel to the nearest floor.
   virtual void relevel(Responder done);
   /// Software inspection on/off with a held direction ("up", "down", "none").
   virtual void inspection(bool on, const std::string& direction, Responder done);
-  /// DCP 12 fast start: "arm" (with args.floor), "go" or "abort".
-  virtual void fast_start(const std::string& action, const TravelArgs& args, Responder done);
   /// Calls queue: "list", "add" or "cancel" (with floor).
   virtual void calls(const std::string& action, std::optional<int> floor, Responder done);
 
@@ -298,12 +256,6 @@ class Backend {
   /// simulated lift's state after it. The default refuses: `not_ready` "only with liftd
   /// --simulate".
   virtual void sim(const SimRequest& request, Responder done);
-
-  // ---- the drive's parameters (drive kinds with Capability::Parameters: USS) ----
-  /// One PKW request (USS C 4); the result is the slave's answer.
-  virtual void parameter(const ParameterArgs& args, Responder done);
-  /// A mirror telegram to `address` (nullopt: the drive) as a link test (USS A 5.3).
-  virtual void mirror(std::optional<int> address, Responder done);
 };
 
 /// JSON of a status snapshot, as in the `status` result and `state` event.
@@ -312,10 +264,6 @@ nlohmann::json to_json(const StatusSnapshot& status);
 nlohmann::json to_json(const StatsSnapshot& stats);
 /// JSON of one trace entry: {"t_us":..,"tx":"hex bytes","rx":"hex bytes"|null}.
 nlohmann::json to_json(const TraceEntry& entry);
-/// JSON of the display.
-nlohmann::json to_json(const DisplaySnapshot& display);
-/// JSON of a power setting: {"supply":"mains"|"emergency","saving":0..2}.
-nlohmann::json to_json(const PowerSetting& power);
 /// JSON of the inputs: every flag by name plus position_mm (null if unknown).
 nlohmann::json to_json(const Inputs& inputs);
 /// "2026-11-22T03:00:00.123Z"

@@ -1,6 +1,6 @@
-// The built-in commands (status, watch, stats, trace, display, key, drive_reset, power, load,
-// config, version, inputs, the travel commands, sim, the USS parameter commands), each one table
-// entry on a Dispatcher.
+// The commands every drive kind has or several share (status, watch, stats, trace, drive_reset,
+// config, version, inputs, the travel commands, sim), each one table entry on a Dispatcher, and
+// the argument helpers a drive kind's own commands (lib/<kind>/host/commands) share with them.
 #pragma once
 
 #include <functional>
@@ -18,7 +18,14 @@ inline constexpr std::int64_t kMaxTraceEntries = 1000;
 /// Highest floor index a request may name (the configuration allows at most 64 floors).
 inline constexpr std::int64_t kMaxFloorIndex = 63;
 
-/// Adds the travel commands (travel, stop, fast_stop, relevel, inspection, fast_start, calls).
+/// The `floor` argument of the travel commands (0..kMaxFloorIndex).
+ArgSpec floor_arg(bool required);
+/// The `speed` argument of the travel commands (drive::kTravelSpeedNames).
+ArgSpec speed_arg();
+/// TravelArgs from a validated request with `floor`, `speed` and `load_percent`.
+TravelArgs travel_args(const nlohmann::json& request);
+
+/// Adds the travel commands every drive kind offers (travel, stop, relevel, inspection, calls).
 /// add_builtin_commands() calls it.
 void add_travel_commands(Dispatcher& dispatcher, Backend& backend);
 
@@ -31,12 +38,9 @@ inline constexpr std::int64_t kMaxSimDriftMm = 1000;
 /// add_builtin_commands() calls it.
 void add_sim_command(Dispatcher& dispatcher, Backend& backend);
 
-/// Adds `uss_read`, `uss_write` and `uss_mirror` (offered by drive kinds with
-/// Capability::Parameters). add_builtin_commands() calls it.
-void add_parameter_commands(Dispatcher& dispatcher, Backend& backend);
-
-/// Adds every built-in command to `dispatcher`, served by `backend`. `api_stats` supplies the
-/// server's own counters for `stats` ("api" object); it may be empty.
+/// Adds every built-in command to `dispatcher`, served by `backend`, and sets the dispatcher's
+/// drive kind to the backend's. A drive kind's own commands come from its folder. `api_stats`
+/// supplies the server's own counters for `stats` ("api" object); it may be empty.
 void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                           std::function<nlohmann::json()> api_stats = {});
 

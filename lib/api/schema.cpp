@@ -1,6 +1,7 @@
 #include "api/schema.hpp"
 
 #include <algorithm>
+#include <utility>
 
 namespace liftd::api {
 namespace {
@@ -43,6 +44,37 @@ bool fits(const ArgSpec& spec, const nlohmann::json& value) {
 }
 
 }  // namespace
+
+ArgSpec flag_arg(std::string name, std::string description) {
+  ArgSpec spec;
+  spec.name = std::move(name);
+  spec.type = ArgType::Bool;
+  spec.description = std::move(description);
+  return spec;
+}
+
+ArgSpec int_arg(std::string name, bool required, std::int64_t min, std::int64_t max,
+                std::string description) {
+  ArgSpec spec;
+  spec.name = std::move(name);
+  spec.type = ArgType::Integer;
+  spec.required = required;
+  spec.min = min;
+  spec.max = max;
+  spec.description = std::move(description);
+  return spec;
+}
+
+ArgSpec choice_arg(std::string name, bool required, std::vector<std::string> choices,
+                   std::string description) {
+  ArgSpec spec;
+  spec.name = std::move(name);
+  spec.type = ArgType::String;
+  spec.required = required;
+  spec.choices = std::move(choices);
+  spec.description = std::move(description);
+  return spec;
+}
 
 std::string describe_allowed(const ArgSpec& spec) {
   switch (spec.type) {

@@ -1,10 +1,14 @@
 // Argument schemas of API commands: one table entry per field, validated generically.
 #pragma once
 
+#include <algorithm>
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -34,6 +38,36 @@ struct ArgSpec {
 
 /// The arguments of one command (fields other than "cmd" and "id").
 using ArgSchema = std::vector<ArgSpec>;
+
+/// An optional boolean argument.
+ArgSpec flag_arg(std::string name, std::string description);
+/// An integer argument within [min, max].
+ArgSpec int_arg(std::string name, bool required, std::int64_t min, std::int64_t max,
+                std::string description);
+/// A string argument that must be one of `choices`.
+ArgSpec choice_arg(std::string name, bool required, std::vector<std::string> choices,
+                   std::string description);
+
+/// The value of the (validated) argument `name` of `request`, or `fallback` when it is absent.
+template <typename T>
+T arg_or(const nlohmann::json& request, const char* name, T fallback) {
+  const auto it = request.find(name);
+  return it == request.end() ? fallback : it->get<T>();
+}
+
+/// The wire names of an enum as the choices of a choice_arg.
+template <std::size_t N>
+std::vector<std::string> names_of(const std::array<std::string_view, N>& names) {
+  return {names.begin(), names.end()};
+}
+
+/// The enum value named `name` in `names` (its wire names in enum order); `name` was validated
+/// against names_of(names).
+template <typename Enum, std::size_t N>
+Enum enum_of(const std::array<std::string_view, N>& names, const std::string& name) {
+  const auto it = std::find(names.begin(), names.end(), name);
+  return static_cast<Enum>(it - names.begin());
+}
 
 /// What a value for `spec` must look like, e.g. "an integer 0..999" or "one of \"mains\",
 /// \"emergency\"".

@@ -63,13 +63,7 @@ class ControllerBackend : public api::Backend {
         wall_at_start_(std::chrono::system_clock::now()) {}
 
   drive::Kind drive_kind() const override { return Drive::kKind; }
-  api::DisplaySnapshot display() override { return {}; }
   nlohmann::json config() override { return config::to_json(config_, schema_); }
-  // Not offered by these drive kinds: the dispatcher refuses them before they get here.
-  void key(int, api::Responder done) override { not_offered(done); }
-  void power(api::PowerSetting, api::Responder done) override { not_offered(done); }
-  void load(int, api::Responder done) override { not_offered(done); }
-
   void update_inputs(const api::InputUpdate& update, api::Responder done) override {
     done(inputs_.take(update, [this](const lift::Inputs& now) { send_inputs(now); }));
   }
@@ -234,6 +228,7 @@ class ControllerLift : public LiftRunner {
     runner_->set_notify_fd(wake_.fd());  // its news wakes poll() at once
     server_ = std::make_unique<api::Server>(daemon_.io(), *backend_, api_server_config(config_),
                                             api_log_sink());
+    daemon_.add_drive_commands(server_->dispatcher(), *backend_);
     if (sim_) {
       daemon_.add_component({"sim", [this] { return sim_->start(); }, [this] { sim_->stop(); }});
     }

@@ -1,7 +1,8 @@
 // What a drive kind's lift needs of the process that runs it (the daemon, daemon/daemon.hpp):
 // the io_context, components started in order and stopped in reverse, the watchdog's probe, the
-// status lines for systemd, what a reload and SIGUSR1 do, and the configuration's schema. A lift
-// registers its parts through Host and is held as a LiftRunner.
+// status lines for systemd, what a reload and SIGUSR1 do, every drive kind's own API commands and
+// the configuration's schema. A lift registers its parts through Host and is held as a
+// LiftRunner.
 #pragma once
 
 #include <functional>
@@ -10,6 +11,8 @@
 
 #include <asio/io_context.hpp>
 
+#include "api/backend.hpp"
+#include "api/dispatcher.hpp"
 #include "config/config.hpp"
 
 namespace liftd::daemon {
@@ -45,6 +48,10 @@ class Host {
   virtual void set_config_applier(std::function<std::string(const config::Config&)> apply) = 0;
   /// What SIGUSR1 does: write the flight recorder.
   virtual void set_dump_handler(std::function<void()> dump) = 0;
+  /// Adds every drive kind's own commands (lib/<kind>/host/commands) to the lift's API after
+  /// the common ones: the lift's own kind's served by `backend`, the other kinds' known by name
+  /// so that the dispatcher answers them `not_offered`.
+  virtual void add_drive_commands(api::Dispatcher& dispatcher, api::Backend& backend) = 0;
   /// The schema of the configuration file (every drive kind's keys): the `config` command's
   /// dump.
   virtual const config::Schema& config_schema() const = 0;

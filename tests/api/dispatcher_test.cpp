@@ -31,7 +31,7 @@ class FakeSession : public SessionControl {
 
 class DispatcherTest : public ::testing::Test {
  protected:
-  DispatcherTest() { add_builtin_commands(dispatcher_, backend_); }
+  DispatcherTest() { add_every_command(dispatcher_, backend_); }
 
   /// Handles `line` as `access` and returns the parsed reply (null if none was sent yet).
   json handle(std::string_view line, AccessSet access = {true, true, true}) {
@@ -477,7 +477,7 @@ class OtherDriveKindTest : public DispatcherTest {
     backend_.status_snapshot.drive_kind = drive::Kind::Sch001;
     backend_.status_snapshot.details = {{"card", "ok"}};
     dispatcher_ = Dispatcher{};
-    add_builtin_commands(dispatcher_, backend_);
+    add_every_command(dispatcher_, backend_);
   }
 };
 
@@ -532,7 +532,7 @@ class UssDriveKindTest : public DispatcherTest {
   UssDriveKindTest() {
     backend_.status_snapshot.drive_kind = drive::Kind::Uss;
     dispatcher_ = Dispatcher{};
-    add_builtin_commands(dispatcher_, backend_);
+    add_every_command(dispatcher_, backend_);
   }
 };
 

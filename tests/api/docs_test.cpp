@@ -29,7 +29,7 @@ TEST(ApiDocs, EveryCommandHasASection) {
   ASSERT_FALSE(docs.empty()) << API_DOCS_PATH;
   testing::FakeBackend backend;
   Dispatcher dispatcher;
-  add_builtin_commands(dispatcher, backend);
+  add_every_command(dispatcher, backend);
   for (const auto& name : dispatcher.names()) {
     EXPECT_NE(docs.find("### `" + name + "`"), std::string::npos) << name << " is not documented";
   }
@@ -68,7 +68,7 @@ TEST(ApiSchema, RequestsMatchTheCommandTable) {
   const auto& defs = schema.at("$defs");
   testing::FakeBackend backend;
   Dispatcher dispatcher;
-  add_builtin_commands(dispatcher, backend);
+  add_every_command(dispatcher, backend);
   for (const auto& name : dispatcher.names()) {
     const auto it = defs.find("request_" + name);
     ASSERT_NE(it, defs.end()) << name << " has no request schema";

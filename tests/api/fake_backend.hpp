@@ -1,4 +1,5 @@
-// A scripted Backend for the API tests, the fuzz target and the benchmark.
+// A scripted Backend for the API tests, the fuzz target and the benchmark: the common commands
+// and every drive kind's own (DCP's and USS's), so one fake serves a lift of any kind.
 #pragma once
 
 #include <optional>
@@ -7,12 +8,18 @@
 #include <vector>
 
 #include "api/backend.hpp"
+#include "api/commands.hpp"
+#include "api/dispatcher.hpp"
+#include "dcp/host/commands.hpp"
+#include "uss/host/commands.hpp"
 
 namespace liftd::api::testing {
 
 /// Answers from fixed snapshots; control commands succeed, fail with `control_result`, or are
 /// held in `deferred` until the test answers them.
-class FakeBackend : public Backend {
+class FakeBackend : public Backend,
+                    public daemon::DcpCommandBackend,
+                    public daemon::UssCommandBackend {
  public:
   FakeBackend() {
     status_snapshot.drive_state = drive::State::Ready;
@@ -57,7 +64,7 @@ class FakeBackend : public Backend {
     const std::size_t n = std::min(max_entries, trace_entries.size());
     return {trace_entries.end() - static_cast<std::ptrdiff_t>(n), trace_entries.end()};
   }
-  DisplaySnapshot display() override { return display_snapshot; }
+  daemon::DisplaySnapshot display() override { return display_snapshot; }
   nlohmann::json config() override { return config_json; }
   void key(int button, Responder done) override {
     answer("key " + std::to_string(button), Result::ok(), std::move(done));
@@ -65,41 +72,50 @@ class FakeBackend : public Backend {
   void drive_reset(Responder done) override {
     answer("drive_reset", Result::ok(), std::move(done));
   }
-  void parameter(const ParameterArgs& a, Responder done) override {
+  void parameter(const daemon::ParameterArgs& a, Responder done) override {
     answer("parameter " + std::to_string(a.address.value_or(-1)) + " " + std::to_string(a.pnu) +
-               " " + std::string(kParameterTargets[static_cast<std::size_t>(a.target)]) + " " +
-               std::to_string(a.index) + (a.write ? " write " + std::to_string(a.value) : "") +
-               (a.dword ? " dword" : "") + (a.eeprom ? " eeprom" : ""),
+               " " + std::string(daemon::kParameterTargets[static_cast<std::size_t>(a.target)]) +
+               " " + std::to_string(a.index) +
+               (a.write ? " write " + std::to_string(a.value) : "") + (a.dword ? " dword" : "") +
+               (a.eeprom ? " eeprom" : ""),
            Result::ok({{"pnu", a.pnu}}), std::move(done));
   }
   void mirror(std::optional<int> address, Responder done) override {
     answer("mirror " + std::to_string(address.value_or(-1)), Result::ok(), std::move(done));
   }
-  void power(PowerSetting setting, Responder done) override {
+  void power(daemon::PowerSetting setting, Responder done) override {
     answer(std::string("power ") + (setting.emergency ? "emergency " : "mains ") +
                std::to_string(setting.saving),
-           Result::ok(to_json(setting)), std::move(done));
+           Result::ok(daemon::to_json(setting)), std::move(done));
   }
   void load(int percent, Responder done) override {
     answer("load " + std::to_string(percent), Result::ok(), std::move(done));
+  }
+  // No travel control, as the defaults of the common travel commands.
+  void fast_stop(Responder done) override { no_travel(done); }
+  void fast_start(const std::string&, const TravelArgs&, Responder done) override {
+    no_travel(done);
   }
   void update_inputs(const InputUpdate& update, Responder done) override {
     update.apply_to(inputs_state);
     answer("inputs", Result::ok(to_json(inputs_state)), std::move(done));
   }
 
-  StatusSnapshot status_snapshot;         ///< what status() returns
-  StatsSnapshot stats_snapshot;           ///< what stats() returns
-  std::vector<TraceEntry> trace_entries;  ///< what trace() picks from
-  DisplaySnapshot display_snapshot;       ///< what display() returns
-  nlohmann::json config_json;             ///< what config() returns
-  Inputs inputs_state;                    ///< updated by update_inputs()
-  std::optional<Result> control_result;   ///< set: control commands answer this
-  bool defer = false;                     ///< true: hold control responders in `deferred`
-  std::vector<Responder> deferred;        ///< held responders
-  std::vector<std::string> calls;         ///< control calls seen, e.g. "load 50"
+  StatusSnapshot status_snapshot;            ///< what status() returns
+  StatsSnapshot stats_snapshot;              ///< what stats() returns
+  std::vector<TraceEntry> trace_entries;     ///< what trace() picks from
+  daemon::DisplaySnapshot display_snapshot;  ///< what display() returns
+  nlohmann::json config_json;                ///< what config() returns
+  Inputs inputs_state;                       ///< updated by update_inputs()
+  std::optional<Result> control_result;      ///< set: control commands answer this
+  bool defer = false;                        ///< true: hold control responders in `deferred`
+  std::vector<Responder> deferred;           ///< held responders
+  std::vector<std::string> calls;            ///< control calls seen, e.g. "load 50"
 
  private:
+  static void no_travel(Responder& done) {
+    done(Result::fail(ErrorCode::NotReady, "this daemon has no travel control for its drive"));
+  }
   void answer(std::string call, Result fallback, Responder done) {
     calls.push_back(std::move(call));
     if (defer) {
@@ -109,5 +125,18 @@ class FakeBackend : public Backend {
     done(control_result ? *control_result : std::move(fallback));
   }
 };
+
+/// Every drive kind's own commands on `dispatcher`, served by `backend`, as the daemon's
+/// registry of drive kinds (daemon/drives.cpp) adds them to a lift's server.
+inline void add_drive_kind_commands(Dispatcher& dispatcher, FakeBackend& backend) {
+  daemon::add_dcp_commands(dispatcher, backend);
+  daemon::add_uss_commands(dispatcher, backend);
+}
+
+/// Every command of the daemon on `dispatcher`: the common ones and every drive kind's own.
+inline void add_every_command(Dispatcher& dispatcher, FakeBackend& backend) {
+  add_builtin_commands(dispatcher, backend);
+  add_drive_kind_commands(dispatcher, backend);
+}
 
 }  // namespace liftd::api::testing

@@ -41,7 +41,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   static liftd::api::testing::FakeBackend backend;
   static liftd::api::Dispatcher dispatcher = [] {
     liftd::api::Dispatcher d;
-    liftd::api::add_builtin_commands(d, backend);
+    liftd::api::testing::add_every_command(d, backend);
     return d;
   }();
   static FuzzSession session;

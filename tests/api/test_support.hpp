@@ -151,6 +151,7 @@ class ServerFixture : public ::testing::Test {
   void start_server(ServerConfig config) {
     server_ = std::make_unique<Server>(io_, backend_, std::move(config),
                                        [](LogLevel, std::string_view) {});
+    add_drive_kind_commands(server_->dispatcher(), backend_);
     server_->start();
     work_.emplace(io_.get_executor());
     thread_ = std::thread([this] { io_.run(); });

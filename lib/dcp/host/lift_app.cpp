@@ -152,6 +152,7 @@ LiftApp::LiftApp(Host& daemon, const config::Config& config, bool simulate)
 
   server_ = std::make_unique<api::Server>(daemon.io(), *backend_, api_server_config(config),
                                           api_log_sink());
+  daemon.add_drive_commands(server_->dispatcher(), *backend_);
 
   if (sim_) {
     daemon.add_component({"sim", [this] { return sim_->start(); }, [this] { sim_->stop(); }});
@@ -359,7 +360,7 @@ void LiftApp::publish_state_if_changed(MonoTime now) {
   const control::ControllerSnapshot s = controller_->snapshot();
   if (s.display_version != last_display_version_) {
     last_display_version_ = s.display_version;
-    server_->publish("display", api::to_json(backend_->display()));
+    server_->publish("display", to_json(backend_->display()));
   }
   publisher_.publish(*server_, backend_->status(), now);
 }

@@ -175,9 +175,9 @@ api::Result LiftBackend::write_flight_recorder(std::string_view why) {
   return flight_recorder_.write(why);
 }
 
-api::DisplaySnapshot LiftBackend::display() {
+DisplaySnapshot LiftBackend::display() {
   const control::ControllerSnapshot s = controller_.snapshot();
-  api::DisplaySnapshot out;
+  DisplaySnapshot out;
   for (const auto& row : s.display) out.lines.push_back(utf8_row(row));
   return out;
 }
@@ -226,18 +226,18 @@ void LiftBackend::drive_reset(api::Responder done) {
        });
 }
 
-void LiftBackend::power(api::PowerSetting setting, api::Responder done) {
+void LiftBackend::power(PowerSetting setting, api::Responder done) {
   dcp::PowerRequest request;
   request.supply = setting.emergency ? dcp::PowerSupply::Emergency : dcp::PowerSupply::Mains;
   request.saving = static_cast<dcp::EnergySaving>('0' + setting.saving);
   send(control::LinkCommand{request}, std::move(done), [](const control::CommandReply& r) {
-    api::PowerSetting actual;
+    PowerSetting actual;
     if (const auto* reply =
             r.drive_reply ? std::get_if<dcp::PowerReply>(&*r.drive_reply) : nullptr) {
       actual.emergency = reply->supply == dcp::PowerSupply::Emergency;
       actual.saving = static_cast<int>(reply->saving) - '0';
     }
-    return Result::ok(api::to_json(actual));
+    return Result::ok(to_json(actual));
   });
 }
 

@@ -14,6 +14,7 @@
 #include "api/dispatcher.hpp"
 #include "config/config.hpp"
 #include "dcp/control/dcp_controller.hpp"
+#include "dcp/host/commands.hpp"
 #include "dcp/host/dcp_status.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
@@ -24,8 +25,8 @@ namespace liftd::daemon {
 
 class SimulatedLift;
 
-/// api::Backend over a DcpController and its CycleRunner.
-class LiftBackend final : public api::Backend {
+/// api::Backend and the DCP commands over a DcpController and its CycleRunner.
+class LiftBackend final : public api::Backend, public DcpCommandBackend {
  public:
   /// `position_feed` is written by `inputs` when position.source is "api" (else nullptr);
   /// `sim` is the simulated lift with --simulate (else nullptr: the `sim` command is refused).
@@ -39,24 +40,26 @@ class LiftBackend final : public api::Backend {
   api::StatsSnapshot stats() override;
   std::vector<api::TraceEntry> trace(std::size_t max_entries) override;
   api::Result save_trace() override;
-  api::DisplaySnapshot display() override;
   nlohmann::json config() override;
-  void key(int button, api::Responder done) override;
   void drive_reset(api::Responder done) override;
-  void power(api::PowerSetting setting, api::Responder done) override;
-  void load(int percent, api::Responder done) override;
   void update_inputs(const api::InputUpdate& update, api::Responder done) override;
 
   void travel(const api::TravelArgs& args, api::Responder done) override;
   void stop(api::Responder done) override;
-  void fast_stop(api::Responder done) override;
   void relevel(api::Responder done) override;
   void inspection(bool on, const std::string& direction, api::Responder done) override;
-  void fast_start(const std::string& action, const api::TravelArgs& args,
-                  api::Responder done) override;
   void calls(const std::string& action, std::optional<int> floor, api::Responder done) override;
   /// Served by the process's SimulatedLift (liftd --simulate); refused without one.
   void sim(const api::SimRequest& request, api::Responder done) override;
+
+  // ---- DcpCommandBackend ----
+  DisplaySnapshot display() override;
+  void key(int button, api::Responder done) override;
+  void power(PowerSetting setting, api::Responder done) override;
+  void load(int percent, api::Responder done) override;
+  void fast_stop(api::Responder done) override;
+  void fast_start(const std::string& action, const api::TravelArgs& args,
+                  api::Responder done) override;
 
   /// Io thread, every few ms: hands controller replies to their waiting clients and times out
   /// requests the cycle never answered (it stopped).

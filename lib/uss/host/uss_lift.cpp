@@ -501,8 +501,7 @@ api::Result UssBackend::parameter_result(const ParameterContext& context,
   nlohmann::json out = {
       {"address", context.address},
       {"pnu", reply.pnu},
-      {"target",
-       std::string(api::kParameterTargets[static_cast<std::size_t>(context.args.target)])},
+      {"target", std::string(kParameterTargets[static_cast<std::size_t>(context.args.target)])},
       {"index", context.args.index},
       {"reply", std::string(uss::reply_name(reply.id))}};
   nlohmann::json words = nlohmann::json::array();
@@ -559,7 +558,7 @@ void UssBackend::drive_reset(api::Responder done) {
   });
 }
 
-void UssBackend::parameter(const api::ParameterArgs& args, api::Responder done) {
+void UssBackend::parameter(const ParameterArgs& args, api::Responder done) {
   const auto address = static_cast<std::uint8_t>(args.address.value_or(config_.uss.drive_address));
   const auto length = pkw_length(address);
   if (!length) {
@@ -577,11 +576,11 @@ void UssBackend::parameter(const api::ParameterArgs& args, api::Responder done) 
                       "address"));
     return;
   }
-  const uss::PkwTarget target =
-      args.target == api::ParameterTarget::Array         ? uss::PkwTarget::ArrayElement
-      : args.target == api::ParameterTarget::Description ? uss::PkwTarget::Description
-      : args.target == api::ParameterTarget::Text        ? uss::PkwTarget::Text
-                                                         : uss::PkwTarget::Value;
+  const uss::PkwTarget target = args.target == ParameterTarget::Array ? uss::PkwTarget::ArrayElement
+                                : args.target == ParameterTarget::Description
+                                    ? uss::PkwTarget::Description
+                                : args.target == ParameterTarget::Text ? uss::PkwTarget::Text
+                                                                       : uss::PkwTarget::Value;
   const uss::PkwWidth width = args.dword ? uss::PkwWidth::Dword : uss::PkwWidth::Word;
   uss::Pkw request;
   request.pnu = static_cast<std::uint16_t>(args.pnu);

@@ -27,6 +27,7 @@
 #include "log/throttle.hpp"
 #include "sim/sim_io.hpp"
 #include "uss/drive/controller.hpp"
+#include "uss/host/commands.hpp"
 #include "uss/master/master.hpp"
 #include "uss/runner/uss_runner.hpp"
 #include "uss/sim/uss_slave_sim.hpp"
@@ -103,8 +104,8 @@ struct UssDrive {
   }
 };
 
-/// api::Backend over the USS lift controller.
-class UssBackend final : public ControllerBackend<UssDrive> {
+/// api::Backend and the USS parameter commands over the USS lift controller.
+class UssBackend final : public ControllerBackend<UssDrive>, public UssCommandBackend {
  public:
   UssBackend(const config::Config& config, const config::Schema& schema,
              uss::UssController& controller, uss::UssRunner& runner, uss::Master& master,
@@ -117,13 +118,15 @@ class UssBackend final : public ControllerBackend<UssDrive> {
   std::vector<api::TraceEntry> trace(std::size_t max_entries) override;
   void drive_reset(api::Responder done) override;
   void travel(const api::TravelArgs& args, api::Responder done) override;
-  void parameter(const api::ParameterArgs& args, api::Responder done) override;
+
+  // ---- UssCommandBackend ----
+  void parameter(const ParameterArgs& args, api::Responder done) override;
   void mirror(std::optional<int> address, api::Responder done) override;
 
  private:
   /// What a reply must turn into: the parameter request's arguments for its result.
   struct ParameterContext {
-    api::ParameterArgs args;
+    ParameterArgs args;
     std::uint8_t address = 0;
     uss::PkwLength length = uss::PkwLength::Four;
   };
