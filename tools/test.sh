@@ -66,11 +66,14 @@ run_preset() {
 }
 
 # start_session SCRIPT: runs it in a session of its own (setsid) and prints the session's process
-# group, so that `kill -- -GROUP` ends all of it (a loop and the command it is waiting for).
+# group, so that `kill -- -GROUP` ends all of it (a loop and the command it is waiting for). The
+# session gets none of this shell's descriptors: called as $(start_session ...), a session that
+# kept the substitution's pipe as its output would keep the caller waiting for as long as it
+# runs (a CPU hog: for ever). SCRIPT redirects its own output where it wants it kept.
 start_session() {
   local pid_file
   pid_file=$(mktemp)
-  setsid -f bash -c 'echo $$ >"$1"; eval "$2"' session "$pid_file" "$1"
+  setsid -f bash -c 'echo $$ >"$1"; eval "$2"' session "$pid_file" "$1" </dev/null >/dev/null 2>&1
   for _ in $(seq 100); do [ -s "$pid_file" ] && break; sleep 0.05; done
   cat "$pid_file"
   rm -f "$pid_file"
