@@ -72,6 +72,22 @@ struct Call {
 /// A command implementation; calls `done` exactly once, now or later.
 using Handler = std::function<void(const Call& call, Responder done)>;
 
+/// The handler of a command only one drive kind offers, served by that kind's own backend
+/// interface (`backend`, nullptr on a lift of another kind). On such a lift the dispatcher
+/// refuses the command by its capability before the handler runs; a dispatcher without a drive
+/// kind gets `not_offered` with `refusal`.
+template <typename KindBackend, typename Serve>
+Handler served_by(KindBackend* backend, std::string refusal, Serve serve) {
+  return [backend, refusal = std::move(refusal), serve = std::move(serve)](const Call& call,
+                                                                           Responder done) {
+    if (backend == nullptr) {
+      done(Result::fail(ErrorCode::NotOffered, refusal));
+      return;
+    }
+    serve(*backend, call, std::move(done));
+  };
+}
+
 /// CommandSpec::needs of a command every drive kind offers.
 inline constexpr std::optional<drive::Capability> kEveryDriveKind = std::nullopt;
 

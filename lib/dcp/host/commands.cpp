@@ -21,23 +21,6 @@ nlohmann::json to_json(const PowerSetting& p) {
   return {{"supply", p.emergency ? "emergency" : "mains"}, {"saving", p.saving}};
 }
 
-namespace {
-
-/// Serves one DCP command on the DCP lift. Elsewhere the dispatcher refuses the command by its
-/// capability before the handler runs; a dispatcher without a drive kind gets this answer.
-template <typename Serve>
-api::Handler served_by(DcpCommandBackend* backend, Serve serve) {
-  return [backend, serve = std::move(serve)](const api::Call& call, api::Responder done) {
-    if (backend == nullptr) {
-      done(api::Result::fail(api::ErrorCode::NotOffered, "this lift's drive does not speak DCP"));
-      return;
-    }
-    serve(*backend, call, std::move(done));
-  };
-}
-
-}  // namespace
-
 void add_dcp_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
   using api::Access;
   using api::arg_or;
@@ -45,13 +28,17 @@ void add_dcp_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
   using api::Responder;
   using api::Result;
   DcpCommandBackend* const dcp = dynamic_cast<DcpCommandBackend*>(&backend);
+  // The answer on a dispatcher without a drive kind (see api::served_by).
+  const std::string kNotDcpRefusal = "this lift's drive does not speak DCP";
 
   dispatcher.add({"display",
                   Access::Read,
                   {},
                   "the drive's remote display",
-                  served_by(dcp, [](DcpCommandBackend& b, const Call&,
-                                    Responder done) { done(Result::ok(to_json(b.display()))); }),
+                  api::served_by(dcp, kNotDcpRefusal,
+                                 [](DcpCommandBackend& b, const Call&, Responder done) {
+                                   done(Result::ok(to_json(b.display())));
+                                 }),
                   drive::Capability::Display});
 
   // DCP 5.6.3: the remote keypad has buttons "1" to "5".
@@ -59,10 +46,10 @@ void add_dcp_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
                   Access::Control,
                   {api::int_arg("key", true, 1, 5, "keypad button 1..5")},
                   "press a button of the drive's remote keypad",
-                  served_by(dcp,
-                            [](DcpCommandBackend& b, const Call& call, Responder done) {
-                              b.key(call.request.at("key").get<int>(), std::move(done));
-                            }),
+                  api::served_by(dcp, kNotDcpRefusal,
+                                 [](DcpCommandBackend& b, const Call& call, Responder done) {
+                                   b.key(call.request.at("key").get<int>(), std::move(done));
+                                 }),
                   drive::Capability::Keypad});
 
   // DCP 5.12.6: supply 'N' mains or 'U' emergency; energy saving '0', '1' or '2'.
@@ -71,14 +58,14 @@ void add_dcp_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
                   {api::choice_arg("supply", true, {"mains", "emergency"}, "power supply"),
                    api::int_arg("saving", false, 0, 2, "energy saving mode (default 0)")},
                   "set the power supply mode (I6)",
-                  served_by(dcp,
-                            [](DcpCommandBackend& b, const Call& call, Responder done) {
-                              PowerSetting setting;
-                              setting.emergency =
-                                  call.request.at("supply").get<std::string>() == "emergency";
-                              setting.saving = arg_or<int>(call.request, "saving", 0);
-                              b.power(setting, std::move(done));
-                            }),
+                  api::served_by(dcp, kNotDcpRefusal,
+                                 [](DcpCommandBackend& b, const Call& call, Responder done) {
+                                   PowerSetting setting;
+                                   setting.emergency =
+                                       call.request.at("supply").get<std::string>() == "emergency";
+                                   setting.saving = arg_or<int>(call.request, "saving", 0);
+                                   b.power(setting, std::move(done));
+                                 }),
                   drive::Capability::Power});
 
   // DCP 5.12.8: three BCD digits of percent of the rated load.
@@ -86,37 +73,40 @@ void add_dcp_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
                   Access::Control,
                   {api::int_arg("percent", true, 0, 999, "car load in percent of rated load")},
                   "send the car load for the next travel (I8)",
-                  served_by(dcp,
-                            [](DcpCommandBackend& b, const Call& call, Responder done) {
-                              b.load(call.request.at("percent").get<int>(), std::move(done));
-                            }),
+                  api::served_by(dcp, kNotDcpRefusal,
+                                 [](DcpCommandBackend& b, const Call& call, Responder done) {
+                                   b.load(call.request.at("percent").get<int>(), std::move(done));
+                                 }),
                   drive::Capability::Load});
 
   dispatcher.add({"fast_stop",
                   Access::Control,
                   {},
                   "fast stop of the running travel (DCP 13)",
-                  served_by(dcp, [](DcpCommandBackend& b, const Call&,
-                                    Responder done) { b.fast_stop(std::move(done)); }),
+                  api::served_by(dcp, kNotDcpRefusal,
+                                 [](DcpCommandBackend& b, const Call&, Responder done) {
+                                   b.fast_stop(std::move(done));
+                                 }),
                   drive::Capability::FastStop});
 
-  dispatcher.add(
-      {"fast_start",
-       Access::Control,
-       {api::choice_arg("action", true, {"arm", "go", "abort"},
-                        "arm while the doors close, go when locked, abort (controlled)"),
-        api::floor_arg(false), api::speed_arg()},
-       "fast start (DCP 12)",
-       served_by(dcp,
-                 [](DcpCommandBackend& b, const Call& call, Responder done) {
-                   const std::string action = call.request.at("action");
-                   if (action == "arm" && !call.request.contains("floor")) {
-                     done(Result::fail(api::ErrorCode::BadRequest, "arm needs a floor", "floor"));
-                     return;
-                   }
-                   b.fast_start(action, api::travel_args(call.request), std::move(done));
-                 }),
-       drive::Capability::FastStart});
+  dispatcher.add({"fast_start",
+                  Access::Control,
+                  {api::choice_arg("action", true, {"arm", "go", "abort"},
+                                   "arm while the doors close, go when locked, abort (controlled)"),
+                   api::floor_arg(false), api::speed_arg()},
+                  "fast start (DCP 12)",
+                  api::served_by(dcp, kNotDcpRefusal,
+                                 [](DcpCommandBackend& b, const Call& call, Responder done) {
+                                   const std::string action = call.request.at("action");
+                                   if (action == "arm" && !call.request.contains("floor")) {
+                                     done(Result::fail(api::ErrorCode::BadRequest,
+                                                       "arm needs a floor", "floor"));
+                                     return;
+                                   }
+                                   b.fast_start(action, api::travel_args(call.request),
+                                                std::move(done));
+                                 }),
+                  drive::Capability::FastStart});
 }
 
 }  // namespace liftd::daemon

@@ -30,20 +30,6 @@ ParameterArgs parameter_args(const nlohmann::json& request) {
   return args;
 }
 
-/// Serves one USS command on the USS lift. Elsewhere the dispatcher refuses the command by its
-/// capability before the handler runs; a dispatcher without a drive kind gets this answer.
-template <typename Serve>
-api::Handler served_by(UssCommandBackend* backend, Serve serve) {
-  return [backend, serve = std::move(serve)](const api::Call& call, api::Responder done) {
-    if (backend == nullptr) {
-      done(api::Result::fail(api::ErrorCode::NotOffered,
-                             "this lift's drive has no parameter channel"));
-      return;
-    }
-    serve(*backend, call, std::move(done));
-  };
-}
-
 }  // namespace
 
 void add_uss_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
@@ -52,6 +38,8 @@ void add_uss_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
   using api::Responder;
   using api::Result;
   UssCommandBackend* const uss = dynamic_cast<UssCommandBackend*>(&backend);
+  // The answer on a dispatcher without a drive kind (see api::served_by).
+  const std::string kNotUssRefusal = "this lift's drive has no parameter channel";
 
   // USS A 4.3: ADR bits 0..4 carry the slave address; C 4.2.1.3: the PNU is PKE bits 0..10.
   const api::ArgSpec address = api::int_arg("address", false, 0, uss::kMaxSlaveAddress,
@@ -68,10 +56,10 @@ void add_uss_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
                                    "value (default), array element, description element or text"),
                    index},
                   "read a parameter of a USS slave (PKW request)",
-                  served_by(uss,
-                            [](UssCommandBackend& b, const Call& call, Responder done) {
-                              b.parameter(parameter_args(call.request), std::move(done));
-                            }),
+                  api::served_by(uss, kNotUssRefusal,
+                                 [](UssCommandBackend& b, const Call& call, Responder done) {
+                                   b.parameter(parameter_args(call.request), std::move(done));
+                                 }),
                   drive::Capability::Parameters});
 
   dispatcher.add(
@@ -83,37 +71,38 @@ void add_uss_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
         api::choice_arg("width", false, {"word", "dword"}, "word (default) or double word"),
         api::flag_arg("eeprom", "also store it in the drive's EEPROM (default false)")},
        "change a parameter of a USS slave (PKW request)",
-       served_by(uss,
-                 [](UssCommandBackend& b, const Call& call, Responder done) {
-                   ParameterArgs args = parameter_args(call.request);
-                   args.write = true;
-                   args.value = call.request.at("value").get<std::int64_t>();
-                   args.dword = api::arg_or<std::string>(call.request, "width", "word") == "dword";
-                   args.eeprom = api::arg_or<bool>(call.request, "eeprom", false);
-                   if (!args.dword && (args.value < kMinWord || args.value > kMaxWord)) {
-                     done(Result::fail(
-                         api::ErrorCode::BadRequest,
-                         "value " + std::to_string(args.value) +
-                             " does not fit a word (-32768..65535): use \"width\": \"dword\"",
-                         "value"));
-                     return;
-                   }
-                   b.parameter(args, std::move(done));
-                 }),
+       api::served_by(uss, kNotUssRefusal,
+                      [](UssCommandBackend& b, const Call& call, Responder done) {
+                        ParameterArgs args = parameter_args(call.request);
+                        args.write = true;
+                        args.value = call.request.at("value").get<std::int64_t>();
+                        args.dword =
+                            api::arg_or<std::string>(call.request, "width", "word") == "dword";
+                        args.eeprom = api::arg_or<bool>(call.request, "eeprom", false);
+                        if (!args.dword && (args.value < kMinWord || args.value > kMaxWord)) {
+                          done(Result::fail(
+                              api::ErrorCode::BadRequest,
+                              "value " + std::to_string(args.value) +
+                                  " does not fit a word (-32768..65535): use \"width\": \"dword\"",
+                              "value"));
+                          return;
+                        }
+                        b.parameter(args, std::move(done));
+                      }),
        drive::Capability::Parameters});
 
   dispatcher.add({"uss_mirror",
                   Access::Control,
                   {address},
                   "send a mirror telegram (link test, USS A 5.3)",
-                  served_by(uss,
-                            [](UssCommandBackend& b, const Call& call, Responder done) {
-                              std::optional<int> a;
-                              if (call.request.contains("address")) {
-                                a = call.request.at("address").get<int>();
-                              }
-                              b.mirror(a, std::move(done));
-                            }),
+                  api::served_by(uss, kNotUssRefusal,
+                                 [](UssCommandBackend& b, const Call& call, Responder done) {
+                                   std::optional<int> a;
+                                   if (call.request.contains("address")) {
+                                     a = call.request.at("address").get<int>();
+                                   }
+                                   b.mirror(a, std::move(done));
+                                 }),
                   drive::Capability::Parameters});
 }
 
