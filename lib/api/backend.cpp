@@ -2,6 +2,8 @@
 
 #include <cstdio>
 #include <ctime>
+#include <memory>
+#include <utility>
 
 namespace liftd::api {
 
@@ -41,6 +43,30 @@ void InputUpdate::apply_to(Inputs& inputs) const {
     if (flags[i]) inputs.*(kInputFlags[i].member) = *flags[i];
   }
   if (position_mm) inputs.position_mm = position_mm;
+}
+
+namespace {
+/// The one empty object default-made values share: a snapshot made for each request allocates
+/// nothing for it.
+const std::shared_ptr<nlohmann::json>& shared_empty_object() {
+  static const auto empty = std::make_shared<nlohmann::json>(nlohmann::json::object());
+  return empty;
+}
+}  // namespace
+
+SharedJson::SharedJson() : value_(shared_empty_object()) {}
+
+SharedJson::SharedJson(nlohmann::json value)
+    : value_(std::make_shared<nlohmann::json>(std::move(value))) {}
+
+SharedJson& SharedJson::operator=(nlohmann::json value) {
+  value_ = std::make_shared<nlohmann::json>(std::move(value));
+  return *this;
+}
+
+nlohmann::json& SharedJson::edit() {
+  if (value_.use_count() != 1) value_ = std::make_shared<nlohmann::json>(*value_);
+  return *value_;
 }
 
 std::string_view to_string(LinkState state) noexcept {
@@ -130,7 +156,7 @@ nlohmann::json to_json(const StatusSnapshot& s) {
   rt["policy"] = s.rt.policy;
   rt["priority"] = s.rt.priority;
   rt["memory_locked"] = s.rt.memory_locked;
-  j[kind] = s.details;
+  j[kind] = *s.details;
   return j;
 }
 

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -46,15 +47,40 @@ struct RtInfo {
   bool operator==(const RtInfo&) const = default;
 };
 
+/// A JSON value that copies share. `status` is the request a dispatcher sends most: each one
+/// copies the lift's snapshot, compares it with the last one answered and, rarely, serialises
+/// it. A kind's detail object rarely changes, so its copies share one value (a reference count,
+/// not a deep copy) and two copies of one value compare equal without a look inside. Changing
+/// it (`edit`) first makes a private copy when another copy shares it.
+class SharedJson {
+ public:
+  /// An empty object.
+  SharedJson();
+  explicit SharedJson(nlohmann::json value);
+  SharedJson& operator=(nlohmann::json value);
+
+  const nlohmann::json& operator*() const noexcept { return *value_; }
+  const nlohmann::json* operator->() const noexcept { return value_.get(); }
+  /// The value to change; no other copy sees the change.
+  nlohmann::json& edit();
+
+  bool operator==(const SharedJson& other) const {
+    return value_ == other.value_ || *value_ == *other.value_;
+  }
+
+ private:
+  std::shared_ptr<nlohmann::json> value_;
+};
+
 /// Everything `status` reports, filled by the backend. The drive-neutral fields every drive kind
 /// fills alike; what only one kind has goes into `details`, reported under the kind's name.
 struct StatusSnapshot {
-  drive::Kind drive_kind = drive::Kind::Dcp;          ///< drive.kind
-  drive::State drive_state = drive::State::Offline;   ///< drive.state
-  LinkState link = LinkState::Down;                   ///< link.state
-  nlohmann::json details = nlohmann::json::object();  ///< status.<drive.kind>, e.g. status.dcp
-  std::optional<std::int64_t> position_mm;            ///< car.position_mm; nullopt if unknown
-  std::optional<int> floor;                           ///< car.floor (0 = lowest); nullopt between
+  drive::Kind drive_kind = drive::Kind::Dcp;         ///< drive.kind
+  drive::State drive_state = drive::State::Offline;  ///< drive.state
+  LinkState link = LinkState::Down;                  ///< link.state
+  SharedJson details;                                ///< status.<drive.kind>, e.g. status.dcp
+  std::optional<std::int64_t> position_mm;           ///< car.position_mm; nullopt if unknown
+  std::optional<int> floor;                          ///< car.floor (0 = lowest); nullopt between
   std::optional<int> next_possible_stop;  ///< car.next_possible_stop: nearest floor it can stop at
   bool brake_open = false;                ///< car.brake_open: brake output (follows S6)
   bool contactors_on = false;             ///< car.contactors_on: motor contactor output

@@ -19,8 +19,8 @@ void StatePublisher::publish(api::Server& server, api::StatusSnapshot status, Mo
   if (last_) {
     without_position.position_mm = last_->position_mm;
     for (const std::string& key : continuous_) {
-      if (without_position.details.contains(key) && last_->details.contains(key)) {
-        without_position.details[key] = last_->details[key];
+      if (without_position.details->contains(key) && last_->details->contains(key)) {
+        without_position.details.edit()[key] = last_->details->at(key);
       }
     }
   }

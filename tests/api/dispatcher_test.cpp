@@ -246,7 +246,7 @@ TEST_F(DispatcherTest, StatusSaysNotReady) {
 }
 
 TEST_F(DispatcherTest, StatusNamesEveryField) {
-  backend_.status_snapshot.details["status"]["advance_warning"] = true;
+  backend_.status_snapshot.details.edit()["status"]["advance_warning"] = true;
   backend_.status_snapshot.faults.push_back(
       {"link_timeout", "no reply for 150 ms", std::chrono::system_clock::time_point{}});
   const json r = handle(R"({"cmd":"status"})").at("result");
@@ -254,7 +254,7 @@ TEST_F(DispatcherTest, StatusNamesEveryField) {
   EXPECT_EQ(r.at("drive").at("state"), "ready");
   EXPECT_EQ(r.at("link").at("state"), "up");
   // The drive kind's own object, under its name.
-  EXPECT_EQ(r.at("dcp"), backend_.status_snapshot.details);
+  EXPECT_EQ(r.at("dcp"), *backend_.status_snapshot.details);
   EXPECT_EQ(r.at("dcp").at("status").at("advance_warning"), true);
   EXPECT_EQ(r.at("car"), (json{{"position_mm", 3000},
                                {"floor", 1},
@@ -475,7 +475,7 @@ class OtherDriveKindTest : public DispatcherTest {
  protected:
   OtherDriveKindTest() {
     backend_.status_snapshot.drive_kind = drive::Kind::Sch001;
-    backend_.status_snapshot.details = {{"card", "ok"}};
+    backend_.status_snapshot.details = nlohmann::json{{"card", "ok"}};
     dispatcher_ = Dispatcher{};
     add_every_command(dispatcher_, backend_);
   }

@@ -95,7 +95,7 @@ class LiftBackend final : public api::Backend, public DcpCommandBackend {
   SimulatedLift* sim_;                   ///< the simulated lift (liftd --simulate), else nullptr
   MachineInputs inputs_;                 ///< the API's and the simulated machine's inputs
   DcpStatusFacts dcp_facts_{};           ///< what dcp_details_ was built from
-  nlohmann::json dcp_details_ = dcp_status_json({});  ///< status.dcp
+  api::SharedJson dcp_details_{dcp_status_json({})};  ///< status.dcp, shared by the snapshots
   Pending pending_;                                   ///< requests waiting for the cycle's reply
   MonoTime mono_at_start_{};
   std::chrono::system_clock::time_point wall_at_start_{};
