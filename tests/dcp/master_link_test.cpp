@@ -1,3 +1,5 @@
+// Over 800 lines: every DCP 6/7 rule of the link engine against one scripted drive; split, the
+// rules would lose their shared fixture.
 // The master link engine against a scripted fake drive, with a fake clock: handshake, DCP 6
 // error handling, DCP 7.3 supervision, channel timeouts, I3 at day change, requests and timeouts,
 // the I2 reset window.

@@ -1,3 +1,5 @@
+// Over 800 lines: each travel type (DCP 9-13) step by step against one scripted drive; split, the
+// travel types would lose their shared fixture.
 // Each travel type against the scripted drive, with a fake clock: the exact command bytes and
 // data words in the order of the DCP 1.0.0.13 figures' numbered steps (chapters 9 to 13).
 #include <gtest/gtest.h>

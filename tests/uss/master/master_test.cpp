@@ -1,3 +1,5 @@
+// Over 800 lines: one case table per USS chapter (A 5.1-5.4, C 4.2.1) against one fake bus; split,
+// the chapters would lose their shared fixture.
 // The master engine against fake slaves on a fake clock: timing of A 5.1.2 / A 5.2.1.1, the
 // polling list of A 5.1, the "sendet nicht" flag, the PKW channel of C 4.2.1, mirror (A 5.3),
 // broadcast (A 3, appendix), special telegrams (A 5.4) and the fixed cycle time (A 5.1.1).
