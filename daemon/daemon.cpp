@@ -119,7 +119,7 @@ int Daemon::run() {
     kLog.debug("starting {}", component.name);
     if (component.start && !component.start()) {
       log::event(log::Level::error, "daemon", "start_failed", {{"part", component.name}},
-                 "could not start " + component.name + "; stopping");
+                 "could not start " + component.name + "; stopping", log::Catalogued::StartFailed);
       notifier_.stopping("failed to start " + component.name);
       stop_components();
       return exit_code::kFailure;
@@ -129,7 +129,7 @@ int Daemon::run() {
 
   notifier_.ready(running_status_);
   log::event(log::Level::info, "daemon", "ready", {{"status", running_status_}},
-             "liftd ready: " + running_status_);
+             "liftd ready: " + running_status_, log::Catalogued::Started);
 
   if (watchdog_timeout_) {
     watchdog_ = std::make_unique<service::Watchdog>(io_, notifier_, *watchdog_timeout_, probe_);
@@ -227,7 +227,8 @@ ReloadOutcome Daemon::refuse_reload(std::vector<std::string> problems) {
   for (const auto& problem : problems) {
     log::event(log::Level::error, "config", "reload_refused",
                {{"file", config_origin_}, {"problem", problem}},
-               "reload refused, the running configuration stays: " + problem);
+               "reload refused, the running configuration stays: " + problem,
+               log::Catalogued::ReloadRefused);
   }
   notifier_.ready("reload refused (" + std::to_string(problems.size()) + " problem(s) in " +
                   config_origin_ + ", see the journal); " + running_status_);
@@ -274,7 +275,8 @@ ReloadOutcome Daemon::reload() {
                {{"key", change.key}, {"running", change.running}, {"requested", change.requested}},
                change.key + " changed from " + change.running + " to " + change.requested +
                    ": it takes effect only after a restart (systemctl restart liftd); keeping " +
-                   change.running);
+                   change.running,
+               log::Catalogued::ReloadNeedsRestart);
     outcome.need_restart.push_back(change.key);
   }
   config_ = plan.effective;

@@ -73,7 +73,8 @@ std::optional<config::Config> load_config(const CommandLine& cl, bool to_log) {
     if (to_log) {
       for (const auto& problem : result.problems) {
         log::event(log::Level::error, "config", "config_invalid",
-                   {{"file", path}, {"key", problem.where}}, config::to_string(problem));
+                   {{"file", path}, {"key", problem.where}}, config::to_string(problem),
+                   log::Catalogued::ConfigRefused);
       }
       liftd::service::Notifier::from_environment().status(
           "configuration invalid: " + std::to_string(result.problems.size()) + " problem(s) in " +
@@ -187,13 +188,14 @@ int run_daemon(const CommandLine& cl) {
     // The daemon's copy: a reload updates it in place, and the parts read the keys it applies.
     app = liftd::daemon::make_lift(daemon, daemon.config(), cl.simulate);
   } catch (const std::exception& error) {
-    log::event(log::Level::error, "daemon", "setup_failed", {}, error.what());
+    log::event(log::Level::error, "daemon", "setup_failed", {}, error.what(),
+               log::Catalogued::StartFailed);
     log::flush();
     return exit_code::kFailure;
   }
   const int code = daemon.run();
   log::event(log::Level::info, "daemon", "stopped", {{"exit_code", std::to_string(code)}},
-             "liftd stopped");
+             "liftd stopped", log::Catalogued::Stopped);
   log::flush();
   return code;
 }

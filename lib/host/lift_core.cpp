@@ -7,6 +7,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "host/catalog_keys.hpp"
 #include "host/lift_common.hpp"
 #include "log/log.hpp"
 
@@ -139,7 +140,8 @@ void report_fault(api::Server& server, lift::FaultCode code, std::string_view te
   const std::string name(lift::fault_code_name(code));
   log::event(active ? log::Level::warn : log::Level::info, "safety",
              active ? "fault_raised" : "fault_cleared", {{"code", name}},
-             std::string(active ? "fault: " : "fault cleared: ") + std::string(text));
+             std::string(active ? "fault: " : "fault cleared: ") + std::string(text),
+             fault_catalog_key(code, active));
   server.publish("fault", {{"code", name}, {"text", std::string(text)}, {"active", active}});
 }
 
@@ -159,7 +161,7 @@ void report_travel(api::Server& server, std::string_view type, std::string_view 
     fields.push_back({"position_mm", std::to_string(*position_mm)});
   }
   log::event(aborted ? log::Level::warn : log::Level::info, "travel", "travel_" + std::string(type),
-             fields, text);
+             fields, text, aborted ? std::optional(abort_catalog_key(cause)) : std::nullopt);
   server.publish(
       "travel",
       {{"event", std::string(type)},
@@ -235,7 +237,8 @@ void journal_port_event(const rt::CycleEvent& e) {
              : e.kind == rt::CycleEventKind::PortOpenFailed ? "port_open_failed"
              : e.kind == rt::CycleEventKind::PortOpened     ? "port_opened"
                                                             : "thread_status",
-             {}, rt::describe(e));
+             {}, rt::describe(e),
+             bad ? std::optional(log::Catalogued::SerialPortLost) : std::nullopt);
 }
 
 api::ErrorCode to_api_error(lift::ReplyCode code) noexcept {

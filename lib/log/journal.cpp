@@ -128,8 +128,10 @@ std::vector<JournalField> journal_fields(const Record& record, std::string_view 
   std::vector<JournalField> out;
   out.emplace_back("MESSAGE", std::string(record.text));
   out.emplace_back("PRIORITY", std::to_string(journal_priority(record.level)));
-  if (const auto id = message_id_for(record.event, record.fields)) {
-    out.emplace_back("MESSAGE_ID", std::string(*id));
+  if (record.catalogued) {
+    if (const std::string_view id = message_id(*record.catalogued); !id.empty()) {
+      out.emplace_back("MESSAGE_ID", std::string(id));
+    }
   }
   out.emplace_back("SYSLOG_IDENTIFIER", std::string(identifier));
   if (!record.component.empty()) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <chrono>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -22,6 +23,7 @@ struct Record {
   std::string_view file;           ///< CODE_FILE; empty when unknown
   unsigned line = 0;               ///< CODE_LINE; 0 when unknown
   std::string_view function;       ///< CODE_FUNC; empty when unknown
+  std::optional<Catalogued> catalogued;  ///< gives MESSAGE_ID; unset for uncatalogued records
 };
 
 /// One journal field: name (A-Z, 0-9, _) and value.
@@ -35,9 +37,10 @@ int journal_priority(Level level);
 /// outside A-Z 0-9 _ become _, and the name is cut to journald's 64-character limit.
 std::string journal_field_name(std::string_view key);
 
-/// The fields of one record, in order: MESSAGE, PRIORITY, MESSAGE_ID (when the event is in the
-/// catalog, see catalog.hpp), SYSLOG_IDENTIFIER, LIFTD_COMPONENT, LIFTD_EVENT (when set), the
-/// extra fields, CODE_FILE/CODE_LINE/CODE_FUNC (when known).
+/// The fields of one record, in order: MESSAGE, PRIORITY, MESSAGE_ID (the id of its catalog key,
+/// when it has one: catalog.hpp; never looked up by event name or field text), SYSLOG_IDENTIFIER,
+/// LIFTD_COMPONENT, LIFTD_EVENT (when set), the extra fields, CODE_FILE/CODE_LINE/CODE_FUNC (when
+/// known).
 std::vector<JournalField> journal_fields(const Record& record, std::string_view identifier);
 
 /// Sends the fields as one journal entry with sd_journal_sendv(3); returns 0 or the errno of

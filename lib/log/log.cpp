@@ -22,6 +22,7 @@ struct Context {
   std::string_view event;
   const Fields* fields = nullptr;
   std::string_view function;
+  std::optional<Catalogued> catalogued;
 };
 thread_local const Context* t_context = nullptr;
 
@@ -73,6 +74,7 @@ Record make_record(const spdlog::details::log_msg& msg) {
     record.event = t_context->event;
     record.fields = t_context->fields;
     record.function = t_context->function;
+    record.catalogued = t_context->catalogued;
   }
   return record;
 }
@@ -224,16 +226,17 @@ void flush() {
 }
 
 void event(Level level, std::string_view component, std::string_view event_name,
-           const Fields& fields, std::string_view text, std::source_location where) {
+           const Fields& fields, std::string_view text, std::optional<Catalogued> catalogued,
+           std::source_location where) {
   if (!enabled(level)) return;
-  const Context context{event_name, &fields, where.function_name()};
+  const Context context{event_name, &fields, where.function_name(), catalogued};
   emit(level, component, context, text, where);
 }
 
 void write(Level level, std::string_view component, std::string_view text,
            std::source_location where) {
   if (!enabled(level)) return;
-  const Context context{{}, nullptr, where.line() == 0 ? "" : where.function_name()};
+  const Context context{{}, nullptr, where.line() == 0 ? "" : where.function_name(), std::nullopt};
   emit(level, component, context, text, where);
 }
 

@@ -15,6 +15,8 @@
 
 #include <spdlog/fmt/fmt.h>
 
+#include "log/catalog.hpp"
+
 namespace spdlog {
 class logger;
 }
@@ -72,8 +74,11 @@ void flush();
 
 /// Writes one record with an event name and extra fields, e.g.
 /// `event(Level::warn, "dcp", "link_fault", {{"cause", "10 lost frames"}}, "link lost")`.
+/// A record a technician acts on passes its catalog key, which alone gives it its journal
+/// MESSAGE_ID (catalog.hpp), e.g. `..., "fault: link lost", Catalogued::LinkLost)`.
 void event(Level level, std::string_view component, std::string_view event_name,
            const Fields& fields, std::string_view text,
+           std::optional<Catalogued> catalogued = std::nullopt,
            std::source_location where = std::source_location::current());
 
 /// Writes one plain record for a component.
@@ -121,10 +126,11 @@ class Logger {
   void error(fmt::format_string<Args...> format, Args&&... args) const {
     log(Level::error, format, std::forward<Args>(args)...);
   }
-  /// A record with an event name and fields (see log::event).
+  /// A record with an event name, fields and maybe a catalog key (see log::event).
   void event(Level level, std::string_view event_name, const Fields& fields, std::string_view text,
+             std::optional<Catalogued> catalogued = std::nullopt,
              std::source_location where = std::source_location::current()) const {
-    log::event(level, component_, event_name, fields, text, where);
+    log::event(level, component_, event_name, fields, text, catalogued, where);
   }
 
  private:

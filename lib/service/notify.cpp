@@ -246,7 +246,8 @@ void Watchdog::tick() {
       log::event(log::Level::error, "service", "watchdog_withheld",
                  {{"timeout_ms", std::to_string(period_.count() * 2 / 1000)}},
                  "no progress: withholding WATCHDOG=1, systemd will restart the service if "
-                 "this lasts");
+                 "this lasts",
+                 log::Catalogued::WatchdogWithheld);
       stalled_ = true;
     }
     ++pings_withheld_;

@@ -304,7 +304,8 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
   std::string name;
   std::string text;
   std::string log_event;
-  log::Fields fields;  // journal fields: the catalog (MESSAGE_ID) keys on code and cause
+  log::Fields fields;
+  std::optional<log::Catalogued> catalogued;  // gives the record its journal MESSAGE_ID
   switch (event.kind) {
     case Kind::Link: {
       name = "link";
@@ -332,6 +333,7 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
     case Kind::DriveError: {
       name = "drive_error";
       log_event = "drive_error";
+      catalogued = log::Catalogued::DriveErrorLog;
       text = "drive error: " + dcp::to_utf8(event.drive_error.chars());
       fields.push_back({"drive_text", dcp::to_utf8(event.drive_error.chars())});
       data = {{"text", dcp::to_utf8(event.drive_error.chars())},
@@ -352,7 +354,7 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
       return;
   }
   // What only a DCP drive tells: its link and its error texts (DCP 5.11).
-  log::event(level_for(event), "dcp", log_event, fields, text);
+  log::event(level_for(event), "dcp", log_event, fields, text, catalogued);
   server_->publish(name, data);
 }
 

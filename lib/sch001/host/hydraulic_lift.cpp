@@ -515,7 +515,8 @@ void HydraulicLift::journal_card_status(const sch001::ControllerSnapshot& s, Mon
             " (ERR fault, RDY ready, T1 oil temperature, P1 minimum/maximum pressure, "
             "P2 overpressure)" +
             (changes > 1 ? "; " + std::to_string(changes) + " changes since the last poll"
-                         : std::string()));
+                         : std::string()),
+        fault ? std::optional(log::Catalogued::CardFault) : std::nullopt);
   }
   if (const auto n = card_status_lines_.suppressed(now)) {
     log::event(log::Level::warn, "sch001", "card_status_flapping",
@@ -557,7 +558,8 @@ void HydraulicLift::journal_link_conditions(const sch001::ControllerSnapshot& s)
                      "beside liftd (card document 1.6: the card's 96 identifiers are for it "
                      "alone); check the bus wiring and the other nodes' addresses; no travel "
                      "command goes out"
-                   : "no frame on liftd's CAN identifier for 10 s");
+                   : "no frame on liftd's CAN identifier for 10 s",
+               s.foreign_sender ? std::optional(log::Catalogued::CanOwnIdInUse) : std::nullopt);
   }
   if (s.send_failing != send_failing_logged_) {
     send_failing_logged_ = s.send_failing;
@@ -612,7 +614,8 @@ void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
       // A silent card is one of the card faults the journal catalog explains (card_fault).
       const bool silent = event.link == sch001::LinkChange::Silent;
       log::event(silent ? log::Level::warn : log::Level::info, "sch001",
-                 silent ? "card_fault" : "link_state_changed", {{"state", state}}, text);
+                 silent ? "card_fault" : "link_state_changed", {{"state", state}}, text,
+                 silent ? std::optional(log::Catalogued::CardFault) : std::nullopt);
       daemon_.report_status(std::string("SCH001 card link ") + state);
       server_->publish("link", {{"kind", "state changed"}, {"state", state}, {"detail", text}});
       break;

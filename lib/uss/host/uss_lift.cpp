@@ -705,7 +705,8 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
       if (link_lines_.admit(1, event.at)) {
         log::event(up ? log::Level::info : log::Level::warn, "uss",
                    up ? "link_state_changed" : "uss_slave_fault",
-                   {{"state", up ? "up" : "fault"}, {"address", address}}, text);
+                   {{"state", up ? "up" : "fault"}, {"address", address}}, text,
+                   up ? std::nullopt : std::optional(log::Catalogued::UssSlaveFault));
       }
       if (drive) daemon_.report_status(std::string("USS drive link ") + (up ? "up" : "fault"));
       server_->publish("link", {{"kind", "state changed"},
@@ -719,7 +720,8 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
                  event.port_up ? "port_opened" : "port_lost",
                  {{"device", runner_->config().device_path}},
                  "USS port " + runner_->config().device_path +
-                     (event.port_up ? " open" : " lost: no travel; reopening"));
+                     (event.port_up ? " open" : " lost: no travel; reopening"),
+                 event.port_up ? std::nullopt : std::optional(log::Catalogued::SerialPortLost));
       break;
     case Kind::Spontaneous: {
       const uss::Pkw& p = event.spontaneous.report;
@@ -764,7 +766,8 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
                      (event.plc_control ? ""
                                         : ", in local control (status word bit 9 = 0): no "
                                           "travel starts") +
-                     " (status word " + std::to_string(event.zsw) + ")");
+                     " (status word " + std::to_string(event.zsw) + ")",
+                 fault ? std::optional(log::Catalogued::UssSlaveFault) : std::nullopt);
       break;
     }
     case Kind::Travel:
