@@ -162,7 +162,22 @@ void DcpController::after_cycle(MonoTime now) noexcept {
   lift_.update(last_input_.position_mm, travel_.direction(), travel_.decel_distance_mm());
   update_faults(last_input_, now);
   serve_calls();
+  sample_travel(now, kind != TravelKind::None, travel::to_string(kind), last_input_.position_mm,
+                target_floor_, drive_bits());
   publish(now);
+}
+
+lift::DriveBits DcpController::drive_bits() const noexcept {
+  lift::DriveBits bits;
+  bits.command = frame_[0];
+  bits.status = link_.drive().status.value_or(0);
+  // DCP 4.1: in DCP4 a desired-distance travel (B1) without B3 carries the remaining distance in
+  // its data bytes; with B3 they carry a speed.
+  const bool distance_word = link_.protocol() == dcp::Protocol::Dcp4 &&
+                             (frame_[0] & dcp::command_bit::kTravel) != 0 &&
+                             (frame_[0] & dcp::command_bit::kSpeedData) == 0;
+  if (distance_word) bits.remaining_mm = last_output_.data_word;
+  return bits;
 }
 
 travel::CycleInput DcpController::build_input(MonoTime now) noexcept {
