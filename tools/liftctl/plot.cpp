@@ -214,7 +214,9 @@ std::string chart(const Curve& c, const std::vector<std::optional<double>>& valu
 std::string switch_lines(const Curve& c) {
   std::string out;
   for (const auto& [t, changes] : switches_of(c)) {
-    std::string line = "  " + fixed(t, 3) + " s ";
+    std::string time = fixed(t, 3);
+    time.insert(0, time.size() < 6 ? 6 - time.size() : 0, ' ');
+    std::string line = "  " + time + " s ";
     const std::size_t indent = line.size();
     std::size_t start = 0;
     while (start < changes.size()) {
@@ -254,7 +256,7 @@ std::string terminal_chart(const Curve& c) {
 // ---- the SVG document ----
 
 constexpr double kSvgWidth = 960;
-constexpr double kLeft = 150;
+constexpr double kLeft = 170;
 constexpr double kRight = 30;
 constexpr double kPanelHeight = 170;
 constexpr double kPanelGap = 60;
