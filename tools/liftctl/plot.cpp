@@ -140,8 +140,8 @@ std::vector<std::pair<double, std::string>> switches_of(const Curve& c) {
     const std::string command = changes_of(before, c.bits[i], c.command_names, "c:");
     const std::string status = changes_of(before, c.bits[i], c.status_names, "s:");
     if (!command.empty() || !status.empty()) {
-      out.emplace_back(c.t_s[i], command + (command.empty() || status.empty() ? "" : " | ") +
-                                     (status.empty() ? "" : status));
+      out.emplace_back(c.t_s[i],
+                       command + (status.empty() ? "" : (command.empty() ? "| " : " | ") + status));
     }
     before = c.bits[i];
   }
