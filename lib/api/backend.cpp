@@ -194,6 +194,10 @@ Result Backend::save_trace() {
   return Result::fail(ErrorCode::NotReady, "this daemon keeps no flight recorder");
 }
 
+Result Backend::travels(std::size_t) {
+  return Result::fail(ErrorCode::NotReady, "this daemon records no travels");
+}
+
 void Backend::travel(const TravelArgs&, Responder done) {
   no_travel(done);
 }

@@ -258,6 +258,9 @@ class Backend {
   /// Writes the whole flight recorder, decoded, to a file; the result names it ({"file": path,
   /// "records": n}). A backend without a recorder refuses.
   virtual Result save_trace();
+  /// The newest `last` travels with their curves, oldest first (`travels`). A backend that
+  /// records none refuses.
+  virtual Result travels(std::size_t last);
   /// The effective configuration (as loaded and defaulted) for `config`.
   virtual nlohmann::json config() = 0;
   /// Asks the drive for a fault reset (I2 'R', DCP 5.12.4).

@@ -102,6 +102,17 @@ void add_state_commands(Dispatcher& dispatcher, Backend* b,
          done(Result::ok(std::move(result)));
        },
        kEveryDriveKind});
+
+  dispatcher.add({"travels",
+                  Access::Read,
+                  {int_arg("last", false, 1, kMaxTravels, "newest travels to return (default 5)")},
+                  "the last travels with their curves: position, speed, remaining distance, "
+                  "the drive's bits",
+                  [b](const Call& call, Responder done) {
+                    const auto last = arg_or<std::int64_t>(call.request, "last", 5);
+                    done(b->travels(static_cast<std::size_t>(last)));
+                  },
+                  kEveryDriveKind});
 }
 
 /// The commands that read the daemon's configuration and version.

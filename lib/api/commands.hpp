@@ -14,6 +14,8 @@ namespace liftd::api {
 
 /// Most trace entries one `trace` request returns.
 inline constexpr std::int64_t kMaxTraceEntries = 1000;
+/// The travels `travels` returns at most: all a lift keeps (host/travel_log.hpp).
+inline constexpr std::int64_t kMaxTravels = 16;
 
 /// Highest floor index a request may name (the configuration allows at most 64 floors).
 inline constexpr std::int64_t kMaxFloorIndex = 63;

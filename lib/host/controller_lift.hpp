@@ -10,7 +10,8 @@
 //   Controller, Runner, Simulator, Snapshot, Command, CommandReply, Event, TravelKind,
 //   StopCommand, RelevelCommand, InspectionCommand, CallCommand, InputsCommand, ShutdownCommand;
 //   kKind, kName (drive.kind, journal and daemon component), kThread (as the journal names the
-//   thread), kStartFailedEvent, kReplyGrace, kShutdownGrace, fault_text().
+//   thread), kStartFailedEvent, kReplyGrace, kShutdownGrace, fault_text(),
+//   travel_bit_names() (the names of the drive's bits in a travel's curve).
 #pragma once
 
 #include <chrono>
@@ -34,6 +35,7 @@
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
 #include "host/trace_files.hpp"
+#include "host/travel_log.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -59,6 +61,7 @@ class ControllerBackend : public api::Backend {
         flight_recorder_(runner.recorder(), default_runtime_dir(config),
                          static_cast<std::size_t>(config.rt.trace_files_kept),
                          std::string(Drive::kName)),
+        travel_log_(Drive::travel_bit_names(), floor_levels_mm(config)),
         mono_at_start_(mono_now()),
         wall_at_start_(std::chrono::system_clock::now()) {}
 
@@ -99,6 +102,18 @@ class ControllerBackend : public api::Backend {
     return flight_recorder_.save_requested(std::chrono::steady_clock::now());
   }
 
+  api::Result travels(std::size_t last) override {
+    return api::Result::ok(
+        travel_log_.to_json(last, [this](MonoTime at) { return wall_time(at); }));
+  }
+  /// A travel event of the controller: a finished or aborted travel ends its curve.
+  template <typename TravelEvent>
+  void record_travel_event(const TravelEvent& t, MonoTime at) {
+    using Type = decltype(t.type);
+    if (t.type == Type::Started) return;
+    travel_log_.end(at, travel_end_cause(t.type == Type::Aborted, lift::to_string(t.cause)));
+  }
+
   /// Writes the flight recorder to `<runtime dir>/liftd-trace-<UTC time>.txt` and journals it
   /// with `why` (SIGUSR1).
   api::Result write_flight_recorder(std::string_view why) { return flight_recorder_.write(why); }
@@ -108,6 +123,7 @@ class ControllerBackend : public api::Backend {
   virtual void poll(MonoTime now) {
     typename Drive::CommandReply r;
     while (controller_.poll_reply(r)) pending_.answer(r);
+    travel_log_.drain(controller_);  // before the events: a travel's end finds its samples
     expire_unanswered(now);
   }
   /// A sample of the simulated machine's inputs (--simulate), sent on with the API's shaft
@@ -174,6 +190,7 @@ class ControllerBackend : public api::Backend {
   Pending pending_;
   /// The runner's recorder to files in the runtime directory.
   FlightRecorderFiles flight_recorder_;
+  TravelLog travel_log_;  ///< the last travels and their curves (`travels`)
 
  private:
   void send_inputs(const lift::Inputs& inputs) {
@@ -269,6 +286,7 @@ class ControllerLift : public LiftRunner {
     using Kind = typename Drive::Event::Kind;
     switch (event.kind) {
       case Kind::Travel:
+        backend_->record_travel_event(event.travel, event.at);
         report_travel(*server_, event.travel, *controller_);
         break;
       case Kind::FaultRaised:

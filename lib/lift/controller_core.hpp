@@ -38,6 +38,7 @@
 #include "lift/inputs.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/rules.hpp"
+#include "lift/travel_sample.hpp"
 
 namespace liftd::lift {
 
@@ -92,6 +93,9 @@ inline constexpr std::size_t kMaxSnapshotCalls = 64;
 inline constexpr std::size_t kCommandQueueSize = 64;
 inline constexpr std::size_t kReplyQueueSize = 64;
 inline constexpr std::size_t kEventQueueSize = 256;
+/// Travel samples between two io-thread polls: the io thread wakes after every step, so 512
+/// holds 7.6 s of 15 ms DCP cycles should it stall.
+inline constexpr std::size_t kTravelSampleQueueSize = 512;
 
 /// The reply code of a refusal for a cause both drives' travels know; NotReady for the others.
 constexpr ReplyCode shared_cause_code(Cause cause) noexcept {
@@ -162,6 +166,13 @@ class ControllerCore {
   std::uint64_t dropped_events() const noexcept {
     return dropped_events_.load(std::memory_order_relaxed) +
            travel_dropped_.load(std::memory_order_relaxed);
+  }
+
+  /// The next sample of a travel's curve (io thread).
+  bool poll_travel_sample(TravelSample& out) noexcept { return travel_samples_.try_pop(out); }
+  /// Travel samples lost because the io thread did not take them in time.
+  std::uint64_t dropped_travel_samples() const noexcept {
+    return dropped_samples_.load(std::memory_order_relaxed);
   }
 
   /// Direct access for single-threaded tests.
@@ -286,6 +297,17 @@ class ControllerCore {
   }
 
   // ---- each step ----
+
+  /// Once per step, after the travel's output: a sample of the curve while a run is in progress
+  /// (`running`, its API name `kind`) and one more at the first step at rest.
+  void sample_travel(MonoTime now, bool running, std::string_view kind,
+                     std::optional<std::int64_t> position_mm,
+                     std::optional<std::size_t> target_floor, const DriveBits& bits) noexcept {
+    const auto sample = sampler_.step(now, running, kind, position_mm, target_floor, bits);
+    if (sample && !travel_samples_.try_push(*sample)) {
+      dropped_samples_.fetch_add(1, std::memory_order_relaxed);
+    }
+  }
 
   /// The current floor is the one the car last stopped at; at start, the nearest to the first
   /// position known.
@@ -437,6 +459,9 @@ class ControllerCore {
   SnapshotBox<typename Types::Snapshot> snapshot_;
   std::atomic<std::uint64_t> dropped_events_{0};
   std::atomic<std::uint64_t> travel_dropped_{0};  ///< the travel's own count, copied each step
+  SpscQueue<TravelSample, kTravelSampleQueueSize> travel_samples_;
+  std::atomic<std::uint64_t> dropped_samples_{0};
+  TravelSampler sampler_;  ///< real-time thread
 
   // Real-time-thread state.
   bool place_known_ = false;  ///< the travel was told the floor the car stands at

@@ -173,6 +173,11 @@ void Sch001Controller::step(MonoTime now) noexcept {
   wanted.destination_floor = static_cast<std::uint8_t>(last_output_.destination_floor);
   link_.set_command(wanted);
   lift_.update(in.position_mm, travel_.direction(), std::nullopt);
+  lift::DriveBits bits;
+  bits.command = last_output_.bits.to_byte();  // 3c: the command byte of our answer
+  bits.status = link_.status() ? link_.status()->to_byte() : 0;  // 3b: the card's status byte
+  sample_travel(now, travel_.kind() != TravelKind::None, to_string(travel_.kind()), in.position_mm,
+                travel_.target(), bits);
   publish(now);
 }
 

@@ -111,6 +111,9 @@ TEST_F(DispatcherTest, RejectsMalformedRequestsWithTheRightCode) {
       {R"({"cmd":"power","supply":"mains","saving":3})", "bad_request", "saving"},
       {R"({"cmd":"trace","count":0})", "bad_request", "count"},
       {R"({"cmd":"trace","count":1001})", "bad_request", "count"},
+      {R"({"cmd":"travels","last":0})", "bad_request", "last"},
+      {R"({"cmd":"travels","last":17})", "bad_request", "last"},
+      {R"({"cmd":"travels","last":"5"})", "bad_request", "last"},
       {R"({"cmd":"inputs","doors_open":true})", "bad_request", "doors_open"},
       {R"({"cmd":"inputs","safety_chain":"yes"})", "bad_request", "safety_chain"},
       {R"({"cmd":"inputs","position_mm":1000000})", "bad_request", "position_mm"},
@@ -154,6 +157,7 @@ TEST_F(DispatcherTest, ChecksAccessPerCommandLevel) {
       {R"({"cmd":"watch","enable":false})", Access::Read},
       {R"({"cmd":"stats"})", Access::Read},
       {R"({"cmd":"trace"})", Access::Read},
+      {R"({"cmd":"travels"})", Access::Read},
       {R"({"cmd":"display"})", Access::Read},
       {R"({"cmd":"config"})", Access::Read},
       {R"({"cmd":"version"})", Access::Read},
@@ -344,6 +348,14 @@ TEST_F(DispatcherTest, TraceReturnsNewestFramesAsHex) {
   EXPECT_EQ(frames[0],
             (json{{"t_us", 45000}, {"tx", "01 00 00 00 00 01"}, {"rx", "21 7F FF 00 00 A1"}}));
   EXPECT_TRUE(frames[1].at("rx").is_null());
+}
+
+TEST_F(DispatcherTest, TravelsAsksTheBackendForTheLastTravelsFiveByDefault) {
+  backend_.travels_result = {{"travels", json::array({{{"id", 3}}})}, {"dropped_samples", 0}};
+  EXPECT_EQ(handle(R"({"cmd":"travels"})").at("result"), backend_.travels_result);
+  EXPECT_EQ(backend_.travels_asked, 5U);
+  EXPECT_TRUE(handle(R"({"cmd":"travels","last":16})").at("ok").get<bool>());
+  EXPECT_EQ(backend_.travels_asked, 16U);
 }
 
 TEST_F(DispatcherTest, WatchTogglesTheSessionAndSendsCurrentState) {

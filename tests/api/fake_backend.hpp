@@ -64,6 +64,10 @@ class FakeBackend : public Backend,
     const std::size_t n = std::min(max_entries, trace_entries.size());
     return {trace_entries.end() - static_cast<std::ptrdiff_t>(n), trace_entries.end()};
   }
+  Result travels(std::size_t last) override {
+    travels_asked = last;
+    return Result::ok(travels_result);
+  }
   daemon::DisplaySnapshot display() override { return display_snapshot; }
   nlohmann::json config() override { return config_json; }
   void key(int button, Responder done) override {
@@ -105,12 +109,14 @@ class FakeBackend : public Backend,
   StatsSnapshot stats_snapshot;              ///< what stats() returns
   std::vector<TraceEntry> trace_entries;     ///< what trace() picks from
   daemon::DisplaySnapshot display_snapshot;  ///< what display() returns
-  nlohmann::json config_json;                ///< what config() returns
-  Inputs inputs_state;                       ///< updated by update_inputs()
-  std::optional<Result> control_result;      ///< set: control commands answer this
-  bool defer = false;                        ///< true: hold control responders in `deferred`
-  std::vector<Responder> deferred;           ///< held responders
-  std::vector<std::string> calls;            ///< control calls seen, e.g. "load 50"
+  nlohmann::json travels_result = {{"travels", nlohmann::json::array()}, {"dropped_samples", 0}};
+  std::size_t travels_asked = 0;         ///< the `last` travels() was called with
+  nlohmann::json config_json;            ///< what config() returns
+  Inputs inputs_state;                   ///< updated by update_inputs()
+  std::optional<Result> control_result;  ///< set: control commands answer this
+  bool defer = false;                    ///< true: hold control responders in `deferred`
+  std::vector<Responder> deferred;       ///< held responders
+  std::vector<std::string> calls;        ///< control calls seen, e.g. "load 50"
 
  private:
   static void no_travel(Responder& done) {

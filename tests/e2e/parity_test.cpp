@@ -10,9 +10,12 @@
 // `status` and in the watch stream's `state` event, and a travel is refused `not_ready`.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <csignal>
+#include <cstdlib>
 #include <fstream>
 #include <ostream>
+#include <thread>
 
 #include "e2e/harness.hpp"
 
@@ -333,6 +336,68 @@ TEST_P(LiftParity, AReloadAppliesAValidFileAndRefusesAnInvalidOne) {
   EXPECT_EQ(lift_->status()["link"]["state"], "up") << "the lift runs on";
   ASSERT_TRUE(lift_->call({{"cmd", "travel"}, {"floor", 1}}).value("ok", false));
   EXPECT_TRUE(lift_->wait_travel_end(40s).is_object()) << lift_->log();
+}
+
+TEST_P(LiftParity, TravelsReturnsTheTravelWithItsCurveToTheFloorsLevel) {
+  // docs/api.md `travels`: the travel, its target and cause, a sample per step with monotonic
+  // time, the car reaching the floor's level, the drive's bits by name.
+  ASSERT_TRUE(lift_->wait_drive_state("ready")) << lift_->status().dump();
+  ASSERT_TRUE(lift_->call({{"cmd", "travel"}, {"floor", 1}}).value("ok", false));
+  const json ended = lift_->wait_travel_end(40s);
+  ASSERT_TRUE(ended.is_object()) << lift_->log();
+  ASSERT_EQ(ended["data"]["event"], "finished") << ended.dump();
+  json travel;
+  const auto deadline = std::chrono::steady_clock::now() + 5s;
+  while (travel.is_null() && std::chrono::steady_clock::now() < deadline) {
+    const json r = lift_->call({{"cmd", "travels"}, {"last", 16}});
+    ASSERT_TRUE(r.value("ok", false)) << r.dump();
+    for (const json& t : r["result"]["travels"]) {
+      if (t["target_floor"] == 1 && !t["end"].is_null()) {
+        travel = t;
+        break;
+      }
+    }
+    if (travel.is_null()) std::this_thread::sleep_for(50ms);
+  }
+  ASSERT_TRUE(travel.is_object()) << lift_->call({{"cmd", "travels"}}).dump();
+  EXPECT_EQ(travel["cause"], "arrived") << travel["cause"];
+  ASSERT_TRUE(travel["target_mm"].is_number_integer());
+  const auto level = travel["target_mm"].get<std::int64_t>();
+  const json& samples = travel["samples"];
+  ASSERT_GT(samples.size(), 20U) << "a sample per step of a travel of a few seconds";
+  EXPECT_EQ(samples.front()["t_ms"], 0);
+  std::int64_t previous = -1;
+  std::int64_t fastest = 0;
+  bool command_seen = false;
+  bool status_seen = false;
+  const json names = [&] {
+    json all = travel["command_bits"];
+    for (const json& n : travel["status_bits"]) all.push_back(n);
+    return all;
+  }();
+  for (const json& s : samples) {
+    const auto t = s["t_ms"].get<std::int64_t>();
+    ASSERT_GE(t, previous) << "time runs forward: " << s.dump();
+    previous = t;
+    if (s["speed_mm_s"].is_number())
+      fastest = std::max(fastest, s["speed_mm_s"].get<std::int64_t>());
+    command_seen = command_seen || !s["command"].empty();
+    status_seen = status_seen || !s["status"].empty();
+    for (const char* group : {"command", "status"}) {
+      for (const json& bit : s[group]) {
+        EXPECT_NE(std::find(names.begin(), names.end(), bit), names.end()) << bit;
+      }
+    }
+  }
+  EXPECT_GT(previous, 1000) << "the travel took more than a second";
+  EXPECT_GT(fastest, 100) << "the car moved up";
+  EXPECT_TRUE(command_seen && status_seen) << samples.dump();
+  const json& last = samples.back();
+  ASSERT_TRUE(last["position_mm"].is_number_integer()) << last.dump();
+  EXPECT_LE(std::llabs(last["position_mm"].get<std::int64_t>() - level), 20) << last.dump();
+
+  const json bad = lift_->call({{"cmd", "travels"}, {"last", 0}});
+  EXPECT_EQ(bad["error"]["code"], "bad_request") << bad.dump();
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryDriveKind, LiftParity, ::testing::ValuesIn(kCases),

@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "format.hpp"
+#include "plot.hpp"
 
 namespace {
 
@@ -41,6 +42,8 @@ void usage(std::FILE* out) {
       "  watch                  live view of state changes and events (Ctrl-C ends)\n"
       "  stats                  link counters, cycle timing, API counters\n"
       "  trace [COUNT]          newest DCP frames (default 100)\n"
+      "  plot [--last N] [--svg FILE]\n"
+      "                         the last N travels' curves (default 5): a chart, or an SVG file\n"
       "  display                the drive's remote display\n"
       "  key N                  press keypad button N (1..5) on the drive\n"
       "  reset                  ask the drive for a fault reset\n"
@@ -346,6 +349,14 @@ Request request_trace(const Args& args) {
   return request;
 }
 
+/// plot asks for `travels`; run_plot prints or writes what comes back.
+Request request_plot(const Args& args) {
+  std::string error;
+  const auto options = liftctl::parse_plot_args(args, error);
+  if (!options) return bad_usage(error.c_str());
+  return json{{"cmd", "travels"}, {"last", options->last}};
+}
+
 Request request_key(const Args& args) {
   const auto key = args.size() == 2 ? parse_int(args[1]) : std::nullopt;
   if (!key) return bad_usage("usage: key N (N = 1..5)");
@@ -509,6 +520,7 @@ constexpr Subcommand kSubcommands[] = {
     {"watch", request_watch, nullptr},
     {"stats", request_plain, print_stats},
     {"trace", request_trace, print_trace},
+    {"plot", request_plot, nullptr},
     {"display", request_plain, print_display},
     {"key", request_key, print_generic},
     {"reset", request_reset, print_generic},
@@ -571,6 +583,36 @@ int run_request(Connection& conn, const Subcommand& subcommand, const json& requ
   return kExitOk;
 }
 
+/// plot: the chart on stdout, or the SVG document into --svg FILE.
+int run_plot(Connection& conn, const Args& args, const json& request, bool raw_json) {
+  std::string error;
+  const auto options = liftctl::parse_plot_args(args, error);
+  const auto reply = call(conn, request);
+  if (!reply) return kExitNoDaemon;
+  if (reply->value("ok", false) != true) return report_error(*reply);
+  const json result = reply->value("result", json::object());
+  if (raw_json) {
+    std::printf("%s\n", result.dump(2).c_str());
+    return kExitOk;
+  }
+  if (!options->svg_path) {
+    std::fputs(liftctl::format_plot(result).c_str(), stdout);
+    return kExitOk;
+  }
+  std::FILE* file = std::fopen(options->svg_path->c_str(), "w");
+  const std::string svg = liftctl::render_svg(result);
+  if (file == nullptr || std::fwrite(svg.data(), 1, svg.size(), file) != svg.size() ||
+      std::fclose(file) != 0) {
+    std::fprintf(stderr, "liftctl: cannot write %s: %s\n", options->svg_path->c_str(),
+                 std::strerror(errno));
+    return kExitFailed;
+  }
+  const std::size_t count = result.value("travels", json::array()).size();
+  std::printf("%zu travel%s written to %s\n", count, count == 1 ? "" : "s",
+              options->svg_path->c_str());
+  return kExitOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -596,5 +638,6 @@ int main(int argc, char** argv) {
   if (!connect_to_liftd(conn, options.socket_path)) return kExitNoDaemon;
   if (command == "watch") return run_watch(conn, options.raw_json);
   if (command == "raw") return run_raw(conn, *request);
+  if (command == "plot") return run_plot(conn, options.args, *request, options.raw_json);
   return run_request(conn, *subcommand, *request, options.raw_json);
 }

@@ -162,7 +162,25 @@ void DcpController::after_cycle(MonoTime now) noexcept {
   lift_.update(last_input_.position_mm, travel_.direction(), travel_.decel_distance_mm());
   update_faults(last_input_, now);
   serve_calls();
+  sample_travel(now, kind != TravelKind::None, travel::to_string(kind), last_input_.position_mm,
+                target_floor_, drive_bits());
   publish(now);
+}
+
+lift::DriveBits DcpController::drive_bits() const noexcept {
+  lift::DriveBits bits;
+  bits.command = frame_[0];
+  bits.status = link_.drive().status.value_or(0);
+  // DCP 4.1, 11.1: a DCP4 travel on remaining distance sends it in the data bytes while B3 is
+  // off; with B3 they carry a speed.
+  const TravelKind kind = travel_.active_kind();
+  const bool distance_word =
+      link_.protocol() == dcp::Protocol::Dcp4 &&
+      (kind == TravelKind::Dcp4Distance || kind == TravelKind::Dcp4Relevel) &&
+      (frame_[0] & dcp::command_bit::kDriveEnable) != 0 &&
+      (frame_[0] & dcp::command_bit::kSpeedData) == 0;
+  if (distance_word) bits.remaining_mm = last_output_.data_word;
+  return bits;
 }
 
 travel::CycleInput DcpController::build_input(MonoTime now) noexcept {

@@ -244,6 +244,9 @@ class DcpController final : public rt::CycleEngine, public lift::ControllerCore<
   void serve_calls() noexcept;
   void update_faults(const travel::CycleInput& in, MonoTime now) noexcept;
   void publish(MonoTime now) noexcept;
+  /// The command and status bytes of this cycle and the remaining distance sent, for the travel
+  /// curve (lift::TravelSample).
+  lift::DriveBits drive_bits() const noexcept;
   std::optional<std::string_view> not_ready_reason(bool fast_start) const noexcept;
   dcp::Speed choose_dcp3_speed(std::int64_t distance_mm) const noexcept;
 

@@ -326,6 +326,9 @@ void LiftApp::handle_event(const control::ControllerEvent& event) {
       // As every lift reports its travels (host/lift_core); a DCP travel also tells its
       // target changes, fast start and drive faults (DCP 4.1, 12, 9.1.6).
       const travel::Event& t = event.travel;
+      if (t.type == travel::Event::Type::Finished || t.type == travel::Event::Type::Aborted) {
+        backend_->record_travel_end(event.at, t.type == travel::Event::Type::Aborted, t.cause);
+      }
       report_travel(*server_, travel::to_string(t.type), travel::to_string(t.kind), t.cause,
                     t.type == travel::Event::Type::Aborted, t.target_mm, t.position_mm);
       return;

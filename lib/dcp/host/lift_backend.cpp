@@ -40,6 +40,15 @@ api::LinkState to_api(dcp::LinkState state) {
   return api::LinkState::Down;
 }
 
+/// The command bits B0..B7 and status bits S0..S7 (DCP 4.1) of a travel's curve: the spec's
+/// label with the name the status JSON (and the trace) gives the bit.
+TravelBitNames dcp_travel_bit_names() {
+  return {{"B0_enable", "B1_travel", "B2_stop", "B3_speed", "B4_down", "B5_change", "B6_desired",
+           "B7_reply_error"},
+          {"S0_ready", "S1_travel_active", "S2_advance_warning", "S3_general_fault",
+           "S4_below_levelling", "S5_accepted", "S6_brake_open", "S7_message_error"}};
+}
+
 std::string utf8_row(const std::array<std::uint8_t, dcp::kDisplayColumns>& row) {
   return dcp::to_utf8(std::span<const std::uint8_t>(row.data(), row.size()));
 }
@@ -66,6 +75,7 @@ LiftBackend::LiftBackend(const config::Config& config, const config::Schema& sch
           }),
       sim_(sim),
       inputs_(config, position_feed, sim != nullptr),
+      travel_log_(dcp_travel_bit_names(), floor_levels_mm(config)),
       mono_at_start_(mono_now()),
       wall_at_start_(std::chrono::system_clock::now()) {}
 
@@ -171,6 +181,14 @@ api::Result LiftBackend::save_trace() {
   return flight_recorder_.save_requested(std::chrono::steady_clock::now());
 }
 
+api::Result LiftBackend::travels(std::size_t last) {
+  return api::Result::ok(travel_log_.to_json(last, [this](MonoTime at) { return wall_time(at); }));
+}
+
+void LiftBackend::record_travel_end(MonoTime at, bool aborted, lift::Cause cause) {
+  travel_log_.end(at, travel_end_cause(aborted, lift::to_string(cause)));
+}
+
 api::Result LiftBackend::write_flight_recorder(std::string_view why) {
   return flight_recorder_.write(why);
 }
@@ -197,6 +215,7 @@ void LiftBackend::send(control::CommandBody body, api::Responder done,
 void LiftBackend::poll(MonoTime now) {
   control::CommandReply r;
   while (controller_.poll_reply(r)) pending_.answer(r);
+  travel_log_.drain(controller_);  // before the events: a travel's end finds its samples
   pending_.expire(now,
                   "the " + std::string(kCycleThread) + " thread did not answer; see the journal");
 }

@@ -19,6 +19,7 @@
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
 #include "host/trace_files.hpp"
+#include "host/travel_log.hpp"
 #include "rt/cycle_runner.hpp"
 
 namespace liftd::daemon {
@@ -40,6 +41,7 @@ class LiftBackend final : public api::Backend, public DcpCommandBackend {
   api::StatsSnapshot stats() override;
   std::vector<api::TraceEntry> trace(std::size_t max_entries) override;
   api::Result save_trace() override;
+  api::Result travels(std::size_t last) override;
   nlohmann::json config() override;
   void drive_reset(api::Responder done) override;
   void update_inputs(const api::InputUpdate& update, api::Responder done) override;
@@ -77,6 +79,9 @@ class LiftBackend final : public api::Backend, public DcpCommandBackend {
   /// it with `why`. Returns the path and record count, or the error text.
   api::Result write_flight_recorder(std::string_view why);
 
+  /// A travel that finished or was aborted at `at` ends its curve (`travels`).
+  void record_travel_end(MonoTime at, bool aborted, lift::Cause cause);
+
   /// Wall-clock time of a monotonic instant (for fault "since" fields).
   std::chrono::system_clock::time_point wall_time(MonoTime at) const;
 
@@ -97,6 +102,7 @@ class LiftBackend final : public api::Backend, public DcpCommandBackend {
   DcpStatusFacts dcp_facts_{};           ///< what dcp_details_ was built from
   api::SharedJson dcp_details_{dcp_status_json({})};  ///< status.dcp, shared by the snapshots
   Pending pending_;                                   ///< requests waiting for the cycle's reply
+  TravelLog travel_log_;  ///< the last travels and their curves (`travels`)
   MonoTime mono_at_start_{};
   std::chrono::system_clock::time_point wall_at_start_{};
 };

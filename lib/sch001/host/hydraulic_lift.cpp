@@ -63,6 +63,12 @@ sch001::ControllerConfig sch001_controller_config(const config::Config& c) {
   return out;
 }
 
+TravelBitNames Sch001Drive::travel_bit_names() {
+  // 3c: SP3 SP2 SP1 SFY MSP HSP DW UP, MSB first; 3b: ERR PNP2 AVV T1 P1 P2 RDY PNP1.
+  return {{"up", "dw", "hsp", "msp", "sfy", "sp1", "sp2", "sp3"},
+          {"pnp1", "rdy", "p2", "p1", "t1", "avv", "pnp2", "err"}};
+}
+
 namespace {
 
 nlohmann::json card_json(const sch001::CardStatus& s, bool single_unit) {

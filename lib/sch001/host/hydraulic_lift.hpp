@@ -92,6 +92,8 @@ struct Sch001Drive {
   static std::string_view fault_text(lift::FaultCode code) noexcept {
     return sch001::fault_text(code);
   }
+  /// The command byte's bits (3c) and the card status byte's (3b), as status names them.
+  static TravelBitNames travel_bit_names();
 };
 
 /// api::Backend over the SCH001 controller.

@@ -157,6 +157,14 @@ void UssController::step(MonoTime now) noexcept {
     decel = config_.travel.slowdown_mm[speed_index(travel_.speed())];
   }
   lift_.update(in.position_mm, travel_.direction(), decel);
+  if (master_.cycles() != sampled_pass_) {
+    sampled_pass_ = master_.cycles();
+    lift::DriveBits bits;
+    bits.command = last_output_.stw;  // C 5.1: the control word sent
+    bits.status = in.zsw;             // C 5.1: the drive's status word
+    sample_travel(now, travel_.kind() != TravelKind::None, to_string(travel_.kind()),
+                  in.position_mm, travel_.target(), bits);
+  }
   publish(now);
 }
 

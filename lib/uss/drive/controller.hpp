@@ -244,6 +244,8 @@ class UssController final : public uss::UssHooks, public lift::ControllerCore<Us
   bool port_failed_ = false;  ///< the port was lost; the drive has not answered on a new one yet
   DriveOutput last_output_{};
   std::int16_t setpoint_raw_ = 0;
+  /// The pass of the polling list the last travel sample was taken in: one sample per pass.
+  std::uint64_t sampled_pass_ = ~std::uint64_t{0};
   ProfileState last_state_ = ProfileState::NotReadyToSwitchOn;
   bool last_plc_control_ = true;
   bool state_reported_ = false;

@@ -128,6 +128,13 @@ nlohmann::json word_bits(std::uint16_t word, const std::array<std::string_view, 
 
 }  // namespace
 
+TravelBitNames UssDrive::travel_bit_names() {
+  TravelBitNames names;
+  for (const std::string_view name : uss::kControlWordBitNames) names.command.emplace_back(name);
+  for (const std::string_view name : uss::kStatusWordBitNames) names.status.emplace_back(name);
+  return names;
+}
+
 // ---- the simulated bus ----
 
 SimulatedUssBus::SimulatedUssBus(const config::Config& config)

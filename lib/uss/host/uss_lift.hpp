@@ -102,6 +102,8 @@ struct UssDrive {
   static std::string_view fault_text(lift::FaultCode code) noexcept {
     return uss::fault_text(code);
   }
+  /// The control and status words' bits (C 5.1), as status names them.
+  static TravelBitNames travel_bit_names();
 };
 
 /// api::Backend and the USS parameter commands over the USS lift controller.
