@@ -130,6 +130,15 @@ class FakeBackend : public Backend,
   }
 };
 
+/// A connection that only runs requests: no event stream, one request in flight.
+class QuietSession : public SessionControl {
+ public:
+  void set_watching(bool) override {}
+  bool watching() const override { return false; }
+  void send_event(std::string) override {}
+  std::size_t requests_in_flight() const override { return 1; }
+};
+
 /// Every drive kind's own commands and `sim` on `dispatcher`, served by `backend`, as the
 /// daemon's registry of drive kinds (daemon/drives.cpp) adds them to a lift's server.
 inline void add_drive_kind_commands(Dispatcher& dispatcher, FakeBackend& backend) {

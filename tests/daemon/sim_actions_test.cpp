@@ -108,18 +108,10 @@ class RecordingSimBackend : public api::testing::FakeBackend {
   SimulatedBoard board_;
 };
 
-class SimTestSession : public api::SessionControl {
- public:
-  void set_watching(bool) override {}
-  bool watching() const override { return false; }
-  void send_event(std::string) override {}
-  std::size_t requests_in_flight() const override { return 1; }
-};
-
 json handle_sim(api::Dispatcher& dispatcher, const json& request) {
   api::Peer peer;
   peer.access = {true, true, true};
-  SimTestSession session;
+  api::testing::QuietSession session;
   json reply;
   dispatcher.handle_line(request.dump(), peer, session,
                          [&reply](std::string text, bool) { reply = json::parse(text); });
