@@ -2,7 +2,8 @@
 // lift lib/dcp/host/lift_app.*, the hydraulic SCH001 lift lib/sch001/host/hydraulic_lift.*, the
 // USS lift lib/uss/host/uss_lift.*). Each builds its controller, its runner, its API backend and,
 // with --simulate, its simulated drive, and registers them with the daemon (lib/host/host.hpp).
-// A kind with API commands of its own adds them from its folder (lib/<kind>/host/commands.*).
+// A kind with API commands of its own adds them from its folder (lib/<kind>/host/commands.*), and
+// each kind names the `sim` actions its simulator takes (lib/<kind>/host/sim_actions.*).
 // drives.cpp is the only file of daemon/ that includes a kind's header.
 #pragma once
 
@@ -22,7 +23,7 @@ std::unique_ptr<LiftRunner> make_lift(Host& host, const config::Config& config, 
 
 /// Adds every drive kind's own API commands to `dispatcher`: those of backend.drive_kind()
 /// served by `backend`, the others' only known, so that the dispatcher answers them
-/// `not_offered` as on every lift.
+/// `not_offered` as on every lift; and `sim` with every kind's simulator actions.
 void add_drive_kind_commands(api::Dispatcher& dispatcher, api::Backend& backend);
 
 }  // namespace liftd::daemon

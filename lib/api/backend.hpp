@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/result.hpp"
+#include "api/sim.hpp"
 #include "common/mono_time.hpp"
 #include "drive/drive.hpp"
 
@@ -167,72 +168,6 @@ struct TravelArgs {
   int floor = 0;                     ///< floor index, 0 = lowest
   std::optional<std::string> speed;  ///< "V4", "V3", ... (nullopt: the fastest allowed)
   std::optional<int> load_percent;   ///< car load for I8
-};
-
-/// What `sim` does to the simulated lift (only a daemon started with --simulate has one).
-enum class SimAction : std::uint8_t {
-  GeneralFault,      ///< drive S3 on/off (DCP 4.1)
-  AdvanceWarning,    ///< drive S2 on/off (DCP 4.1)
-  NotReady,          ///< drive S0 forced to 0 on/off (DCP 4.1)
-  ReplyFault,        ///< the drive's next `frames` replies carry `fault`
-  ClearReplyFaults,  ///< ends every injected reply fault
-  Drift,             ///< moves the stationary car by `drift_mm`
-  SafetyChainOpen,   ///< safety chain open (on) or closed (off)
-  DoorReversal,      ///< a door reversal (light curtain): closing doors reopen
-  OpenDoors,         ///< starts opening the doors (on arrival while the car moves)
-  CloseDoors,        ///< starts closing the doors
-  ObstructDoors,     ///< holds the doors open (on) or releases them (off)
-  ChannelFault,      ///< a fault on the drive's communication channel only (DCP 5)
-  RefuseTarget,      ///< the drive refuses the next target change with S5 (DCP 4.1)
-  // The simulated SCH001 card and hydraulic unit (drive.kind "sch001"); general_fault is its
-  // ERR and not_ready its RDY = 0 there.
-  OilTemperature,  ///< the card's T1 relay on/off (oil temperature)
-  Pressure,        ///< the card's P1 relay on/off (minimum/maximum pressure)
-  Overpressure,    ///< the card's P2 relay on/off (overpressure)
-  CardSilence,     ///< the card stops sending (on) or sends again (off)
-  BusOff,          ///< one CAN bus-off error frame reaches the controller
-  ColdOil,         ///< cold oil: every speed of the unit is lower (on/off)
-  Sink,            ///< the car at rest sinks 2 mm/s (leaking valve, cooling oil) on/off
-  CardReconnect,   ///< the card's CAN connection drops once; the controller reopens it
-};
-/// Wire names of SimAction, in enum order.
-inline constexpr std::array<std::string_view, 21> kSimActions = {
-    "general_fault",  "advance_warning",   "not_ready",     "reply_fault",     "clear_reply_faults",
-    "drift",          "safety_chain_open", "door_reversal", "open_doors",      "close_doors",
-    "obstruct_doors", "channel_fault",     "refuse_target", "oil_temperature", "pressure",
-    "overpressure",   "card_silence",      "bus_off",       "cold_oil",        "sink",
-    "card_reconnect"};
-
-/// A fault on the simulated drive's communication channel (DCP 5), the real-time bytes intact.
-enum class SimChannelFault : std::uint8_t {
-  Partial,  ///< STX and the start of a message, never an ETX (the master resets after 1 s)
-  Garbage,  ///< a frame with an undefined mode byte and stray control characters
-  Silence,  ///< 1.5 s of idle channel bytes, the master's channel bytes unheard
-};
-/// Wire names of SimChannelFault, in enum order.
-inline constexpr std::array<std::string_view, 3> kSimChannelFaults = {"partial", "garbage",
-                                                                      "silence"};
-
-/// A fault on the simulated drive's replies.
-enum class SimReplyFault : std::uint8_t {
-  NoReply,      ///< no reply at all
-  BadChecksum,  ///< reply with a wrong checksum
-  S7,           ///< reply with S7 (the drive claims our frame was corrupt)
-  Late,         ///< reply outside the DCP 7.2 window
-  Garbage,      ///< a few random bytes instead of a frame
-};
-/// Wire names of SimReplyFault, in enum order.
-inline constexpr std::array<std::string_view, 5> kSimReplyFaults = {"no_reply", "bad_checksum",
-                                                                    "s7", "late", "garbage"};
-
-/// Arguments of `sim`, validated by the command table.
-struct SimRequest {
-  SimAction action = SimAction::GeneralFault;          ///< what to do
-  bool on = true;                                      ///< switches: on (default) or off
-  SimReplyFault fault = SimReplyFault::NoReply;        ///< ReplyFault: which fault
-  std::uint32_t frames = 1;                            ///< ReplyFault: how many replies
-  std::int32_t drift_mm = 0;                           ///< Drift: + up, - down
-  SimChannelFault channel = SimChannelFault::Partial;  ///< ChannelFault: which fault
 };
 
 /// The position range we accept (every drive kind): DCP I9 carries a sign and 6 digits of

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <memory>
+#include <optional>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "common/version.hpp"
 #include "drive/drive.hpp"
@@ -182,7 +185,6 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
   add_drive_reset_command(dispatcher, b);
   add_inputs_command(dispatcher, b);
   add_travel_commands(dispatcher, *b);
-  add_sim_command(dispatcher, *b);
 }
 
 TravelArgs travel_args(const nlohmann::json& request) {
@@ -262,27 +264,60 @@ void add_travel_commands(Dispatcher& dispatcher, Backend& backend) {
                   kEveryDriveKind});
 }
 
-void add_sim_command(Dispatcher& dispatcher, Backend& backend) {
+namespace {
+
+/// The `sim` action named `name`: a shared one, or the own action of the kind that lists it.
+SimRequest sim_request_for(std::span<const KindSimActions* const> kinds, const std::string& name) {
+  SimRequest request;
+  if (const auto it = std::find(kSimActions.begin(), kSimActions.end(), name);
+      it != kSimActions.end()) {
+    request.name = *it;
+    request.shared = static_cast<SimAction>(it - kSimActions.begin());
+    return request;
+  }
+  request.shared.reset();
+  for (const KindSimActions* kind : kinds) {
+    const auto it = std::find(kind->own.begin(), kind->own.end(), name);
+    if (it == kind->own.end()) continue;
+    request.name = *it;
+    request.owner = kind->kind;
+    request.own = static_cast<std::size_t>(it - kind->own.begin());
+    return request;
+  }
+  return request;  // unreachable: `action` was validated against every name
+}
+
+}  // namespace
+
+void add_sim_command(Dispatcher& dispatcher, Backend& backend,
+                     std::span<const KindSimActions* const> kinds) {
   Backend* b = &backend;
+  std::vector<std::string> actions = names_of(kSimActions);
+  ArgSchema own_args;
+  for (const KindSimActions* kind : kinds) {
+    actions.insert(actions.end(), kind->own.begin(), kind->own.end());
+    if (kind->own_args != nullptr) {
+      for (ArgSpec& arg : kind->own_args()) own_args.push_back(std::move(arg));
+    }
+  }
+  ArgSchema args = {
+      choice_arg("action", true, std::move(actions), "what to do to the simulated lift"),
+      flag_arg("on", "switches: on (default) or off"),
+      choice_arg("fault", false, names_of(kSimReplyFaults), "reply_fault: the fault to inject")};
+  for (ArgSpec& arg : own_args) args.push_back(std::move(arg));
+  args.push_back(int_arg("frames", false, 1, kMaxSimFaultFrames,
+                         "reply_fault: how many replies it affects (default 1)"));
+  args.push_back(int_arg("drift_mm", false, -kMaxSimDriftMm, kMaxSimDriftMm,
+                         "drift: how far the stationary car moves, + up"));
+  std::vector<const KindSimActions*> table(kinds.begin(), kinds.end());
   dispatcher.add(
-      {"sim",
-       Access::Control,
-       {choice_arg("action", true, names_of(kSimActions), "what to do to the simulated lift"),
-        flag_arg("on", "switches: on (default) or off"),
-        choice_arg("fault", false, names_of(kSimReplyFaults), "reply_fault: the fault to inject"),
-        choice_arg("channel", false, names_of(kSimChannelFaults),
-                   "channel_fault: the communication-channel fault to inject"),
-        int_arg("frames", false, 1, kMaxSimFaultFrames,
-                "reply_fault: how many replies it affects (default 1)"),
-        int_arg("drift_mm", false, -kMaxSimDriftMm, kMaxSimDriftMm,
-                "drift: how far the stationary car moves, + up")},
+      {"sim", Access::Control, std::move(args),
        "fault injection on the simulated lift (liftd --simulate only)",
-       [b](const Call& call, Responder done) {
+       [b, table = std::move(table)](const Call& call, Responder done) {
          const nlohmann::json& r = call.request;
-         SimRequest request;
-         request.action = enum_of<SimAction>(kSimActions, r.at("action").get<std::string>());
+         SimRequest request = sim_request_for(table, r.at("action").get<std::string>());
          request.on = arg_or<bool>(r, "on", true);
-         if (request.action == SimAction::ReplyFault) {
+         if (request.shared == SimAction::ReplyFault) {
            if (!r.contains("fault")) {
              done(Result::fail(ErrorCode::BadRequest, "reply_fault needs a fault", "fault"));
              return;
@@ -291,15 +326,7 @@ void add_sim_command(Dispatcher& dispatcher, Backend& backend) {
                enum_of<SimReplyFault>(kSimReplyFaults, r.at("fault").get<std::string>());
            request.frames = arg_or<std::uint32_t>(r, "frames", 1);
          }
-         if (request.action == SimAction::ChannelFault) {
-           if (!r.contains("channel")) {
-             done(Result::fail(ErrorCode::BadRequest, "channel_fault needs a channel", "channel"));
-             return;
-           }
-           request.channel =
-               enum_of<SimChannelFault>(kSimChannelFaults, r.at("channel").get<std::string>());
-         }
-         if (request.action == SimAction::Drift) {
+         if (request.shared == SimAction::Drift) {
            request.drift_mm = arg_or<std::int32_t>(r, "drift_mm", 0);
            if (request.drift_mm == 0) {
              done(Result::fail(ErrorCode::BadRequest, "drift needs a drift_mm other than 0",
@@ -307,9 +334,27 @@ void add_sim_command(Dispatcher& dispatcher, Backend& backend) {
              return;
            }
          }
+         if (!request.shared) {
+           for (const KindSimActions* kind : table) {
+             if (kind->kind != request.owner || kind->check == nullptr) continue;
+             if (std::optional<Result> refused = kind->check(request.own, r)) {
+               done(std::move(*refused));
+               return;
+             }
+           }
+           request.request = r;
+         }
          b->sim(request, std::move(done));
        },
        kEveryDriveKind});
+}
+
+Result sim_action_refused(const SimRequest& request, std::string_view this_lift) {
+  return Result::fail(ErrorCode::BadRequest,
+                      "\"" + std::string(request.name) +
+                          "\" is for the simulator of another drive kind; this lift is " +
+                          std::string(this_lift),
+                      "action");
 }
 
 }  // namespace liftd::api

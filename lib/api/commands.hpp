@@ -4,11 +4,13 @@
 #pragma once
 
 #include <functional>
+#include <span>
 
 #include <nlohmann/json.hpp>
 
 #include "api/backend.hpp"
 #include "api/dispatcher.hpp"
+#include "api/sim.hpp"
 
 namespace liftd::api {
 
@@ -36,12 +38,15 @@ inline constexpr std::int64_t kMaxSimFaultFrames = 10000;
 /// Largest car drift one `sim` drift request applies, either way.
 inline constexpr std::int64_t kMaxSimDriftMm = 1000;
 
-/// Adds `sim`, the simulated lift's fault injection (a backend without one refuses it).
-/// add_builtin_commands() calls it.
-void add_sim_command(Dispatcher& dispatcher, Backend& backend);
+/// Adds `sim`, the simulated lift's fault injection (a backend without one refuses it): the
+/// shared actions, then each of `kinds`' own actions in the order of `kinds` (the registry of
+/// drive kinds, daemon/drives.cpp, adds it with every kind's list).
+void add_sim_command(Dispatcher& dispatcher, Backend& backend,
+                     std::span<const KindSimActions* const> kinds);
 
 /// Adds every built-in command to `dispatcher`, served by `backend`, and sets the dispatcher's
-/// drive kind to the backend's. A drive kind's own commands come from its folder. `api_stats`
+/// drive kind to the backend's. A drive kind's own commands, and `sim` with every kind's
+/// simulator actions, come from the registry of drive kinds (add_sim_command). `api_stats`
 /// supplies the server's own counters for `stats` ("api" object); it may be empty.
 void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                           std::function<nlohmann::json()> api_stats = {});

@@ -188,7 +188,7 @@ sim::SimIoConfig board_config(const config::Config& c) {
 }
 
 std::string action_name(const api::SimRequest& request) {
-  return std::string(api::kSimActions[static_cast<std::size_t>(request.action)]);
+  return std::string(request.name);
 }
 
 }  // namespace
@@ -220,7 +220,8 @@ SimulatedBoard::SimulatedBoard(const config::Config& config, MonoTime now)
 
 bool SimulatedBoard::apply(const api::SimRequest& request, MonoTime now) {
   using api::SimAction;
-  switch (request.action) {
+  if (!request.shared) return false;
+  switch (*request.shared) {
     case SimAction::SafetyChainOpen:
       chain_open_ = request.on;
       io_.set_safety_chain_open(request.on);
@@ -249,14 +250,6 @@ void SimulatedBoard::add_state(nlohmann::json& out) const {
   out["safety_chain_open"] = chain_open_;
   out["doors"] = sim::to_string(io_.door_state());
   out["door_obstructed"] = obstructed_;
-}
-
-api::Result sim_action_refused(const api::SimRequest& request, std::string_view this_lift) {
-  return api::Result::fail(api::ErrorCode::BadRequest,
-                           "\"" + action_name(request) +
-                               "\" is for the simulator of another drive kind; this lift is " +
-                               std::string(this_lift),
-                           "action");
 }
 
 void journal_sim_action(const api::SimRequest& request) {

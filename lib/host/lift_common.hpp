@@ -12,7 +12,9 @@
 #include <string_view>
 #include <thread>
 
+#include "api/result.hpp"
 #include "api/server.hpp"
+#include "api/sim.hpp"
 #include "can/encoder.hpp"
 #include "common/position_source.hpp"
 #include "config/config.hpp"
@@ -141,11 +143,29 @@ class SimulatorThread {
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };
-/// `sim` with an action of another drive kind's simulator: bad_request, naming the action and
-/// this lift's kind.
-api::Result sim_action_refused(const api::SimRequest& request, std::string_view this_lift);
 /// Journals a `sim` action that was applied.
 void journal_sim_action(const api::SimRequest& request);
+
+/// Carries out `request` on the simulator of the kind `mine` describes: an action the kind did
+/// not declare is refused (api::sim_action_refused) and reaches none of the handlers; the
+/// board's actions go to `board`, the kind's other shared actions to `shared(api::SimAction)`
+/// and its own to `own(std::size_t index)`, each returning a refusal or nullopt. An applied
+/// action is journalled. nullopt: applied.
+template <typename Shared, typename Own>
+std::optional<api::Result> apply_sim(const api::KindSimActions& mine,
+                                     const api::SimRequest& request, SimulatedBoard& board,
+                                     MonoTime now, Shared&& shared, Own&& own) {
+  if (!mine.takes(request)) return api::sim_action_refused(request, mine.lift_name);
+  std::optional<api::Result> refused;
+  if (!request.shared) {
+    refused = own(request.own);
+  } else if (!board.apply(request, now)) {
+    refused = shared(*request.shared);
+  }
+  if (refused) return refused;
+  journal_sim_action(request);
+  return std::nullopt;
+}
 
 /// The sequencers' inputs from the API's inputs (every drive kind reads the same machine).
 lift::Inputs to_lift(const api::Inputs& inputs);

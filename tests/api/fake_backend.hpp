@@ -2,6 +2,7 @@
 // and every drive kind's own (DCP's and USS's), so one fake serves a lift of any kind.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <utility>
@@ -11,7 +12,10 @@
 #include "api/commands.hpp"
 #include "api/dispatcher.hpp"
 #include "dcp/host/commands.hpp"
+#include "dcp/host/sim_actions.hpp"
+#include "sch001/host/sim_actions.hpp"
 #include "uss/host/commands.hpp"
+#include "uss/host/sim_actions.hpp"
 
 namespace liftd::api::testing {
 
@@ -132,11 +136,23 @@ class FakeBackend : public Backend,
   }
 };
 
-/// Every drive kind's own commands on `dispatcher`, served by `backend`, as the daemon's
-/// registry of drive kinds (daemon/drives.cpp) adds them to a lift's server.
+/// A connection that only runs requests: no event stream, one request in flight.
+class QuietSession : public SessionControl {
+ public:
+  void set_watching(bool) override {}
+  bool watching() const override { return false; }
+  void send_event(std::string) override {}
+  std::size_t requests_in_flight() const override { return 1; }
+};
+
+/// Every drive kind's own commands and `sim` on `dispatcher`, served by `backend`, as the
+/// daemon's registry of drive kinds (daemon/drives.cpp) adds them to a lift's server.
 inline void add_drive_kind_commands(Dispatcher& dispatcher, FakeBackend& backend) {
   daemon::add_dcp_commands(dispatcher, backend);
   daemon::add_uss_commands(dispatcher, backend);
+  const std::array<const KindSimActions*, 3> sim_actions = {
+      &daemon::kDcpSimActionTable, &daemon::kSch001SimActionTable, &daemon::kUssSimActionTable};
+  add_sim_command(dispatcher, backend, sim_actions);
 }
 
 /// Every command of the daemon on `dispatcher`: the common ones and every drive kind's own.

@@ -16,15 +16,8 @@ namespace liftd::daemon {
 namespace {
 
 using api::testing::FakeBackend;
+using api::testing::QuietSession;
 using nlohmann::json;
-
-class QuietSession : public api::SessionControl {
- public:
-  void set_watching(bool) override {}
-  bool watching() const override { return false; }
-  void send_event(std::string) override {}
-  std::size_t requests_in_flight() const override { return 1; }
-};
 
 /// A lift's dispatcher as the daemon builds it: the common commands, then the registry's.
 class DriveCommandsTest : public ::testing::Test {

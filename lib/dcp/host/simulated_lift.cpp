@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
+#include "dcp/host/sim_actions.hpp"
 #include "dcp/travel/types.hpp"
 #include "log/log.hpp"
 
@@ -54,6 +57,18 @@ dcp::sim::ReplyFault to_sim(api::SimReplyFault fault) {
       return dcp::sim::ReplyFault::Garbage;
   }
   return dcp::sim::ReplyFault::NoReply;
+}
+
+dcp::sim::ChannelFault to_sim(SimChannelFault fault) {
+  switch (fault) {
+    case SimChannelFault::Partial:
+      return dcp::sim::ChannelFault::Partial;
+    case SimChannelFault::Garbage:
+      return dcp::sim::ChannelFault::Garbage;
+    case SimChannelFault::Silence:
+      return dcp::sim::ChannelFault::Silence;
+  }
+  return dcp::sim::ChannelFault::Partial;
 }
 
 }  // namespace
@@ -138,63 +153,57 @@ void SimulatedLift::log_events() {
 }
 
 api::Result SimulatedLift::apply(const api::SimRequest& request, MonoTime now) {
-  using api::SimAction;
-  switch (request.action) {
-    case SimAction::GeneralFault:
-      general_fault_ = request.on;
-      drive_->set_general_fault(request.on);
-      break;
-    case SimAction::AdvanceWarning:
-      advance_warning_ = request.on;
-      drive_->set_advance_warning(request.on);
-      break;
-    case SimAction::NotReady:
-      not_ready_ = request.on;
-      drive_->set_not_ready(request.on);
-      break;
-    case SimAction::ReplyFault:
-      drive_->inject(to_sim(request.fault), request.frames);
-      break;
-    case SimAction::ChannelFault:
-      drive_->inject_channel(
-          request.channel == api::SimChannelFault::Partial   ? dcp::sim::ChannelFault::Partial
-          : request.channel == api::SimChannelFault::Garbage ? dcp::sim::ChannelFault::Garbage
-                                                             : dcp::sim::ChannelFault::Silence);
-      break;
-    case SimAction::RefuseTarget:
-      drive_->refuse_next_target();
-      break;
-    case SimAction::ClearReplyFaults:
-      drive_->clear_reply_faults();
-      break;
-    case SimAction::Drift: {
-      const dcp::sim::RunnerStatus s = drive_->status();
-      // The simulator moves a car only while its drive is idle; a moving car would not drift.
-      if (s.phase != dcp::sim::Phase::Idle || std::abs(s.velocity_mps) > 0.0) {
-        return api::Result::fail(api::ErrorCode::Busy,
-                                 "the car is moving: drift only while the drive is idle");
+  const auto shared = [this, &request](api::SimAction action) -> std::optional<api::Result> {
+    using api::SimAction;
+    switch (action) {
+      case SimAction::GeneralFault:
+        general_fault_ = request.on;
+        drive_->set_general_fault(request.on);
+        break;
+      case SimAction::AdvanceWarning:
+        advance_warning_ = request.on;
+        drive_->set_advance_warning(request.on);
+        break;
+      case SimAction::NotReady:
+        not_ready_ = request.on;
+        drive_->set_not_ready(request.on);
+        break;
+      case SimAction::ReplyFault:
+        drive_->inject(to_sim(request.fault), request.frames);
+        break;
+      case SimAction::ClearReplyFaults:
+        drive_->clear_reply_faults();
+        break;
+      case SimAction::Drift: {
+        const dcp::sim::RunnerStatus s = drive_->status();
+        // The simulator moves a car only while its drive is idle; a moving car would not drift.
+        if (s.phase != dcp::sim::Phase::Idle || std::abs(s.velocity_mps) > 0.0) {
+          return api::Result::fail(api::ErrorCode::Busy,
+                                   "the car is moving: drift only while the drive is idle");
+        }
+        drive_->set_position_mm(s.position_mm + request.drift_mm);
+        break;
       }
-      drive_->set_position_mm(s.position_mm + request.drift_mm);
-      break;
+      default:  // the board's actions: SimulatedBoard::apply took them
+        break;
     }
-    case SimAction::SafetyChainOpen:
-    case SimAction::DoorReversal:
-    case SimAction::OpenDoors:
-    case SimAction::CloseDoors:
-    case SimAction::ObstructDoors:
-      (void)board_.apply(request, now);
-      break;
-    case SimAction::OilTemperature:
-    case SimAction::Pressure:
-    case SimAction::Overpressure:
-    case SimAction::CardSilence:
-    case SimAction::CardReconnect:
-    case SimAction::BusOff:
-    case SimAction::ColdOil:
-    case SimAction::Sink:
-      return sim_action_refused(request, "DCP");
+    return std::nullopt;
+  };
+  const auto own = [this, &request](std::size_t) -> std::optional<api::Result> {
+    const DcpSimRequest dcp = dcp_sim_request(request);
+    switch (dcp.action) {
+      case DcpSimAction::ChannelFault:
+        drive_->inject_channel(to_sim(dcp.channel));
+        break;
+      case DcpSimAction::RefuseTarget:
+        drive_->refuse_next_target();
+        break;
+    }
+    return std::nullopt;
+  };
+  if (auto refused = apply_sim(kDcpSimActionTable, request, board_, now, shared, own)) {
+    return std::move(*refused);
   }
-  journal_sim_action(request);
   return api::Result::ok(state_json());
 }
 

@@ -10,12 +10,15 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include "api/commands.hpp"
 #include "can/interface_info.hpp"
 #include "host/lift_common.hpp"
 #include "log/log.hpp"
+#include "sch001/host/sim_actions.hpp"
 
 namespace liftd::daemon {
 namespace {
@@ -239,60 +242,59 @@ void SimulatedCard::log_violations() {
 }
 
 api::Result SimulatedCard::apply(const api::SimRequest& request, MonoTime now) {
-  using api::SimAction;
   std::lock_guard<std::mutex> lock(mutex_);
-  switch (request.action) {
-    case SimAction::GeneralFault:
-      card_.set_err(request.on);
-      break;
-    case SimAction::NotReady:
-      card_.set_rdy(!request.on);
-      break;
-    case SimAction::OilTemperature:
-      card_.set_t1(request.on);
-      break;
-    case SimAction::Pressure:
-      card_.set_p1(request.on);
-      break;
-    case SimAction::Overpressure:
-      card_.set_p2(request.on);
-      break;
-    case SimAction::CardSilence:
-      card_.set_silent(request.on);
-      break;
-    case SimAction::BusOff:
-      bus_off_ = true;
-      break;
-    case SimAction::CardReconnect:
-      drop_ = true;
-      break;
-    case SimAction::ColdOil:
-      card_.set_cold_oil(request.on);
-      break;
-    case SimAction::Sink:
-      card_.set_sink(request.on ? kSinkMmPerS : 0.0);
-      break;
-    case SimAction::Drift:
-      if (card_.state().velocity_mps != 0.0) {
-        return Result::fail(api::ErrorCode::Busy, "the car is moving: drift only at rest");
-      }
-      card_.drift(request.drift_mm);
-      break;
-    case SimAction::SafetyChainOpen:
-    case SimAction::DoorReversal:
-    case SimAction::OpenDoors:
-    case SimAction::CloseDoors:
-    case SimAction::ObstructDoors:
-      (void)board_.apply(request, now);
-      break;
-    case SimAction::AdvanceWarning:
-    case SimAction::ReplyFault:
-    case SimAction::ClearReplyFaults:
-    case SimAction::ChannelFault:
-    case SimAction::RefuseTarget:
-      return sim_action_refused(request, "SCH001 (hydraulic)");
+  const auto shared = [this, &request](api::SimAction action) -> std::optional<Result> {
+    using api::SimAction;
+    switch (action) {
+      case SimAction::GeneralFault:
+        card_.set_err(request.on);
+        break;
+      case SimAction::NotReady:
+        card_.set_rdy(!request.on);
+        break;
+      case SimAction::Drift:
+        if (card_.state().velocity_mps != 0.0) {
+          return Result::fail(api::ErrorCode::Busy, "the car is moving: drift only at rest");
+        }
+        card_.drift(request.drift_mm);
+        break;
+      default:  // the board's actions: SimulatedBoard::apply took them; apply_sim refused the rest
+        break;
+    }
+    return std::nullopt;
+  };
+  const auto own = [this, &request](std::size_t index) -> std::optional<Result> {
+    switch (static_cast<Sch001SimAction>(index)) {
+      case Sch001SimAction::OilTemperature:
+        card_.set_t1(request.on);
+        break;
+      case Sch001SimAction::Pressure:
+        card_.set_p1(request.on);
+        break;
+      case Sch001SimAction::Overpressure:
+        card_.set_p2(request.on);
+        break;
+      case Sch001SimAction::CardSilence:
+        card_.set_silent(request.on);
+        break;
+      case Sch001SimAction::BusOff:
+        bus_off_ = true;
+        break;
+      case Sch001SimAction::CardReconnect:
+        drop_ = true;
+        break;
+      case Sch001SimAction::ColdOil:
+        card_.set_cold_oil(request.on);
+        break;
+      case Sch001SimAction::Sink:
+        card_.set_sink(request.on ? kSinkMmPerS : 0.0);
+        break;
+    }
+    return std::nullopt;
+  };
+  if (auto refused = apply_sim(kSch001SimActionTable, request, board_, now, shared, own)) {
+    return std::move(*refused);
   }
-  journal_sim_action(request);
   return Result::ok(state_json_locked());
 }
 

@@ -8,10 +8,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include "api/commands.hpp"
 #include "log/log.hpp"
+#include "uss/host/sim_actions.hpp"
 #include "uss/timing.hpp"
 
 namespace liftd::daemon {
@@ -271,73 +274,64 @@ void SimulatedUssBus::log_violations() {
 }
 
 api::Result SimulatedUssBus::apply(const api::SimRequest& request, MonoTime now) {
-  using api::SimAction;
   std::lock_guard<std::mutex> lock(mutex_);
-  switch (request.action) {
-    case SimAction::GeneralFault:
-      drive().set_drive_fault(request.on);
-      break;
-    case SimAction::AdvanceWarning:
-      drive().set_warning(request.on);
-      break;
-    case SimAction::NotReady:
-      // ZSW bit 9 = 0: the drive is in local control and takes no process data (USS C 5.2.1).
-      drive().set_local(request.on);
-      break;
-    case SimAction::ReplyFault: {
-      std::optional<uss::sim::UssReplyFault> fault;
-      switch (request.fault) {
-        case api::SimReplyFault::NoReply:
-          fault = uss::sim::UssReplyFault::Silent;
-          break;
-        case api::SimReplyFault::BadChecksum:
-          fault = uss::sim::UssReplyFault::BadBcc;
-          break;
-        case api::SimReplyFault::Late:
-          fault = uss::sim::UssReplyFault::Late;
-          break;
-        case api::SimReplyFault::Garbage:
-          fault = uss::sim::UssReplyFault::BadLge;
-          break;
-        case api::SimReplyFault::S7:
-          break;
+  const auto shared = [this, &request](api::SimAction action) -> std::optional<Result> {
+    using api::SimAction;
+    switch (action) {
+      case SimAction::GeneralFault:
+        drive().set_drive_fault(request.on);
+        break;
+      case SimAction::AdvanceWarning:
+        drive().set_warning(request.on);
+        break;
+      case SimAction::NotReady:
+        // ZSW bit 9 = 0: the drive is in local control and takes no process data (USS C 5.2.1).
+        drive().set_local(request.on);
+        break;
+      case SimAction::ReplyFault: {
+        std::optional<uss::sim::UssReplyFault> fault;
+        switch (request.fault) {
+          case api::SimReplyFault::NoReply:
+            fault = uss::sim::UssReplyFault::Silent;
+            break;
+          case api::SimReplyFault::BadChecksum:
+            fault = uss::sim::UssReplyFault::BadBcc;
+            break;
+          case api::SimReplyFault::Late:
+            fault = uss::sim::UssReplyFault::Late;
+            break;
+          case api::SimReplyFault::Garbage:
+            fault = uss::sim::UssReplyFault::BadLge;
+            break;
+          case api::SimReplyFault::S7:
+            break;
+        }
+        if (!fault) {
+          return Result::fail(api::ErrorCode::BadRequest,
+                              "\"s7\" is a DCP reply bit; a USS drive has none", "fault");
+        }
+        drive().inject(*fault, request.frames);
+        break;
       }
-      if (!fault) {
-        return Result::fail(api::ErrorCode::BadRequest,
-                            "\"s7\" is a DCP reply bit; a USS drive has none", "fault");
-      }
-      drive().inject(*fault, request.frames);
-      break;
+      case SimAction::ClearReplyFaults:
+        drive().clear_faults();
+        break;
+      case SimAction::Drift:
+        if (drive().velocity_mps() != 0.0) {
+          return Result::fail(api::ErrorCode::Busy, "the car is moving: drift only at rest");
+        }
+        drive().move_car(request.drift_mm);
+        break;
+      default:  // the board's actions: SimulatedBoard::apply took them
+        break;
     }
-    case SimAction::ClearReplyFaults:
-      drive().clear_faults();
-      break;
-    case SimAction::Drift:
-      if (drive().velocity_mps() != 0.0) {
-        return Result::fail(api::ErrorCode::Busy, "the car is moving: drift only at rest");
-      }
-      drive().move_car(request.drift_mm);
-      break;
-    case SimAction::SafetyChainOpen:
-    case SimAction::DoorReversal:
-    case SimAction::OpenDoors:
-    case SimAction::CloseDoors:
-    case SimAction::ObstructDoors:
-      (void)board_.apply(request, now);
-      break;
-    case SimAction::ChannelFault:
-    case SimAction::RefuseTarget:
-    case SimAction::OilTemperature:
-    case SimAction::Pressure:
-    case SimAction::Overpressure:
-    case SimAction::CardSilence:
-    case SimAction::CardReconnect:
-    case SimAction::BusOff:
-    case SimAction::ColdOil:
-    case SimAction::Sink:
-      return sim_action_refused(request, "USS");
+    return std::nullopt;
+  };
+  // The USS kind declares no actions of its own, so apply_sim never calls this.
+  const auto own = [](std::size_t) -> std::optional<Result> { return std::nullopt; };
+  if (auto refused = apply_sim(kUssSimActionTable, request, board_, now, shared, own)) {
+    return std::move(*refused);
   }
-  journal_sim_action(request);
   return Result::ok(state_json_locked());
 }
 

@@ -1,0 +1,195 @@
+// `sim` as the registry of drive kinds (daemon/drives.cpp) builds it: every kind's actions in the
+// documented order, each once; and an action reaches only the simulator of a kind that declared
+// it (lib/<kind>/host/sim_actions.*, routed by apply_sim of lib/host/lift_common.hpp).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "api/commands.hpp"
+#include "api/dispatcher.hpp"
+#include "api/fake_backend.hpp"
+#include "common/mono_time.hpp"
+#include "config/config.hpp"
+#include "daemon/drives.hpp"
+#include "dcp/host/sim_actions.hpp"
+#include "host/lift_common.hpp"
+#include "sch001/host/sim_actions.hpp"
+#include "uss/host/sim_actions.hpp"
+
+namespace liftd::daemon {
+namespace {
+
+using nlohmann::json;
+
+/// The `sim` actions in the order docs/api.md and docs/api.schema.json list them.
+const std::vector<std::string> kDocumentedActions = {
+    "general_fault",  "advance_warning",   "not_ready",     "reply_fault",     "clear_reply_faults",
+    "drift",          "safety_chain_open", "door_reversal", "open_doors",      "close_doors",
+    "obstruct_doors", "channel_fault",     "refuse_target", "oil_temperature", "pressure",
+    "overpressure",   "card_silence",      "bus_off",       "cold_oil",        "sink",
+    "card_reconnect"};
+
+/// The actions on the simulated I/O board, which every simulated lift has.
+const std::set<std::string> kBoardActions = {"safety_chain_open", "door_reversal", "open_doors",
+                                             "close_doors", "obstruct_doors"};
+
+/// Which handler of a simulator each action of each kind must reach; an action missing here is
+/// refused as another kind's.
+struct KindExpectation {
+  drive::Kind kind;
+  std::string lift_name;
+  std::set<std::string> shared;  ///< to the simulator's shared handler
+  std::set<std::string> own;     ///< to the simulator's own handler
+};
+
+const std::vector<KindExpectation> kExpected = {
+    {drive::Kind::Dcp,
+     "DCP",
+     {"general_fault", "advance_warning", "not_ready", "reply_fault", "clear_reply_faults",
+      "drift"},
+     {"channel_fault", "refuse_target"}},
+    {drive::Kind::Sch001,
+     "SCH001 (hydraulic)",
+     {"general_fault", "not_ready", "drift"},
+     {"oil_temperature", "pressure", "overpressure", "card_silence", "bus_off", "cold_oil", "sink",
+      "card_reconnect"}},
+    {drive::Kind::Uss,
+     "USS",
+     {"general_fault", "advance_warning", "not_ready", "reply_fault", "clear_reply_faults",
+      "drift"},
+     {}},
+};
+
+const api::KindSimActions& table_of(drive::Kind kind) {
+  switch (kind) {
+    case drive::Kind::Dcp:
+      return kDcpSimActionTable;
+    case drive::Kind::Sch001:
+      return kSch001SimActionTable;
+    case drive::Kind::Uss:
+      break;
+  }
+  return kUssSimActionTable;
+}
+
+/// A simulated lift of one kind whose simulator only records which handler an action reached.
+class RecordingSimBackend : public api::testing::FakeBackend {
+ public:
+  explicit RecordingSimBackend(drive::Kind kind) : board_(config::Config{}, mono_now()) {
+    status_snapshot.drive_kind = kind;
+  }
+
+  void sim(const api::SimRequest& request, api::Responder done) override {
+    const auto shared = [&](api::SimAction action) -> std::optional<api::Result> {
+      reached.push_back("shared " +
+                        std::string(api::kSimActions[static_cast<std::size_t>(action)]));
+      return std::nullopt;
+    };
+    const auto own = [&](std::size_t index) -> std::optional<api::Result> {
+      reached.push_back("own " + std::string(table_of(drive_kind()).own[index]));
+      return std::nullopt;
+    };
+    if (auto refused =
+            apply_sim(table_of(drive_kind()), request, board_, mono_now(), shared, own)) {
+      done(std::move(*refused));
+      return;
+    }
+    done(api::Result::ok({{"applied", std::string(request.name)}}));
+  }
+
+  std::vector<std::string> reached;  ///< "shared NAME" / "own NAME", in order
+
+ private:
+  SimulatedBoard board_;
+};
+
+json handle_sim(api::Dispatcher& dispatcher, const json& request) {
+  api::Peer peer;
+  peer.access = {true, true, true};
+  api::testing::QuietSession session;
+  json reply;
+  dispatcher.handle_line(request.dump(), peer, session,
+                         [&reply](std::string text, bool) { reply = json::parse(text); });
+  return reply;
+}
+
+/// A valid `sim` request for `action` (with the arguments it needs).
+json sim_request(const std::string& action) {
+  json request = {{"cmd", "sim"}, {"action", action}};
+  if (action == "reply_fault") request["fault"] = "no_reply";
+  if (action == "channel_fault") request["channel"] = "garbage";
+  if (action == "drift") request["drift_mm"] = 5;
+  return request;
+}
+
+TEST(SimActions, TheSimCommandListsEveryKindsActionsOnceInTheDocumentedOrder) {
+  for (const drive::Kind kind : {drive::Kind::Dcp, drive::Kind::Sch001, drive::Kind::Uss}) {
+    api::testing::FakeBackend backend;
+    backend.status_snapshot.drive_kind = kind;
+    api::Dispatcher dispatcher;
+    api::add_builtin_commands(dispatcher, backend);
+    add_drive_kind_commands(dispatcher, backend);
+    const api::CommandSpec* sim = dispatcher.find("sim");
+    ASSERT_NE(sim, nullptr) << drive::to_string(kind);
+    std::vector<std::string> arg_names;
+    for (const auto& arg : sim->args) arg_names.push_back(arg.name);
+    EXPECT_EQ(arg_names,
+              (std::vector<std::string>{"action", "on", "fault", "channel", "frames", "drift_mm"}));
+    const std::vector<std::string>& choices = sim->args.at(0).choices;
+    EXPECT_EQ(choices, kDocumentedActions) << drive::to_string(kind);
+    const std::set<std::string> distinct(choices.begin(), choices.end());
+    EXPECT_EQ(distinct.size(), choices.size()) << "an action name twice";
+  }
+}
+
+TEST(SimActions, AnActionReachesOnlyTheSimulatorOfAKindThatDeclaredIt) {
+  for (const KindExpectation& expected : kExpected) {
+    RecordingSimBackend backend(expected.kind);
+    api::Dispatcher dispatcher;
+    api::add_builtin_commands(dispatcher, backend);
+    add_drive_kind_commands(dispatcher, backend);
+    for (const std::string& action : kDocumentedActions) {
+      SCOPED_TRACE(std::string(drive::to_string(expected.kind)) + " " + action);
+      backend.reached.clear();
+      const json reply = handle_sim(dispatcher, sim_request(action));
+      if (expected.shared.count(action) != 0) {
+        EXPECT_TRUE(reply.value("ok", false)) << reply.dump();
+        EXPECT_EQ(backend.reached, std::vector<std::string>{"shared " + action});
+      } else if (expected.own.count(action) != 0) {
+        EXPECT_TRUE(reply.value("ok", false)) << reply.dump();
+        EXPECT_EQ(backend.reached, std::vector<std::string>{"own " + action});
+      } else if (kBoardActions.count(action) != 0) {
+        EXPECT_TRUE(reply.value("ok", false)) << reply.dump();
+        EXPECT_TRUE(backend.reached.empty()) << "a board action reached the drive's simulator";
+      } else {
+        EXPECT_TRUE(backend.reached.empty()) << "another kind's action reached this simulator";
+        ASSERT_TRUE(reply.contains("error")) << reply.dump();
+        EXPECT_EQ(reply.at("error").at("code"), "bad_request");
+        EXPECT_EQ(reply.at("error").at("message"),
+                  "\"" + action + "\" is for the simulator of another drive kind; this lift is " +
+                      expected.lift_name);
+      }
+    }
+  }
+}
+
+TEST(SimActions, AKindsOwnArgumentIsCheckedOnEveryLift) {
+  for (const drive::Kind kind : {drive::Kind::Dcp, drive::Kind::Sch001, drive::Kind::Uss}) {
+    RecordingSimBackend backend(kind);
+    api::Dispatcher dispatcher;
+    api::add_builtin_commands(dispatcher, backend);
+    add_drive_kind_commands(dispatcher, backend);
+    const json reply = handle_sim(dispatcher, {{"cmd", "sim"}, {"action", "channel_fault"}});
+    ASSERT_TRUE(reply.contains("error")) << reply.dump();
+    EXPECT_EQ(reply.at("error").at("message"), "channel_fault needs a channel");
+    EXPECT_TRUE(backend.reached.empty());
+  }
+}
+
+}  // namespace
+}  // namespace liftd::daemon
