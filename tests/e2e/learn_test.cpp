@@ -5,12 +5,16 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <future>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "daemon/process.hpp"
 #include "e2e/harness.hpp"
 
 namespace {
@@ -18,6 +22,7 @@ namespace {
 using namespace std::chrono_literals;
 using liftd::e2e::Client;
 using liftd::e2e::Lift;
+using liftd::testing::Process;
 using nlohmann::json;
 
 // Three floors 500 mm apart: a short shaft, so the crawl through it takes about half a minute.
@@ -73,8 +78,50 @@ void expect_learned(int dcp) {
   EXPECT_LT(at, static_cast<double>(kTrue.back() + 150));
 }
 
-TEST(Learn, Dcp4LearnsTheShaftsLevelsWithinTwoMillimetres) {
-  expect_learned(4);
+// liftctl learn --apply on the daemon's own file, then a daemon started from the new file lands
+// a travel on the shaft's true level.
+TEST(Learn, Dcp4LiftctlAppliesTheLearnedLevelsAndATravelLandsThere) {
+  std::filesystem::path file;
+  {
+    Lift lift("learn-apply", 4, json::object(), {}, config(4, kTrue));
+    ASSERT_EQ(lift.setup_error(), "");
+    file = lift.dir() / "liftd.json";
+    const std::string before = [&] {
+      std::ifstream in(file);
+      std::stringstream text;
+      text << in.rdbuf();
+      return text.str();
+    }();
+    Process liftctl({LIFTCTL_BINARY, "--socket", lift.socket(), "learn", "--apply", file.string()},
+                    {"PATH=/usr/bin:/bin"}, lift.dir().string(), "liftctl");
+    const auto code = liftctl.wait(kLearnTimeout);
+    ASSERT_EQ(code, 0) << liftctl.out() << liftctl.err() << lift.log();
+    EXPECT_NE(liftctl.out().find("accepted: "), std::string::npos) << liftctl.out();
+    EXPECT_NE(liftctl.out().find("restart liftd"), std::string::npos) << liftctl.out();
+    std::ifstream bak(file.string() + ".bak");
+    std::stringstream kept;
+    kept << bak.rdbuf();
+    EXPECT_EQ(kept.str(), before);
+    std::ifstream in(file);
+    const json written = json::parse(in);
+    for (std::size_t i = 0; i < kTrue.size(); ++i) {
+      EXPECT_NEAR(written["floors"][i]["level_mm"].get<double>(), static_cast<double>(kTrue[i]),
+                  2.0);
+    }
+  }
+  std::ifstream in(file);
+  const json written = json::parse(in);
+  json next = config(4, kTrue);
+  next["floors"] = written["floors"];
+  Lift lift("learn-applied", 4, json::object(), {}, next);
+  ASSERT_EQ(lift.setup_error(), "");
+  const json reply = lift.call({{"cmd", "travel"}, {"floor", 1}});
+  ASSERT_TRUE(reply.value("ok", false)) << reply.dump();
+  const json end = lift.wait_travel_end();
+  ASSERT_TRUE(end.is_object());
+  EXPECT_EQ(end["data"]["event"], "finished") << end.dump();
+  EXPECT_TRUE(lift.wait_drive_state("ready", 10s));
+  EXPECT_NEAR(lift.position_mm(), static_cast<double>(kTrue[1]), 5.0);
 }
 
 TEST(Learn, Dcp3LearnsTheShaftsLevelsWithinTwoMillimetres) {
@@ -119,6 +166,7 @@ TEST(Learn, StopMidLearningEndsItWithNothingLearned) {
   ASSERT_TRUE(reply.is_object());
   EXPECT_FALSE(reply.value("ok", true)) << reply.dump();
   EXPECT_EQ(reply["error"]["code"], "not_ready") << reply.dump();
+  EXPECT_EQ(reply["error"]["message"], "learning travel stopped: nothing learned");
   EXPECT_EQ(lift.api().wait_event(
                 "learn", [](const json&) { return true; }, 2s),
             nullptr);

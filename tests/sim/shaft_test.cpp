@@ -18,7 +18,7 @@ TEST(SimulatedShaft, ZonesAreCentredOnTheTrueLevels) {
   EXPECT_FALSE(shaft.level_zone(-50.5));
   EXPECT_TRUE(shaft.level_zone(50.0));
   EXPECT_FALSE(shaft.level_zone(50.5));
-  EXPECT_FALSE(shaft.level_zone(3000.0));
+  EXPECT_FALSE(shaft.level_zone(2989.0));
   EXPECT_TRUE(shaft.level_zone(2990.0));
   EXPECT_TRUE(shaft.level_zone(3090.0));
   EXPECT_TRUE(shaft.level_zone(6030.0));

@@ -418,6 +418,10 @@ void DcpController::handle_stop(std::uint32_t tag) noexcept {
 
 // ---- the learning travel ----
 
+namespace {
+constexpr std::string_view kLearnStopped = "learning travel stopped: nothing learned";
+}  // namespace
+
 void DcpController::handle_learn(std::uint32_t tag) noexcept {
   if (learn_phase_ != LearnPhase::Idle) {
     reply(tag, ReplyCode::Busy, "a learning travel is running");
@@ -506,17 +510,17 @@ void DcpController::step_learning() noexcept {
   if (!learn_leg_ended_) {
     // Stopped between the legs: nothing runs that the stop could end.
     if (learn_stopped_ && travel_.active_kind() == TravelKind::None) {
-      end_learning(ReplyCode::NotReady, abort_text(lift::Cause::StopRequested));
+      end_learning(ReplyCode::NotReady, kLearnStopped);
     }
     return;
   }
   learn_leg_ended_ = false;
   if (learn_stopped_) {
-    end_learning(ReplyCode::NotReady, abort_text(lift::Cause::StopRequested));
+    end_learning(ReplyCode::NotReady, kLearnStopped);
     return;
   }
   if (learn_leg_cause_ != lift::Cause::None) {
-    end_learning(ReplyCode::Fault, abort_text(learn_leg_cause_));
+    end_learning(ReplyCode::Fault, lift::to_string(learn_leg_cause_));
     return;
   }
   if (learn_phase_ == LearnPhase::Down) {
