@@ -81,11 +81,11 @@ void expect_learned(int dcp) {
 // liftctl learn --apply on the daemon's own file, then a daemon started from the new file lands
 // a travel on the shaft's true level.
 TEST(Learn, Dcp4LiftctlAppliesTheLearnedLevelsAndATravelLandsThere) {
-  std::filesystem::path file;
+  json written;  // the daemon's file after --apply (the Lift's directory goes with it)
   {
     Lift lift("learn-apply", 4, json::object(), {}, config(4, kTrue));
     ASSERT_EQ(lift.setup_error(), "");
-    file = lift.dir() / "liftd.json";
+    const std::filesystem::path file = lift.dir() / "liftd.json";
     const std::string before = [&] {
       std::ifstream in(file);
       std::stringstream text;
@@ -103,14 +103,12 @@ TEST(Learn, Dcp4LiftctlAppliesTheLearnedLevelsAndATravelLandsThere) {
     kept << bak.rdbuf();
     EXPECT_EQ(kept.str(), before);
     std::ifstream in(file);
-    const json written = json::parse(in);
+    written = json::parse(in);
     for (std::size_t i = 0; i < kTrue.size(); ++i) {
       EXPECT_NEAR(written["floors"][i]["level_mm"].get<double>(), static_cast<double>(kTrue[i]),
                   2.0);
     }
   }
-  std::ifstream in(file);
-  const json written = json::parse(in);
   json next = config(4, kTrue);
   next["floors"] = written["floors"];
   Lift lift("learn-applied", 4, json::object(), {}, next);
