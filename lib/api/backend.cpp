@@ -207,6 +207,9 @@ void Backend::stop(Responder done) {
 void Backend::relevel(Responder done) {
   no_travel(done);
 }
+void Backend::learn(Responder done) {
+  done(Result::fail(ErrorCode::NotOffered, "this lift's drive kind has no learning travel yet"));
+}
 void Backend::inspection(bool, const std::string&, Responder done) {
   no_travel(done);
 }

@@ -214,6 +214,9 @@ class Backend {
   virtual void inspection(bool on, const std::string& direction, Responder done);
   /// Calls queue: "list", "add" or "cancel" (with floor).
   virtual void calls(const std::string& action, std::optional<int> floor, Responder done);
+  /// The learning travel: answered when it ends, with the learned levels beside the configured
+  /// ones (docs/api.md "learn"). The default refuses: `not_offered` on this drive kind.
+  virtual void learn(Responder done);
 
   // ---- the simulated lift (liftd --simulate only) ----
   /// Fault injection and door/safety-chain handling on the simulated lift. The result is the

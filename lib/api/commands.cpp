@@ -262,6 +262,18 @@ void add_travel_commands(Dispatcher& dispatcher, Backend& backend) {
                     b->calls(action, f, std::move(done));
                   },
                   kEveryDriveKind});
+  add_learn_command(dispatcher, backend);
+}
+
+void add_learn_command(Dispatcher& dispatcher, Backend& backend) {
+  Backend* b = &backend;
+  dispatcher.add({"learn",
+                  Access::Control,
+                  {},
+                  "learning travel: find each floor's level from the shaft's level zones; "
+                  "answered when it ends",
+                  [b](const Call&, Responder done) { b->learn(std::move(done)); },
+                  kEveryDriveKind});
 }
 
 namespace {

@@ -32,6 +32,8 @@ TravelArgs travel_args(const nlohmann::json& request);
 /// Adds the travel commands every drive kind offers (travel, stop, relevel, inspection, calls).
 /// add_builtin_commands() calls it.
 void add_travel_commands(Dispatcher& dispatcher, Backend& backend);
+/// `learn`: the learning travel (added by add_travel_commands).
+void add_learn_command(Dispatcher& dispatcher, Backend& backend);
 
 /// Most replies one `sim` reply_fault request affects (about 2.5 minutes of 15 ms cycles).
 inline constexpr std::int64_t kMaxSimFaultFrames = 10000;

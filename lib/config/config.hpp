@@ -199,6 +199,12 @@ struct UssConfig {
 /// `sim.*`
 struct SimConfig {
   int dcp = 4;  ///< sim.dcp: the simulated drive speaks DCP3 or DCP4
+  /// sim.shaft_levels_mm: the simulated shaft's true level of each floor, lowest first; empty:
+  /// the floor table's levels. Its level zones may differ from the floors in number (a shaft
+  /// with a missing zone).
+  std::vector<std::int64_t> shaft_levels_mm;
+  /// sim.level_zone_mm: length of each simulated level zone, centred on its true level.
+  int level_zone_mm = 100;
 };
 
 /// The whole configuration; every member mirrors a key of the JSON file. The member

@@ -133,9 +133,47 @@ std::vector<Key> inputs_keys() {
                   &InputsConfig::timeout_ms)};
 }
 
+// The simulated shaft's levels: at most as many as floors may be configured, each within the
+// range of a floor's level (I9's six digits, DCP 5.12.9), strictly increasing.
+void apply_shaft_levels(const json& value, const std::string& where, Config& cfg,
+                        Problems& problems) {
+  constexpr std::int64_t kMaxShaftLevels = 128;
+  constexpr std::int64_t kMaxLevelMm = 999999;
+  if (!value.is_array() || value.size() > static_cast<std::size_t>(kMaxShaftLevels)) {
+    problems.push_back({where, "expected an array of at most " + std::to_string(kMaxShaftLevels) +
+                                   " levels in mm, got " + show(value)});
+    return;
+  }
+  std::vector<std::int64_t> levels;
+  bool good = true;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    const std::string at = where + "[" + std::to_string(i) + "]";
+    if (!check_integer(value[i], at, -kMaxLevelMm, kMaxLevelMm, problems)) {
+      good = false;
+      continue;
+    }
+    const std::int64_t level = value[i].get<std::int64_t>();
+    if (!levels.empty() && level <= levels.back()) {
+      problems.push_back({at, "must be above the level before it"});
+      good = false;
+    }
+    levels.push_back(level);
+  }
+  if (good) cfg.sim.shaft_levels_mm = std::move(levels);
+}
+
 std::vector<Key> sim_keys() {
-  return {int_key("sim.dcp", 3, 4, "DCP version the simulated drive speaks (--simulate)",
-                  &Config::sim, &SimConfig::dcp)};
+  return {
+      int_key("sim.dcp", 3, 4, "DCP version the simulated drive speaks (--simulate)", &Config::sim,
+              &SimConfig::dcp),
+      custom_key("sim.shaft_levels_mm", "array of integers",
+                 "at most 128 levels in mm, strictly increasing; [] = the floors' levels",
+                 "the simulated shaft's true level of each floor, where its level zone is "
+                 "centred (--simulate; the learning travel finds them)",
+                 apply_shaft_levels, [](const Config& c) { return json(c.sim.shaft_levels_mm); }),
+      int_key("sim.level_zone_mm", 10, 1000,
+              "length of each simulated level zone, centred on its true level (--simulate)",
+              &Config::sim, &SimConfig::level_zone_mm)};
 }
 
 std::string_view to_string(LogLevel value) {

@@ -257,4 +257,12 @@ void journal_sim_action(const api::SimRequest& request) {
              "simulated lift: " + action_name(request));
 }
 
+sim::SimulatedShaft simulated_shaft(const config::Config& c) {
+  std::vector<std::int64_t> levels = c.sim.shaft_levels_mm;
+  if (levels.empty()) {
+    for (const auto& floor : c.floors) levels.push_back(floor.level_mm);
+  }
+  return sim::SimulatedShaft(levels, c.sim.level_zone_mm);
+}
+
 }  // namespace liftd::daemon

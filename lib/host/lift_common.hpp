@@ -19,6 +19,7 @@
 #include "common/position_source.hpp"
 #include "config/config.hpp"
 #include "lift/inputs.hpp"
+#include "sim/shaft.hpp"
 #include "sim/sim_io.hpp"
 
 namespace liftd::daemon {
@@ -92,6 +93,10 @@ class SimulatedEncoder final : public PositionSource {
  private:
   std::atomic<std::int64_t> mm_{0};
 };
+
+/// The simulated shaft of --simulate: sim.shaft_levels_mm (else the floors' levels), each with a
+/// level zone of sim.level_zone_mm.
+sim::SimulatedShaft simulated_shaft(const config::Config& config);
 
 /// The simulated I/O board of every simulated lift (--simulate): safety chain, doors and shaft
 /// (from the floors), and the `sim` actions that act on it whatever the drive.

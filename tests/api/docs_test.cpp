@@ -185,13 +185,14 @@ void expect_table_rows(const std::vector<std::string>& names, const char* what) 
 
 // Every event the daemon publishes: the server's greeting, the watch start, the lifts.
 const std::vector<std::string> kEvents = {
-    "hello", "state",       "display",           "link",   "travel",     "drive_error",
-    "fault", "call_served", "parameter_changed", "missed", "watch_ended"};
+    "hello", "state",       "display",           "link",   "travel",      "drive_error",
+    "fault", "call_served", "parameter_changed", "missed", "watch_ended", "learn"};
 
 TEST(ApiDocs, EventListMatchesWhatTheDaemonPublishes) {
   std::set<std::string> published;
-  for (const char* lift : {"lib/dcp/host/lift_app.cpp", "lib/sch001/host/hydraulic_lift.cpp",
-                           "lib/uss/host/uss_lift.cpp", "lib/host/lift_core.cpp"}) {
+  for (const char* lift :
+       {"lib/dcp/host/lift_app.cpp", "lib/sch001/host/hydraulic_lift.cpp",
+        "lib/uss/host/uss_lift.cpp", "lib/host/lift_core.cpp", "lib/host/learn_report.cpp"}) {
     const std::string app = read_source(lift);
     for (const auto& pattern : {R"re(\bname = "([a-z_]+)";)re", R"re(publish\(\s*"([a-z_]+)")re"}) {
       published.merge(matches(app, pattern));

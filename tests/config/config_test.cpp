@@ -126,6 +126,8 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/uss/profile_timeout_ms", 2000},
       {"/uss/speeds", {{"V0", 5}, {"VN", 3}, {"VI", 30}, {"V3", 60}, {"V4", 100}}},
       {"/sim/dcp", 4},
+      {"/sim/shaft_levels_mm", json::array()},
+      {"/sim/level_zone_mm", 100},
   };
   const LoadResult result = kinds::parse_config("{}", "test");
   ASSERT_TRUE(result.ok()) << all_problems(result);

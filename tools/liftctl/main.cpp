@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "format.hpp"
+#include "learn_apply.hpp"
 #include "plot.hpp"
 
 namespace {
@@ -54,6 +55,9 @@ void usage(std::FILE* out) {
       "  fast-stop              DCP fast stop of the running travel\n"
       "  relevel                relevel to the nearest floor\n"
       "  calls [add|cancel N]   list, add or cancel destinations (served in order)\n"
+      "  learn [--apply FILE]   learning travel: each floor's level from the shaft's level\n"
+      "                         zones; --apply writes them into the configuration FILE\n"
+      "                         (the old one kept as FILE.bak); floors take effect at restart\n"
       "  inspection on|off [up|down|none]   software inspection; repeat to hold a direction\n"
       "  fast-start arm FLOOR|go|abort      DCP fast start while the doors close\n"
       "  uss-read PNU [array|description|text INDEX] [@ADDRESS]\n"
@@ -507,6 +511,48 @@ std::string print_generic(const json&, const json& result) {
   return liftctl::format_generic(result);
 }
 
+// ---- learn ----
+
+/// How long `learn` waits for its reply: the learning travel crawls through the whole shaft.
+constexpr int kLearnReplyTimeoutMs = 60 * 60 * 1000;
+
+/// learn [--apply FILE]: FILE is the daemon's configuration file (liftctl cannot ask for it).
+Request request_learn(const Args& args) {
+  if (args.size() != 1 && !(args.size() == 3 && args[1] == "--apply")) {
+    return bad_usage("usage: learn [--apply CONFIG_FILE]");
+  }
+  return json{{"cmd", "learn"}};
+}
+
+std::string print_learn(const json&, const json& result) {
+  return liftctl::format_learn_result(result);
+}
+
+/// The learning travel: waits for its result, prints it, and with --apply writes it.
+int run_learn(Connection& conn, const Args& args, json request, bool raw_json) {
+  request["id"] = 1;
+  if (!conn.send_line(request.dump())) return kExitNoDaemon;
+  std::optional<json> reply;
+  while (!reply) {
+    auto message = conn.read_json(kLearnReplyTimeoutMs);
+    if (!message) {
+      std::fprintf(stderr, "liftctl: liftd closed the connection without answering\n");
+      return kExitNoDaemon;
+    }
+    if (message->contains("ok")) reply = std::move(message);
+  }
+  if (reply->value("ok", false) != true) return report_error(*reply);
+  const json result = reply->value("result", json::object());
+  std::fputs(raw_json ? (result.dump(2) + "\n").c_str() : print_learn(request, result).c_str(),
+             stdout);
+  if (!result.value("accepted", false)) return kExitFailed;
+  if (args.size() != 3) return kExitOk;
+  const liftctl::ApplyOutcome outcome = liftctl::apply_learned_levels(args[2], result);
+  std::fprintf(outcome.ok ? stdout : stderr, "%s%s\n",
+               outcome.ok ? "" : "liftctl: ", outcome.message.c_str());
+  return outcome.ok ? kExitOk : kExitFailed;
+}
+
 /// One subcommand: how its words become a request, and how the result is printed (watch and
 /// raw print what they receive themselves).
 struct Subcommand {
@@ -531,6 +577,7 @@ constexpr Subcommand kSubcommands[] = {
     {"fast-stop", request_stop, liftctl::format_travel_result},
     {"relevel", request_stop, liftctl::format_travel_result},
     {"calls", request_calls, liftctl::format_travel_result},
+    {"learn", request_learn, print_learn},
     {"inspection", request_inspection, liftctl::format_travel_result},
     {"fast-start", request_fast_start, liftctl::format_travel_result},
     {"uss-read", request_uss_parameter, print_generic},
@@ -639,5 +686,6 @@ int main(int argc, char** argv) {
   if (command == "watch") return run_watch(conn, options.raw_json);
   if (command == "raw") return run_raw(conn, *request);
   if (command == "plot") return run_plot(conn, options.args, *request, options.raw_json);
+  if (command == "learn") return run_learn(conn, options.args, *request, options.raw_json);
   return run_request(conn, *subcommand, *request, options.raw_json);
 }

@@ -16,6 +16,7 @@
 #include "dcp/charset.hpp"
 #include "dcp/host/simulated_lift.hpp"
 #include "dcp/messages.hpp"
+#include "host/learn_report.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
 #include "log/log.hpp"
@@ -142,7 +143,9 @@ LiftApp::LiftApp(Host& daemon, const config::Config& config, bool simulate)
       position_ = encoder_.get();
     }
   }
-  controller_ = std::make_unique<control::DcpController>(dcp_controller_config(config), *position_);
+  control::ControllerConfig controller_config = dcp_controller_config(config);
+  if (sim_) controller_config.level_zone_source = &sim_->level_zone();
+  controller_ = std::make_unique<control::DcpController>(controller_config, *position_);
   runner_ = std::make_unique<rt::CycleRunner>(cycle_config(config, device), *controller_);
   runner_->set_notify_fd(wake_.fd());
   backend_ = std::make_unique<LiftBackend>(
@@ -153,6 +156,8 @@ LiftApp::LiftApp(Host& daemon, const config::Config& config, bool simulate)
   server_ = std::make_unique<api::Server>(daemon.io(), *backend_, api_server_config(config),
                                           api_log_sink());
   daemon.add_drive_commands(server_->dispatcher(), *backend_);
+  backend_->set_learn_listener(
+      [this](const nlohmann::json& result) { report_learn(*server_, result); });
 
   if (sim_) {
     daemon.add_component({"sim", [this] { return sim_->start(); }, [this] { sim_->stop(); }});

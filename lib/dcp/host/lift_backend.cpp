@@ -7,6 +7,7 @@
 #include "dcp/charset.hpp"
 #include "dcp/host/simulated_lift.hpp"
 #include "dcp/trace.hpp"
+#include "host/learn_report.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
 #include "log/log.hpp"
@@ -323,6 +324,27 @@ void LiftBackend::fast_stop(api::Responder done) {
 
 void LiftBackend::relevel(api::Responder done) {
   send(control::RelevelCommand{}, std::move(done));
+}
+
+void LiftBackend::learn(api::Responder done) {
+  // Answered when the learning ends: both legs at the crawl limit the controller gives them,
+  // and the grace of every reply.
+  std::int64_t shaft_mm = 2 * control::kLearnApproachMm;
+  if (!config_.floors.empty())
+    shaft_mm += config_.floors.back().level_mm - config_.floors.front().level_mm;
+  const auto longest = std::chrono::milliseconds(
+      2 * (travel::TravelConfig{}.crawl_timeout_ms + shaft_mm * control::kLearnCrawlMsPerMm));
+  (void)post_command<control::Command>(
+      controller_, pending_, control::LearnCommand{}, std::move(done), longest + kDcpReplyGrace,
+      kCycleThread, [this](const control::CommandReply&) {
+        const control::LearnRecord record = controller_.learn_record();
+        nlohmann::json result = learn_result_json(
+            config_, record.judgement,
+            std::span<const lift::LearnedZone>(record.zones.data(), record.zone_count),
+            record.zones_seen);
+        if (learn_listener_) learn_listener_(result);
+        return api::Result::ok(std::move(result));
+      });
 }
 
 void LiftBackend::inspection(bool on, const std::string& direction, api::Responder done) {

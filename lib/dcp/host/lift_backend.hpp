@@ -51,6 +51,11 @@ class LiftBackend final : public api::Backend, public DcpCommandBackend {
   void relevel(api::Responder done) override;
   void inspection(bool on, const std::string& direction, api::Responder done) override;
   void calls(const std::string& action, std::optional<int> floor, api::Responder done) override;
+  void learn(api::Responder done) override;
+  /// Called with each learning travel's result (the lift reports it to the journal and watchers).
+  void set_learn_listener(std::function<void(const nlohmann::json&)> listener) {
+    learn_listener_ = std::move(listener);
+  }
   /// Served by the process's SimulatedLift (liftd --simulate); refused without one.
   void sim(const api::SimRequest& request, api::Responder done) override;
 
@@ -103,6 +108,7 @@ class LiftBackend final : public api::Backend, public DcpCommandBackend {
   api::SharedJson dcp_details_{dcp_status_json({})};  ///< status.dcp, shared by the snapshots
   Pending pending_;                                   ///< requests waiting for the cycle's reply
   TravelLog travel_log_;  ///< the last travels and their curves (`travels`)
+  std::function<void(const nlohmann::json&)> learn_listener_;
   MonoTime mono_at_start_{};
   std::chrono::system_clock::time_point wall_at_start_{};
 };

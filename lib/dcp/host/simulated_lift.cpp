@@ -37,6 +37,21 @@ class SimulatedLift::Encoder final : public control::PositionSource {
   const dcp::sim::SerialDriveRunner& drive_;
 };
 
+/// The simulated shaft's level switch: the drive's motion plan evaluated at `now`, as the
+/// encoder evaluates it, against the shaft's true levels.
+class SimulatedLift::ZoneSwitch final : public LevelZoneSource {
+ public:
+  ZoneSwitch(const dcp::sim::SerialDriveRunner& drive, const sim::SimulatedShaft& shaft)
+      : drive_(drive), shaft_(shaft) {}
+  bool level_zone(MonoTime now) const noexcept override {
+    return shaft_.level_zone(drive_.encoder_sample().position_at_mm(now));
+  }
+
+ private:
+  const dcp::sim::SerialDriveRunner& drive_;
+  sim::SimulatedShaft shaft_;
+};
+
 namespace {
 
 // Crawl distance of the simulated DCP3 installation: the drive's SVx is this much shorter than
@@ -101,6 +116,11 @@ SimulatedLift::SimulatedLift(const config::Config& config) : board_(config, mono
   options.priority = std::max(1, config.rt.priority - 1);
   drive_ = std::make_unique<dcp::sim::SerialDriveRunner>(drive, options);
   position_ = std::make_unique<Encoder>(*drive_);
+  zone_ = std::make_unique<ZoneSwitch>(*drive_, simulated_shaft(config));
+}
+
+const LevelZoneSource& SimulatedLift::level_zone() const {
+  return *zone_;
 }
 
 SimulatedLift::~SimulatedLift() {

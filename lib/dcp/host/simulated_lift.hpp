@@ -14,6 +14,7 @@
 #include "host/lift_common.hpp"
 #include "io/pty.hpp"
 #include "lift/inputs.hpp"
+#include "sim/shaft.hpp"
 #include "sim/sim_io.hpp"
 
 namespace liftd::daemon {
@@ -35,6 +36,8 @@ class SimulatedLift {
   void stop();
   /// The simulated absolute encoder, read by the cycle thread (lock-free).
   const control::PositionSource& position() const;
+  /// The simulated shaft's level zone at the car's position (read by the cycle thread).
+  const LevelZoneSource& level_zone() const;
   /// The simulated I/O board's inputs now (io thread).
   lift::Inputs inputs(MonoTime now);
   /// Logs what the simulated drive did since the last call (io thread).
@@ -47,11 +50,13 @@ class SimulatedLift {
 
  private:
   class Encoder;
+  class ZoneSwitch;
 
   std::unique_ptr<io::PtyPair> pty_;  ///< held open so the cycle's side never sees a hang-up
   std::string device_path_;
   std::unique_ptr<dcp::sim::SerialDriveRunner> drive_;
   std::unique_ptr<Encoder> position_;
+  std::unique_ptr<ZoneSwitch> zone_;
   SimulatedBoard board_;  ///< safety chain, doors, shaft
   bool started_ = false;
   bool general_fault_ = false;    ///< injected S3

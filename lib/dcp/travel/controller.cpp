@@ -83,7 +83,8 @@ StartResult TravelController::start(const TravelRequest& request) noexcept {
       [[fallthrough]];
     case TravelKind::Dcp3Crawl:
       if (direction == Direction::None) return StartResult::NoDirection;
-      if (config_.dcp3_reference == Dcp3Reference::Position && !last_.position_mm) {
+      if ((config_.dcp3_reference == Dcp3Reference::Position || request.by_position) &&
+          !last_.position_mm) {
         return StartResult::NoPosition;
       }
       break;
@@ -120,10 +121,13 @@ void TravelController::begin_pending(const CycleInput& in) noexcept {
     default:
       break;
   }
-  // The auto relevelling reference: only where the target is a real level.
-  if (request.kind == TravelKind::Dcp4Distance ||
-      ((request.kind == TravelKind::Dcp3Speed || request.kind == TravelKind::Dcp3Crawl) &&
-       config_.dcp3_reference == Dcp3Reference::Position)) {
+  // The auto relevelling reference: only where the target is a real level (a learning travel's
+  // legs, by_position, end beyond the terminal levels).
+  if (request.by_position) {
+    home_level_mm_.reset();
+  } else if (request.kind == TravelKind::Dcp4Distance ||
+             ((request.kind == TravelKind::Dcp3Speed || request.kind == TravelKind::Dcp3Crawl) &&
+              config_.dcp3_reference == Dcp3Reference::Position)) {
     home_level_mm_ = request.target_mm;
   } else if (request.kind != TravelKind::Dcp4Relevel) {
     home_level_mm_.reset();

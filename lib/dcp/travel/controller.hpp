@@ -35,6 +35,8 @@ class TravelController {
   /// that level's deceleration point; anything else gets the controlled stop of stop(). Returns
   /// the level the car will stop at, or nullopt when it stops where stop() stops it.
   std::optional<std::int64_t> stop_at(std::int64_t target_mm) noexcept;
+  /// A running crawl travel by position ends at `target_mm` instead (Dcp3Travel::end_crawl_at).
+  bool end_crawl_at(std::int64_t target_mm) noexcept { return dcp3_.end_crawl_at(target_mm); }
   /// The shortest remaining distance a running DCP4 travel can be retargeted to now.
   std::optional<std::int64_t> stop_distance_mm() const noexcept;
   /// Service stop: no new travel, no automatic relevelling from now on; `force` also withdraws

@@ -9,6 +9,8 @@ void Dcp3Travel::begin(const TravelRequest& request, Direction direction,
   direction_ = direction;
   target_mm_ = request.target_mm;
   fast_start_ = request.fast_start;
+  by_position_ = request.by_position;
+  crawl_timeout_ms_ = request.crawl_timeout_ms;
   go_sent_ = false;
   brake_seen_open_ = false;
   travel_seen_ = false;
@@ -44,6 +46,12 @@ bool Dcp3Travel::stop_at(std::int64_t target_mm) noexcept {
   return true;
 }
 
+bool Dcp3Travel::end_crawl_at(std::int64_t target_mm) noexcept {
+  if (state_ != State::Travel || speed_ != dcp::Speed::V0 || !by_position_) return false;
+  target_mm_ = target_mm;
+  return true;
+}
+
 void Dcp3Travel::request_fast_stop() noexcept {
   if (state_ == State::Travel || state_ == State::Creep || state_ == State::FastStartGo) {
     end_cause_ = lift::Cause::StopRequested;
@@ -64,7 +72,7 @@ Demand Dcp3Travel::demand(std::uint8_t message, std::uint16_t data_word) const n
 }
 
 bool Dcp3Travel::decel_point(const StepContext& ctx) const noexcept {
-  if (ctx.config.dcp3_reference == Dcp3Reference::ShaftSignals) {
+  if (ctx.config.dcp3_reference == Dcp3Reference::ShaftSignals && !by_position_) {
     return ctx.in.inputs.decel_point(speed_number(speed_), direction_);
   }
   if (!ctx.in.position_mm) return false;
@@ -74,7 +82,7 @@ bool Dcp3Travel::decel_point(const StepContext& ctx) const noexcept {
 }
 
 bool Dcp3Travel::at_level(const StepContext& ctx) const noexcept {
-  if (ctx.config.dcp3_reference == Dcp3Reference::ShaftSignals) {
+  if (ctx.config.dcp3_reference == Dcp3Reference::ShaftSignals && !by_position_) {
     return ctx.in.inputs.level_zone;
   }
   if (!ctx.in.position_mm) return false;
@@ -166,7 +174,7 @@ Demand Dcp3Travel::step(StepContext& ctx) noexcept {
         return demand(nibble::kStop, 0);
       }
       if (speed_ == dcp::Speed::V0) {
-        if (since_ms >= config.crawl_timeout_ms) {
+        if (since_ms >= crawl_timeout_ms(config)) {
           request_stop(lift::Cause::LevelNotReached);
           return demand(nibble::kStop, 0);
         }
@@ -187,7 +195,7 @@ Demand Dcp3Travel::step(StepContext& ctx) noexcept {
       return demand(nibble::kTravel, 0);
 
     case State::Creep:
-      if (since_ms >= config.crawl_timeout_ms) {
+      if (since_ms >= crawl_timeout_ms(config)) {
         request_stop(lift::Cause::LevelNotReached);
         return demand(nibble::kStop, 0);
       }

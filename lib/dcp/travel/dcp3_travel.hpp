@@ -38,6 +38,9 @@ class Dcp3Travel {
   /// A user stop with a known position: crawl from `target_mm`'s deceleration point SVx on
   /// (DCP 10.1.1 step 3). False when the car is already past its deceleration point.
   bool stop_at(std::int64_t target_mm) noexcept;
+  /// A crawl travel (V0) by position ends at `target_mm` instead: B1 and B2 withdrawn once the
+  /// car is the stop lead before it (DCP 10.3 step 3). False for any other travel or state.
+  bool end_crawl_at(std::int64_t target_mm) noexcept;
   /// Destination level.
   std::int64_t target_mm() const noexcept { return target_mm_; }
   /// The speed of the running travel.
@@ -57,6 +60,9 @@ class Dcp3Travel {
   Demand demand(std::uint8_t message, std::uint16_t data_word) const noexcept;
   bool decel_point(const StepContext& ctx) const noexcept;
   bool at_level(const StepContext& ctx) const noexcept;
+  std::uint32_t crawl_timeout_ms(const TravelConfig& config) const noexcept {
+    return crawl_timeout_ms_ != 0 ? crawl_timeout_ms_ : config.crawl_timeout_ms;
+  }
   void finish(StepContext& ctx) noexcept;
 
   State state_ = State::Idle;
@@ -65,6 +71,8 @@ class Dcp3Travel {
   Direction direction_ = Direction::None;
   std::int64_t target_mm_ = 0;
   bool fast_start_ = false;
+  bool by_position_ = false;
+  std::uint32_t crawl_timeout_ms_ = 0;
   bool go_sent_ = false;
   bool brake_seen_open_ = false;
   bool travel_seen_ = false;

@@ -121,6 +121,11 @@ struct TravelRequest {
   bool fast_start = false;
   /// DCP 5.12.8: load in percent, sent with I8 if known (never with fast start).
   std::optional<std::uint8_t> load_percent;
+  /// DCP3 and crawl travels: end by position against `target_mm` whatever
+  /// TravelConfig::dcp3_reference says (the learning travel, which finds the shaft's signals).
+  bool by_position = false;
+  /// Crawl travels: the longest crawl in ms; 0 takes TravelConfig::crawl_timeout_ms.
+  std::uint32_t crawl_timeout_ms = 0;
 };
 
 /// Where a DCP3 travel learns its deceleration point and level.

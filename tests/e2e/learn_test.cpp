@@ -1,0 +1,175 @@
+// The learning travel end to end on the DCP lift: `liftd --simulate` whose floor table is wrong
+// by 20-60 mm learns the simulated shaft's true levels within 2 mm; a shaft with a missing zone
+// is refused; `stop` mid-learning ends it with nothing learned.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <future>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "daemon/process.hpp"
+#include "e2e/harness.hpp"
+
+namespace {
+
+using namespace std::chrono_literals;
+using liftd::e2e::Client;
+using liftd::e2e::Lift;
+using liftd::testing::Process;
+using nlohmann::json;
+
+// Three floors 500 mm apart: a short shaft, so the crawl through it takes about half a minute.
+const std::vector<std::int64_t> kConfigured = {0, 500, 1000};
+// The simulated shaft's true levels: off the configured ones by -35, +25 and +55 mm.
+const std::vector<std::int64_t> kTrue = {-35, 525, 1055};
+
+json floors(const std::vector<std::int64_t>& levels) {
+  json out = json::array();
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    out.push_back({{"name", std::to_string(i)}, {"level_mm", levels[i]}});
+  }
+  return out;
+}
+
+json config(int dcp, const std::vector<std::int64_t>& shaft) {
+  return {{"floors", floors(kConfigured)},
+          {"sim", {{"dcp", dcp}, {"shaft_levels_mm", shaft}, {"level_zone_mm", 100}}}};
+}
+
+constexpr auto kLearnTimeout = 150s;
+
+void expect_learned(int dcp) {
+  Lift lift("learn-dcp" + std::to_string(dcp), dcp, json::object(), {}, config(dcp, kTrue));
+  ASSERT_EQ(lift.setup_error(), "");
+  const json reply = lift.api().call({{"cmd", "learn"}}, kLearnTimeout);
+  ASSERT_TRUE(reply.is_object()) << lift.log();
+  ASSERT_TRUE(reply.value("ok", false)) << reply.dump();
+  const json& result = reply["result"];
+  EXPECT_TRUE(result["accepted"].get<bool>()) << result.dump();
+  EXPECT_EQ(result["verdict"], "ok");
+  EXPECT_EQ(result["zones_found"], 3);
+  ASSERT_EQ(result["floors"].size(), 3U) << result.dump();
+  for (std::size_t i = 0; i < 3; ++i) {
+    const json& f = result["floors"][i];
+    EXPECT_EQ(f["configured_mm"], kConfigured[i]);
+    EXPECT_NEAR(f["learned_mm"].get<double>(), static_cast<double>(kTrue[i]), 2.0) << f.dump();
+    EXPECT_EQ(f["difference_mm"].get<std::int64_t>(),
+              f["learned_mm"].get<std::int64_t>() - kConfigured[i]);
+    EXPECT_NEAR(f["zone_mm"].get<double>(), 100.0, 3.0) << f.dump();
+  }
+  // The watchers got the same table as the `learn` event; nothing else changed.
+  const json event = lift.api().wait_event(
+      "learn", [](const json&) { return true; }, 5s);
+  ASSERT_TRUE(event.is_object());
+  EXPECT_EQ(event["data"]["floors"], result["floors"]);
+  const json cfg = lift.call({{"cmd", "config"}});
+  EXPECT_EQ(cfg["result"]["config"]["floors"], floors(kConfigured));
+  // The car stopped just above the top zone (the top terminal), at rest.
+  EXPECT_TRUE(lift.wait_drive_state("ready", 10s));
+  const double at = lift.position_mm();
+  EXPECT_GT(at, static_cast<double>(kTrue.back() + 50));
+  EXPECT_LT(at, static_cast<double>(kTrue.back() + 150));
+}
+
+// liftctl learn --apply on the daemon's own file, then a daemon started from the new file lands
+// a travel on the shaft's true level.
+TEST(Learn, Dcp4LiftctlAppliesTheLearnedLevelsAndATravelLandsThere) {
+  json written;  // the daemon's file after --apply (the Lift's directory goes with it)
+  {
+    Lift lift("learn-apply", 4, json::object(), {}, config(4, kTrue));
+    ASSERT_EQ(lift.setup_error(), "");
+    const std::filesystem::path file = lift.dir() / "liftd.json";
+    const std::string before = [&] {
+      std::ifstream in(file);
+      std::stringstream text;
+      text << in.rdbuf();
+      return text.str();
+    }();
+    Process liftctl({LIFTCTL_BINARY, "--socket", lift.socket(), "learn", "--apply", file.string()},
+                    {"PATH=/usr/bin:/bin"}, lift.dir().string(), "liftctl");
+    const auto code = liftctl.wait(kLearnTimeout);
+    ASSERT_EQ(code, 0) << liftctl.out() << liftctl.err() << lift.log();
+    EXPECT_NE(liftctl.out().find("accepted: "), std::string::npos) << liftctl.out();
+    EXPECT_NE(liftctl.out().find("restart liftd"), std::string::npos) << liftctl.out();
+    std::ifstream bak(file.string() + ".bak");
+    std::stringstream kept;
+    kept << bak.rdbuf();
+    EXPECT_EQ(kept.str(), before);
+    std::ifstream in(file);
+    written = json::parse(in);
+    for (std::size_t i = 0; i < kTrue.size(); ++i) {
+      EXPECT_NEAR(written["floors"][i]["level_mm"].get<double>(), static_cast<double>(kTrue[i]),
+                  2.0);
+    }
+  }
+  json next = config(4, kTrue);
+  next["floors"] = written["floors"];
+  Lift lift("learn-applied", 4, json::object(), {}, next);
+  ASSERT_EQ(lift.setup_error(), "");
+  const json reply = lift.call({{"cmd", "travel"}, {"floor", 1}});
+  ASSERT_TRUE(reply.value("ok", false)) << reply.dump();
+  const json end = lift.wait_travel_end();
+  ASSERT_TRUE(end.is_object());
+  EXPECT_EQ(end["data"]["event"], "finished") << end.dump();
+  EXPECT_TRUE(lift.wait_drive_state("ready", 10s));
+  EXPECT_NEAR(lift.position_mm(), static_cast<double>(kTrue[1]), 5.0);
+}
+
+TEST(Learn, Dcp3LearnsTheShaftsLevelsWithinTwoMillimetres) {
+  expect_learned(3);
+}
+
+TEST(Learn, AShaftWithAMissingZoneIsRefused) {
+  Lift lift("learn-missing", 4, json::object(), {}, config(4, {-35, 1055}));
+  ASSERT_EQ(lift.setup_error(), "");
+  const json reply = lift.api().call({{"cmd", "learn"}}, kLearnTimeout);
+  ASSERT_TRUE(reply.is_object()) << lift.log();
+  ASSERT_TRUE(reply.value("ok", false)) << reply.dump();
+  const json& result = reply["result"];
+  EXPECT_FALSE(result["accepted"].get<bool>());
+  EXPECT_EQ(result["verdict"], "zone_count_differs");
+  EXPECT_EQ(result["zones_found"], 2);
+  EXPECT_EQ(result["reason"], "found 2 level zones for 3 floors");
+}
+
+TEST(Learn, StopMidLearningEndsItWithNothingLearned) {
+  Lift lift("learn-stop", 4, json::object(), {}, config(4, kTrue));
+  ASSERT_EQ(lift.setup_error(), "");
+  auto learning = std::async(std::launch::async, [&lift] {
+    Client other(lift.socket());
+    return other.call({{"cmd", "learn"}}, kLearnTimeout);
+  });
+  // Well into the crawl up (the approach down takes a few seconds).
+  ASSERT_TRUE(lift.api()
+                  .wait_event(
+                      "travel",
+                      [](const json& d) {
+                        return d.value("event", "") == "started" && d.value("kind", "") == "crawl";
+                      },
+                      30s)
+                  .is_object())
+      << lift.log();
+  std::this_thread::sleep_for(3s);
+  const json stop = lift.call({{"cmd", "stop"}});
+  EXPECT_TRUE(stop.value("ok", false)) << stop.dump();
+  ASSERT_EQ(learning.wait_for(30s), std::future_status::ready);
+  const json reply = learning.get();
+  ASSERT_TRUE(reply.is_object());
+  EXPECT_FALSE(reply.value("ok", true)) << reply.dump();
+  EXPECT_EQ(reply["error"]["code"], "not_ready") << reply.dump();
+  EXPECT_EQ(reply["error"]["message"], "learning travel stopped: nothing learned");
+  EXPECT_EQ(lift.api().wait_event(
+                "learn", [](const json&) { return true; }, 2s),
+            nullptr);
+  const json cfg = lift.call({{"cmd", "config"}});
+  EXPECT_EQ(cfg["result"]["config"]["floors"], floors(kConfigured));
+}
+
+}  // namespace
