@@ -137,18 +137,8 @@ function(liftd_test name)
   # gtest_discover_tests expands its PROPERTIES list three more times before it writes the test
   # file; the separators between labels are escaped for each of those expansions.
   string(REPLACE ";" "\\\\\\\\\\\\\\;" labels "${ARG_LABELS}")
-  # CTest starts the costliest tests first. Without a previous run's times (a fresh checkout,
-  # as in CI) every test costs 0 and they start in the order they are defined, so the slow
-  # process tests, defined last, would run at the end one beside the other instead of beside the
-  # many short ones. The tier gives the first estimate; a run's measured times replace it.
-  set(cost 1)
-  if("slow" IN_LIST ARG_LABELS)
-    set(cost 30)
-  elseif("process" IN_LIST ARG_LABELS)
-    set(cost 5)
-  endif()
   gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-                       PROPERTIES LABELS "${labels}" TIMEOUT 300 RUN_SERIAL ${serial} COST ${cost})
+                       PROPERTIES LABELS "${labels}" TIMEOUT 300 RUN_SERIAL ${serial})
 endfunction()
 
 # liftd_test_library(<name> SOURCES ... [DEPS ...]): code several test binaries share, compiled
