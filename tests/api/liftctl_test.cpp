@@ -1,41 +1,16 @@
 // liftctl against the in-process server: output, exit codes, and its messages when the daemon
 // is missing.
-#include <sys/wait.h>
-
-#include <cstdio>
 
 #include "api/test_support.hpp"
 
 namespace liftd::api::testing {
 namespace {
 
-struct RunResult {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
-
-RunResult run(const std::string& command_line) {
-  RunResult r;
-  std::FILE* pipe = ::popen((command_line + " 2>&1").c_str(), "r");
-  if (pipe == nullptr) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) r.output.append(buf, n);
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-class Liftctl : public ServerFixture {
- protected:
-  std::string liftctl(const std::string& args) const {
-    return std::string(LIFTCTL_PATH) + " --socket " + socket_path() + " " + args;
-  }
-};
+class Liftctl : public LiftctlFixture {};
 
 TEST_F(Liftctl, StatusPrintsASummary) {
   start_server();
-  const RunResult r = run(liftctl("status"));
+  const RunResult r = run_command(liftctl("status"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("link:     up"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("drive:    dcp, ready"), std::string::npos) << r.output;
@@ -47,7 +22,7 @@ TEST_F(Liftctl, StatusSaysWhatOfTheDriveHoldsATravelBack) {
   backend_.status_snapshot.drive_kind = drive::Kind::Sch001;
   backend_.status_snapshot.drive_state = drive::State::NotReady;
   start_server();
-  const RunResult r = run(liftctl("status"));
+  const RunResult r = run_command(liftctl("status"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("drive:    sch001, not_ready (the card reports RDY = 0: no travel "
                           "starts)"),
@@ -57,14 +32,15 @@ TEST_F(Liftctl, StatusSaysWhatOfTheDriveHoldsATravelBack) {
 
 TEST_F(Liftctl, JsonPrintsTheRawResult) {
   start_server();
-  const RunResult r = run(liftctl("--json status"));
+  const RunResult r = run_command(liftctl("--json status"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(nlohmann::json::parse(r.output).at("dcp").at("mode"), "DCP4");
 }
 
 TEST_F(Liftctl, SocketComesFromTheEnvironment) {
   start_server();
-  const RunResult r = run("LIFTD_SOCKET=" + socket_path() + " " + LIFTCTL_PATH + " version");
+  const RunResult r =
+      run_command("LIFTD_SOCKET=" + socket_path() + " " + LIFTCTL_PATH + " version");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("api: 3"), std::string::npos) << r.output;
 }
@@ -73,7 +49,7 @@ TEST_F(Liftctl, StatsPrintTheNeutralCountersThenTheDriveKinds) {
   backend_.stats_snapshot.frames_sent = 24000;
   backend_.stats_snapshot.details = {{"missing_replies", 6}, {"reply_p99_us", 2210.0}};
   start_server();
-  const RunResult r = run(liftctl("stats"));
+  const RunResult r = run_command(liftctl("stats"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("link:\n  frames_sent: 24000\n"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("dcp:\n  missing_replies: 6\n  reply_p99_us: 2210.0\n"),
@@ -87,17 +63,17 @@ TEST_F(Liftctl, StatsOfAUssLiftPrintTheBussNestedFiguresByPath) {
   backend_.stats_snapshot.drive_kind = drive::Kind::Uss;
   backend_.stats_snapshot.details = {{"receive", {{"bcc", 2}}}};
   start_server();
-  const RunResult r = run(liftctl("stats"));
+  const RunResult r = run_command(liftctl("stats"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("uss:\n  receive.bcc: 2\n"), std::string::npos) << r.output;
 }
 
 TEST_F(Liftctl, ControlCommandsReachTheBackend) {
   start_server();
-  EXPECT_EQ(run(liftctl("key 2")).exit_code, 0);
-  EXPECT_EQ(run(liftctl("reset")).exit_code, 0);
-  EXPECT_EQ(run(liftctl("power emergency 1")).exit_code, 0);
-  EXPECT_EQ(run(liftctl("load 80")).exit_code, 0);
+  EXPECT_EQ(run_command(liftctl("key 2")).exit_code, 0);
+  EXPECT_EQ(run_command(liftctl("reset")).exit_code, 0);
+  EXPECT_EQ(run_command(liftctl("power emergency 1")).exit_code, 0);
+  EXPECT_EQ(run_command(liftctl("load 80")).exit_code, 0);
   EXPECT_EQ(on_io([this] { return backend_.calls; }),
             (std::vector<std::string>{"key 2", "drive_reset", "power emergency 1", "load 80"}));
 }
@@ -116,7 +92,7 @@ TEST_F(Liftctl, StatusOfAUssLiftShowsTheDriveProfile) {
       {"slaves",
        {{{"address", 0}, {"responding", true}}, {{"address", 5}, {"responding", false}}}}};
   start_server();
-  const RunResult r = run(liftctl("status"));
+  const RunResult r = run_command(liftctl("status"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("uss:      drive 0 operation_enabled (asked: run), phase run"),
             std::string::npos)
@@ -134,7 +110,7 @@ TEST_F(Liftctl, UssParameterCommandsReachTheBackend) {
   for (const char* args : {"uss-read 52", "uss-read 7 text 3 @5", "uss-read 4 description 255",
                            "uss-write 4 -1 dword array 2", "uss-write 1000 300 eeprom @31",
                            "uss-mirror", "uss-mirror 12"}) {
-    const RunResult r = run(liftctl(args));
+    const RunResult r = run_command(liftctl(args));
     EXPECT_EQ(r.exit_code, 0) << args << ": " << r.output;
   }
   EXPECT_EQ(on_io([this] { return backend_.calls; }),
@@ -144,13 +120,13 @@ TEST_F(Liftctl, UssParameterCommandsReachTheBackend) {
                 "parameter 31 1000 value 0 write 300 eeprom", "mirror -1", "mirror 12"}));
   for (const char* args : {"uss-read", "uss-read x", "uss-read 5 text", "uss-read 5 dword",
                            "uss-write 5", "uss-write 5 1 text 3", "uss-mirror a", "uss-read 5 @"}) {
-    EXPECT_EQ(run(liftctl(args)).exit_code, 2) << args;
+    EXPECT_EQ(run_command(liftctl(args)).exit_code, 2) << args;
   }
 }
 
 TEST_F(Liftctl, ErrorReplyExitsWithOne) {
   start_server();
-  const RunResult r = run(liftctl("key 9"));
+  const RunResult r = run_command(liftctl("key 9"));
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("bad_request: field \"key\" must be an integer 1..5"), std::string::npos)
       << r.output;
@@ -158,7 +134,8 @@ TEST_F(Liftctl, ErrorReplyExitsWithOne) {
 
 TEST_F(Liftctl, RawSendsAnyRequest) {
   start_server();
-  const RunResult r = run(liftctl(R"(raw '{"cmd":"inputs","doors_closed":true,"id":"io"}')"));
+  const RunResult r =
+      run_command(liftctl(R"(raw '{"cmd":"inputs","doors_closed":true,"id":"io"}')"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto reply = nlohmann::json::parse(r.output);
   EXPECT_EQ(reply.at("id"), "io");
@@ -168,13 +145,13 @@ TEST_F(Liftctl, RawSendsAnyRequest) {
 TEST_F(Liftctl, WatchPrintsPlainLinesWhenNotATerminal) {
   start_server();
   // stdout is a pipe here: one plain line per event; SIGINT after a second ends it.
-  const RunResult r = run("timeout -s INT 1 " + liftctl("watch"));
+  const RunResult r = run_command("timeout -s INT 1 " + liftctl("watch"));
   EXPECT_NE(r.output.find("state link=up drive=ready mode=DCP4"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("\x1b["), std::string::npos) << "no terminal escapes into a pipe";
 }
 
 TEST_F(Liftctl, SaysWhenTheSocketIsMissing) {
-  const RunResult r = run(liftctl("status"));
+  const RunResult r = run_command(liftctl("status"));
   EXPECT_EQ(r.exit_code, 3);
   EXPECT_NE(r.output.find("liftd is not running"), std::string::npos) << r.output;
 }
@@ -185,24 +162,24 @@ TEST_F(Liftctl, SaysWhenNothingListens) {
     asio::local::stream_protocol::acceptor stale(
         other, asio::local::stream_protocol::endpoint(socket_path()));
   }
-  const RunResult r = run(liftctl("status"));
+  const RunResult r = run_command(liftctl("status"));
   EXPECT_EQ(r.exit_code, 3);
   EXPECT_NE(r.output.find("nothing listens"), std::string::npos) << r.output;
 }
 
 TEST_F(Liftctl, RejectsBadUsage) {
-  EXPECT_EQ(run(liftctl("")).exit_code, 2);
-  EXPECT_EQ(run(liftctl("frobnicate")).exit_code, 2);
-  EXPECT_EQ(run(liftctl("key")).exit_code, 2);
-  EXPECT_EQ(run(liftctl("raw 'not json'")).exit_code, 2);
+  EXPECT_EQ(run_command(liftctl("")).exit_code, 2);
+  EXPECT_EQ(run_command(liftctl("frobnicate")).exit_code, 2);
+  EXPECT_EQ(run_command(liftctl("key")).exit_code, 2);
+  EXPECT_EQ(run_command(liftctl("raw 'not json'")).exit_code, 2);
 }
 
 TEST_F(Liftctl, SocketWithoutAValueSaysWhatIsMissing) {
-  const RunResult bare = run(std::string(LIFTCTL_PATH) + " --socket");
+  const RunResult bare = run_command(std::string(LIFTCTL_PATH) + " --socket");
   EXPECT_EQ(bare.exit_code, 2);
   EXPECT_EQ(bare.output,
             "liftctl: --socket needs a PATH (the API socket, e.g. /run/liftd/api.sock)\n");
-  const RunResult empty = run(std::string(LIFTCTL_PATH) + " --socket= status");
+  const RunResult empty = run_command(std::string(LIFTCTL_PATH) + " --socket= status");
   EXPECT_EQ(empty.exit_code, 2);
   EXPECT_EQ(empty.output, "liftctl: --socket needs a PATH, got an empty one\n");
 }

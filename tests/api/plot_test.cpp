@@ -354,34 +354,12 @@ TEST(LiftctlPlot, NoTravelYet) {
 
 // ---- liftctl plot against the in-process server ----
 
-struct PlotRun {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
-
-PlotRun run_liftctl(const std::string& command_line) {
-  PlotRun r;
-  std::FILE* pipe = ::popen((command_line + " 2>&1").c_str(), "r");
-  if (pipe == nullptr) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) r.output.append(buf, n);
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-class LiftctlPlotCommand : public ServerFixture {
- protected:
-  std::string liftctl(const std::string& args) const {
-    return std::string(LIFTCTL_PATH) + " --socket " + socket_path() + " " + args;
-  }
-};
+class LiftctlPlotCommand : public LiftctlFixture {};
 
 TEST_F(LiftctlPlotCommand, AsksForTheLastTravelsAndDrawsThemInEightyColumns) {
   backend_.travels_result = two_travels();
   start_server();
-  const PlotRun r = run_liftctl(liftctl("plot --last 3"));
+  const RunResult r = run_command(liftctl("plot --last 3"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(backend_.travels_asked, 3U);
   expect_fits_80_columns(r.output);
@@ -392,7 +370,7 @@ TEST_F(LiftctlPlotCommand, WritesTheSvgFile) {
   backend_.travels_result = two_travels();
   start_server();
   const std::string file = socket_path() + ".svg";
-  const PlotRun r = run_liftctl(liftctl("plot --svg " + file));
+  const RunResult r = run_command(liftctl("plot --svg " + file));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(backend_.travels_asked, 5U) << "the default --last";
   EXPECT_NE(r.output.find("2 travels written to " + file), std::string::npos) << r.output;
@@ -409,7 +387,7 @@ TEST_F(LiftctlPlotCommand, RefusesABadLast) {
   start_server();
   for (const char* args :
        {"plot --last 0", "plot --last 17", "plot --last", "plot --svg", "plot extra"}) {
-    const PlotRun r = run_liftctl(liftctl(args));
+    const RunResult r = run_command(liftctl(args));
     EXPECT_EQ(r.exit_code, 2) << args << ": " << r.output;
   }
   EXPECT_EQ(backend_.travels_asked, 0U);

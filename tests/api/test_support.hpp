@@ -5,9 +5,11 @@
 #include <poll.h>
 #include <sys/socket.h>
 #include <sys/un.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -206,5 +208,34 @@ class ServerFixture : public ::testing::Test {
   std::optional<asio::executor_work_guard<asio::io_context::executor_type>> work_;
   std::thread thread_;
 };
+
+/// What a command printed (stdout and stderr) and its exit status (-1: it did not exit).
+struct RunResult {
+  int exit_code = -1;
+  std::string output;
+};
+
+/// Runs `command_line` through the shell and collects its output.
+inline RunResult run_command(const std::string& command_line) {
+  RunResult r;
+  std::FILE* pipe = ::popen((command_line + " 2>&1").c_str(), "r");
+  if (pipe == nullptr) return r;
+  char buf[4096];
+  std::size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) r.output.append(buf, n);
+  const int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+#ifdef LIFTCTL_PATH
+/// The in-process server with the liftctl binary pointed at its socket.
+class LiftctlFixture : public ServerFixture {
+ protected:
+  std::string liftctl(const std::string& args) const {
+    return std::string(LIFTCTL_PATH) + " --socket " + socket_path() + " " + args;
+  }
+};
+#endif
 
 }  // namespace liftd::api::testing
