@@ -615,17 +615,26 @@ int run_raw(Connection& conn, const json& request) {
   }
 }
 
-/// Every other subcommand: one request, its result printed by the subcommand (or as JSON).
-int run_request(Connection& conn, const Subcommand& subcommand, const json& request,
-                bool raw_json) {
+/// Sends `request` and takes its result into `result`. Returns the exit status when the command
+/// is done already: no daemon, a refusal (reported), or --json (the result printed).
+std::optional<int> fetch_result(Connection& conn, const json& request, bool raw_json,
+                                json& result) {
   const auto reply = call(conn, request);
   if (!reply) return kExitNoDaemon;
   if (reply->value("ok", false) != true) return report_error(*reply);
-  const json result = reply->value("result", json::object());
+  result = reply->value("result", json::object());
   if (raw_json) {
     std::printf("%s\n", result.dump(2).c_str());
     return kExitOk;
   }
+  return std::nullopt;
+}
+
+/// Every other subcommand: one request, its result printed by the subcommand (or as JSON).
+int run_request(Connection& conn, const Subcommand& subcommand, const json& request,
+                bool raw_json) {
+  json result;
+  if (const auto done = fetch_result(conn, request, raw_json, result)) return *done;
   std::fputs(subcommand.print(request, result).c_str(), stdout);
   return kExitOk;
 }
@@ -634,14 +643,8 @@ int run_request(Connection& conn, const Subcommand& subcommand, const json& requ
 int run_plot(Connection& conn, const Args& args, const json& request, bool raw_json) {
   std::string error;
   const auto options = liftctl::parse_plot_args(args, error);
-  const auto reply = call(conn, request);
-  if (!reply) return kExitNoDaemon;
-  if (reply->value("ok", false) != true) return report_error(*reply);
-  const json result = reply->value("result", json::object());
-  if (raw_json) {
-    std::printf("%s\n", result.dump(2).c_str());
-    return kExitOk;
-  }
+  json result;
+  if (const auto done = fetch_result(conn, request, raw_json, result)) return *done;
   if (!options->svg_path) {
     std::fputs(liftctl::format_plot(result).c_str(), stdout);
     return kExitOk;
