@@ -101,11 +101,11 @@ if [ "$coverage" = 1 ]; then
     [travel_controller_fuzz]="lib/dcp/travel/controller.cpp lib/dcp/travel/dcp3_travel.cpp lib/dcp/travel/dcp4_travel.cpp lib/dcp/travel/gate.cpp"
     [uss_receiver_fuzz]="lib/uss/receiver.cpp lib/uss/telegram.cpp lib/uss/line.cpp"
   )
-  llvm_bin=/usr/lib/llvm-14/bin
-  [ -x "$llvm_bin/llvm-cov" ] || apt-get install -y -qq llvm-14 >/dev/null
+  llvm_bin=/usr/lib/llvm-16/bin
+  [ -x "$llvm_bin/llvm-cov" ] || apt-get install -y -qq llvm-16 >/dev/null
   cov=build-fuzz-cov
-  cmake -S . -B "$cov" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=clang++ \
-    -DCMAKE_C_COMPILER=clang -DLIFTD_FUZZ=ON -DLIFTD_TESTS=OFF \
+  cmake -S . -B "$cov" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=clang++-16 \
+    -DCMAKE_C_COMPILER=clang-16 -DLIFTD_FUZZ=ON -DLIFTD_TESTS=OFF \
     -DCMAKE_CXX_FLAGS="-fprofile-instr-generate -fcoverage-mapping" >/dev/null
   cmake --build "$cov" --target fuzzers --parallel "$(nproc)"
   printf '\n%-26s %9s  %s\n' target "lines %" "of"

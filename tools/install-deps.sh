@@ -14,7 +14,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libasio-dev libspdlog-dev nlohmann-json3-dev libsystemd-dev systemd
   googletest libgtest-dev libgmock-dev libbenchmark-dev
-  clang libclang-rt-14-dev clang-format
+  clang-16 libclang-rt-16-dev clang-format
   python3 python3-jsonschema
 )
 uml_can=(user-mode-linux kmod iproute2 can-utils)

@@ -111,7 +111,7 @@ ApplyOutcome apply_learned_levels(const std::string& path, const nlohmann::json&
   for (std::size_t i = 0; i < learned.size(); ++i) {
     ordered& floor = config["floors"][i];
     if (!floor.is_object() ||
-        floor.value("level_mm", ordered()) != learned[i].at("configured_mm")) {
+        floor.value("level_mm", ordered()) != ordered(learned[i].at("configured_mm"))) {
       return {false, path + "'s floor " + std::to_string(i) +
                          " is not at the level liftd runs with: nothing written"};
     }

@@ -86,7 +86,6 @@ class LiftApp final : public LiftRunner {
   MonoTime last_clock_{};
   MonoTime last_sim_inputs_{};
   std::uint32_t last_display_version_ = 0;
-  dcp::LinkState last_link_ = dcp::LinkState::Down;
   WindDown wind_down_;  ///< a service stop waiting for the car to rest, as on every lift
 };
 
