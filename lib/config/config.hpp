@@ -205,6 +205,9 @@ struct SimConfig {
   std::vector<std::int64_t> shaft_levels_mm;
   /// sim.level_zone_mm: length of each simulated level zone, centred on its true level.
   int level_zone_mm = 100;
+  /// sim.slow_mm_per_s: the simulated hydraulic unit's slow (levelling) speed (drive.kind
+  /// "sch001"): 50 mm/s, a usual levelling speed; a test may make the slow runs shorter.
+  int slow_mm_per_s = 50;
 };
 
 /// The whole configuration; every member mirrors a key of the JSON file. The member

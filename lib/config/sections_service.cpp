@@ -173,7 +173,11 @@ std::vector<Key> sim_keys() {
                  apply_shaft_levels, [](const Config& c) { return json(c.sim.shaft_levels_mm); }),
       int_key("sim.level_zone_mm", 10, 1000,
               "length of each simulated level zone, centred on its true level (--simulate)",
-              &Config::sim, &SimConfig::level_zone_mm)};
+              &Config::sim, &SimConfig::level_zone_mm),
+      int_key("sim.slow_mm_per_s", 10, 500,
+              "slow (levelling) speed of the simulated hydraulic unit, the direction signal "
+              "alone (--simulate, drive.kind sch001; card document 1.4)",
+              &Config::sim, &SimConfig::slow_mm_per_s)};
 }
 
 std::string_view to_string(LogLevel value) {
