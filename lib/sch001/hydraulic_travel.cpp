@@ -148,6 +148,7 @@ lift::Cause HydraulicTravel::inspect(lift::Direction direction, const TickInput&
   kind_ = TravelKind::Inspection;
   direction_ = direction;
   started_at_ = in.now;
+  limit_ms_ = config_.max_travel_ms;
   motor_on_ = direction == lift::Direction::Up;
   motor_on_at_ = in.now;
   phase_ = motor_on_ ? Phase::MotorStart : Phase::Slow;
