@@ -175,8 +175,9 @@ std::vector<Key> sim_keys() {
               "length of each simulated level zone, centred on its true level (--simulate)",
               &Config::sim, &SimConfig::level_zone_mm),
       int_key("sim.slow_mm_per_s", 10, 500,
-              "slow (levelling) speed of the simulated hydraulic unit, the direction signal "
-              "alone (--simulate, drive.kind sch001; card document 1.4)",
+              "the simulated drive's slowest travel speed (--simulate): the DCP drive's crawl V0 "
+              "(DCP 10.3), the hydraulic unit's slow (levelling) speed, the direction signal "
+              "alone (card document 1.4); a USS drive crawls at uss.speeds V0",
               &Config::sim, &SimConfig::slow_mm_per_s)};
 }
 
