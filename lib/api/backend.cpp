@@ -208,7 +208,7 @@ void Backend::relevel(Responder done) {
   no_travel(done);
 }
 void Backend::learn(Responder done) {
-  done(Result::fail(ErrorCode::NotOffered, "this lift's drive kind has no learning travel yet"));
+  done(Result::fail(ErrorCode::NotOffered, "this backend has no learning travel"));
 }
 void Backend::inspection(bool, const std::string&, Responder done) {
   no_travel(done);

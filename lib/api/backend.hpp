@@ -215,7 +215,8 @@ class Backend {
   /// Calls queue: "list", "add" or "cancel" (with floor).
   virtual void calls(const std::string& action, std::optional<int> floor, Responder done);
   /// The learning travel: answered when it ends, with the learned levels beside the configured
-  /// ones (docs/api.md "learn"). The default refuses: `not_offered` on this drive kind.
+  /// ones (docs/api.md "learn"). Every lift's backend offers it (DCP, SCH001 and USS); the
+  /// default, for a backend without travels, refuses: `not_offered`.
   virtual void learn(Responder done);
 
   // ---- the simulated lift (liftd --simulate only) ----

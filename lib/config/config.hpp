@@ -205,6 +205,11 @@ struct SimConfig {
   std::vector<std::int64_t> shaft_levels_mm;
   /// sim.level_zone_mm: length of each simulated level zone, centred on its true level.
   int level_zone_mm = 100;
+  /// sim.slow_mm_per_s: the simulated drive's slowest travel speed: the DCP drive's crawl V0
+  /// (DCP 10.3), the hydraulic unit's slow (levelling) speed (card document 1.4); 50 mm/s, a
+  /// usual one; a test may make the learning travel's crawl shorter. A USS drive's crawl is
+  /// uss.speeds V0.
+  int slow_mm_per_s = 50;
 };
 
 /// The whole configuration; every member mirrors a key of the JSON file. The member

@@ -173,7 +173,12 @@ std::vector<Key> sim_keys() {
                  apply_shaft_levels, [](const Config& c) { return json(c.sim.shaft_levels_mm); }),
       int_key("sim.level_zone_mm", 10, 1000,
               "length of each simulated level zone, centred on its true level (--simulate)",
-              &Config::sim, &SimConfig::level_zone_mm)};
+              &Config::sim, &SimConfig::level_zone_mm),
+      int_key("sim.slow_mm_per_s", 10, 500,
+              "the simulated drive's slowest travel speed (--simulate): the DCP drive's crawl V0 "
+              "(DCP 10.3), the hydraulic unit's slow (levelling) speed, the direction signal "
+              "alone (card document 1.4); a USS drive crawls at uss.speeds V0",
+              &Config::sim, &SimConfig::slow_mm_per_s)};
 }
 
 std::string_view to_string(LogLevel value) {

@@ -9,9 +9,10 @@
 // `Drive` names the parts of one drive kind (see Sch001Drive, UssDrive):
 //   Controller, Runner, Simulator, Snapshot, Command, CommandReply, Event, TravelKind,
 //   StopCommand, RelevelCommand, InspectionCommand, CallCommand, InputsCommand, ShutdownCommand;
-//   kKind, kName (drive.kind, journal and daemon component), kThread (as the journal names the
-//   thread), kStartFailedEvent, kReplyGrace, kShutdownGrace, fault_text(),
-//   travel_bit_names() (the names of the drive's bits in a travel's curve).
+//   LearnCommand; kKind, kName (drive.kind, journal and daemon component), kThread (as the
+//   journal names the thread), kStartFailedEvent, kReplyGrace, kShutdownGrace, fault_text(),
+//   travel_bit_names() (the names of the drive's bits in a travel's curve), learn_leg_base_ms()
+//   (the run-time limit a learning leg's allowance is added to).
 #pragma once
 
 #include <chrono>
@@ -32,10 +33,12 @@
 #include "config/config.hpp"
 #include "drive/drive.hpp"
 #include "host/host.hpp"
+#include "host/learn_report.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
 #include "host/trace_files.hpp"
 #include "host/travel_log.hpp"
+#include "lift/learning_travel.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -96,6 +99,33 @@ class ControllerBackend : public api::Backend {
       return;
     }
     done(sim_->apply(request, mono_now()));
+  }
+  /// The learning travel (Drive::LearnCommand), answered when it ends: within the run-time
+  /// limits of both legs through the whole shaft (lift::learn_longest from
+  /// Drive::learn_leg_base_ms), and the grace of every reply.
+  void learn(api::Responder done) override {
+    std::int64_t bottom_mm = 0;
+    std::int64_t top_mm = 0;
+    if (!config_.floors.empty()) {
+      bottom_mm = config_.floors.front().level_mm;
+      top_mm = config_.floors.back().level_mm;
+    }
+    const auto longest = lift::learn_longest(Drive::learn_leg_base_ms(config_), bottom_mm, top_mm);
+    (void)post_command<typename Drive::Command>(
+        controller_, pending_, typename Drive::LearnCommand{}, std::move(done),
+        longest + Drive::kReplyGrace, Drive::kThread, [this](const typename Drive::CommandReply&) {
+          const lift::LearnRecord record = controller_.learn_record();
+          nlohmann::json result = learn_result_json(
+              config_, record.judgement,
+              std::span<const lift::LearnedZone>(record.zones.data(), record.zone_count),
+              record.zones_seen);
+          if (learn_listener_) learn_listener_(result);
+          return api::Result::ok(std::move(result));
+        });
+  }
+  /// Called with each learning travel's result (the lift reports it to the journal and watchers).
+  void set_learn_listener(std::function<void(const nlohmann::json&)> listener) {
+    learn_listener_ = std::move(listener);
   }
   /// `trace` with `save`: the runner's flight recorder to a file, as the DCP lift writes it.
   api::Result save_trace() override {
@@ -199,6 +229,7 @@ class ControllerBackend : public api::Backend {
 
   MonoTime mono_at_start_{};
   std::chrono::system_clock::time_point wall_at_start_{};
+  std::function<void(const nlohmann::json&)> learn_listener_;
 };
 
 /// The lift as one piece over a controller on a real-time thread, registered with the daemon:
@@ -245,6 +276,8 @@ class ControllerLift : public LiftRunner {
     runner_->set_notify_fd(wake_.fd());  // its news wakes poll() at once
     server_ = std::make_unique<api::Server>(daemon_.io(), *backend_, api_server_config(config_),
                                             api_log_sink());
+    backend_->set_learn_listener(
+        [this](const nlohmann::json& result) { report_learn(*server_, result); });
     daemon_.add_drive_commands(server_->dispatcher(), *backend_);
     if (sim_) {
       daemon_.add_component({"sim", [this] { return sim_->start(); }, [this] { sim_->stop(); }});

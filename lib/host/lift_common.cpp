@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -211,7 +212,7 @@ bool SimulatorThread::join_thread() {
 }
 
 void SimulatorThread::car_moved(double position_mm, bool moving, MonoTime now) {
-  encoder_.set(std::llround(position_mm));
+  encoder_.set(position_mm);
   board_.io().set_car(moving, position_mm, now);
 }
 
@@ -255,6 +256,28 @@ void SimulatedBoard::add_state(nlohmann::json& out) const {
 void journal_sim_action(const api::SimRequest& request) {
   log::event(log::Level::info, "sim", "sim_injected", {{"action", action_name(request)}},
              "simulated lift: " + action_name(request));
+}
+
+namespace {
+// The buffer and the shaft's top lie this far beyond the terminal levels: room for the learning
+// travel's approach (lift::kLearnApproachMm, 300 mm) and the run-out of a stop there.
+constexpr double kShaftEndBeyondLevelMm = 500.0;
+}  // namespace
+
+double shaft_bottom_mm(const config::Config& c) {
+  double lowest = c.floors.empty() ? 0.0 : static_cast<double>(c.floors.front().level_mm);
+  if (!c.sim.shaft_levels_mm.empty()) {
+    lowest = std::min(lowest, static_cast<double>(c.sim.shaft_levels_mm.front()));
+  }
+  return lowest - kShaftEndBeyondLevelMm;
+}
+
+double shaft_top_mm(const config::Config& c) {
+  double highest = c.floors.empty() ? 0.0 : static_cast<double>(c.floors.back().level_mm);
+  if (!c.sim.shaft_levels_mm.empty()) {
+    highest = std::max(highest, static_cast<double>(c.sim.shaft_levels_mm.back()));
+  }
+  return highest + kShaftEndBeyondLevelMm;
 }
 
 sim::SimulatedShaft simulated_shaft(const config::Config& c) {

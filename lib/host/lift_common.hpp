@@ -4,6 +4,7 @@
 #pragma once
 
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <mutex>
@@ -16,6 +17,7 @@
 #include "api/server.hpp"
 #include "api/sim.hpp"
 #include "can/encoder.hpp"
+#include "common/level_zone_source.hpp"
 #include "common/position_source.hpp"
 #include "config/config.hpp"
 #include "lift/inputs.hpp"
@@ -88,15 +90,45 @@ class SimulatedEncoder final : public PositionSource {
   std::optional<std::int64_t> position_mm(MonoTime) const noexcept override {
     return mm_.load(std::memory_order_relaxed);
   }
-  void set(std::int64_t mm) noexcept { mm_.store(mm, std::memory_order_relaxed); }
+  /// The car is at `mm`: the encoder reads it to the millimetre.
+  void set(double mm) noexcept {
+    exact_mm_.store(mm, std::memory_order_relaxed);
+    mm_.store(std::llround(mm), std::memory_order_relaxed);
+  }
+  /// Where the car is, unrounded: what a switch in the shaft sees (SimulatedZoneSwitch).
+  double exact_mm() const noexcept { return exact_mm_.load(std::memory_order_relaxed); }
 
  private:
   std::atomic<std::int64_t> mm_{0};
+  std::atomic<double> exact_mm_{0.0};
 };
 
 /// The simulated shaft of --simulate: sim.shaft_levels_mm (else the floors' levels), each with a
 /// level zone of sim.level_zone_mm.
 sim::SimulatedShaft simulated_shaft(const config::Config& config);
+
+/// Where the simulated car meets the pit's buffer and the shaft's top (--simulate, the hydraulic
+/// and USS cars): 500 mm below the lowest and above the highest of the floors' and the simulated
+/// shaft's levels, room for the learning travel's approach of 300 mm (lift::kLearnApproachMm)
+/// beyond a terminal level.
+double shaft_bottom_mm(const config::Config& config);
+double shaft_top_mm(const config::Config& config);
+
+/// The simulated shaft's level switch at the simulated car, read by the controller's thread when
+/// it reads the position (lock-free), as a level switch wired beside the encoder would be.
+class SimulatedZoneSwitch final : public LevelZoneSource {
+ public:
+  SimulatedZoneSwitch(const SimulatedEncoder& encoder, const sim::SimulatedShaft& shaft)
+      : encoder_(encoder), shaft_(shaft) {}
+  bool level_zone(MonoTime) const noexcept override {
+    // The switch sees the car itself, not the encoder's millimetres.
+    return shaft_.level_zone(encoder_.exact_mm());
+  }
+
+ private:
+  const SimulatedEncoder& encoder_;
+  sim::SimulatedShaft shaft_;
+};
 
 /// The simulated I/O board of every simulated lift (--simulate): safety chain, doors and shaft
 /// (from the floors), and the `sim` actions that act on it whatever the drive.
@@ -126,11 +158,14 @@ class SimulatorThread {
 
   /// The simulated encoder on the car (lock-free).
   const PositionSource& position() const { return encoder_; }
+  /// The simulated shaft's level zone at the car (lock-free; the learning travel reads it).
+  const LevelZoneSource& level_zone() const { return zone_; }
   /// The simulated I/O board's inputs now (io thread).
   lift::Inputs inputs(MonoTime now);
 
  protected:
-  explicit SimulatorThread(const config::Config& config) : board_(config, mono_now()) {}
+  explicit SimulatorThread(const config::Config& config)
+      : board_(config, mono_now()), zone_(encoder_, simulated_shaft(config)) {}
   ~SimulatorThread() = default;
   /// Runs `loop` on the simulator's thread; `loop` returns once stopping() is true.
   void start_thread(std::function<void()> loop);
@@ -143,6 +178,7 @@ class SimulatorThread {
   mutable std::mutex mutex_;  ///< guards the simulator and board_ (its thread and the io thread)
   SimulatedBoard board_;
   SimulatedEncoder encoder_;
+  SimulatedZoneSwitch zone_;  ///< the simulated shaft's level switch at encoder_
 
  private:
   std::atomic<bool> stop_{false};

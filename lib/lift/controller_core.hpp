@@ -29,6 +29,7 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "common/level_zone_source.hpp"
 #include "common/mono_time.hpp"
 #include "common/snapshot_box.hpp"
 #include "common/spsc_queue.hpp"
@@ -36,6 +37,7 @@
 #include "lift/cause.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
+#include "lift/learning_travel.hpp"
 #include "lift/lift_model.hpp"
 #include "lift/rules.hpp"
 #include "lift/travel_sample.hpp"
@@ -132,6 +134,9 @@ struct ControllerCoreConfig {
   MonoTime inputs_timeout{};                ///< inputs.timeout_ms
   MonoTime inspection_hold{};               ///< travel.inspection_hold_ms
   MonoTime start{};                         ///< when the controller was made
+  /// The simulated shaft's level zone, read at the cycle's instant beside the machine inputs'
+  /// level zone by the learning travel (liftd --simulate; nullptr otherwise).
+  const LevelZoneSource* level_zone_source = nullptr;
 };
 
 template <typename Types>
@@ -178,6 +183,9 @@ class ControllerCore {
   /// Direct access for single-threaded tests.
   const typename Types::Travel& travel() const noexcept { return travel_; }
 
+  /// io thread: the last learning travel's record (read after its ok reply).
+  LearnRecord learn_record() noexcept { return learn_box_.read(); }
+
  protected:
   /// Throws std::invalid_argument on a floor table the lift model refuses (empty, too long, not
   /// strictly increasing).
@@ -186,7 +194,8 @@ class ControllerCore {
       : travel_(travel_config),
         lift_(config.lift),
         level_tolerance_mm_(config.lift.level_tolerance_mm),
-        rules_(config.inputs_timeout, config.inspection_hold) {
+        rules_(config.inputs_timeout, config.inspection_hold),
+        level_zone_source_(config.level_zone_source) {
     rules_.start(config.start);
     if (!lift_.set_floors(config.floors_mm)) {
       throw std::invalid_argument("floors: need 2 or more strictly increasing levels");
@@ -235,6 +244,7 @@ class ControllerCore {
                      typename Types::Input& in) noexcept {
     shutting_down_ = true;
     lift_.calls().clear();
+    learning_.stop();
     if (body.force) {
       travel_.abort(Cause::ShuttingDown, in.now);
     } else {
@@ -244,6 +254,7 @@ class ControllerCore {
   }
   void handle_shared(std::uint32_t tag, const StopCommand&, typename Types::Input& in) noexcept {
     lift_.calls().clear();
+    learning_.stop();
     const auto floor = travel_.stop(lift_.floors(), in);
     reply(tag, ReplyCode::Ok, {}, floor);
   }
@@ -296,6 +307,62 @@ class ControllerCore {
     return false;
   }
 
+  // ---- the learning travel (lift/learning_travel.hpp) ----
+
+  /// The learn command's gates in order (a learning running, the first gates of a travel, the
+  /// drive's and the machine's `gate()` (an optional Answer), the car position), then the first
+  /// leg by `start_leg(target_mm, direction)` (true: it runs). Answered when the learning ends.
+  /// `tolerance_mm`: a car this close above the approach's end goes up at once.
+  template <typename Gate, typename StartLeg>
+  void handle_learn(std::uint32_t tag, std::optional<std::int64_t> position_mm,
+                    std::uint32_t tolerance_mm, Gate gate, StartLeg start_leg) noexcept {
+    if (learning_.active()) return (void)refuse(tag, ReplyCode::Busy, kLearnRunning);
+    if (const std::optional<Refusal> refusal = first_travel_refusal(0)) {
+      return (void)refuse(tag, refusal->code, refusal->detail);
+    }
+    if (const std::optional<Answer> refusal = gate()) {
+      return (void)refuse(tag, refusal->code, refusal->detail);
+    }
+    if (!position_mm) return (void)refuse(tag, ReplyCode::NotReady, kLearnNoPosition);
+    if (!learning_.begin(tag, lift_.floors(), *position_mm, tolerance_mm, start_leg)) {
+      return (void)refuse(tag, ReplyCode::NotReady, kLearnNotTaken);
+    }
+    relevel_held_ = true;
+  }
+  /// Once per step after the travel's: the learning's sample (the level zone of `inputs` or of
+  /// the simulated shaft) and, after the last zone, the leg's end by `end_at(target_mm)`.
+  template <typename EndAt>
+  void sample_learning(std::optional<std::int64_t> position_mm, const Inputs& inputs, MonoTime now,
+                       Direction direction, EndAt end_at) noexcept {
+    if (learning_.phase() != LearningTravel::Phase::Up || !position_mm) return;
+    const bool zone =
+        inputs.level_zone || (level_zone_source_ != nullptr && level_zone_source_->level_zone(now));
+    learning_.sample(position_mm, zone, direction, lift_.floors().size(), end_at);
+  }
+  /// A travel event: a leg of the learning ended (finished, or `aborted` with `cause`).
+  void learning_leg_ended(bool aborted, Cause cause) noexcept {
+    learning_.leg_ended(aborted, cause);
+  }
+  /// `stop`: the learning ends once its leg has.
+  void stop_learning() noexcept { learning_.stop(); }
+  /// After the step's travel events: the next leg (`gate()` and `start_leg` as for
+  /// handle_learn) or the end, answered to the learn command; a learning that ended well
+  /// publishes its record first. `leg_running`: a leg (or its tail) still runs.
+  template <typename Gate, typename StartLeg>
+  void step_learning(bool leg_running, Gate gate, StartLeg start_leg) noexcept {
+    const std::optional<Answer> answer =
+        learning_.step(leg_running, lift_.floors(), gate, start_leg);
+    if (!answer) return;
+    if (answer->code == ReplyCode::Ok) learn_box_.publish(learning_.record());
+    reply(learning_.tag(), answer->code, answer->detail);
+  }
+  /// A learning travel runs.
+  bool learning() const noexcept { return learning_.active(); }
+  /// No automatic relevelling by the floor table: from a learning travel's start until the next
+  /// travel to a floor. The car stands beyond the top level after learning, and the table it
+  /// would relevel to may be the one the learning just found wrong.
+  bool relevel_held() const noexcept { return relevel_held_; }
+
   // ---- each step ----
 
   /// Once per step, after the travel's output: a sample of the curve while a run is in progress
@@ -325,9 +392,9 @@ class ControllerCore {
   void follow_inspection(const typename Types::Input& in, Cause abort_cause,
                          Inspect inspect) noexcept {
     if (in.inputs.inspection) {
-      if (travel_.kind() == Types::TravelKind::Travel ||
-          travel_.kind() == Types::TravelKind::Relevel) {
-        travel_.abort(abort_cause, in.now);
+      if (travel_.kind() != Types::TravelKind::None &&
+          travel_.kind() != Types::TravelKind::Inspection) {
+        travel_.abort(abort_cause, in.now);  // a travel, a relevelling or a learning leg
       }
       const Direction d = in.inputs.button_up == in.inputs.button_down
                               ? Direction::None
@@ -348,6 +415,13 @@ class ControllerCore {
       e.at = now;
       e.travel = t;
       push_event(e);
+      if (t.type == Types::TravelEvent::Type::Started && t.kind == Types::TravelKind::Travel) {
+        relevel_held_ = false;
+      }
+      if (learning_.active() && (t.type == Types::TravelEvent::Type::Finished ||
+                                 t.type == Types::TravelEvent::Type::Aborted)) {
+        learning_.leg_ended(t.type == Types::TravelEvent::Type::Aborted, t.cause);
+      }
       if (t.type == Types::TravelEvent::Type::Finished && t.kind == Types::TravelKind::Travel) {
         const auto front = lift_.calls().front();
         if (front && *front == t.floor) {
@@ -379,7 +453,7 @@ class ControllerCore {
   /// The floor of the first call to travel to now, if any: none while a run is in progress or
   /// inspection is on; a call to the floor the car is at is served at once.
   std::optional<std::size_t> next_call(const typename Types::Input& in) noexcept {
-    if (travel_.busy() || in.inputs.inspection) return std::nullopt;
+    if (travel_.busy() || in.inputs.inspection || learning_.active()) return std::nullopt;
     const auto front = lift_.calls().front();
     if (!front) return std::nullopt;
     const std::size_t floor = *front;
@@ -452,6 +526,10 @@ class ControllerCore {
   }
   std::uint32_t level_tolerance_mm_;
   LiftRules rules_;  ///< inputs, inspection, start grace and calls, as every lift has them
+  const LevelZoneSource* level_zone_source_;  ///< the simulated shaft's (nullptr: none)
+  LearningTravel learning_;                   ///< real-time thread
+  bool relevel_held_ = false;                 ///< relevel_held()
+  SnapshotBox<LearnRecord> learn_box_;        ///< the last record, to the io thread
 
   SpscQueue<typename Types::Command, kCommandQueueSize> commands_;
   SpscQueue<typename Types::Reply, kReplyQueueSize> replies_;

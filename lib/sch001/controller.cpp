@@ -8,7 +8,8 @@ namespace liftd::sch001 {
 namespace {
 
 lift::ControllerCoreConfig core_config(const ControllerConfig& config, MonoTime start) {
-  return {config.lift, config.floors_mm, config.inputs_timeout, config.inspection_hold, start};
+  return {config.lift, config.floors_mm,        config.inputs_timeout, config.inspection_hold,
+          start,       config.level_zone_source};
 }
 
 }  // namespace
@@ -160,7 +161,19 @@ void Sch001Controller::step(MonoTime now) noexcept {
                     [&](lift::Direction d) { (void)travel_.inspect(d, in); });
   update_faults(in, now);
   last_output_ = travel_.tick(lift_.floors(), in);
+  sample_learning(in.position_mm, in.inputs, now, travel_.direction(),
+                  [this](std::int64_t target_mm) { return travel_.end_learning_at(target_mm); });
   drain_travel(now);
+  const bool was_busy = travel_.busy();
+  step_learning(
+      was_busy, [&] { return learn_refusal(in); },
+      [&](std::int64_t target_mm, lift::Direction direction) {
+        return travel_.start_learning(target_mm, direction, in) == lift::Cause::None;
+      });
+  if (!was_busy && travel_.busy()) {  // the leg up after the approach: its signals now
+    last_output_ = travel_.tick(lift_.floors(), in);
+    drain_travel(now);
+  }
   if (!shutting_down_) {
     serve_calls(in);
     maybe_relevel(in);
@@ -234,11 +247,28 @@ void Sch001Controller::handle(const ControllerCommand& command, TickInput& in) n
           const lift::Cause why = travel_.start_relevel(lift_.floors(), *nearest, in);
           if (why != lift::Cause::None) return reply(tag, code_for(why), text_for(why));
           reply(tag, ReplyCode::Ok, {}, nearest);
+        } else if constexpr (std::is_same_v<T, LearnCommand>) {
+          handle_learn(
+              tag, in.position_mm, config_.lift.level_tolerance_mm,
+              [&] { return learn_refusal(in); },
+              [&](std::int64_t target_mm, lift::Direction direction) {
+                return travel_.start_learning(target_mm, direction, in) == lift::Cause::None;
+              });
         } else {
           handle_shared(tag, body, in);
         }
       },
       command.body);
+}
+
+std::optional<lift::Answer> Sch001Controller::learn_refusal(const TickInput& in) const noexcept {
+  if (in.inputs.inspection) return lift::Answer{ReplyCode::NotReady, "inspection is on"};
+  if (travel_.busy()) return lift::Answer{ReplyCode::Busy, "a travel is running"};
+  // Every gate of a travel: the card (RDY, ERR, fresh status, the bus), the safety chain, the
+  // doors, the inputs and the position (HydraulicTravel::forbidding).
+  const lift::Cause why = travel_.forbidding(TravelKind::Learn, in);
+  if (why != lift::Cause::None) return lift::Answer{code_for(why), text_for(why)};
+  return std::nullopt;
 }
 
 // ---- travels, calls, faults ----
@@ -251,7 +281,7 @@ void Sch001Controller::serve_calls(TickInput& in) noexcept {
 
 void Sch001Controller::maybe_relevel(TickInput& in) noexcept {
   if (!config_.auto_relevel || travel_.kind() != TravelKind::None || in.inputs.inspection ||
-      !in.position_mm) {
+      !in.position_mm || learning() || relevel_held()) {
     return;
   }
   const auto nearest = lift::floor_to_relevel(

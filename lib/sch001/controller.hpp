@@ -20,6 +20,7 @@
 
 #include "can/socket.hpp"
 #include "common/defaults.hpp"
+#include "common/level_zone_source.hpp"
 #include "common/mono_time.hpp"
 #include "common/position_source.hpp"
 #include "lift/controller_core.hpp"
@@ -43,6 +44,9 @@ struct ControllerConfig {
   MonoTime inspection_hold = std::chrono::milliseconds(defaults::kInspectionHoldMs);
   /// Relevel by itself when the car at rest leaves the level zone.
   bool auto_relevel = defaults::kHydraulicAutoRelevel;
+  /// The simulated shaft's level zone, read beside the machine inputs' by the learning travel
+  /// (liftd --simulate; nullptr otherwise).
+  const LevelZoneSource* level_zone_source = nullptr;
 };
 
 // ---- commands (io thread -> CAN thread): lib/lift/controller_core.hpp ----
@@ -56,8 +60,11 @@ using lift::RelevelCommand;
 /// drops every signal at once.
 using lift::ShutdownCommand;
 using lift::StopCommand;
+/// The learning travel (lift/learning_travel.hpp): legs at the unit's slow speed, ended by
+/// position; answered when it ends (the record in learn_record()).
+struct LearnCommand {};
 using CommandBody = std::variant<TravelCommand, StopCommand, RelevelCommand, InspectionCommand,
-                                 CallCommand, InputsCommand, ShutdownCommand>;
+                                 CallCommand, InputsCommand, ShutdownCommand, LearnCommand>;
 /// A command with the caller's tag (the frame's command bits are `Command` in protocol.hpp).
 using ControllerCommand = lift::TaggedCommand<CommandBody>;
 
@@ -180,6 +187,8 @@ class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore
   void update_faults(const TickInput& in, MonoTime now) noexcept;
   void serve_calls(TickInput& in) noexcept;
   void maybe_relevel(TickInput& in) noexcept;
+  /// The learn command's and the next leg's gates beyond the shared ones (ControllerCore).
+  std::optional<lift::Answer> learn_refusal(const TickInput& in) const noexcept;
   void publish(MonoTime now) noexcept;
   static ReplyCode code_for(lift::Cause cause) noexcept;
   static std::string_view text_for(lift::Cause cause) noexcept;

@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "lift/gate.hpp"
+#include "lift/learning_travel.hpp"
 
 namespace liftd::sch001 {
 namespace {
@@ -34,6 +35,8 @@ std::string_view to_string(TravelKind kind) noexcept {
       return "relevel";
     case TravelKind::Inspection:
       return "inspection";
+    case TravelKind::Learn:
+      return "learn";
   }
   return "idle";
 }
@@ -64,8 +67,10 @@ lift::Cause HydraulicTravel::forbidding(TravelKind kind, const TickInput& in) co
   if (const lift::Cause why = drive_forbidding(in); why != lift::Cause::None) return why;
   // The machine's rules, common to every drive kind (lib/lift/gate.hpp). Inspection: the
   // safety chain holds the door contacts.
+  // A learning leg needs what a travel needs: locked doors and the position.
   const lift::MachineNeeds needs =
-      lift::run_needs(kind, config_.relevel_doors_open, /*steers_by_position=*/true);
+      lift::run_needs(kind == TravelKind::Learn ? TravelKind::Travel : kind,
+                      config_.relevel_doors_open, /*steers_by_position=*/true);
   return lift::refusal_cause(lift::machine_refusal(in.inputs, in.position_mm.has_value(), needs));
 }
 
@@ -73,16 +78,44 @@ lift::Cause HydraulicTravel::begin(TravelKind kind, const lift::FloorTable& floo
                                    std::size_t floor, const TickInput& in) noexcept {
   if (const lift::Cause why = forbidding(kind, in); why != lift::Cause::None) return why;
   const std::int64_t level = floors.level_mm(floor);
-  kind_ = kind;
   target_ = floor;
-  direction_ = level >= *in.position_mm ? lift::Direction::Up : lift::Direction::Down;
+  return begin_run(kind, level,
+                   level >= *in.position_mm ? lift::Direction::Up : lift::Direction::Down, in);
+}
+
+lift::Cause HydraulicTravel::begin_run(TravelKind kind, std::int64_t target_mm,
+                                       lift::Direction direction, const TickInput& in) noexcept {
+  kind_ = kind;
+  target_mm_ = target_mm;
+  direction_ = direction;
   started_at_ = in.now;
+  limit_ms_ = config_.max_travel_ms;
   const bool up = direction_ == lift::Direction::Up;
   motor_on_ = up;  // up by the pump, down by the valve alone
   motor_on_at_ = in.now;
   phase_ = up ? Phase::MotorStart : (kind == TravelKind::Relevel ? Phase::Slow : Phase::Fast);
-  push({TravelEvent::Type::Started, kind_, direction_, target_, lift::Cause::None, in.now});
+  const std::size_t floor = kind == TravelKind::Learn ? current_floor_ : target_;
+  push({TravelEvent::Type::Started, kind_, direction_, floor, lift::Cause::None, in.now});
   return lift::Cause::None;
+}
+
+lift::Cause HydraulicTravel::start_learning(std::int64_t target_mm, lift::Direction direction,
+                                            const TickInput& in) noexcept {
+  if (direction == lift::Direction::None) return lift::Cause::PositionLost;
+  if (const lift::Cause why = forbidding(TravelKind::Learn, in); why != lift::Cause::None) {
+    return why;
+  }
+  speed_ = Speed::Fast;  // down: the ordinary fast speed before the slow one
+  const lift::Cause started = begin_run(TravelKind::Learn, target_mm, direction, in);
+  // The limiter must let a slow run cover the whole leg.
+  limit_ms_ = lift::learn_leg_limit_ms(config_.max_travel_ms, target_mm - *in.position_mm);
+  return started;
+}
+
+bool HydraulicTravel::end_learning_at(std::int64_t target_mm) noexcept {
+  if (kind_ != TravelKind::Learn || direction_ != lift::Direction::Up) return false;
+  target_mm_ = target_mm;
+  return true;
 }
 
 lift::Cause HydraulicTravel::start_travel(const lift::FloorTable& floors, std::size_t floor,
@@ -115,6 +148,7 @@ lift::Cause HydraulicTravel::inspect(lift::Direction direction, const TickInput&
   kind_ = TravelKind::Inspection;
   direction_ = direction;
   started_at_ = in.now;
+  limit_ms_ = config_.max_travel_ms;
   motor_on_ = direction == lift::Direction::Up;
   motor_on_at_ = in.now;
   phase_ = motor_on_ ? Phase::MotorStart : Phase::Slow;
@@ -132,6 +166,10 @@ std::optional<std::size_t> HydraulicTravel::stop(const lift::FloorTable& floors,
       return std::nullopt;
     case TravelKind::Relevel:
       return target_;  // a few millimetres at the slow speed: let it land
+    case TravelKind::Learn:
+      // No floor to land at: every signal drops, the valve's soft stop ends the run.
+      end(TravelEvent::Type::Aborted, lift::Cause::StopRequested, in.now);
+      return std::nullopt;
     case TravelKind::Travel:
       break;
   }
@@ -149,7 +187,10 @@ std::optional<std::size_t> HydraulicTravel::stop(const lift::FloorTable& floors,
       const std::int64_t d =
           lift::distance_ahead(*in.position_mm, floors.level_mm(floor), direction_);
       if (d >= static_cast<std::int64_t>(slowdown_mm())) {
-        if (up ? floor < target_ : floor > target_) target_ = floor;
+        if (up ? floor < target_ : floor > target_) {
+          target_ = floor;
+          target_mm_ = floors.level_mm(floor);
+        }
         break;
       }
     }
@@ -202,17 +243,28 @@ TickOutput HydraulicTravel::tick(const lift::FloorTable& floors, const TickInput
   if (kind_ != TravelKind::None) {
     if (const lift::Cause why = forbidding(kind_, in); why != lift::Cause::None) {
       end(TravelEvent::Type::Aborted, why, in.now);
-    } else if (in.now - started_at_ > milliseconds(config_.max_travel_ms)) {
+    } else if (in.now - started_at_ > milliseconds(limit_ms_)) {
       end(TravelEvent::Type::Aborted, lift::Cause::TravelTimeout, in.now);
     }
   }
   if (phase_ == Phase::MotorStart && in.now - motor_on_at_ >= milliseconds(config_.star_delta_ms)) {
-    phase_ = kind_ == TravelKind::Travel ? Phase::Fast : Phase::Slow;
+    phase_ = kind_ == TravelKind::Travel ? Phase::Fast : Phase::Slow;  // learning up: slow
+  }
+  if (kind_ == TravelKind::Learn && phase_ != Phase::MotorStart && in.position_mm) {
+    // Ended by position alone: the level zones are what the learning records, not stops.
+    const std::int64_t remaining = lift::distance_ahead(*in.position_mm, target_mm_, direction_);
+    if (phase_ == Phase::Fast && remaining <= static_cast<std::int64_t>(slowdown_mm())) {
+      phase_ = Phase::Slow;
+    }
+    if (remaining <= 0) {
+      // 3c: the current floor is the one nearest where the leg ended.
+      if (const auto nearest = floors.nearest(*in.position_mm)) current_floor_ = *nearest;
+      end(TravelEvent::Type::Finished, lift::Cause::None, in.now);
+    }
   }
   if ((kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel) &&
       phase_ != Phase::MotorStart && in.position_mm) {
-    const std::int64_t remaining =
-        lift::distance_ahead(*in.position_mm, floors.level_mm(target_), direction_);
+    const std::int64_t remaining = lift::distance_ahead(*in.position_mm, target_mm_, direction_);
     if (phase_ == Phase::Fast && (remaining <= static_cast<std::int64_t>(slowdown_mm()) ||
                                   in.inputs.decel_point(speed_number(speed_), direction_))) {
       phase_ = Phase::Slow;
@@ -243,7 +295,8 @@ void HydraulicTravel::finish(MonoTime now) noexcept {
 }
 
 void HydraulicTravel::end(TravelEvent::Type type, lift::Cause cause, MonoTime now) noexcept {
-  const std::size_t floor = type == TravelEvent::Type::Finished && kind_ != TravelKind::Inspection
+  const std::size_t floor = type == TravelEvent::Type::Finished &&
+                                    (kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel)
                                 ? target_
                                 : current_floor_;
   push({type, kind_, direction_, floor, cause, now});

@@ -57,8 +57,14 @@ struct HydraulicConfig {
 enum class Speed : std::uint8_t { Fast, V3, V4 };
 
 /// What runs.
-enum class TravelKind : std::uint8_t { None, Travel, Relevel, Inspection };
-/// "idle", "hydraulic", "relevel", "inspection" (status travel.state, travel events).
+enum class TravelKind : std::uint8_t {
+  None,
+  Travel,
+  Relevel,
+  Inspection,
+  Learn,  ///< a leg of the learning travel (lift/learning_travel.hpp): ends by position
+};
+/// "idle", "hydraulic", "relevel", "inspection", "learn" (status travel.state, travel events).
 std::string_view to_string(TravelKind kind) noexcept;
 
 /// Where a travel is.
@@ -106,10 +112,21 @@ class HydraulicTravel {
   /// Starts relevelling to `floor` (slow speed, doors may be open where allowed).
   lift::Cause start_relevel(const lift::FloorTable& floors, std::size_t floor,
                             const TickInput& in) noexcept;
+  /// Starts a leg of the learning travel to `target_mm` going `direction`, ended by position (no
+  /// floor of the table, no level-zone stop). Up at the slow (levelling) speed all the way, the
+  /// pump started as for a travel; down by the valve at the fast speed until slowdown_down_mm
+  /// before the target, then slow. The run-time limiter allows a slow run of the leg
+  /// (lift::learn_leg_limit_ms over max_travel_ms). Every gate of a travel applies.
+  lift::Cause start_learning(std::int64_t target_mm, lift::Direction direction,
+                             const TickInput& in) noexcept;
+  /// A learning leg going up ends at `target_mm` instead (the run-out after the last zone);
+  /// false when no such leg runs.
+  bool end_learning_at(std::int64_t target_mm) noexcept;
   /// Inspection: hold-to-run `direction` (None: stand still). The run ends when released.
   lift::Cause inspect(lift::Direction direction, const TickInput& in) noexcept;
   /// Stop at the next floor ahead the car can still reach by the slow approach; a car already
-  /// slowing keeps its floor; with no floor ahead reachable, every signal drops now.
+  /// slowing keeps its floor; with no floor ahead reachable, every signal drops now. A learning
+  /// leg drops every signal now (the valve's soft stop lands the car).
   /// Returns the floor the car will stop at (nullopt: stopped at once between floors).
   std::optional<std::size_t> stop(const lift::FloorTable& floors, const TickInput& in) noexcept;
   /// Ends whatever runs at once, with `cause` (reported once).
@@ -149,6 +166,8 @@ class HydraulicTravel {
  private:
   lift::Cause begin(TravelKind kind, const lift::FloorTable& floors, std::size_t floor,
                     const TickInput& in) noexcept;
+  lift::Cause begin_run(TravelKind kind, std::int64_t target_mm, lift::Direction direction,
+                        const TickInput& in) noexcept;
   void finish(MonoTime now) noexcept;
   void end(TravelEvent::Type type, lift::Cause cause, MonoTime now) noexcept;
   void push(const TravelEvent& event) noexcept { events_.push(event); }
@@ -161,7 +180,9 @@ class HydraulicTravel {
   lift::Direction direction_ = lift::Direction::None;
   Speed speed_ = Speed::Fast;
   std::size_t target_ = 0;
+  std::int64_t target_mm_ = 0;  ///< where the run ends (the target floor's level, or the leg's)
   std::size_t current_floor_ = 0;
+  std::uint32_t limit_ms_ = 0;  ///< the run-time limiter of this run
   MonoTime started_at_{};
   MonoTime motor_on_at_{};
   bool motor_on_ = false;

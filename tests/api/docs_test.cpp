@@ -265,7 +265,7 @@ TEST(ApiDocs, TravelEventTypesMatchTheTravelLibrary) {
 // Travel kinds as status.travel.state and the travel event's kind ("none" only in events).
 const std::vector<std::string> kTravelKinds = {"distance", "relevel_distance", "speed",
                                                "crawl",    "inspection",       "recall",
-                                               "relevel",  "hydraulic"};
+                                               "relevel",  "hydraulic",        "learn"};
 
 TEST(ApiDocs, TravelKindsMatchTheTravelLibrary) {
   std::set<std::string> named =

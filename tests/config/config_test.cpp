@@ -128,6 +128,7 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/sim/dcp", 4},
       {"/sim/shaft_levels_mm", json::array()},
       {"/sim/level_zone_mm", 100},
+      {"/sim/slow_mm_per_s", 50},
   };
   const LoadResult result = kinds::parse_config("{}", "test");
   ASSERT_TRUE(result.ok()) << all_problems(result);

@@ -1,6 +1,7 @@
-// The learning travel end to end on the DCP lift: `liftd --simulate` whose floor table is wrong
+// The learning travel end to end: on the DCP lift, `liftd --simulate` whose floor table is wrong
 // by 20-60 mm learns the simulated shaft's true levels within 2 mm; a shaft with a missing zone
-// is refused; `stop` mid-learning ends it with nothing learned.
+// is refused; `stop` mid-learning ends it with nothing learned, on the hydraulic and USS lifts
+// too (their learning within 2 mm: parity_test.cpp, LearnParity).
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -170,6 +171,72 @@ TEST(Learn, StopMidLearningEndsItWithNothingLearned) {
             nullptr);
   const json cfg = lift.call({{"cmd", "config"}});
   EXPECT_EQ(cfg["result"]["config"]["floors"], floors(kConfigured));
+}
+
+// The hydraulic and USS lifts on three floors 400 mm apart, with the learning speeds of
+// parity_test.cpp's LearnParity (the slow speed 200 mm/s, the crawl V0 30 %).
+json kind_config(const std::string& kind) {
+  json out = {
+      {"drive", {{"kind", kind}}},
+      {"floors", floors({0, 400, 800})},
+      {"sim",
+       {{"shaft_levels_mm", {-35, 425, 855}}, {"level_zone_mm", 100}, {"slow_mm_per_s", 200}}}};
+  if (kind == "sch001") {
+    out["sch001"] = {{"star_delta_ms", 500}, {"slowdown_up_mm", 300}, {"slowdown_down_mm", 350}};
+  } else {
+    out["travel"] = {{"dcp3_decel_distance_mm", {{"V4", 700}, {"V3", 500}}}};
+    out["uss"] = {{"speeds", {{"V0", 30}, {"VN", 3}, {"VI", 30}, {"V3", 63}, {"V4", 100}}}};
+  }
+  return out;
+}
+
+/// `stop` once the leg up runs: the learn command is answered not_ready, the car stops, nothing
+/// is learned and no `learn` event follows.
+void expect_stop_learns_nothing(const std::string& kind) {
+  Lift lift("learn-stop-" + kind, 4, json::object(), {}, kind_config(kind));
+  ASSERT_EQ(lift.setup_error(), "") << lift.log();
+  ASSERT_TRUE(lift.wait_drive_state("ready")) << lift.status().dump();
+  auto learning = std::async(std::launch::async, [&lift] {
+    Client other(lift.socket());
+    return other.call({{"cmd", "learn"}}, 60s);
+  });
+  // The approach down is one leg; the second `learn` travel is the leg up.
+  int legs = 0;
+  ASSERT_TRUE(lift.api()
+                  .wait_event(
+                      "travel",
+                      [&legs](const json& d) {
+                        return d.value("event", "") == "started" &&
+                               d.value("kind", "") == "learn" && ++legs == 2;
+                      },
+                      20s)
+                  .is_object())
+      << lift.log();
+  ASSERT_TRUE(lift.wait_moved(-300, 100)) << lift.status().dump();  // well under way up
+  const json stop = lift.call({{"cmd", "stop"}});
+  EXPECT_TRUE(stop.value("ok", false)) << stop.dump();
+  ASSERT_EQ(learning.wait_for(20s), std::future_status::ready);
+  const json reply = learning.get();
+  ASSERT_TRUE(reply.is_object());
+  EXPECT_FALSE(reply.value("ok", true)) << reply.dump();
+  EXPECT_EQ(reply["error"]["code"], "not_ready") << reply.dump();
+  EXPECT_EQ(reply["error"]["message"], "learning travel stopped: nothing learned");
+  EXPECT_EQ(lift.api().wait_event(
+                "learn", [](const json&) { return true; }, 1s),
+            nullptr);
+  EXPECT_TRUE(lift.wait_drive_state("ready", 10s));
+  const json s = lift.status();
+  EXPECT_EQ(s["travel"]["state"], "idle") << s.dump();
+  EXPECT_LT(s["car"]["position_mm"].get<double>(), 425.0) << "stopped, not run on: " << s.dump();
+  EXPECT_EQ(lift.call({{"cmd", "config"}})["result"]["config"]["floors"], floors({0, 400, 800}));
+}
+
+TEST(Learn, Sch001StopMidLearningEndsItWithNothingLearned) {
+  expect_stop_learns_nothing("sch001");
+}
+
+TEST(Learn, UssStopMidLearningEndsItWithNothingLearned) {
+  expect_stop_learns_nothing("uss");
 }
 
 }  // namespace

@@ -16,6 +16,7 @@
 #include <fstream>
 #include <ostream>
 #include <thread>
+#include <vector>
 
 #include "e2e/harness.hpp"
 
@@ -402,6 +403,91 @@ TEST_P(LiftParity, TravelsReturnsTheTravelWithItsCurveToTheFloorsLevel) {
 
 INSTANTIATE_TEST_SUITE_P(EveryDriveKind, LiftParity, ::testing::ValuesIn(kCases),
                          [](const ::testing::TestParamInfo<DriveCase>& param) {
+                           return std::string(param.param.name);
+                         });
+
+// ---- the learning travel on every kind ----
+
+// Three floors 300 mm apart, wrong by -35, +25 and +55 mm against the simulated shaft, and each
+// kind's learning speed brisk enough for a short test: the DCP drive's crawl V0 and the hydraulic
+// unit's slow speed by sim.slow_mm_per_s, the USS drive's crawl by its V0 setpoint.
+const json kLearnFloors = json::array({{{"name", "0"}, {"level_mm", 0}},
+                                       {{"name", "1"}, {"level_mm", 300}},
+                                       {{"name", "2"}, {"level_mm", 600}}});
+const std::vector<std::int64_t> kLearnConfigured = {0, 300, 600};
+const std::vector<std::int64_t> kLearnTrue = {-35, 325, 655};
+
+json learn_shaft(int slow_mm_per_s) {
+  return {
+      {"shaft_levels_mm", kLearnTrue}, {"level_zone_mm", 100}, {"slow_mm_per_s", slow_mm_per_s}};
+}
+
+struct LearnCase {
+  const char* name;
+  json config;
+};
+
+void PrintTo(const LearnCase& c, std::ostream* out) {
+  *out << c.name;
+}
+
+const LearnCase kLearnCases[] = {
+    // DCP: V0 at 150 mm/s, 2.3 mm per 15 ms cycle.
+    {"dcp", {{"floors", kLearnFloors}, {"sim", learn_shaft(150)}}},
+    // SCH001: the slow speed at 200 mm/s, 2 mm per 10 ms tick.
+    {"sch001",
+     {{"drive", {{"kind", "sch001"}}},
+      {"floors", kLearnFloors},
+      {"sch001", {{"star_delta_ms", 500}, {"slowdown_up_mm", 300}, {"slowdown_down_mm", 350}}},
+      {"sim", learn_shaft(200)}}},
+    // USS: V0 30 % of the simulated drive's 0.78 m/s, 1.6 mm per 7 ms exchange.
+    {"uss",
+     {{"drive", {{"kind", "uss"}}},
+      {"floors", kLearnFloors},
+      {"travel", {{"dcp3_decel_distance_mm", {{"V4", 700}, {"V3", 500}}}}},
+      {"uss", {{"speeds", {{"V0", 30}, {"VN", 3}, {"VI", 30}, {"V3", 63}, {"V4", 100}}}}},
+      {"sim", learn_shaft(200)}}},
+};
+
+class LearnParity : public ::testing::TestWithParam<LearnCase> {};
+
+TEST_P(LearnParity, LearnsTheSimulatedShaftWithinTwoMillimetres) {
+  Lift lift(std::string("learn-parity-") + GetParam().name, 4, json::object(),
+            std::vector<std::string>{}, GetParam().config);
+  ASSERT_EQ(lift.setup_error(), "") << lift.log();
+  ASSERT_TRUE(lift.wait_drive_state("ready")) << lift.status().dump();
+  const json reply = lift.api().call({{"cmd", "learn"}}, 60s);
+  ASSERT_TRUE(reply.is_object()) << lift.log();
+  ASSERT_TRUE(reply.value("ok", false)) << reply.dump() << lift.log();
+  const json& result = reply["result"];
+  EXPECT_TRUE(result["accepted"].get<bool>()) << result.dump();
+  EXPECT_EQ(result["verdict"], "ok");
+  EXPECT_EQ(result["zones_found"], 3);
+  ASSERT_EQ(result["floors"].size(), 3U) << result.dump();
+  for (std::size_t i = 0; i < 3; ++i) {
+    const json& f = result["floors"][i];
+    EXPECT_EQ(f["configured_mm"], kLearnConfigured[i]);
+    EXPECT_NEAR(f["learned_mm"].get<double>(), static_cast<double>(kLearnTrue[i]), 2.0) << f.dump();
+    EXPECT_NEAR(f["zone_mm"].get<double>(), 100.0, 4.0) << f.dump();
+  }
+  // Every leg was a travel the watchers saw; the `learn` event carries the same table.
+  const json event = lift.api().wait_event(
+      "learn", [](const json&) { return true; }, 5s);
+  ASSERT_TRUE(event.is_object());
+  EXPECT_EQ(event["data"]["floors"], result["floors"]);
+  EXPECT_EQ(lift.call({{"cmd", "config"}})["result"]["config"]["floors"], kLearnFloors)
+      << "learning changes nothing in the running daemon";
+  // At rest at the top terminal: above the top zone (655 + 50), short of the leg's end 300 mm
+  // above the configured top level.
+  EXPECT_TRUE(lift.wait_drive_state("ready", 10s));
+  EXPECT_EQ(lift.status()["travel"]["state"], "idle");
+  const double at = lift.position_mm();
+  EXPECT_GT(at, 705.0);
+  EXPECT_LT(at, 900.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryDriveKind, LearnParity, ::testing::ValuesIn(kLearnCases),
+                         [](const ::testing::TestParamInfo<LearnCase>& param) {
                            return std::string(param.param.name);
                          });
 

@@ -285,5 +285,151 @@ TEST_F(Sch001ControllerTest, AnswersThatCannotBeSentAreALinkFaultAndNotShownAsSe
   EXPECT_FALSE(controller_.snapshot().send_failing);
 }
 
+// ---- the learning travel ----
+
+/// A shaft whose true levels are off the floor table: its level switch reads the test's car.
+class ShaftSwitch final : public LevelZoneSource {
+ public:
+  explicit ShaftSwitch(const StillCar& car) : car_(car) {}
+  bool level_zone(MonoTime) const noexcept override {
+    if (!car_.mm) return false;
+    for (const std::int64_t level : kTrueLevels) {
+      if (*car_.mm >= level - 50 && *car_.mm <= level + 50) return true;  // 100 mm zones
+    }
+    return false;
+  }
+  static constexpr std::array<std::int64_t, 4> kTrueLevels = {-35, 3025, 6055, 8980};
+
+ private:
+  const StillCar& car_;
+};
+
+class Sch001LearnTest : public ::testing::Test {
+ protected:
+  Sch001LearnTest() : zone_(position_), controller_(make_config(zone_), position_, MonoTime{}) {
+    controller_.on_endpoint(true, now_);
+    send_inputs();
+  }
+  static ControllerConfig make_config(const LevelZoneSource& zone) {
+    ControllerConfig config;
+    config.floors_mm = {0, 3000, 6000, 9000};
+    config.hydraulic.star_delta_ms = 200;
+    config.level_zone_source = &zone;
+    return config;
+  }
+  void send_inputs() { ASSERT_TRUE(controller_.post({0, InputsCommand{inputs_}})); }
+  /// 10 ms: the car moves as the last answer's signals say (slow 2 mm, fast 10 mm per 10 ms),
+  /// the controller ticks, every 100 ms the card's status frame is answered.
+  void run_10ms() {
+    const CommandBits b = CommandBits::from_byte(sent_);
+    const std::int64_t step = b.hsp || b.sp3 ? 10 : 2;
+    if (b.up && b.sfy) *position_.mm += step;
+    if (b.dw) *position_.mm -= step;
+    now_ += 10ms;
+    if (++ticks_ % 10 == 0) {
+      send_inputs();
+      const std::array<std::uint8_t, 2> bytes = {kStatusFrame, kReady};
+      const auto answer = controller_.on_frame(can::make_frame(0x581, bytes), now_);
+      ASSERT_TRUE(answer);
+      controller_.on_sent(true, now_);
+      sent_ = answer->data[1];
+    } else {
+      controller_.on_tick(now_);
+    }
+  }
+  /// Runs until the learn command (tag 1) is answered, at most `limit` of fake time.
+  std::optional<CommandReply> run_until_answered(MonoTime limit = 200s) {
+    const MonoTime end = now_ + limit;
+    CommandReply r;
+    while (now_ < end) {
+      run_10ms();
+      while (controller_.poll_reply(r)) {
+        if (r.tag == 1) return r;
+      }
+    }
+    return std::nullopt;
+  }
+
+  StillCar position_;
+  ShaftSwitch zone_;
+  Sch001Controller controller_;
+  lift::Inputs inputs_ = [] {
+    lift::Inputs in;
+    in.valid = in.doors_closed = in.doors_locked = in.safety_chain_closed = true;
+    return in;
+  }();
+  MonoTime now_{};
+  std::uint8_t sent_ = 0;
+  int ticks_ = 0;
+};
+
+TEST_F(Sch001LearnTest, LearnsTheShaftsLevelsAndStopsJustAboveTheTopZone) {
+  for (int i = 0; i < 50; ++i) run_10ms();  // the card is heard
+  ASSERT_TRUE(controller_.post({1, LearnCommand{}}));
+  const auto reply = run_until_answered();
+  ASSERT_TRUE(reply);
+  EXPECT_EQ(reply->code, ReplyCode::Ok) << reply->detail;
+  const lift::LearnRecord record = controller_.learn_record();
+  EXPECT_EQ(record.tag, 1U);
+  EXPECT_TRUE(record.judgement.ok());
+  ASSERT_EQ(record.zone_count, 4U);
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_NEAR(static_cast<double>(record.zones[i].level_mm()),
+                static_cast<double>(ShaftSwitch::kTrueLevels[i]), 2.0)
+        << "floor " << i;
+  }
+  // 20 mm beyond the top zone's end (9030) the signals drop; the car coasts one answer on.
+  EXPECT_GE(*position_.mm, 9030 + 20);
+  EXPECT_LE(*position_.mm, 9030 + 20 + 30);
+  EXPECT_EQ(controller_.snapshot().travel_kind, TravelKind::None);
+  // No relevelling towards the table's top level the car now stands 70 mm beyond.
+  for (int i = 0; i < 100; ++i) run_10ms();
+  EXPECT_EQ(controller_.snapshot().travel_kind, TravelKind::None);
+}
+
+TEST_F(Sch001LearnTest, StopMidLearningEndsItAndNothingIsLearned) {
+  for (int i = 0; i < 50; ++i) run_10ms();
+  ASSERT_TRUE(controller_.post({1, LearnCommand{}}));
+  for (int i = 0; i < 500; ++i) run_10ms();  // the approach, then well into the leg up
+  ASSERT_EQ(controller_.snapshot().travel_kind, TravelKind::Learn);
+  ASSERT_EQ(controller_.snapshot().direction, lift::Direction::Up);
+  ASSERT_TRUE(controller_.post({2, StopCommand{}}));
+  const auto reply = run_until_answered(5s);
+  ASSERT_TRUE(reply);
+  EXPECT_EQ(reply->code, ReplyCode::NotReady);
+  EXPECT_EQ(reply->detail, "learning travel stopped: nothing learned");
+  EXPECT_EQ(controller_.learn_record().tag, 0U) << "a record was published";
+  for (int i = 0; i < 10; ++i) run_10ms();  // the card's next status frame is answered
+  EXPECT_EQ(sent_, 0) << "every signal dropped";
+}
+
+TEST_F(Sch001LearnTest, AFaultMidLearningEndsItWithItsCause) {
+  for (int i = 0; i < 50; ++i) run_10ms();
+  ASSERT_TRUE(controller_.post({1, LearnCommand{}}));
+  for (int i = 0; i < 500; ++i) run_10ms();
+  ASSERT_EQ(controller_.snapshot().travel_kind, TravelKind::Learn);
+  inputs_.safety_chain_closed = false;
+  send_inputs();
+  const auto reply = run_until_answered(5s);
+  ASSERT_TRUE(reply);
+  EXPECT_EQ(reply->code, ReplyCode::Fault);
+  EXPECT_EQ(reply->detail, "safety_chain_open");
+  EXPECT_EQ(controller_.learn_record().tag, 0U);
+  for (int i = 0; i < 10; ++i) run_10ms();
+  EXPECT_EQ(sent_, 0);
+}
+
+TEST_F(Sch001LearnTest, IsRefusedAsATravelIs) {
+  for (int i = 0; i < 50; ++i) run_10ms();
+  inputs_.doors_locked = false;
+  send_inputs();
+  ASSERT_TRUE(controller_.post({1, LearnCommand{}}));
+  const auto reply = run_until_answered(1s);
+  ASSERT_TRUE(reply);
+  EXPECT_EQ(reply->code, ReplyCode::NotReady);
+  EXPECT_EQ(reply->detail, "doors not locked");
+  EXPECT_EQ(controller_.snapshot().travel_kind, TravelKind::None);
+}
+
 }  // namespace
 }  // namespace liftd::sch001

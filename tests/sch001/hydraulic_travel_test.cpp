@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <functional>
 #include <vector>
 
 #include "sch001/hydraulic_travel.hpp"
@@ -264,6 +265,146 @@ TEST_F(HydraulicTest, ShaftSignalsSlowAndStopWhereTheyAreMet) {
   in_.inputs.level_zone = true;
   EXPECT_EQ(tick(1700, 2900), 0);
   EXPECT_EQ(travel_.current_floor(), 1U);
+}
+
+// ---- the learning travel's legs (lift/learning_travel.hpp) ----
+
+TEST_F(HydraulicTest, LearningLegUpRunsAtTheSlowSpeedThroughTheZonesAndEndsByPosition) {
+  // The issue: "the slow speed on a hydraulic unit"; 1.4: the direction signal alone (no HSP,
+  // SP1, SP2), SFY once the motor runs after its star-delta start.
+  ASSERT_EQ(travel_.start_learning(9300, lift::Direction::Up, in_), lift::Cause::None);
+  EXPECT_EQ(travel_.kind(), TravelKind::Learn);
+  EXPECT_EQ(travel_.target(), std::nullopt) << "a leg goes to no floor";
+  struct Step {
+    int t_ms;
+    std::int64_t position_mm;
+    bool level_zone;
+    std::uint8_t byte;
+    const char* legend;
+  };
+  const Step steps[] = {
+      {0, 0, true, 0, "star-delta start: nothing before the motor runs"},
+      {1499, 0, true, 0, "still starting"},
+      {1500, 0, true, kUp | kSfy, "slow up: UP and SFY alone"},
+      {30000, 2950, true, kUp | kSfy, "a level zone stops no learning leg"},
+      {60000, 6000, false, kUp | kSfy, "past the slowdown point of floor 2: still slow"},
+      {90000, 9299, false, kUp | kSfy, "1 mm short of the leg's end"},
+      {90100, 9300, false, 0, "at the leg's end: every signal drops"},
+  };
+  for (const Step& s : steps) {
+    in_.inputs.level_zone = s.level_zone;
+    EXPECT_EQ(tick(s.t_ms, s.position_mm), s.byte) << s.legend;
+  }
+  const auto ev = events();
+  ASSERT_EQ(ev.size(), 2U);
+  EXPECT_EQ(ev[0].kind, TravelKind::Learn);
+  EXPECT_EQ(ev[1].type, TravelEvent::Type::Finished);
+  EXPECT_EQ(travel_.current_floor(), 3U) << "3c: the floor nearest where the leg ended";
+}
+
+TEST_F(HydraulicTest, LearningLegDownByTheValveFastThenSlowToItsEnd) {
+  struct Case {
+    FastDown fast_down;
+    std::uint8_t fast;
+  };
+  for (const Case& c : {Case{FastDown::Hsp, kDw | kHsp}, Case{FastDown::Sp3, kDw | kSp3}}) {
+    config_.fast_down = c.fast_down;
+    travel_ = HydraulicTravel(config_);
+    in_.now = MonoTime{};
+    in_.position_mm = 6000;
+    ASSERT_EQ(travel_.start_learning(-300, lift::Direction::Down, in_), lift::Cause::None);
+    EXPECT_EQ(tick(0, 6000), c.fast) << "no motor start going down";
+    EXPECT_EQ(tick(5000, 401), c.fast);
+    EXPECT_EQ(tick(5100, 400), kDw) << "slowdown 700 mm above the leg's end";
+    in_.inputs.level_zone = true;
+    EXPECT_EQ(tick(6000, 0), kDw) << "the bottom floor's zone stops no learning leg";
+    in_.inputs.level_zone = false;
+    EXPECT_EQ(tick(9000, -299), kDw);
+    EXPECT_EQ(tick(9100, -300), 0);
+    EXPECT_EQ(travel_.kind(), TravelKind::None);
+  }
+}
+
+TEST_F(HydraulicTest, LearningLegUpEndsWhereTheRunOutSaysAndOnlyThere) {
+  ASSERT_EQ(travel_.start_learning(9300, lift::Direction::Up, in_), lift::Cause::None);
+  tick(0, 0);
+  ASSERT_EQ(tick(1500, 0), kUp | kSfy);
+  EXPECT_TRUE(travel_.end_learning_at(9070));
+  EXPECT_EQ(tick(60000, 9069), kUp | kSfy);
+  EXPECT_EQ(tick(60100, 9070), 0);
+  EXPECT_FALSE(travel_.end_learning_at(9100)) << "no leg runs";
+  // A leg down has no run-out, nor has a travel.
+  in_.position_mm = 9070;
+  ASSERT_EQ(travel_.start_learning(-300, lift::Direction::Down, in_), lift::Cause::None);
+  EXPECT_FALSE(travel_.end_learning_at(100));
+  travel_.abort(lift::Cause::StopRequested, milliseconds(60200));
+  ASSERT_EQ(travel_.start_travel(floors_, 0, Speed::Fast, in_), lift::Cause::None);
+  EXPECT_FALSE(travel_.end_learning_at(100));
+}
+
+TEST_F(HydraulicTest, AFaultMidLegEndsItAtOnceWithEverySignalDropped) {
+  struct Case {
+    const char* legend;
+    std::function<void(TickInput&)> fault;
+    lift::Cause cause;
+  };
+  const Case cases[] = {
+      {"card ERR (3d)", [](TickInput& in) { in.card_error = true; }, lift::Cause::DriveFault},
+      {"RDY = 0 (3e)", [](TickInput& in) { in.card_allows_travel = false; },
+       lift::Cause::DriveNotReady},
+      {"card silent (3f)", [](TickInput& in) { in.card_silent = true; }, lift::Cause::CardSilent},
+      {"bus fault", [](TickInput& in) { in.bus_ok = false; }, lift::Cause::BusFault},
+      {"safety chain", [](TickInput& in) { in.inputs.safety_chain_closed = false; },
+       lift::Cause::SafetyChainOpen},
+      {"doors", [](TickInput& in) { in.inputs.doors_locked = false; }, lift::Cause::DoorsNotLocked},
+      {"inputs stale", [](TickInput& in) { in.inputs.valid = false; }, lift::Cause::InputsLost},
+  };
+  for (const Case& c : cases) {
+    travel_ = HydraulicTravel(config_);
+    (void)events();
+    TickInput healthy = in_;
+    in_.now = MonoTime{};
+    in_.position_mm = -300;
+    ASSERT_EQ(travel_.start_learning(1100, lift::Direction::Up, in_), lift::Cause::None)
+        << c.legend;
+    tick(0, -300);
+    ASSERT_EQ(tick(1500, -300), kUp | kSfy) << c.legend;
+    c.fault(in_);
+    EXPECT_EQ(tick(1600, -295), 0) << c.legend;
+    EXPECT_EQ(travel_.kind(), TravelKind::None) << c.legend;
+    const auto ev = events();
+    ASSERT_EQ(ev.size(), 2U) << c.legend;
+    EXPECT_EQ(ev[1].type, TravelEvent::Type::Aborted) << c.legend;
+    EXPECT_EQ(ev[1].cause, c.cause) << c.legend;
+    // The same condition refuses a new leg.
+    EXPECT_EQ(travel_.start_learning(1100, lift::Direction::Up, in_), c.cause) << c.legend;
+    in_ = healthy;
+  }
+  in_.position_mm = std::nullopt;
+  EXPECT_EQ(travel_.start_learning(1100, lift::Direction::Up, in_), lift::Cause::PositionLost);
+}
+
+TEST_F(HydraulicTest, StopEndsALearningLegAtOnce) {
+  ASSERT_EQ(travel_.start_learning(9300, lift::Direction::Up, in_), lift::Cause::None);
+  tick(0, 0);
+  ASSERT_EQ(tick(1500, 0), kUp | kSfy);
+  in_.position_mm = 100;
+  EXPECT_EQ(travel_.stop(floors_, in_), std::nullopt) << "no floor to land at";
+  EXPECT_EQ(tick(1600, 100), 0);
+  const auto ev = events();
+  ASSERT_EQ(ev.size(), 2U);
+  EXPECT_EQ(ev[1].type, TravelEvent::Type::Aborted);
+  EXPECT_EQ(ev[1].cause, lift::Cause::StopRequested);
+}
+
+TEST_F(HydraulicTest, TheRunTimeLimiterAllowsASlowRunThroughTheLeg) {
+  // 9300 mm at 40 ms/mm on top of the 45 s limiter (lift::learn_leg_limit_ms): 417 s.
+  ASSERT_EQ(travel_.start_learning(9300, lift::Direction::Up, in_), lift::Cause::None);
+  tick(0, 0);
+  EXPECT_EQ(tick(45001, 2000), kUp | kSfy) << "past the limit of a travel: a leg goes on";
+  EXPECT_EQ(tick(417000, 9000), kUp | kSfy);
+  EXPECT_EQ(tick(417001, 9000), 0);
+  EXPECT_EQ(events().back().cause, lift::Cause::TravelTimeout);
 }
 
 }  // namespace

@@ -69,6 +69,7 @@ lift::ControllerCoreConfig core_config(const ControllerConfig& config) {
   core.floors_mm = config.floors_mm;
   core.inputs_timeout = config.inputs_timeout;
   core.inspection_hold = config.inspection_hold;
+  core.level_zone_source = config.level_zone_source;
   return core;  // the start grace counts from the first cycle (frame_to_send)
 }
 
@@ -113,7 +114,8 @@ std::span<const std::uint8_t> DcpController::frame_to_send(MonoTime now) noexcep
                                         internal_.kind == travel::ChannelRequest::Kind::Position));
 
   last_output_ = travel_.step(last_input_);
-  sample_learning();
+  sample_learning(last_input_.position_mm, last_input_.inputs, last_input_.now, travel_.direction(),
+                  [this](std::int64_t target_mm) { return travel_.end_crawl_at(target_mm); });
   // Stationary as the position shows it: a car whose drive enable was cut may still slide on the
   // brake after S1 fell (at most 1 mm of encoder jitter between two cycles).
   const auto position = last_input_.position_mm;
@@ -156,7 +158,7 @@ bool DcpController::on_reply(std::span<const std::uint8_t> reply, MonoTime now) 
 void DcpController::after_cycle(MonoTime now) noexcept {
   drain_link(now);
   drain_travel(now);
-  step_learning();
+  step_learn();
   // DCP 5.12.9: every stop owes the drive an I9, whatever ended the travel.
   const TravelKind kind = travel_.active_kind();
   if (last_kind_ != TravelKind::None && kind == TravelKind::None) position_owed_ = true;
@@ -398,7 +400,7 @@ std::optional<std::size_t> DcpController::next_stop_floor() const noexcept {
 
 void DcpController::handle_stop(std::uint32_t tag) noexcept {
   lift_.calls().clear();
-  if (learn_phase_ != LearnPhase::Idle) learn_stopped_ = true;
+  stop_learning();
   const TravelKind kind = travel_.active_kind();
   // A car that moves under a distance or speed travel stops at a floor; the stop message of
   // DCP 3.5.3.2 is only for the deceleration and for travels that do not move yet.
@@ -434,56 +436,29 @@ void DcpController::handle_stop(std::uint32_t tag) noexcept {
   reply(tag, ReplyCode::Ok, {}, stop_floor);
 }
 
-// ---- the learning travel ----
-
-namespace {
-constexpr std::string_view kLearnStopped = "learning travel stopped: nothing learned";
-}  // namespace
+// ---- the learning travel (lift::LearningTravel through ControllerCore) ----
 
 void DcpController::handle_learn(std::uint32_t tag) noexcept {
-  if (learn_phase_ != LearnPhase::Idle) {
-    reply(tag, ReplyCode::Busy, "a learning travel is running");
-    return;
-  }
   // The gates of a travel to the lowest floor: the service stop, the link, a running travel, the
   // machine and the drive.
-  if (const std::optional<lift::Refusal> refusal = first_travel_refusal(0)) {
-    reply(tag, refusal->code, refusal->detail);
-    return;
-  }
-  if (!link_.travel_allowed()) {
-    reply(tag, ReplyCode::NotReady, abort_text(lift::Cause::LinkDown));
-    return;
-  }
-  if (travel_.active_kind() != TravelKind::None) {
-    reply(tag, ReplyCode::Busy, "a travel is running");
-    return;
-  }
-  if (auto why = not_ready_reason(false)) {
-    reply(tag, last_input_.status.general_fault ? ReplyCode::Fault : ReplyCode::NotReady, *why);
-    return;
-  }
-  if (!last_input_.position_mm) {
-    reply(tag, ReplyCode::NotReady, "no car position: the learning travel records by position");
-    return;
-  }
-  learner_.reset();
-  learn_tag_ = tag;
-  learn_leg_ended_ = false;
-  learn_leg_cause_ = lift::Cause::None;
-  learn_stopped_ = false;
-  learn_run_out_ = false;
-  const std::int64_t bottom_mm = lift_.floors().level_mm(0) - kLearnApproachMm;
-  const bool below = *last_input_.position_mm <=
-                     bottom_mm + static_cast<std::int64_t>(config_.travel.level_tolerance_mm);
-  const std::int64_t top_mm = lift_.floors().level_mm(lift_.floors().size() - 1) + kLearnApproachMm;
-  const bool started = below ? start_learn_leg(top_mm, lift::Direction::Up)
-                             : start_learn_leg(bottom_mm, lift::Direction::Down);
-  if (!started) {
-    reply(tag, ReplyCode::NotReady, "the drive did not take the learning travel");
-    return;
-  }
-  learn_phase_ = below ? LearnPhase::Up : LearnPhase::Down;
+  ControllerCore::handle_learn(
+      tag, last_input_.position_mm, config_.travel.level_tolerance_mm,
+      [this]() -> std::optional<lift::Answer> {
+        if (!link_.travel_allowed()) {
+          return lift::Answer{ReplyCode::NotReady, abort_text(lift::Cause::LinkDown)};
+        }
+        if (travel_.active_kind() != TravelKind::None) {
+          return lift::Answer{ReplyCode::Busy, "a travel is running"};
+        }
+        if (auto why = not_ready_reason(false)) {
+          return lift::Answer{
+              last_input_.status.general_fault ? ReplyCode::Fault : ReplyCode::NotReady, *why};
+        }
+        return std::nullopt;
+      },
+      [this](std::int64_t target_mm, lift::Direction direction) {
+        return start_learn_leg(target_mm, direction);
+      });
 }
 
 bool DcpController::start_learn_leg(std::int64_t target_mm, lift::Direction direction) noexcept {
@@ -510,62 +485,19 @@ bool DcpController::start_learn_leg(std::int64_t target_mm, lift::Direction dire
   return travel_.start(request) == travel::StartResult::Accepted;
 }
 
-void DcpController::sample_learning() noexcept {
-  if (learn_phase_ != LearnPhase::Up || !last_input_.position_mm) return;
-  const bool zone =
-      last_input_.inputs.level_zone || (config_.level_zone_source != nullptr &&
-                                        config_.level_zone_source->level_zone(last_input_.now));
-  learner_.sample(*last_input_.position_mm, zone, travel_.direction());
-  // Every floor's zone passed: end the crawl just beyond the last one (the top terminal).
-  if (!learn_run_out_ && learner_.zones_seen() == lift_.floors().size() && !learner_.in_zone() &&
-      travel_.end_crawl_at(*last_input_.position_mm + kLearnRunOutMm)) {
-    learn_run_out_ = true;
-  }
-}
-
-void DcpController::step_learning() noexcept {
-  if (learn_phase_ == LearnPhase::Idle) return;
-  if (!learn_leg_ended_) {
-    // Stopped between the legs: nothing runs that the stop could end.
-    if (learn_stopped_ && travel_.active_kind() == TravelKind::None) {
-      end_learning(ReplyCode::NotReady, kLearnStopped);
-    }
-    return;
-  }
-  learn_leg_ended_ = false;
-  if (learn_stopped_) {
-    end_learning(ReplyCode::NotReady, kLearnStopped);
-    return;
-  }
-  if (learn_leg_cause_ != lift::Cause::None) {
-    end_learning(ReplyCode::Fault, lift::to_string(learn_leg_cause_));
-    return;
-  }
-  if (learn_phase_ == LearnPhase::Down) {
-    const std::int64_t top_mm =
-        lift_.floors().level_mm(lift_.floors().size() - 1) + kLearnApproachMm;
-    if (auto why = not_ready_reason(false)) {
-      end_learning(last_input_.status.general_fault ? ReplyCode::Fault : ReplyCode::NotReady, *why);
-    } else if (!start_learn_leg(top_mm, lift::Direction::Up)) {
-      end_learning(ReplyCode::NotReady, "the drive did not take the learning travel");
-    } else {
-      learn_phase_ = LearnPhase::Up;
-    }
-    return;
-  }
-  learn_out_.tag = learn_tag_;
-  learn_out_.judgement = learner_.judge(lift_.floors().size());
-  learn_out_.zones_seen = learner_.zones_seen();
-  learn_out_.zone_count = learner_.zone_count();
-  for (std::size_t i = 0; i < learn_out_.zone_count; ++i) learn_out_.zones[i] = learner_.zone(i);
-  learn_box_.publish(learn_out_);
-  end_learning(ReplyCode::Ok, {});
-}
-
-void DcpController::end_learning(ReplyCode code, std::string_view detail) noexcept {
-  learn_phase_ = LearnPhase::Idle;
-  learn_stopped_ = false;
-  reply(learn_tag_, code, detail);
+void DcpController::step_learn() noexcept {
+  step_learning(
+      travel_.active_kind() != TravelKind::None,
+      [this]() -> std::optional<lift::Answer> {
+        if (auto why = not_ready_reason(false)) {
+          return lift::Answer{
+              last_input_.status.general_fault ? ReplyCode::Fault : ReplyCode::NotReady, *why};
+        }
+        return std::nullopt;
+      },
+      [this](std::int64_t target_mm, lift::Direction direction) {
+        return start_learn_leg(target_mm, direction);
+      });
 }
 
 void DcpController::settle_extension(const travel::Event& event) noexcept {
@@ -736,12 +668,8 @@ void DcpController::drain_travel(MonoTime now) noexcept {
     ev.at = e->at;
     ev.travel = *e;
     push_event(ev);
-    if (learn_phase_ != LearnPhase::Idle &&
-        (e->type == travel::Event::Type::Finished || e->type == travel::Event::Type::Aborted)) {
-      learn_leg_ended_ = true;
-      learn_leg_cause_ = e->type == travel::Event::Type::Aborted && e->cause == lift::Cause::None
-                             ? lift::Cause::StopRequested
-                             : e->cause;
+    if (e->type == travel::Event::Type::Finished || e->type == travel::Event::Type::Aborted) {
+      learning_leg_ended(e->type == travel::Event::Type::Aborted, e->cause);
     }
     switch (e->type) {
       case travel::Event::Type::FastStartArmed:

@@ -99,24 +99,13 @@ using CommandBody = std::variant<TravelCommand, StopCommand, FastStopCommand, Re
                                  InspectionCommand, FastStartCommand, CallCommand, InputsCommand,
                                  LinkCommand, ClockCommand, ShutdownCommand, LearnCommand>;
 
-/// What a learning travel found, published once when it ends well (its reply is ok).
-struct LearnRecord {
-  std::uint32_t tag = 0;  ///< the learn command's tag
-  lift::LearnJudgement judgement{};
-  std::size_t zones_seen = 0;
-  std::size_t zone_count = 0;  ///< zones stored (at most lift::kMaxFloors)
-  std::array<lift::LearnedZone, lift::kMaxFloors> zones{};
-};
-
-/// The car goes this far beyond each terminal level to begin and end outside its level zone:
-/// half the longest plausible zone (lift::kMaxLevelZoneMm) plus 100 mm for a configured
-/// terminal level that far off its true level.
-inline constexpr std::int64_t kLearnApproachMm = lift::kMaxLevelZoneMm / 2 + 100;
-/// After the last zone the car crawls on this far before B1 and B2 are withdrawn.
-inline constexpr std::int64_t kLearnRunOutMm = 20;
-/// A learning leg's crawl limit: the configured crawl time plus this many ms per mm of the leg
-/// (25 mm/s, half the usual crawl speed V0 of 0.05 m/s).
-inline constexpr std::uint32_t kLearnCrawlMsPerMm = 40;
+/// What a learning travel found (lift/learning_travel.hpp).
+using lift::LearnRecord;
+/// The learning travel's approach and run-out (lift/learning_travel.hpp).
+using lift::kLearnApproachMm;
+using lift::kLearnRunOutMm;
+/// A learning leg's crawl limit: the configured crawl time plus this many ms per mm of the leg.
+inline constexpr std::uint32_t kLearnCrawlMsPerMm = lift::kLearnMsPerMm;
 
 /// A command with the caller's tag (echoed in the reply; 0 = no reply wanted).
 using Command = lift::TaggedCommand<CommandBody>;
@@ -244,8 +233,6 @@ class DcpController final : public rt::CycleEngine, public lift::ControllerCore<
 
   /// Direct access for in-process tests and benchmarks driven on one thread (and travel()).
   const dcp::MasterLink& link() const noexcept { return link_; }
-  /// io thread: the last learning travel's record (read after its ok reply).
-  LearnRecord learn_record() noexcept { return learn_box_.read(); }
 
  private:
   struct Internal {  // a channel request the travel made; its reply goes back to the travel
@@ -262,11 +249,8 @@ class DcpController final : public rt::CycleEngine, public lift::ControllerCore<
   void handle_learn(std::uint32_t tag) noexcept;
   /// Starts a learning leg to `target_mm`: up at crawl by position, down as a travel would go.
   bool start_learn_leg(std::int64_t target_mm, lift::Direction direction) noexcept;
-  /// The learning travel's part of a cycle: its sample, and its end after the last zone.
-  void sample_learning() noexcept;
-  /// After a learning leg ended: the next leg, or the learning's end.
-  void step_learning() noexcept;
-  void end_learning(ReplyCode code, std::string_view detail) noexcept;
+  /// After a learning leg ended: the next leg, or the learning's end (ControllerCore).
+  void step_learn() noexcept;
   std::optional<std::size_t> next_stop_floor() const noexcept;
   void settle_extension(const travel::Event& event) noexcept;
   void owe_position(MonoTime now) noexcept;
@@ -314,17 +298,6 @@ class DcpController final : public rt::CycleEngine, public lift::ControllerCore<
   std::optional<std::int64_t> slip_mm_;
   bool fast_start_armed_ = false;
   std::uint64_t cycle_ = 0;
-
-  enum class LearnPhase : std::uint8_t { Idle, Down, Up };
-  LearnPhase learn_phase_ = LearnPhase::Idle;
-  std::uint32_t learn_tag_ = 0;
-  bool learn_leg_ended_ = false;
-  lift::Cause learn_leg_cause_ = lift::Cause::None;  ///< why the leg ended early (None: finished)
-  bool learn_stopped_ = false;                       ///< `stop` or the service stop asked for it
-  bool learn_run_out_ = false;                       ///< the end after the last zone is set
-  lift::LevelLearner learner_;
-  LearnRecord learn_out_;
-  SnapshotBox<LearnRecord> learn_box_;
 };
 
 }  // namespace liftd::control

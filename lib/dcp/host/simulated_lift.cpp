@@ -97,6 +97,7 @@ SimulatedLift::SimulatedLift(const config::Config& config) : board_(config, mono
 
   dcp::sim::DriveConfig drive;
   drive.protocol = config.sim.dcp == 3 ? dcp::Protocol::Dcp3 : dcp::Protocol::Dcp4;
+  drive.speeds.v0_mps = config.sim.slow_mm_per_s / 1000.0;  // crawl V0 (DCP 10.3)
   if (!config.floors.empty()) drive.start_position_mm = config.floors.front().level_mm;
   for (const auto& [name, mm] : config.travel.dcp3_decel_distance_mm) {
     if (auto speed = dcp::speed_from_string(name)) {

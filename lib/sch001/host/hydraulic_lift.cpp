@@ -135,9 +135,10 @@ sch001::sim::CardSimConfig card_sim_config(const config::Config& c) {
   out.fast_down_sp3 = c.sch001.fast_down == config::FastDown::sp3;
   if (!c.floors.empty()) {
     out.start_mm = static_cast<double>(c.floors.front().level_mm);
-    out.bottom_mm = static_cast<double>(c.floors.front().level_mm) - 200.0;
-    out.top_mm = static_cast<double>(c.floors.back().level_mm) + 300.0;
+    out.bottom_mm = shaft_bottom_mm(c);
+    out.top_mm = shaft_top_mm(c);
   }
+  out.slow_mps = c.sim.slow_mm_per_s / 1000.0;
   return out;
 }
 
@@ -153,7 +154,7 @@ SimulatedCard::SimulatedCard(const config::Config& config, const std::string& so
                              std::strerror(listener.error().code));
   }
   listener_ = listener.value();
-  encoder_.set(std::llround(card_.state().position_mm));
+  encoder_.set(card_.state().position_mm);
 }
 
 SimulatedCard::~SimulatedCard() {
@@ -407,7 +408,7 @@ HydraulicLift::HydraulicLift(Host& daemon, const config::Config& config, bool si
       bus_error_lines_(kBurstLines, kBurstInterval) {
   rt::CanRunnerConfig rc;
   rc.endpoint = config.can.interface;
-  const sch001::ControllerConfig cc = sch001_controller_config(config);
+  sch001::ControllerConfig cc = sch001_controller_config(config);
   // Our own identifier too: nobody else may send on it (card document 1.6), so a frame there
   // is another node commanding the card, counted and reported (the socket never hands us our
   // own frames).
@@ -422,6 +423,7 @@ HydraulicLift::HydraulicLift(Host& daemon, const config::Config& config, bool si
         (std::filesystem::path(config.api.socket).parent_path() / "sch001-card.sock").string();
     sim_ = std::make_unique<SimulatedCard>(config, card_socket);
     position = &sim_->position();
+    cc.level_zone_source = &sim_->level_zone();
     rc.endpoint = "unix:" + card_socket;
   } else if (config.position.source == config::PositionSource::can) {
     // The encoder on the card's bus: its frames are read by the same runner.

@@ -81,6 +81,7 @@ struct Sch001Drive {
   using CallCommand = sch001::CallCommand;
   using InputsCommand = sch001::InputsCommand;
   using ShutdownCommand = sch001::ShutdownCommand;
+  using LearnCommand = sch001::LearnCommand;
   static constexpr drive::Kind kKind = drive::Kind::Sch001;
   static constexpr std::string_view kName = "sch001";
   static constexpr std::string_view kThread = "CAN";
@@ -94,6 +95,10 @@ struct Sch001Drive {
   }
   /// The command byte's bits (3c) and the card status byte's (3b), as status names them.
   static TravelBitNames travel_bit_names();
+  /// A learning leg's limit is the motor run-time limiter's plus the slow run's allowance.
+  static std::uint32_t learn_leg_base_ms(const config::Config& config) {
+    return static_cast<std::uint32_t>(config.sch001.max_travel_ms);
+  }
 };
 
 /// api::Backend over the SCH001 controller.

@@ -12,7 +12,8 @@ namespace liftd::uss {
 namespace {
 
 lift::ControllerCoreConfig core_config(const UssControllerConfig& config, MonoTime start) {
-  return {config.lift, config.floors_mm, config.inputs_timeout, config.inspection_hold, start};
+  return {config.lift, config.floors_mm,        config.inputs_timeout, config.inspection_hold,
+          start,       config.level_zone_source};
 }
 
 }  // namespace
@@ -122,7 +123,19 @@ void UssController::step(MonoTime now) noexcept {
     maybe_relevel(in);
   }
   last_output_ = travel_.tick(lift_.floors(), in);
+  sample_learning(in.position_mm, in.inputs, now, travel_.direction(),
+                  [this](std::int64_t target_mm) { return travel_.end_learning_at(target_mm); });
   drain_travel(now);
+  const bool was_busy = travel_.busy();
+  step_learning(
+      was_busy, [&] { return learn_refusal(in); },
+      [&](std::int64_t target_mm, lift::Direction direction) {
+        return start_learn_leg(target_mm, direction, in);
+      });
+  if (!was_busy && travel_.busy()) {  // the leg up after the approach: its telegram now
+    last_output_ = travel_.tick(lift_.floors(), in);
+    drain_travel(now);
+  }
   update_faults(in, now);
 
   // C 5.1: PZD1 STW, PZD2 the main setpoint HSW (normalised, C 5.2.2), further words 0.
@@ -308,11 +321,44 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
           if (!master_.request_mirror(body.address, tag)) {
             return reply(tag, ReplyCode::Busy, "a mirror to that slave is still pending");
           }
+        } else if constexpr (std::is_same_v<T, LearnCommand>) {
+          handle_learn(
+              tag, in.position_mm, config_.travel.level_tolerance_mm,
+              [&] { return learn_refusal(in); },
+              [&](std::int64_t target_mm, lift::Direction direction) {
+                return start_learn_leg(target_mm, direction, in);
+              });
         } else {
           handle_shared(tag, body, in);
         }
       },
       command.body);
+}
+
+std::optional<lift::Answer> UssController::learn_refusal(const DriveInput& in) const noexcept {
+  if (in.inputs.inspection) return lift::Answer{ReplyCode::NotReady, "inspection is on"};
+  if (travel_.busy()) return lift::Answer{ReplyCode::Busy, "a travel is running"};
+  if (!travel_.speed_available(SpeedName::V0)) {
+    return lift::Answer{ReplyCode::BadRequest, text_for(lift::Cause::SpeedNotConfigured)};
+  }
+  // Every gate of a travel: the link, the drive's status word (fault, local control, ready,
+  // warning), the safety chain, the doors, the inputs and the position (LiftTravel::forbidding).
+  const lift::Cause why = travel_.forbidding(TravelKind::Learn, in);
+  if (why != lift::Cause::None) return lift::Answer{code_for(why), text_for(why)};
+  return std::nullopt;
+}
+
+bool UssController::start_learn_leg(std::int64_t target_mm, lift::Direction direction,
+                                    const DriveInput& in) noexcept {
+  return travel_.start_learning(target_mm, direction, fastest_speed(), in) == lift::Cause::None;
+}
+
+SpeedName UssController::fastest_speed() const noexcept {
+  for (const std::string_view name : drive::kTravelSpeedNames) {
+    const auto speed = parse_speed(name);
+    if (speed && travel_.speed_available(*speed)) return *speed;
+  }
+  return SpeedName::V4;
 }
 
 // ---- travels, calls, faults ----
@@ -321,17 +367,17 @@ void UssController::serve_calls(const DriveInput& in) noexcept {
   const auto floor = next_call(in);
   if (!floor) return;
   // The fastest speed the installation has, in the order DCP 3.5.3.7 adds them.
-  for (const std::string_view name : drive::kTravelSpeedNames) {
-    const auto speed = parse_speed(name);
-    if (speed && travel_.speed_available(*speed)) {
-      (void)travel_.start_travel(lift_.floors(), *floor, *speed, in);  // waits while refused
-      return;
-    }
+  const SpeedName speed = fastest_speed();
+  if (travel_.speed_available(speed)) {
+    (void)travel_.start_travel(lift_.floors(), *floor, speed, in);  // waits while refused
   }
 }
 
 void UssController::maybe_relevel(const DriveInput& in) noexcept {
-  if (!config_.auto_relevel || travel_.busy() || in.inputs.inspection) return;
+  if (!config_.auto_relevel || travel_.busy() || in.inputs.inspection || learning() ||
+      relevel_held()) {
+    return;
+  }
   if (in.position_mm) {
     const auto nearest = lift::floor_to_relevel(
         lift_.floors(), *in.position_mm, config_.relevel_threshold_mm, config_.relevel_zone_mm);

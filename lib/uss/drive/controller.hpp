@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "common/defaults.hpp"
+#include "common/level_zone_source.hpp"
 #include "common/mono_time.hpp"
 #include "common/position_source.hpp"
 #include "lift/controller_core.hpp"
@@ -59,6 +60,9 @@ struct UssControllerConfig {
   bool auto_relevel = true;
   std::uint32_t relevel_threshold_mm = defaults::kRelevelThresholdMm;
   std::uint32_t relevel_zone_mm = lift::kRelevelZoneMm;
+  /// The simulated shaft's level zone, read beside the machine inputs' by the learning travel
+  /// (liftd --simulate; nullptr otherwise).
+  const LevelZoneSource* level_zone_source = nullptr;
 };
 
 // ---- commands (io thread -> USS thread): the shared ones in lib/lift/controller_core.hpp ----
@@ -84,9 +88,12 @@ struct ParameterCommand {
 struct MirrorCommand {
   std::uint8_t address = 0;
 };
+/// The learning travel (lift/learning_travel.hpp): legs at the crawl setpoint V0 ended by
+/// position; answered when it ends (the record in learn_record()).
+struct LearnCommand {};
 using CommandBody = std::variant<TravelCommand, StopCommand, RelevelCommand, InspectionCommand,
                                  CallCommand, InputsCommand, ShutdownCommand, DriveResetCommand,
-                                 ParameterCommand, MirrorCommand>;
+                                 ParameterCommand, MirrorCommand, LearnCommand>;
 using ControllerCommand = lift::TaggedCommand<CommandBody>;
 
 // ---- replies and events (USS thread -> io thread) ----
@@ -231,6 +238,13 @@ class UssController final : public uss::UssHooks, public lift::ControllerCore<Us
   void update_faults(const DriveInput& in, MonoTime now) noexcept;
   void serve_calls(const DriveInput& in) noexcept;
   void maybe_relevel(const DriveInput& in) noexcept;
+  /// The fastest travel speed with a setpoint, in the order DCP 3.5.3.7 adds them (V4 if none).
+  SpeedName fastest_speed() const noexcept;
+  /// The learn command's and the next leg's gates beyond the shared ones (ControllerCore).
+  std::optional<lift::Answer> learn_refusal(const DriveInput& in) const noexcept;
+  /// Starts a learning leg (LiftTravel::start_learning, the approach at the fastest speed).
+  bool start_learn_leg(std::int64_t target_mm, lift::Direction direction,
+                       const DriveInput& in) noexcept;
   void publish(MonoTime now) noexcept;
   static ReplyCode code_for(lift::Cause cause) noexcept;
   static std::string_view text_for(lift::Cause cause) noexcept;

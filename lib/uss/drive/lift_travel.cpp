@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "lift/gate.hpp"
+#include "lift/learning_travel.hpp"
 
 namespace liftd::uss {
 namespace {
@@ -110,6 +111,8 @@ std::string_view to_string(TravelKind kind) noexcept {
       return "relevel";
     case TravelKind::Inspection:
       return "inspection";
+    case TravelKind::Learn:
+      return "learn";
   }
   return "idle";
 }
@@ -213,8 +216,11 @@ lift::Cause LiftTravel::ending(TravelKind kind, const DriveInput& in) const noex
   if (!profile_.plc_control(in.zsw)) return lift::Cause::DriveNotReady;
   // The machine's rules, common to every drive kind (lib/lift/gate.hpp). Inspection: the
   // safety chain holds the door contacts.
+  // A learning leg needs what a travel needs, and the position whatever the reference.
+  const bool learn = kind == TravelKind::Learn;
   const lift::MachineNeeds needs =
-      lift::run_needs(kind, config_.relevel_doors_open, config_.reference == Reference::Position);
+      lift::run_needs(learn ? TravelKind::Travel : kind, config_.relevel_doors_open,
+                      learn || config_.reference == Reference::Position);
   return lift::refusal_cause(lift::machine_refusal(in.inputs, in.position_mm.has_value(), needs));
 }
 
@@ -229,6 +235,8 @@ lift::Cause LiftTravel::begin(TravelKind kind, std::size_t floor, SpeedName spee
   speed_ = speed;
   direction_ = direction;
   started_at_ = in.now;
+  run_limit_ms_ = config_.max_travel_ms;
+  crawl_limit_ms_ = config_.crawl_timeout_ms;
   inspect_stop_ = false;
   enter(Phase::Contactors, in.now);
   push(TravelEvent::Type::Started, lift::Cause::None, in.now);
@@ -248,6 +256,7 @@ lift::Cause LiftTravel::start_travel(const lift::FloorTable& floors, std::size_t
   } else {
     return lift::Cause::PositionLost;  // no way to tell which way
   }
+  target_mm_ = floors.level_mm(floor);
   return begin(TravelKind::Travel, floor, speed, direction, in);
 }
 
@@ -258,7 +267,41 @@ lift::Cause LiftTravel::start_relevel(const lift::FloorTable& floors, std::size_
         floors.level_mm(floor) >= *in.position_mm ? lift::Direction::Up : lift::Direction::Down;
   }
   if (direction == lift::Direction::None) return lift::Cause::PositionLost;
+  target_mm_ = floors.level_mm(floor);
   return begin(TravelKind::Relevel, floor, SpeedName::VN, direction, in);
+}
+
+lift::Cause LiftTravel::start_learning(std::int64_t target_mm, lift::Direction direction,
+                                       SpeedName approach, const DriveInput& in) noexcept {
+  if (direction == lift::Direction::None || !in.position_mm) return lift::Cause::PositionLost;
+  // Up: the crawl setpoint all the way, so each zone edge is seen at the crawl. Down: the
+  // approach may go fast and crawl the last part, as a travel does.
+  const SpeedName speed =
+      direction == lift::Direction::Up || !is_travel_speed(approach) || !speed_available(approach)
+          ? SpeedName::V0
+          : approach;
+  const std::int64_t distance = target_mm - *in.position_mm;
+  const std::int64_t previous_target_mm = target_mm_;
+  target_mm_ = target_mm;
+  const lift::Cause why = begin(TravelKind::Learn, current_floor_, speed, direction, in);
+  if (why != lift::Cause::None) {
+    target_mm_ = previous_target_mm;
+    return why;
+  }
+  // The limits must let a crawl cover the whole leg.
+  run_limit_ms_ = lift::learn_leg_limit_ms(config_.max_travel_ms, distance);
+  crawl_limit_ms_ = lift::learn_leg_limit_ms(config_.crawl_timeout_ms, distance);
+  return lift::Cause::None;
+}
+
+bool LiftTravel::end_learning_at(std::int64_t target_mm) noexcept {
+  if (kind_ != TravelKind::Learn || direction_ != lift::Direction::Up) return false;
+  if (phase_ != Phase::Contactors && phase_ != Phase::SwitchOn && phase_ != Phase::BrakeRelease &&
+      phase_ != Phase::Run && phase_ != Phase::Crawl) {
+    return false;  // stopping already
+  }
+  target_mm_ = target_mm;
+  return true;
 }
 
 lift::Cause LiftTravel::inspect(const lift::FloorTable& floors, lift::Direction direction,
@@ -308,6 +351,9 @@ std::optional<std::size_t> LiftTravel::stop(const lift::FloorTable& floors,
       return std::nullopt;
     case TravelKind::Relevel:
       return target_;  // a few millimetres at VN: let it land
+    case TravelKind::Learn:
+      normal_stop(in.now);  // no floor to land at: the drive's ramp to standstill
+      return std::nullopt;
     case TravelKind::Travel:
       break;
   }
@@ -328,7 +374,10 @@ std::optional<std::size_t> LiftTravel::stop(const lift::FloorTable& floors,
     const auto floor = static_cast<std::size_t>(i);
     if (lift::distance_ahead(*in.position_mm, floors.level_mm(floor), direction_) >=
         static_cast<std::int64_t>(slowdown)) {
-      if (up ? floor < target_ : floor > target_) target_ = floor;
+      if (up ? floor < target_ : floor > target_) {
+        target_ = floor;
+        target_mm_ = floors.level_mm(floor);
+      }
       return target_;
     }
   }
@@ -374,31 +423,33 @@ void LiftTravel::finish(MonoTime now) noexcept {
 }
 
 void LiftTravel::push(TravelEvent::Type type, lift::Cause cause, MonoTime now) noexcept {
-  const bool landed = type == TravelEvent::Type::Finished && kind_ != TravelKind::Inspection;
-  const std::size_t floor = type == TravelEvent::Type::Started && kind_ != TravelKind::Inspection
-                                ? target_
-                            : landed ? target_
-                                     : current_floor_;
+  // A travel or relevelling names its target; an inspection run and a learning leg the floor
+  // the car was at (a finished learning leg: the one nearest where it ended).
+  const bool to_floor = kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel;
+  const bool landed = type == TravelEvent::Type::Finished && to_floor;
+  const std::size_t floor = type == TravelEvent::Type::Started && to_floor ? target_
+                            : landed                                       ? target_
+                                                                           : current_floor_;
   events_.push({type, kind_, direction_, floor, cause, now});
 }
 
 // ---- one step ----
 
-bool LiftTravel::decel_point(const lift::FloorTable& floors, const DriveInput& in) const noexcept {
-  if (config_.reference == Reference::ShaftSignals) {
+bool LiftTravel::decel_point(const DriveInput& in) const noexcept {
+  if (config_.reference == Reference::ShaftSignals && kind_ != TravelKind::Learn) {
     return in.inputs.decel_point(speed_number(speed_), direction_);
   }
   if (!in.position_mm) return false;
-  return lift::distance_ahead(*in.position_mm, floors.level_mm(target_), direction_) <=
+  return lift::distance_ahead(*in.position_mm, target_mm_, direction_) <=
          static_cast<std::int64_t>(config_.slowdown_mm[speed_index(speed_)]);
 }
 
-bool LiftTravel::at_level(const lift::FloorTable& floors, const DriveInput& in) const noexcept {
-  if (in.position_mm &&
-      (config_.reference == Reference::Position || kind_ == TravelKind::Relevel)) {
+bool LiftTravel::at_level(const DriveInput& in) const noexcept {
+  if (in.position_mm && (config_.reference == Reference::Position || kind_ == TravelKind::Relevel ||
+                         kind_ == TravelKind::Learn)) {
     // The setpoint goes to 0 the crawl's ramp distance before the level, so the car stops on
     // it (the role a stop flag ahead of the level plays in the shaft).
-    return lift::distance_ahead(*in.position_mm, floors.level_mm(target_), direction_) <=
+    return lift::distance_ahead(*in.position_mm, target_mm_, direction_) <=
            static_cast<std::int64_t>(config_.stop_lead_mm);
   }
   if (kind_ == TravelKind::Relevel) {
@@ -446,13 +497,20 @@ void LiftTravel::sequence(const lift::FloorTable& floors, const DriveInput& in) 
       return;
     case Phase::Run:
       if (!running) return abort(lift::Cause::DriveNotReady, in.now);
-      if (kind_ == TravelKind::Travel) {
-        if (decel_point(floors, in)) enter(Phase::Crawl, in.now);
+      if (kind_ == TravelKind::Travel || (kind_ == TravelKind::Learn && speed_ != SpeedName::V0)) {
+        if (decel_point(in)) enter(Phase::Crawl, in.now);
+      } else if (kind_ == TravelKind::Learn) {
+        // The crawl up through the zones: by position to the leg's end, bounded like a crawl.
+        if (at_level(in)) {
+          enter(Phase::Stopping, in.now);
+        } else if (since >= milliseconds(crawl_limit_ms_)) {
+          abort(lift::Cause::LevelNotReached, in.now);
+        }
       } else if (kind_ == TravelKind::Relevel) {
         // Relevelling runs at VN all the way: bounded like a crawl.
-        if (at_level(floors, in)) {
+        if (at_level(in)) {
           enter(Phase::Stopping, in.now);
-        } else if (since >= milliseconds(config_.crawl_timeout_ms)) {
+        } else if (since >= milliseconds(crawl_limit_ms_)) {
           abort(lift::Cause::LevelNotReached, in.now);
         }
       } else if (in.position_mm && floors.size() > 0 &&
@@ -463,9 +521,9 @@ void LiftTravel::sequence(const lift::FloorTable& floors, const DriveInput& in) 
       return;
     case Phase::Crawl:
       if (!running) return abort(lift::Cause::DriveNotReady, in.now);
-      if (at_level(floors, in)) {
+      if (at_level(in)) {
         enter(Phase::Stopping, in.now);
-      } else if (since >= milliseconds(config_.crawl_timeout_ms)) {
+      } else if (since >= milliseconds(crawl_limit_ms_)) {
         abort(lift::Cause::LevelNotReached, in.now);
       }
       return;
@@ -484,7 +542,12 @@ void LiftTravel::sequence(const lift::FloorTable& floors, const DriveInput& in) 
     case Phase::SwitchOff:
       // C 5.2.1 table 5.2 OFF1: "bei n/f = 0 und I = 0 Spannungsfreischaltung": the run is over
       // when ZSW bit 2 drops. The profile supervision ends a drive that stays on.
-      if (!operation_enabled(in.zsw)) finish(in.now);
+      if (!operation_enabled(in.zsw)) {
+        if (kind_ == TravelKind::Learn && in.position_mm) {
+          if (const auto nearest = floors.nearest(*in.position_mm)) current_floor_ = *nearest;
+        }
+        finish(in.now);
+      }
       return;
   }
 }
@@ -495,7 +558,7 @@ DriveOutput LiftTravel::tick(const lift::FloorTable& floors, const DriveInput& i
     // Motor run-time limiter; as common practice has it, not on inspection runs (a technician
     // may walk the whole shaft at VI, and lets go of the button to stop).
     if (why == lift::Cause::None && kind_ != TravelKind::Inspection &&
-        in.now - started_at_ > milliseconds(config_.max_travel_ms)) {
+        in.now - started_at_ > milliseconds(run_limit_ms_)) {
       why = lift::Cause::TravelTimeout;  // motor run-time limiter
     }
     if (why != lift::Cause::None) abort(why, in.now);

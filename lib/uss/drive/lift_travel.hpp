@@ -132,8 +132,14 @@ struct LiftTravelConfig {
 std::optional<std::string_view> validate(const LiftTravelConfig& config) noexcept;
 
 /// What runs.
-enum class TravelKind : std::uint8_t { None, Travel, Relevel, Inspection };
-/// "idle", "speed", "relevel", "inspection".
+enum class TravelKind : std::uint8_t {
+  None,
+  Travel,
+  Relevel,
+  Inspection,
+  Learn,  ///< a leg of the learning travel (lift/learning_travel.hpp): ends by position
+};
+/// "idle", "speed", "relevel", "inspection", "learn".
 std::string_view to_string(TravelKind kind) noexcept;
 
 /// Where a run is.
@@ -197,6 +203,16 @@ class LiftTravel {
   /// position `direction` (from the shaft's relevel signals) is used.
   lift::Cause start_relevel(const lift::FloorTable& floors, std::size_t floor,
                             lift::Direction direction, const DriveInput& in) noexcept;
+  /// Starts a leg of the learning travel to `target_mm` going `direction`, ended by position
+  /// whatever the reference (no floor of the table, no level-zone stop). Up at the crawl setpoint
+  /// V0 all the way; down at `approach` (a travel speed with a setpoint; else V0) until its
+  /// slowdown distance before the target, then V0. The crawl and run-time limits allow a crawl
+  /// through the leg (lift::learn_leg_limit_ms). Every gate of a travel applies.
+  lift::Cause start_learning(std::int64_t target_mm, lift::Direction direction, SpeedName approach,
+                             const DriveInput& in) noexcept;
+  /// A learning leg going up ends at `target_mm` instead (the run-out after the last zone);
+  /// false when no such leg runs.
+  bool end_learning_at(std::int64_t target_mm) noexcept;
   /// Inspection: hold-to-run `direction` (None: stop). A change of direction stops first; no
   /// run starts towards a terminal level the car is at.
   lift::Cause inspect(const lift::FloorTable& floors, lift::Direction direction,
@@ -204,7 +220,8 @@ class LiftTravel {
   /// Stop at the next floor ahead the car can still reach at its speed's slowdown distance (by
   /// position; by shaft signals the target stays); a car already crawling keeps its floor; a car
   /// not yet moving, or with no floor reachable, stops at once by OFF1 (the drive's ramp).
-  /// Inspection: the normal stop sequence. Returns the floor the car will stop at.
+  /// Inspection and a learning leg: the normal stop sequence. Returns the floor the car will
+  /// stop at.
   std::optional<std::size_t> stop(const lift::FloorTable& floors, const DriveInput& in) noexcept;
   /// Ends whatever runs at once with `cause` (reported once), leaving abort_wish(cause).
   void abort(lift::Cause cause, MonoTime now) noexcept;
@@ -256,8 +273,8 @@ class LiftTravel {
   void finish(MonoTime now) noexcept;
   void push(TravelEvent::Type type, lift::Cause cause, MonoTime now) noexcept;
   void normal_stop(MonoTime now) noexcept;
-  bool decel_point(const lift::FloorTable& floors, const DriveInput& in) const noexcept;
-  bool at_level(const lift::FloorTable& floors, const DriveInput& in) const noexcept;
+  bool decel_point(const DriveInput& in) const noexcept;
+  bool at_level(const DriveInput& in) const noexcept;
   double run_setpoint(const DriveInput& in) const noexcept;
   void sequence(const lift::FloorTable& floors, const DriveInput& in) noexcept;
 
@@ -268,7 +285,11 @@ class LiftTravel {
   lift::Direction direction_ = lift::Direction::None;
   SpeedName speed_ = SpeedName::V4;
   std::size_t target_ = 0;
+  std::int64_t target_mm_ =
+      0;  ///< where the run ends by position (the floor's level, or the leg's)
   std::size_t current_floor_ = 0;
+  std::uint32_t run_limit_ms_ = 0;    ///< the run-time limiter of this run
+  std::uint32_t crawl_limit_ms_ = 0;  ///< the longest crawl of this run
   MonoTime started_at_{};
   MonoTime entered_at_{};
   ProfileWish halt_wish_ = ProfileWish::Stop;

@@ -169,14 +169,14 @@ SimulatedUssBus::SimulatedUssBus(const config::Config& config)
     sc.car.accel_mps2 = kSimRampMps2;
     if (!config.floors.empty()) {
       sc.car.start_mm = static_cast<double>(config.floors.front().level_mm);
-      sc.car.bottom_mm = static_cast<double>(config.floors.front().level_mm) - 200.0;
-      sc.car.top_mm = static_cast<double>(config.floors.back().level_mm) + 300.0;
+      sc.car.bottom_mm = shaft_bottom_mm(config);
+      sc.car.top_mm = shaft_top_mm(config);
     }
     for (const auto& f : config.floors) sc.car.floors_mm.push_back(f.level_mm);
     slaves.push_back(sc);
   }
   bus_ = std::make_unique<uss::sim::UssBusSim>(slaves, baud_, mono_now());
-  encoder_.set(std::llround(drive().position_mm()));
+  encoder_.set(drive().position_mm());
 }
 
 SimulatedUssBus::~SimulatedUssBus() {
@@ -661,8 +661,9 @@ UssLift::UssLift(Host& daemon, const config::Config& config, bool simulate)
     position = &make_position_feed();
   }
   master_ = std::make_unique<uss::Master>(uss_master_config(config));
-  controller_ = std::make_unique<uss::UssController>(uss_controller_config(config), *master_,
-                                                     *position, mono_now());
+  uss::UssControllerConfig cc = uss_controller_config(config);
+  if (sim_) cc.level_zone_source = &sim_->level_zone();
+  controller_ = std::make_unique<uss::UssController>(cc, *master_, *position, mono_now());
   runner_ = std::make_unique<uss::UssRunner>(rc, *master_, *controller_);
   register_parts(std::make_unique<UssBackend>(config, daemon.config_schema(), *controller_,
                                               *runner_, *master_, api_position_feed(), sim_.get()),

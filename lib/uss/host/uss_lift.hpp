@@ -90,6 +90,7 @@ struct UssDrive {
   using CallCommand = uss::CallCommand;
   using InputsCommand = uss::InputsCommand;
   using ShutdownCommand = uss::ShutdownCommand;
+  using LearnCommand = uss::LearnCommand;
   static constexpr drive::Kind kKind = drive::Kind::Uss;
   static constexpr std::string_view kName = "uss";
   static constexpr std::string_view kThread = "USS";
@@ -104,6 +105,11 @@ struct UssDrive {
   }
   /// The control and status words' bits (C 5.1), as status names them.
   static TravelBitNames travel_bit_names();
+  /// A learning leg's limit is the run-time limiter's (the longer of the two a leg has) plus the
+  /// crawl's allowance.
+  static std::uint32_t learn_leg_base_ms(const config::Config&) {
+    return uss::LiftTravelConfig{}.max_travel_ms;
+  }
 };
 
 /// api::Backend and the USS parameter commands over the USS lift controller.

@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <optional>
+#include <string_view>
 #include <vector>
 
 #include "uss/drive/bus.hpp"
@@ -344,6 +347,95 @@ TEST(UssController, RejectsAConfigItCannotRun) {
   config = controller_config();
   config.floors_mm = {0};
   EXPECT_THROW(UssController(config, master, position, MonoTime{}), std::invalid_argument);
+}
+
+// ---- the learning travel ----
+
+/// The shaft's true levels, off the floor table (0, 3000, 6000, 9000); their level zones are
+/// 100 mm long and reach the controller as the machine input `zone_level`.
+constexpr std::array<std::int64_t, 4> kTrueLevels = {-35, 3025, 6055, 8980};
+
+/// Runs the bus with the level zone input following the car until `done` (fake time).
+bool run_shaft(Bus& bus, const std::function<bool()>& done, int limit_ms = 400000) {
+  return bus.run_until(
+      [&] {
+        bus.inputs.level_zone = false;
+        for (const std::int64_t level : kTrueLevels) {
+          const double at = bus.car.position_mm;
+          if (at >= static_cast<double>(level) - 50.0 && at <= static_cast<double>(level) + 50.0) {
+            bus.inputs.level_zone = true;
+          }
+        }
+        return done();
+      },
+      limit_ms);
+}
+
+std::optional<CommandReply> reply_to(const Bus& bus, std::uint32_t tag) {
+  for (const CommandReply& r : bus.replies) {
+    if (r.tag == tag) return r;
+  }
+  return std::nullopt;
+}
+
+TEST(UssController, LearnsTheShaftsLevelsAtTheCrawlAndStopsJustAboveTheTopZone) {
+  Bus bus;
+  bus.post(7, LearnCommand{});
+  ASSERT_TRUE(run_shaft(bus, [&] { return reply_to(bus, 7).has_value(); }));
+  const CommandReply reply = *reply_to(bus, 7);
+  EXPECT_EQ(reply.code, ReplyCode::Ok) << reply.detail;
+  const lift::LearnRecord record = bus.controller.learn_record();
+  EXPECT_EQ(record.tag, 7U);
+  EXPECT_TRUE(record.judgement.ok());
+  ASSERT_EQ(record.zone_count, 4U);
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_NEAR(static_cast<double>(record.zones[i].level_mm()),
+                static_cast<double>(kTrueLevels[i]), 2.0)
+        << "floor " << i;
+  }
+  EXPECT_NEAR(bus.car.position_mm, 9030.0 + 20.0, 5.0) << "20 mm beyond the top zone";
+  const auto legs = bus.travel_events();
+  ASSERT_EQ(legs.size(), 4U);
+  for (const auto& e : legs) EXPECT_EQ(e.travel.kind, TravelKind::Learn);
+  // At rest beyond the table's top level: no relevelling towards it.
+  ASSERT_FALSE(run_shaft(
+      bus, [&] { return bus.controller.travel().busy(); }, 2000));
+}
+
+TEST(UssController, StopOrAFaultMidLearningEndsItAndNothingIsLearned) {
+  struct Case {
+    const char* legend;
+    std::function<void(Bus&)> act;
+    ReplyCode code;
+    std::string_view detail;
+  };
+  const Case cases[] = {
+      {"stop", [](Bus& b) { b.post(8, StopCommand{}); }, ReplyCode::NotReady,
+       "learning travel stopped: nothing learned"},
+      {"safety chain", [](Bus& b) { b.inputs.safety_chain_closed = false; }, ReplyCode::Fault,
+       "safety_chain_open"},
+  };
+  for (const Case& c : cases) {
+    Bus bus;
+    bus.post(7, LearnCommand{});
+    // Past the approach and into the leg up.
+    ASSERT_TRUE(run_shaft(bus, [&] {
+      return bus.controller.travel().kind() == TravelKind::Learn &&
+             bus.controller.travel().direction() == lift::Direction::Up &&
+             bus.car.position_mm > 500.0;
+    })) << c.legend;
+    c.act(bus);
+    ASSERT_TRUE(run_shaft(
+        bus, [&] { return reply_to(bus, 7).has_value(); }, 10000))
+        << c.legend;
+    EXPECT_EQ(reply_to(bus, 7)->code, c.code) << c.legend;
+    EXPECT_EQ(reply_to(bus, 7)->detail, c.detail) << c.legend;
+    EXPECT_EQ(bus.controller.learn_record().tag, 0U) << c.legend << ": a record was published";
+    ASSERT_TRUE(run_shaft(
+        bus, [&] { return bus.idle(); }, 10000))
+        << c.legend;
+    EXPECT_LT(bus.car.position_mm, 1000.0) << c.legend << ": stopped, not run on";
+  }
 }
 
 }  // namespace

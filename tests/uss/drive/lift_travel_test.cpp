@@ -581,6 +581,167 @@ TEST(LiftTravel, RefusalsAtStart) {
   EXPECT_TRUE(rig.events.empty());
 }
 
+// ---- the learning travel's legs (lift/learning_travel.hpp) ----
+
+/// The phases a run went through from output `from` on, repeats collapsed.
+std::vector<Phase> phase_runs(const Rig& rig, std::size_t from) {
+  std::vector<Phase> seen;
+  for (std::size_t i = from; i < rig.phases.size(); ++i) {
+    if (seen.empty() || seen.back() != rig.phases[i]) seen.push_back(rig.phases[i]);
+  }
+  return seen;
+}
+
+TEST(LiftTravel, LearningLegUpCrawlsAtV0ThroughTheZonesAndEndsByPosition) {
+  // The issue: "the crawl setpoint on a USS drive", whatever the reference; a level zone or a
+  // deceleration point on the way stops no learning leg.
+  for (const Reference reference : {Reference::Position, Reference::ShaftSignals}) {
+    LiftTravelConfig config = test_config();
+    config.reference = reference;
+    Rig rig(config);
+    rig.car.position_mm = -300.0;
+    const std::size_t from = rig.outputs.size();
+    ASSERT_EQ(rig.travel.start_learning(1100, lift::Direction::Up, SpeedName::V4, rig.input()),
+              lift::Cause::None);
+    EXPECT_EQ(rig.travel.kind(), TravelKind::Learn);
+    EXPECT_EQ(rig.travel.target(), std::nullopt) << "a leg goes to no floor";
+    rig.inputs.level_zone = true;
+    rig.inputs.decel_up[3] = true;
+    ASSERT_TRUE(rig.run_idle());
+    // Stops on the stop lead (2 mm) before the leg's end: within the fake drive's 1.25 mm ramp.
+    EXPECT_LE(std::abs(rig.car.position_mm - 1100.0), 2.0) << rig.car.position_mm;
+    EXPECT_EQ(
+        phase_runs(rig, from),
+        (std::vector<Phase>{Phase::Contactors, Phase::SwitchOn, Phase::BrakeRelease, Phase::Run,
+                            Phase::Stopping, Phase::BrakeApply, Phase::SwitchOff, Phase::Idle}));
+    for (std::size_t i = from; i < rig.outputs.size(); ++i) {
+      const double expected = rig.phases[i] == Phase::Run ? 5.0 : 0.0;  // V0 = 5 %
+      EXPECT_EQ(rig.outputs[i].setpoint_percent, expected) << i;
+    }
+    const auto ev = rig.take_events();
+    ASSERT_EQ(ev.size(), 2U);
+    EXPECT_EQ(ev[0].kind, TravelKind::Learn);
+    EXPECT_EQ(ev[1].type, TravelEvent::Type::Finished);
+    EXPECT_EQ(rig.travel.current_floor(), 0U) << "the floor nearest where the leg ended";
+  }
+}
+
+TEST(LiftTravel, LearningLegDownApproachesAtTheFastestSpeedThenCrawls) {
+  Rig rig;
+  rig.car.position_mm = 3000.0;
+  const std::size_t from = rig.outputs.size();
+  ASSERT_EQ(rig.travel.start_learning(-300, lift::Direction::Down, SpeedName::V4, rig.input()),
+            lift::Cause::None);
+  ASSERT_TRUE(rig.run_idle());
+  EXPECT_LE(std::abs(rig.car.position_mm + 300.0), 2.0) << rig.car.position_mm;
+  EXPECT_EQ(phase_runs(rig, from),
+            (std::vector<Phase>{Phase::Contactors, Phase::SwitchOn, Phase::BrakeRelease, Phase::Run,
+                                Phase::Crawl, Phase::Stopping, Phase::BrakeApply, Phase::SwitchOff,
+                                Phase::Idle}));
+  for (std::size_t i = from; i < rig.outputs.size(); ++i) {
+    const double expected = rig.phases[i] == Phase::Run     ? -100.0
+                            : rig.phases[i] == Phase::Crawl ? -5.0
+                                                            : 0.0;
+    EXPECT_EQ(rig.outputs[i].setpoint_percent, expected) << i;
+    // V4's slowdown distance (700 mm) before the leg's end: the crawl, by position.
+    if (rig.phases[i] == Phase::Run && rig.seen_positions[i]) {
+      EXPECT_GT(*rig.seen_positions[i], -300 + 700) << i;
+    }
+  }
+}
+
+TEST(LiftTravel, LearningLegUpEndsWhereTheRunOutSays) {
+  Rig rig;
+  rig.car.position_mm = -300.0;
+  ASSERT_EQ(rig.travel.start_learning(1100, lift::Direction::Up, SpeedName::V4, rig.input()),
+            lift::Cause::None);
+  ASSERT_TRUE(rig.run_until([&] { return rig.car.position_mm > 500.0; }));
+  EXPECT_TRUE(rig.travel.end_learning_at(620));
+  ASSERT_TRUE(rig.run_idle());
+  EXPECT_LE(std::abs(rig.car.position_mm - 620.0), 2.0) << rig.car.position_mm;
+  EXPECT_FALSE(rig.travel.end_learning_at(700)) << "no leg runs";
+  ASSERT_EQ(rig.travel.start_travel(rig.floors, 3, SpeedName::V4, rig.input()), lift::Cause::None);
+  EXPECT_FALSE(rig.travel.end_learning_at(700)) << "a travel has its floor";
+}
+
+TEST(LiftTravel, AFaultMidLegEndsItAsItEndsATravel) {
+  struct Case {
+    const char* legend;
+    std::function<void(Rig&)> fault;
+    std::uint16_t stw;  // the next telegram (C 5.2.1 table 5.2)
+    lift::Cause cause;
+  };
+  const Case cases[] = {
+      {"safety chain: OFF2", [](Rig& r) { r.inputs.safety_chain_closed = false; }, 0x0404,
+       lift::Cause::SafetyChainOpen},
+      {"doors: OFF2", [](Rig& r) { r.inputs.doors_locked = false; }, 0x0404,
+       lift::Cause::DoorsNotLocked},
+      {"inputs lost: OFF3", [](Rig& r) { r.inputs.valid = false; }, 0x040A,
+       lift::Cause::InputsLost},
+      {"position lost: OFF3", [](Rig& r) { r.position_known = false; }, 0x040A,
+       lift::Cause::PositionLost},
+  };
+  for (const Case& c : cases) {
+    // The position is needed even where travels read the shaft signals: the leg ends by it.
+    LiftTravelConfig config = test_config();
+    config.reference = Reference::ShaftSignals;
+    Rig rig(config);
+    rig.car.position_mm = -300.0;
+    ASSERT_EQ(rig.travel.start_learning(1100, lift::Direction::Up, SpeedName::V4, rig.input()),
+              lift::Cause::None)
+        << c.legend;
+    ASSERT_TRUE(rig.run_until([&] { return rig.car.position_mm > 0.0; })) << c.legend;
+    rig.take_events();
+    c.fault(rig);
+    EXPECT_EQ(rig.exchange().stw, c.stw) << c.legend;
+    EXPECT_EQ(rig.outputs.back().setpoint_percent, 0.0) << c.legend;
+    ASSERT_EQ(rig.events.size(), 1U) << c.legend;
+    EXPECT_EQ(rig.events[0].type, TravelEvent::Type::Aborted) << c.legend;
+    EXPECT_EQ(rig.events[0].cause, c.cause) << c.legend;
+    EXPECT_EQ(rig.travel.start_learning(1100, lift::Direction::Up, SpeedName::V4, rig.input()),
+              c.cause)
+        << c.legend << ": the same condition refuses a new leg";
+  }
+}
+
+TEST(LiftTravel, StopEndsALearningLegByTheDrivesRamp) {
+  Rig rig;
+  rig.car.position_mm = -300.0;
+  ASSERT_EQ(rig.travel.start_learning(1100, lift::Direction::Up, SpeedName::V4, rig.input()),
+            lift::Cause::None);
+  ASSERT_TRUE(rig.run_until([&] { return rig.car.position_mm > 0.0; }));
+  EXPECT_EQ(rig.travel.stop(rig.floors, rig.input()), std::nullopt) << "no floor to land at";
+  EXPECT_EQ(rig.exchange().setpoint_percent, 0.0);
+  EXPECT_EQ(rig.travel.phase(), Phase::Stopping);
+  ASSERT_TRUE(rig.run_idle());
+  EXPECT_LT(rig.car.position_mm, 10.0) << "stopped on the ramp from V0";
+  ASSERT_EQ(rig.events.size(), 2U);
+  EXPECT_EQ(rig.events[1].type, TravelEvent::Type::Finished);
+}
+
+TEST(LiftTravel, TheLimitsOfALearningLegAllowACrawlThroughIt) {
+  // 1400 mm at V0 (50 mm/s) take 28 s: far beyond the crawl's 1 s and the limiter's 2 s, within
+  // their learning allowance of 40 ms per mm (56 s) on top.
+  LiftTravelConfig config = test_config();
+  config.crawl_timeout_ms = 1000;
+  config.max_travel_ms = 2000;
+  Rig rig(config);
+  rig.car.position_mm = -300.0;
+  ASSERT_EQ(rig.travel.start_learning(1100, lift::Direction::Up, SpeedName::V4, rig.input()),
+            lift::Cause::None);
+  ASSERT_TRUE(rig.run_idle());
+  ASSERT_EQ(rig.events.size(), 2U);
+  EXPECT_EQ(rig.events[1].type, TravelEvent::Type::Finished);
+  EXPECT_GT(rig.events[1].at - rig.events[0].at, milliseconds(28000));
+  // A car that does not move runs into the limit: the crawl's (1 s + 56 s) first.
+  Rig stuck(config);
+  stuck.car.rated_mm_per_s = 0.0;
+  ASSERT_EQ(stuck.travel.start_learning(1100, lift::Direction::Up, SpeedName::V4, stuck.input()),
+            lift::Cause::None);
+  ASSERT_TRUE(stuck.run_until([&] { return stuck.travel.phase() == Phase::Halt; }, 70000));
+  EXPECT_EQ(stuck.events.back().cause, lift::Cause::LevelNotReached);
+}
+
 TEST(LiftTravelConfig, ValidateNamesTheBadField) {
   EXPECT_EQ(validate(LiftTravelConfig{}), std::nullopt);
   LiftTravelConfig c;
