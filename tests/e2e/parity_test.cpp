@@ -432,14 +432,16 @@ void PrintTo(const LearnCase& c, std::ostream* out) {
 }
 
 const LearnCase kLearnCases[] = {
-    // DCP: V0 at 150 mm/s, 2.3 mm per 15 ms cycle.
-    {"dcp", {{"floors", kLearnFloors}, {"sim", learn_shaft(150)}}},
-    // SCH001: the slow speed at 200 mm/s, 2 mm per 10 ms tick.
+    // DCP: V0 at 100 mm/s, 1.5 mm per 15 ms cycle: each edge lies within 0.75 mm of a sample
+    // even with the encoder's whole millimetres, well inside the 2 mm (a cycle that wakes late
+    // widens one gap, not the others).
+    {"dcp", {{"floors", kLearnFloors}, {"sim", learn_shaft(100)}}},
+    // SCH001: the slow speed at 120 mm/s, 1.2 mm per 10 ms tick.
     {"sch001",
      {{"drive", {{"kind", "sch001"}}},
       {"floors", kLearnFloors},
       {"sch001", {{"star_delta_ms", 500}, {"slowdown_up_mm", 300}, {"slowdown_down_mm", 350}}},
-      {"sim", learn_shaft(200)}}},
+      {"sim", learn_shaft(120)}}},
     // USS: V0 30 % of the simulated drive's 0.78 m/s, 1.6 mm per 7 ms exchange.
     {"uss",
      {{"drive", {{"kind", "uss"}}},
