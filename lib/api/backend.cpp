@@ -166,6 +166,7 @@ nlohmann::json to_json(const StatsSnapshot& s) {
   nlohmann::json& cycle = out["cycle"];
   cycle["cycles"] = s.cycles;
   cycle["dropped_events"] = s.dropped_events;
+  cycle["dropped_travel_samples"] = s.dropped_travel_samples;
   out[std::string(drive::to_string(s.drive_kind))] = s.details;
   return out;
 }

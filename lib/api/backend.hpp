@@ -99,10 +99,12 @@ struct StatusSnapshot {
 /// every counter of one kind's own link or thread goes into `details`, reported under the kind's
 /// name (stats.dcp, stats.sch001, stats.uss).
 struct StatsSnapshot {
-  drive::Kind drive_kind = drive::Kind::Dcp;          ///< names the object of `details`
-  std::uint64_t frames_sent = 0;                      ///< link.frames_sent: frames to the drive
-  std::uint64_t cycles = 0;                           ///< cycle.cycles: passes of the drive loop
-  std::uint64_t dropped_events = 0;                   ///< cycle.dropped_events: queue full
+  drive::Kind drive_kind = drive::Kind::Dcp;  ///< names the object of `details`
+  std::uint64_t frames_sent = 0;              ///< link.frames_sent: frames to the drive
+  std::uint64_t cycles = 0;                   ///< cycle.cycles: passes of the drive loop
+  std::uint64_t dropped_events = 0;           ///< cycle.dropped_events: queue full
+  /// cycle.dropped_travel_samples: travel curve samples the io thread did not take in time
+  std::uint64_t dropped_travel_samples = 0;
   nlohmann::json details = nlohmann::json::object();  ///< stats.<drive.kind>, e.g. stats.dcp
 };
 

@@ -301,10 +301,13 @@ TEST_F(DispatcherTest, StatsPutTheKindsOwnCountersUnderItsName) {
     backend_.stats_snapshot.frames_sent = 7;
     backend_.stats_snapshot.cycles = 9;
     backend_.stats_snapshot.dropped_events = 1;
+    backend_.stats_snapshot.dropped_travel_samples = 2;
     backend_.stats_snapshot.details = {{"own_counter", 3}};
     const json r = handle(R"({"cmd":"stats"})").at("result");
     EXPECT_EQ(r.at("link"), (json{{"frames_sent", 7}})) << c.name;
-    EXPECT_EQ(r.at("cycle"), (json{{"cycles", 9}, {"dropped_events", 1}})) << c.name;
+    EXPECT_EQ(r.at("cycle"),
+              (json{{"cycles", 9}, {"dropped_events", 1}, {"dropped_travel_samples", 2}}))
+        << c.name;
     EXPECT_EQ(r.at(c.name), (json{{"own_counter", 3}})) << c.name;
     EXPECT_EQ(r.size(), 4U) << r.dump();  // and "api"
   }

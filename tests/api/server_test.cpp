@@ -408,6 +408,7 @@ TEST_F(ApiServer, StatsIncludeApiCounters) {
   EXPECT_EQ(stats.at("api").at("errors"), 1);
   EXPECT_TRUE(stats.at("link").contains("frames_sent"));
   EXPECT_TRUE(stats.at("cycle").contains("dropped_events"));
+  EXPECT_TRUE(stats.at("cycle").contains("dropped_travel_samples"));
   EXPECT_TRUE(stats.at("dcp").is_object()) << "the drive kind's own counters";
 }
 

@@ -136,6 +136,7 @@ api::StatsSnapshot LiftBackend::stats() {
   out.frames_sent = cycle.counters.frames_sent;
   out.cycles = cycle.counters.cycles;
   out.dropped_events = controller_.dropped_events();
+  out.dropped_travel_samples = controller_.dropped_travel_samples();
   nlohmann::json& d = out.details;
   // The link (DCP 6, 7) and the 15 ms cycle's timing (DCP 7.2): docs/api.md `stats`.
   d["replies_good"] = link.good_replies;

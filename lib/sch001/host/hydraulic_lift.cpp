@@ -350,6 +350,7 @@ api::StatsSnapshot Sch001Backend::stats() {
   out.frames_sent = c.frames_sent;
   out.cycles = s.steps;
   out.dropped_events = controller_.dropped_events();
+  out.dropped_travel_samples = controller_.dropped_travel_samples();
   nlohmann::json& d = out.details;
   // The card's frames by kind (card document 3b, 3f, 1.6) and the CAN endpoint's own counters.
   d["frames_received"] = c.frames_received;

@@ -406,6 +406,7 @@ api::StatsSnapshot UssBackend::stats() {
   out.frames_sent = r.counters.exchanges;
   out.cycles = r.counters.cycles;
   out.dropped_events = controller_.dropped_events();
+  out.dropped_travel_samples = controller_.dropped_travel_samples();
   nlohmann::json rx = {{"good", s.rx.good},
                        {"rejected", s.rx.rejected},
                        {"framing", s.rx.framing},
