@@ -114,11 +114,7 @@ class ControllerBackend : public api::Backend {
     (void)post_command<typename Drive::Command>(
         controller_, pending_, typename Drive::LearnCommand{}, std::move(done),
         longest + Drive::kReplyGrace, Drive::kThread, [this](const typename Drive::CommandReply&) {
-          const lift::LearnRecord record = controller_.learn_record();
-          nlohmann::json result = learn_result_json(
-              config_, record.judgement,
-              std::span<const lift::LearnedZone>(record.zones.data(), record.zone_count),
-              record.zones_seen);
+          nlohmann::json result = learn_result_json(config_, controller_.learn_record());
           if (learn_listener_) learn_listener_(result);
           return api::Result::ok(std::move(result));
         });

@@ -56,6 +56,13 @@ nlohmann::json learn_result_json(const config::Config& config, lift::LearnJudgem
           {"takes_effect", kLearnTakesEffect}};
 }
 
+nlohmann::json learn_result_json(const config::Config& config, const lift::LearnRecord& record) {
+  return learn_result_json(
+      config, record.judgement,
+      std::span<const lift::LearnedZone>(record.zones.data(), record.zone_count),
+      record.zones_seen);
+}
+
 void report_learn(api::Server& server, const nlohmann::json& result) {
   const bool accepted = result.value("accepted", false);
   log::event(

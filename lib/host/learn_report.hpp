@@ -9,6 +9,7 @@
 
 #include "api/server.hpp"
 #include "config/config.hpp"
+#include "lift/learning_travel.hpp"
 #include "lift/level_learner.hpp"
 
 namespace liftd::daemon {
@@ -22,6 +23,9 @@ inline constexpr const char* kLearnTakesEffect =
 /// learned_mm, difference_mm, zone_mm for each floor a zone was found for), takes_effect.
 nlohmann::json learn_result_json(const config::Config& config, lift::LearnJudgement judgement,
                                  std::span<const lift::LearnedZone> zones, std::size_t zones_seen);
+
+/// The same from a learning travel's record (every lift's controller publishes one).
+nlohmann::json learn_result_json(const config::Config& config, const lift::LearnRecord& record);
 
 /// Journals the result and sends the `learn` event to the watchers.
 void report_learn(api::Server& server, const nlohmann::json& result);

@@ -450,15 +450,19 @@ void DcpController::handle_learn(std::uint32_t tag) noexcept {
         if (travel_.active_kind() != TravelKind::None) {
           return lift::Answer{ReplyCode::Busy, "a travel is running"};
         }
-        if (auto why = not_ready_reason(false)) {
-          return lift::Answer{
-              last_input_.status.general_fault ? ReplyCode::Fault : ReplyCode::NotReady, *why};
-        }
-        return std::nullopt;
+        return drive_refuses_learning();
       },
       [this](std::int64_t target_mm, lift::Direction direction) {
         return start_learn_leg(target_mm, direction);
       });
+}
+
+std::optional<lift::Answer> DcpController::drive_refuses_learning() const noexcept {
+  if (auto why = not_ready_reason(false)) {
+    return lift::Answer{last_input_.status.general_fault ? ReplyCode::Fault : ReplyCode::NotReady,
+                        *why};
+  }
+  return std::nullopt;
 }
 
 bool DcpController::start_learn_leg(std::int64_t target_mm, lift::Direction direction) noexcept {
@@ -488,13 +492,7 @@ bool DcpController::start_learn_leg(std::int64_t target_mm, lift::Direction dire
 void DcpController::step_learn() noexcept {
   step_learning(
       travel_.active_kind() != TravelKind::None,
-      [this]() -> std::optional<lift::Answer> {
-        if (auto why = not_ready_reason(false)) {
-          return lift::Answer{
-              last_input_.status.general_fault ? ReplyCode::Fault : ReplyCode::NotReady, *why};
-        }
-        return std::nullopt;
-      },
+      [this]() -> std::optional<lift::Answer> { return drive_refuses_learning(); },
       [this](std::int64_t target_mm, lift::Direction direction) {
         return start_learn_leg(target_mm, direction);
       });

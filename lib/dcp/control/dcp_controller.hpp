@@ -247,6 +247,8 @@ class DcpController final : public rt::CycleEngine, public lift::ControllerCore<
   void handle_relevel(std::uint32_t tag) noexcept;
   void handle_stop(std::uint32_t tag) noexcept;
   void handle_learn(std::uint32_t tag) noexcept;
+  /// The drive's refusal of a learning leg (not ready, general fault), as a travel's start has.
+  std::optional<lift::Answer> drive_refuses_learning() const noexcept;
   /// Starts a learning leg to `target_mm`: up at crawl by position, down as a travel would go.
   bool start_learn_leg(std::int64_t target_mm, lift::Direction direction) noexcept;
   /// After a learning leg ended: the next leg, or the learning's end (ControllerCore).

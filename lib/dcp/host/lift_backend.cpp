@@ -330,19 +330,18 @@ void LiftBackend::relevel(api::Responder done) {
 void LiftBackend::learn(api::Responder done) {
   // Answered when the learning ends: both legs at the crawl limit the controller gives them,
   // and the grace of every reply.
-  std::int64_t shaft_mm = 2 * control::kLearnApproachMm;
-  if (!config_.floors.empty())
-    shaft_mm += config_.floors.back().level_mm - config_.floors.front().level_mm;
-  const auto longest = std::chrono::milliseconds(
-      2 * (travel::TravelConfig{}.crawl_timeout_ms + shaft_mm * control::kLearnCrawlMsPerMm));
+  std::int64_t bottom_mm = 0;
+  std::int64_t top_mm = 0;
+  if (!config_.floors.empty()) {
+    bottom_mm = config_.floors.front().level_mm;
+    top_mm = config_.floors.back().level_mm;
+  }
+  const auto longest =
+      lift::learn_longest(travel::TravelConfig{}.crawl_timeout_ms, bottom_mm, top_mm);
   (void)post_command<control::Command>(
       controller_, pending_, control::LearnCommand{}, std::move(done), longest + kDcpReplyGrace,
       kCycleThread, [this](const control::CommandReply&) {
-        const control::LearnRecord record = controller_.learn_record();
-        nlohmann::json result = learn_result_json(
-            config_, record.judgement,
-            std::span<const lift::LearnedZone>(record.zones.data(), record.zone_count),
-            record.zones_seen);
+        nlohmann::json result = learn_result_json(config_, controller_.learn_record());
         if (learn_listener_) learn_listener_(result);
         return api::Result::ok(std::move(result));
       });
