@@ -14,6 +14,8 @@
 #include "can/frame.hpp"
 #include "io/expected.hpp"
 
+struct msghdr;
+
 namespace liftd::can {
 
 /// A decoded CAN error frame (linux/can/error.h). Over a Unix socket a simulator sends the same
@@ -77,6 +79,9 @@ struct DropCounters {
   std::uint64_t malformed =
       0;  ///< records that are not one struct can_frame (empty ones too), or length > 8
   std::uint64_t extended = 0;  ///< 29-bit or remote frames (the protocols here use neither)
+  /// Frames the kernel dropped before we read them because this socket's receive queue was
+  /// full (SO_RXQ_OVFL; CAN interfaces only): a reader too slow for the bus.
+  std::uint64_t overflowed = 0;
 };
 
 /// A non-blocking CAN endpoint. Move-only; closes its descriptor.
@@ -116,10 +121,13 @@ class CanSocket {
   bool wanted(std::uint32_t id) const noexcept;
   /// The peer hung up and nothing more is queued (a read of 0 bytes was its end of file).
   bool peer_closed() const noexcept;
+  /// Adds the frames the kernel dropped since the last record (SO_RXQ_OVFL's running total).
+  void note_overflow(const msghdr& message) noexcept;
 
   int fd_ = -1;
   std::vector<std::uint32_t> ids_;
   DropCounters drops_{};
+  std::uint32_t kernel_overflow_total_ = 0;  // SO_RXQ_OVFL's last running total
 };
 
 /// Listens on a Unix SOCK_SEQPACKET socket at `path` (replacing a stale socket file) for one

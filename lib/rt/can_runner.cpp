@@ -48,6 +48,7 @@ CanRunnerCounters CanRunner::counters() const noexcept {
   c.error_frames = error_frames_.load(std::memory_order_relaxed);
   c.reopens = reopens_.load(std::memory_order_relaxed);
   c.dropped = dropped_.load(std::memory_order_relaxed);
+  c.overflowed = overflowed_.load(std::memory_order_relaxed);
   return c;
 }
 
@@ -107,6 +108,7 @@ void CanRunner::close_endpoint(MonoTime now, int error, const char* what) {
     std::lock_guard<std::mutex> lock(error_mutex_);
     last_error_ = std::string(what) + (error != 0 ? std::string(": ") + std::strerror(error) : "");
   }
+  overflowed_before_socket_ += socket_->drops().overflowed;
   socket_.reset();
   engine_.on_endpoint(false, now);
   recorder_.record(now, Direction::Event, record_flag::kPortLost, {});
@@ -173,6 +175,7 @@ void CanRunner::loop() {
     if (socket_) {
       const can::DropCounters& d = socket_->drops();
       dropped_.store(d.filtered + d.malformed + d.extended, std::memory_order_relaxed);
+      overflowed_.store(overflowed_before_socket_ + d.overflowed, std::memory_order_relaxed);
     }
     engine_.on_tick(mono_now());
     notify();  // a frame's answer or a tick's timeout may have queued news for the io thread

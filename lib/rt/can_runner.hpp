@@ -54,8 +54,9 @@ struct CanRunnerCounters {
   std::uint64_t frames_sent = 0;
   std::uint64_t send_errors = 0;
   std::uint64_t error_frames = 0;
-  std::uint64_t reopens = 0;  ///< endpoint (re)opened after the first time
-  std::uint64_t dropped = 0;  ///< records the endpoint dropped (filtered, malformed, 29-bit)
+  std::uint64_t reopens = 0;     ///< endpoint (re)opened after the first time
+  std::uint64_t dropped = 0;     ///< records the endpoint dropped (filtered, malformed, 29-bit)
+  std::uint64_t overflowed = 0;  ///< frames the kernel dropped on our full receive queue
 };
 
 class CanRunner {
@@ -114,6 +115,8 @@ class CanRunner {
   std::atomic<std::uint64_t> error_frames_{0};
   std::atomic<std::uint64_t> reopens_{0};
   std::atomic<std::uint64_t> dropped_{0};
+  std::atomic<std::uint64_t> overflowed_{0};
+  std::uint64_t overflowed_before_socket_ = 0;  // by the sockets closed before this one
   mutable std::mutex error_mutex_;  ///< guards last_error_ (written off the hot path only)
   std::string last_error_;
 };

@@ -111,6 +111,47 @@ TEST(CanRealSocket, KernelFilterPassesOnlyTheWantedIdentifiers) {
   EXPECT_EQ(r.frame.id, 0x123U);
 }
 
+// A reader that falls behind the bus: the kernel drops what its full receive queue cannot
+// hold, and the endpoint counts every such frame (SO_RXQ_OVFL) instead of losing it unseen.
+TEST(CanRealSocket, FramesTheKernelDroppedOnAFullQueueAreCounted) {
+  REQUIRE_CAN_INTERFACE(name);
+  auto reader = CanSocket::open(name, {0x581});
+  ASSERT_TRUE(reader) << reader.error().what;
+  const int smallest = 1;  // the kernel rounds it up to its minimum (a few frames)
+  ASSERT_EQ(::setsockopt(reader.value().fd(), SOL_SOCKET, SO_RCVBUF, &smallest, sizeof smallest),
+            0);
+  auto writer = CanSocket::open(name, {});
+  ASSERT_TRUE(writer) << writer.error().what;
+  constexpr int kSent = 400;
+  for (int i = 0; i < kSent; ++i) {
+    ASSERT_EQ(writer.value().write(make_frame(0x581, Bytes{0x61, static_cast<std::uint8_t>(i)})),
+              0);
+    if (i % 50 == 49) ::usleep(2000);  // the loopback's backlog drains: no drop before the socket
+  }
+  const auto got = read_all(reader.value(), 300);
+  // The kernel reports its running count of drops with the next frame it queues (SO_RXQ_OVFL),
+  // so the drops behind the last frame read show with the next one.
+  EXPECT_EQ(reader.value().drops().overflowed, 0U) << "reported before a later frame came";
+  ASSERT_EQ(writer.value().write(make_frame(0x581, Bytes{0x61, 0xFF})), 0);
+  const Received next = read_one(reader.value());
+  ASSERT_EQ(next.kind, Received::Kind::Frame);
+  EXPECT_EQ(next.frame.data[1], 0xFF);
+  const std::uint64_t overflowed = reader.value().drops().overflowed;
+  EXPECT_GT(overflowed, 0U) << "the queue held all " << kSent << " frames";
+  EXPECT_EQ(got.size() + overflowed, static_cast<std::uint64_t>(kSent))
+      << got.size() << " read, " << overflowed << " counted as dropped";
+  // Counted once: a second frame after it brings the same running total.
+  ASSERT_EQ(writer.value().write(make_frame(0x581, Bytes{0x61, 0xFE})), 0);
+  ASSERT_EQ(read_one(reader.value()).kind, Received::Kind::Frame);
+  EXPECT_EQ(reader.value().drops().overflowed, overflowed);
+  // Nobody read while they came: the queue kept the first frames and the kernel dropped the
+  // rest.
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    ASSERT_EQ(got[i].frame.data[1], static_cast<std::uint8_t>(i)) << "frame " << i;
+  }
+  EXPECT_EQ(reader.value().drops().filtered + reader.value().drops().malformed, 0U);
+}
+
 // The kernel's loopback rules: every other socket on the interface sees a frame this one sends
 // (how a controller and a card simulator on one vcan talk), the sender does not see its own
 // frame even where its filter asks for that identifier (CAN_RAW_RECV_OWN_MSGS is off), and a

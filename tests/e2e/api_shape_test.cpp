@@ -57,7 +57,7 @@ const ShapeCase kCases[] = {
       "phase", "send_failing", "foreign_sender"},
      {"frames_received", "status_frames", "timeout_commands", "wrong_length", "unknown_first_byte",
       "own_id_frames", "other_id_frames", "card_silences", "error_frames", "send_errors", "reopens",
-      "dropped_records"}},
+      "dropped_records", "overflowed_frames"}},
     {"uss",
      {{"drive", {{"kind", "uss"}}},
       {"floors", kThreeFloors},

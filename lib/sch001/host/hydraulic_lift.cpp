@@ -365,6 +365,7 @@ api::StatsSnapshot Sch001Backend::stats() {
   d["send_errors"] = c.send_errors;
   d["reopens"] = c.reopens;
   d["dropped_records"] = c.dropped;
+  d["overflowed_frames"] = c.overflowed;
   return out;
 }
 
