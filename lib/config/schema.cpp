@@ -14,7 +14,11 @@ std::optional<std::string> closest(std::string_view word, const std::vector<std:
   std::optional<std::string> best;
   std::size_t best_distance = std::max<std::size_t>(2, word.size() / 3) + 1;
   for (const auto& candidate : pool) {
-    std::size_t d = edit_distance(word, candidate);
+    // The distance is at least the difference in length: a candidate that cannot beat the best
+    // so far is not measured (a long unknown word against every key costs otherwise).
+    const std::size_t length_gap = word.size() > candidate.size() ? word.size() - candidate.size()
+                                                                  : candidate.size() - word.size();
+    std::size_t d = length_gap < best_distance ? edit_distance(word, candidate) : length_gap;
     // A word that is a longer or shorter form of a candidate ("warning", "warn") is close too.
     const std::string_view shorter = word.size() < candidate.size() ? word : candidate;
     const std::string_view longer = word.size() < candidate.size() ? candidate : word;
