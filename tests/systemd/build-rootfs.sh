@@ -53,7 +53,8 @@ done
 echo 6c1f7d2a9b3e4f5a8d0c1b2a3e4f5d6c >"$dir/etc/machine-id"
 echo liftd-stage >"$dir/etc/hostname"
 echo "/dev/ubda / ext4 rw 0 1" >"$dir/etc/fstab"
-mkfs.ext4 -q -F -L root -d "$dir" "$img.tmp" 1536M
+# mke2fs says "Creating regular file" on stdout even with -q: stdout carries only the path.
+mkfs.ext4 -q -F -L root -d "$dir" "$img.tmp" 1536M >&2
 mv "$img.tmp" "$img"
 echo "build-rootfs: image built in $((SECONDS - start)) s" >&2
 echo "$img"
