@@ -15,7 +15,7 @@
 #                            Debian 12 with systemd as PID 1 under user-mode Linux; 3 to 5
 #                            minutes more, which the 30-minute CI budget does not hold today)
 #   LIFTD_JOBS=N, LIFTD_TEST_JOBS=M   build with N jobs (default: cores), run M tests at once
-#                            (default: N + 1)
+#                            (default: 3 N; N + 1 under load)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 under_load=0
@@ -41,12 +41,16 @@ fi
 background=()  # what runs beside the foreground; a failure ends it too
 trap 'kill "${background[@]}" 2>/dev/null || true' EXIT
 [ -n "${rootfs_pid:-}" ] && background+=("$rootfs_pid")
-# One test more than cores: the process tests spend nearly all their time waiting on a simulated
-# car in real time (a whole run uses about 3 minutes of CPU in its 12 minutes of tests), so a third
-# test on two cores costs them nothing. Never a build beside them: a compiler's load delays even
-# SCHED_FIFO cycle threads by several ms on these machines (measured: 12 ms), which a real-time
-# test rightly fails on. The RUN_SERIAL tests always run alone.
-test_jobs=${LIFTD_TEST_JOBS:-$((jobs + 1))}
+# Three tests per core: the process tests spend nearly all their time waiting on a simulated car
+# in real time (measured on 2 cores: the whole default suite used 75 s of CPU in 364 s at 3 tests
+# at once, and passed in 221 s at 6), so more of them side by side cost each other nothing. Never
+# a build beside them: a compiler's load delays even SCHED_FIFO cycle threads by several ms on
+# these machines (measured: 12 ms), which a real-time test rightly fails on. The RUN_SERIAL tests
+# always run alone. Under --under-load one test more than cores: the hogs take the CPUs.
+# The sanitizer build's tests, one more than cores: its code runs several times slower, so its
+# tests keep the CPUs busy.
+test_jobs=${LIFTD_TEST_JOBS:-$((under_load == 1 ? jobs + 1 : jobs * 3))}
+asan_test_jobs=${LIFTD_TEST_JOBS:-$((jobs + 1))}
 
 timings=()
 timed() {  # timed LABEL COMMAND...: runs it and notes how long it took
@@ -56,13 +60,13 @@ timed() {  # timed LABEL COMMAND...: runs it and notes how long it took
   timings+=("$(printf '%-22s %5d s' "$label" $((SECONDS - start)))")
 }
 
-run_preset() {
-  local preset=$1
-  shift
+run_preset() {  # run_preset PRESET TEST_JOBS [CTEST ARGS...]
+  local preset=$1 parallel=$2
+  shift 2
   echo "=== preset: $preset ==="
   cmake --preset "$preset" >/dev/null
   timed "$preset build" cmake --build --preset "$preset" --parallel "$jobs"
-  timed "$preset tests" ctest --preset "$preset" --parallel "$test_jobs" "$@"
+  timed "$preset tests" ctest --preset "$preset" --parallel "$parallel" "$@"
 }
 
 # start_session SCRIPT: runs it in a session of its own (setsid) and prints the session's process
@@ -130,7 +134,7 @@ if [ $under_load = 1 ]; then
   exit 0
 fi
 
-run_preset default
+run_preset default "$test_jobs"
 # The installed service as an operator meets it: Debian 12 booted with systemd as PID 1 under
 # user-mode Linux, beside the one-job compile of the next presets (start_early_builds). Nothing
 # else runs beside it: the CAN stage and the soaks wait (a second guest beside it made the
@@ -178,7 +182,7 @@ if [ "$soak_seconds" != 0 ]; then
   timed "soak uss" tools/soak --kind uss --seconds "$controller_seconds" --seed 1
 fi
 stop_early_builds
-[ "${LIFTD_SKIP_ASAN:-0}" = 1 ] || run_preset asan -LE 'slow|vcan'
+[ "${LIFTD_SKIP_ASAN:-0}" = 1 ] || run_preset asan "$asan_test_jobs" -LE 'slow|vcan'
 if [ "${LIFTD_SKIP_FUZZ:-0}" != 1 ]; then
   echo "=== preset: fuzz ==="
   cmake --preset fuzz >/dev/null
