@@ -5,8 +5,8 @@
 #   tools/install-deps.sh --uml-can    what the real-SocketCAN stage needs besides (user-mode
 #                                      Linux, its module loader, ip, candump/cangen)
 #   tools/install-deps.sh --uml-systemd  what the systemd stage needs besides (user-mode Linux,
-#                                      kmod, mmdebstrap and e2fsprogs for the Debian 12 root file
-#                                      system and its ext4 image)
+#                                      its management console, kmod, mmdebstrap and e2fsprogs for
+#                                      the Debian 12 root file system and its ext4 image)
 #   tools/install-deps.sh --with-uml   all three at once (tools/test.sh: one apt-get run)
 set -euo pipefail
 
@@ -18,7 +18,7 @@ packages=(
   python3 python3-jsonschema
 )
 uml_can=(user-mode-linux kmod iproute2 can-utils)
-uml_systemd=(user-mode-linux kmod iproute2 mmdebstrap e2fsprogs python3)
+uml_systemd=(user-mode-linux uml-utilities kmod iproute2 mmdebstrap e2fsprogs python3)
 case "${1:-}" in
   --uml-can) packages=("${uml_can[@]}") ;;
   --uml-systemd) packages=("${uml_systemd[@]}") ;;

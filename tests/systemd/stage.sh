@@ -56,18 +56,35 @@ prep=$((SECONDS - start))
 
 # Two serial lines joined on the host: liftd gets ttyS1, the simulated drive ttyS2.
 timeout 900 python3 - "$work/root.img" "$work/share" "$work/console.log" <<'PY'
-import socket, subprocess, sys
+import os, signal, socket, subprocess, sys, time
 image, share, console = sys.argv[1:4]
 liftd_end, drive_end = socket.socketpair()
+umid = f"liftd-stage-{os.getpid()}"
 # Ahead of other work on the host (compilers): the guest runs liftd's 15 ms cycle, whose
 # wake-ups a starved guest misses (the drive link then fails and travels end short).
 args = ["nice", "-n", "-10", "linux.uml", "mem=1024M", f"ubd0={image}", "root=/dev/ubda", "rw",
         "init=/lib/systemd/systemd", "con=null", "con0=null,fd:2", "ssl=null",
-        f"ssl1=fd:{liftd_end.fileno()}", f"ssl2=fd:{drive_end.fileno()}",
+        f"ssl1=fd:{liftd_end.fileno()}", f"ssl2=fd:{drive_end.fileno()}", f"umid={umid}",
         f"liftd.share={share}", "systemd.show_status=0", "quiet"]
 with open(console, "w") as out:
-    sys.exit(subprocess.run(args, stdin=subprocess.DEVNULL, stdout=out, stderr=out,
-                            pass_fds=(liftd_end.fileno(), drive_end.fileno())).returncode)
+    # A session of its own: the kernel's helper processes end with it, whatever happens here.
+    guest = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=out, stderr=out,
+                             pass_fds=(liftd_end.fileno(), drive_end.fileno()),
+                             start_new_session=True)
+    try:
+        sys.exit(guest.wait(timeout=840))
+    except subprocess.TimeoutExpired:
+        # A guest that stopped making progress: what each of its tasks was doing (sysrq t, w
+        # through the management console) goes to the console log, then the whole guest goes.
+        for key in ("t", "w"):
+            subprocess.run(["uml_mconsole", umid, "sysrq", key], stdout=subprocess.DEVNULL,
+                           stderr=subprocess.DEVNULL, timeout=20, check=False)
+        time.sleep(3)
+        os.killpg(guest.pid, signal.SIGKILL)
+        guest.wait()
+        print("systemd stage: the guest made no progress for 840 s; its task states are in the "
+              "console log", file=sys.stderr)
+        sys.exit(124)
 PY
 rc=$?
 echo "systemd stage: kernel $kernel, image $(basename "$image")"
@@ -77,6 +94,13 @@ if [ ! -s "$work/share/guest.rc" ]; then
   tail -40 "$work/share/guest.log" 2>/dev/null
   echo "--- console (tail)"
   tail -40 "$work/console.log"
+  if grep -q "state:R" "$work/console.log"; then
+    echo "--- the guest's running tasks when it was stopped (sysrq t)"
+    grep -A14 "state:R" "$work/console.log" | head -120
+  fi
+  keep=/var/tmp/liftd-systemd-stage-failed
+  rm -rf "$keep" && cp -r "$work/share" "$keep" && cp "$work/console.log" "$keep/" &&
+    rm -f "$keep"/*.deb && echo "--- the guest's logs and its console are in $keep"
   die "the guest did not finish (user-mode Linux exit $rc)"
 fi
 oks=$(grep -c '^ok - ' "$work/share/results.txt")
