@@ -242,8 +242,9 @@ Verdict judge(const std::vector<BusFrame>& frames, std::int64_t from_us = 0,
   };
   for (const BusFrame& f : frames) {
     if (f.t_us < from_us) continue;
-    // After the window only the answer to its last status counts: a later status is not judged.
-    if (f.t_us > to_us && !is_answer(f)) break;
+    // After the window only the answers to its last status count: the next status ends it.
+    if (f.t_us > to_us && is_status(f)) break;
+    if (f.t_us > to_us && !is_answer(f)) continue;
     if (is_status(f)) {
       close_status();
       status = &f;
