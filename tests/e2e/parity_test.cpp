@@ -453,14 +453,30 @@ const LearnCase kLearnCases[] = {
 
 class LearnParity : public ::testing::TestWithParam<LearnCase> {};
 
+/// Waits for the lift to be ready and runs the learning travel: its reply, or null after a failure
+/// the test has been told of.
+json learn_when_ready(Lift& lift) {
+  if (!lift.setup_error().empty()) {
+    ADD_FAILURE() << lift.setup_error() << lift.log();
+    return nullptr;
+  }
+  if (!lift.wait_drive_state("ready")) {
+    ADD_FAILURE() << "not ready: " << lift.status().dump();
+    return nullptr;
+  }
+  json reply = lift.api().call({{"cmd", "learn"}}, 60s);
+  if (!reply.is_object() || !reply.value("ok", false)) {
+    ADD_FAILURE() << "learn: " << reply.dump() << lift.log();
+    return nullptr;
+  }
+  return reply;
+}
+
 TEST_P(LearnParity, LearnsTheSimulatedShaftWithinTwoMillimetres) {
   Lift lift(std::string("learn-parity-") + GetParam().name, 4, json::object(),
             std::vector<std::string>{}, GetParam().config);
-  ASSERT_EQ(lift.setup_error(), "") << lift.log();
-  ASSERT_TRUE(lift.wait_drive_state("ready")) << lift.status().dump();
-  const json reply = lift.api().call({{"cmd", "learn"}}, 60s);
-  ASSERT_TRUE(reply.is_object()) << lift.log();
-  ASSERT_TRUE(reply.value("ok", false)) << reply.dump() << lift.log();
+  const json reply = learn_when_ready(lift);
+  ASSERT_FALSE(reply.is_null());
   const json& result = reply["result"];
   EXPECT_TRUE(result["accepted"].get<bool>()) << result.dump();
   EXPECT_EQ(result["verdict"], "ok");
@@ -523,11 +539,8 @@ TEST_P(LearnParity, RefusesAShaftWithAMissingZone) {
   config["sim"]["shaft_levels_mm"] = {kLearnTrue.front(), kLearnTrue.back()};
   Lift lift(std::string("learn-missing-") + GetParam().name, 4, json::object(),
             std::vector<std::string>{}, config);
-  ASSERT_EQ(lift.setup_error(), "") << lift.log();
-  ASSERT_TRUE(lift.wait_drive_state("ready")) << lift.status().dump();
-  const json reply = lift.api().call({{"cmd", "learn"}}, 60s);
-  ASSERT_TRUE(reply.is_object()) << lift.log();
-  ASSERT_TRUE(reply.value("ok", false)) << reply.dump() << lift.log();
+  const json reply = learn_when_ready(lift);
+  ASSERT_FALSE(reply.is_null());
   const json& result = reply["result"];
   EXPECT_FALSE(result["accepted"].get<bool>()) << result.dump();
   EXPECT_EQ(result["verdict"], "zone_count_differs");
