@@ -14,7 +14,9 @@ std::string describe(const CycleEvent& event) {
     case CycleEventKind::PortOpenFailed:
       return "serial port open failed, retrying: " + text;
     case CycleEventKind::PortLost:
-      return "serial port lost (" +
+      return "serial port lost" +
+             (event.count > 1 ? " " + std::to_string(event.count) + " times, the last" : "") +
+             " (" +
              std::string(event.error_number != 0 ? std::strerror(event.error_number) : "hang-up") +
              "), reopening";
     case CycleEventKind::SkipRunStarted:

@@ -32,6 +32,35 @@ struct CycleEvent {
   std::array<char, 240> text{};                    ///< message (filled off the cycle thread)
 };
 
+/// An event the non-real-time side must get even if the queue was full when it happened (a port
+/// loss behind a burst of skip-run events the reader has not taken yet): held here and offered
+/// again at every try. Another event while one is held is added to its `count` (same kind only:
+/// the runners hold port losses, nothing else), never dropped. Real-time safe: plain data.
+struct HeldEvent {
+  CycleEvent event{};
+  bool held = false;
+
+  /// Queues `e`, or holds it when the queue is full.
+  template <class Queue>
+  void push(Queue& queue, const CycleEvent& e) noexcept {
+    retry(queue);
+    if (held) {
+      event.count += e.count;
+      event.error_number = e.error_number;
+      return;
+    }
+    if (!queue.try_push(e)) {
+      event = e;
+      held = true;
+    }
+  }
+  /// Offers the held event again; call it once per cycle.
+  template <class Queue>
+  void retry(Queue& queue) noexcept {
+    if (held && queue.try_push(event)) held = false;
+  }
+};
+
 /// A readable line for an event (for the log).
 std::string describe(const CycleEvent& event);
 

@@ -86,6 +86,7 @@ void CycleRunner::cycle_loop() noexcept {
   MonoTime next = mono_now() + config_.period;
   while (!port_keeper_.stop_requested()) {
     sleep_until(next);
+    held_loss_.retry(cycle_events_);
     const MonoTime wake = mono_now();
     const auto late = wake - next;
     wake_lateness_.record(late);
@@ -130,7 +131,7 @@ void CycleRunner::note_skip(MonoTime now, std::chrono::nanoseconds lateness,
     e.time = run_started_;
     e.count = run_skipped_;
     e.lateness = run_worst_;
-    if (cycle_events_.try_push(e)) skip_start_pending_ = false;
+    if (push_skip_event(e)) skip_start_pending_ = false;
   }
 }
 
@@ -146,7 +147,14 @@ void CycleRunner::end_skip_run(MonoTime now) noexcept {
     pending_end_.lateness = run_worst_;
     skip_end_pending_ = true;
   }
-  if (skip_end_pending_ && cycle_events_.try_push(pending_end_)) skip_end_pending_ = false;
+  if (skip_end_pending_ && push_skip_event(pending_end_)) skip_end_pending_ = false;
+}
+
+bool CycleRunner::push_skip_event(const CycleEvent& e) noexcept {
+  // The last slots stay free for port losses: skip runs a slow reader has not taken yet must
+  // not crowd out the loss of the port. A skip event that finds no room stays pending.
+  if (cycle_events_.size_approx() + kSlotsKeptForLosses >= kEventSlots) return false;
+  return cycle_events_.try_push(e);
 }
 
 void CycleRunner::notify() noexcept {
@@ -237,7 +245,7 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
 void CycleRunner::lose_port(MonoTime now, int error_number) noexcept {
   port_keeper_.hand_back_port();
   recorder_.record(now, Direction::Event, record_flag::kPortLost, {});
-  cycle_events_.try_push(port_lost_event(now, error_number));
+  held_loss_.push(cycle_events_, port_lost_event(now, error_number));
   engine_.on_port_lost(now);
 }
 

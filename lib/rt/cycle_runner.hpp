@@ -169,6 +169,7 @@ class CycleRunner {
  private:
   static constexpr std::size_t kMaxReply = 256;  // USS A: a telegram is at most 256 bytes
   static constexpr std::size_t kEventSlots = 64;
+  static constexpr std::size_t kSlotsKeptForLosses = 8;  // see push_skip_event()
 
   void cycle_loop() noexcept;
   void run_one_cycle(MonoTime wake, MonoTime planned) noexcept;
@@ -176,6 +177,7 @@ class CycleRunner {
   void note_skip(MonoTime now, std::chrono::nanoseconds lateness, std::uint64_t skipped) noexcept;
   void end_skip_run(MonoTime now) noexcept;
   void notify() noexcept;
+  bool push_skip_event(const CycleEvent& e) noexcept;
   static void bump(std::atomic<std::uint64_t>& a, std::uint64_t by = 1) noexcept {
     a.store(a.load(std::memory_order_relaxed) + by, std::memory_order_relaxed);
   }
@@ -214,6 +216,7 @@ class CycleRunner {
 
   // Events of the cycle thread; poll_event() drains them, then the keeper's.
   SpscQueue<CycleEvent, kEventSlots> cycle_events_;
+  HeldEvent held_loss_;  // a port loss the full queue could not take yet
 
   // The cycle thread (cycle_loop), its port and the keeper thread that (re)opens the port.
   PortKeeper port_keeper_;

@@ -40,6 +40,7 @@ inline CycleEvent port_lost_event(MonoTime now, int error_number) noexcept {
   e.kind = CycleEventKind::PortLost;
   e.time = now;
   e.error_number = error_number;
+  e.count = 1;  // losses in this event (more when it was held back behind a full queue)
   return e;
 }
 

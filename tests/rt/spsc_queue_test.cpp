@@ -1,13 +1,23 @@
-// SpscQueue: order, capacity limits and a two-thread handoff (run it under TSan too).
+// SpscQueue: order, capacity limits and a two-thread handoff (run it under TSan too); HeldEvent,
+// which keeps a port loss the full queue could not take.
 #include "common/spsc_queue.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cerrno>
+#include <chrono>
 #include <cstdint>
+#include <cstring>
+#include <string>
 #include <thread>
+
+#include "rt/cycle_event.hpp"
+#include "rt/port_keeper.hpp"
 
 namespace liftd::rt {
 namespace {
+
+using namespace std::chrono_literals;
 
 TEST(RtSpscQueue, PopsInPushOrder) {
   SpscQueue<int, 4> q;
@@ -82,6 +92,46 @@ TEST(RtSpscQueue, TwoThreadsHandOverEveryElementInOrder) {
   producer.join();
   EXPECT_EQ(bad, 0U);
   EXPECT_EQ(expected, kCount);
+}
+
+// A port loss must reach the reader even when skip-run events filled the queue first: it is
+// held and offered again, and a second loss while held is counted, not dropped.
+TEST(HeldEvent, APortLossBehindAFullQueueArrivesOnceThereIsRoomWithEveryLossCounted) {
+  SpscQueue<CycleEvent, 2> queue;
+  CycleEvent skip;
+  skip.kind = CycleEventKind::SkipRunStarted;
+  ASSERT_TRUE(queue.try_push(skip));
+  ASSERT_TRUE(queue.try_push(skip));
+
+  HeldEvent held;
+  held.push(queue, port_lost_event(MonoTime{} + 1s, EIO));
+  EXPECT_TRUE(held.held);
+  held.push(queue, port_lost_event(MonoTime{} + 2s, ENXIO));
+  held.retry(queue);  // still full
+  EXPECT_TRUE(held.held);
+
+  CycleEvent out;
+  ASSERT_TRUE(queue.try_pop(out));
+  EXPECT_EQ(out.kind, CycleEventKind::SkipRunStarted);
+  held.retry(queue);
+  EXPECT_FALSE(held.held);
+  ASSERT_TRUE(queue.try_pop(out));
+  EXPECT_EQ(out.kind, CycleEventKind::SkipRunStarted);
+  ASSERT_TRUE(queue.try_pop(out));
+  EXPECT_EQ(out.kind, CycleEventKind::PortLost);
+  EXPECT_EQ(out.time, MonoTime{} + 1s);  // when the first loss happened
+  EXPECT_EQ(out.count, 2U);
+  EXPECT_EQ(out.error_number, ENXIO);  // the last one's cause
+  EXPECT_EQ(describe(out), "serial port lost 2 times, the last (" +
+                               std::string(std::strerror(ENXIO)) + "), reopening");
+  EXPECT_FALSE(queue.try_pop(out));
+
+  // With room, a loss goes straight through, as one.
+  held.push(queue, port_lost_event(MonoTime{} + 3s, 0));
+  EXPECT_FALSE(held.held);
+  ASSERT_TRUE(queue.try_pop(out));
+  EXPECT_EQ(out.count, 1U);
+  EXPECT_EQ(describe(out), "serial port lost (hang-up), reopening");
 }
 
 }  // namespace

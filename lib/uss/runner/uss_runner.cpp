@@ -124,6 +124,7 @@ void UssRunner::adopt_offered_port() noexcept {
 
 void UssRunner::loop() noexcept {
   while (!port_keeper_.stop_requested()) {
+    held_loss_.retry(bus_events_);
     adopt_offered_port();
     if (!port_keeper_.port().is_open()) {
       rt::sleep_until(mono_now() + kIdleTick);
@@ -283,7 +284,7 @@ void UssRunner::lose_port(MonoTime now, int error_number) noexcept {
   port_keeper_.hand_back_port();
   recorder_.record(now, rt::Direction::Event, rt::record_flag::kPortLost, {});
   master_.reset_link(now);
-  bus_events_.try_push(rt::port_lost_event(now, error_number));
+  held_loss_.push(bus_events_, rt::port_lost_event(now, error_number));
   hooks_.on_port(false, now);
 }
 

@@ -170,6 +170,7 @@ class UssRunner {
 
   // Events of the bus thread; poll_event() drains them, then the keeper's.
   SpscQueue<rt::CycleEvent, kEventSlots> bus_events_;
+  rt::HeldEvent held_loss_;  // a port loss the full queue could not take yet
 
   // The bus thread (loop), its port and the keeper thread that (re)opens the port.
   rt::PortKeeper port_keeper_;
