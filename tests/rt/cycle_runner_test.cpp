@@ -21,6 +21,7 @@
 #include "fault_proxy.hpp"
 #include "io/pty.hpp"
 #include "pty_device.hpp"
+#include "support/reference_link.hpp"
 
 namespace liftd::rt {
 namespace {
@@ -183,12 +184,16 @@ TEST(RtCycle, InjectedFaultsProduceTheExpectedCountsThenHangUpIsALoss) {
       kTestPriority);
   ASSERT_EQ(responder.start(), 0);
   ASSERT_EQ(proxy.start(), 0);
+  // The machine's own share of late replies over the same time (tests/support/reference_link.hpp).
+  liftd::testing::ReferenceLink reference;
+  ASSERT_EQ(reference.start(kTestPriority, false), 0);
   EchoEngine engine;
   CycleRunner runner(test_config(side_a.slave_path()), engine);
   ASSERT_EQ(runner.start(), 0);
 
   ASSERT_TRUE(wait_for([&] { return proxy.requests() >= 600; }, milliseconds(20000)));
   proxy.heal();
+  reference.stop();
   const std::uint64_t healed_at = proxy.requests();
   ASSERT_TRUE(wait_for([&] { return proxy.requests() >= healed_at + 10; }, milliseconds(10000)));
 
@@ -220,13 +225,26 @@ TEST(RtCycle, InjectedFaultsProduceTheExpectedCountsThenHangUpIsALoss) {
     bool seen = false;
   };
   std::vector<Outcome> outcome(proxy.requests() + 2);
+  // A skipped cycle (the machine woke the cycle too late, DCP 7.2) moves a delayed reply into
+  // another cycle than the legend's: the frames on either side of a skip are not judged.
+  std::vector<bool> beside_a_skip(outcome.size() + 1, false);
   const auto records = runner.recorder().copy();
-  for (std::size_t i = 0; i + 1 < records.size(); ++i) {
-    if (records[i].direction != Direction::Tx || records[i + 1].direction != Direction::Rx)
-      continue;
+  std::size_t last_seq = 0;
+  bool skip_since_last = false;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    if ((records[i].flags & record_flag::kSkipped) != 0) {
+      skip_since_last = true;
+      if (last_seq != 0 && last_seq <= outcome.size()) beside_a_skip[last_seq - 1] = true;
+    }
+    if (records[i].direction != Direction::Tx) continue;
     const std::size_t seq = std::size_t{records[i].bytes[1]} << 8 | records[i].bytes[2];
     if (seq == 0 || seq > outcome.size()) continue;
-    outcome[seq - 1] = Outcome{records[i + 1].flags, records[i + 1].length, true};
+    if (skip_since_last) beside_a_skip[seq - 1] = true;
+    skip_since_last = false;
+    last_seq = seq;
+    if (i + 1 < records.size() && records[i + 1].direction == Direction::Rx) {
+      outcome[seq - 1] = Outcome{records[i + 1].flags, records[i + 1].length, true};
+    }
   }
   const auto is = [](const Outcome& o, std::uint8_t flags, std::uint16_t length) {
     return o.seen && o.flags == flags && o.length == length;
@@ -236,11 +254,20 @@ TEST(RtCycle, InjectedFaultsProduceTheExpectedCountsThenHangUpIsALoss) {
   constexpr std::uint8_t kMissing = record_flag::kMissing;
   constexpr std::uint8_t kPartial = record_flag::kMissing | record_flag::kPartial;
   std::array<std::uint64_t, testing::kFaultKinds> as_legend{};
+  std::array<std::uint64_t, testing::kFaultKinds> judged_kind{};
   std::uint64_t clean = 0;
   std::uint64_t clean_good = 0;
+  std::uint64_t not_judged = 0;  // cycles beside a skipped one
   for (std::uint64_t i = 0; i + 2 < outcome.size() && i < healed_at; ++i) {
     if (i % 10 == 5) {
       const Fault f = kPlan[(i / 10) % kPlan.size()];
+      const std::uint64_t span = f == Fault::Stall ? 3 : 1;  // cycles the fault decides
+      if (std::any_of(beside_a_skip.begin() + static_cast<std::ptrdiff_t>(i),
+                      beside_a_skip.begin() + static_cast<std::ptrdiff_t>(i + span),
+                      [](bool b) { return b; })) {
+        not_judged += span;
+        continue;
+      }
       bool ok = false;
       switch (f) {
         case Fault::FlipBit:
@@ -265,32 +292,51 @@ TEST(RtCycle, InjectedFaultsProduceTheExpectedCountsThenHangUpIsALoss) {
         case Fault::None:
           break;
       }
+      ++judged_kind[static_cast<std::size_t>(f)];
       as_legend[static_cast<std::size_t>(f)] += ok ? 1U : 0U;
     } else if (i % 10 != 6 && i % 10 != 7 && outcome[i].seen) {
+      if (beside_a_skip[i]) {
+        ++not_judged;
+        continue;
+      }
       ++clean;  // neither faulted nor behind a stall
       clean_good += is(outcome[i], kGood, 6) ? 1U : 0U;
     }
   }
-  // A loaded machine can delay a reply past its deadline on its own, which changes that one
-  // cycle's outcome: allow one such cycle per fault kind, and 2 % of the clean cycles.
+  // A loaded machine can also delay a reply past its deadline on its own, which changes that
+  // cycle's outcome (a stall's three cycles are exposed three times). At least half of each
+  // kind must go as the legend says (a kind the code got wrong goes wrong every time); the
+  // cycles the machine changed, all kinds and the clean ones together, at most 2 % of the
+  // judged cycles beyond twice what the bare reference link lost meanwhile.
+  std::uint64_t changed_by_the_machine = clean - clean_good;
+  std::uint64_t judged = clean;
   for (Fault f : kPlan) {
-    EXPECT_GE(as_legend[static_cast<std::size_t>(f)] + 1, n(f)) << "fault " << static_cast<int>(f);
+    const std::uint64_t kind_judged = judged_kind[static_cast<std::size_t>(f)];
+    const std::uint64_t as_planned = as_legend[static_cast<std::size_t>(f)];
+    EXPECT_GE(kind_judged, 1U) << "fault " << static_cast<int>(f);
+    EXPECT_GE(as_planned * 2, kind_judged) << "fault " << static_cast<int>(f);
+    changed_by_the_machine += kind_judged - as_planned;
+    judged += kind_judged;
   }
-  EXPECT_GE(clean_good, clean - clean / 50);
-  EXPECT_GE(clean, 400U);
+  EXPECT_LE(changed_by_the_machine, judged / 50 + 2 * reference.missing())
+      << "reference link: " << reference.missing() << " of " << reference.exchanges() << " missed";
+  EXPECT_GE(clean + not_judged, 400U);
+  EXPECT_GE(clean, 200U);
+  std::printf(
+      "[ info     ] %llu cycles judged (%llu beside a skip not), %llu changed by the "
+      "machine; reference link %llu of %llu missed\n",
+      static_cast<unsigned long long>(judged), static_cast<unsigned long long>(not_judged),
+      static_cast<unsigned long long>(changed_by_the_machine),
+      static_cast<unsigned long long>(reference.missing()),
+      static_cast<unsigned long long>(reference.exchanges()));
   // Extra bytes are flushed (and counted) before the next send.
   EXPECT_GE(c.stray_bytes, 2 * (as_legend[static_cast<std::size_t>(Fault::ExtraBytes)]));
   // Only flipped bits corrupt a reply; everything else the machine does only delays it. A
   // partial reply the machine delayed past the input flush after its deadline can still reach
   // the line discipline before the next reply and spoil that one: each corrupt reply beyond the
-  // flipped bits must follow a cycle whose outcome the machine changed (counted above).
-  std::uint64_t changed_by_the_machine = clean - clean_good;
-  for (Fault f : kPlan) {
-    const std::uint64_t applied = n(f);
-    const std::uint64_t as_planned = as_legend[static_cast<std::size_t>(f)];
-    changed_by_the_machine += applied > as_planned ? applied - as_planned : 0;
-  }
-  EXPECT_LE(engine.corrupt_.load(), n(Fault::FlipBit) + changed_by_the_machine);
+  // flipped bits must follow a cycle whose outcome the machine changed or that was beside a
+  // skipped one (counted above).
+  EXPECT_LE(engine.corrupt_.load(), n(Fault::FlipBit) + changed_by_the_machine + not_judged);
   EXPECT_GE(engine.corrupt_.load() + 1, n(Fault::FlipBit));
 
   const CycleCounters after = runner.stats().counters;

@@ -40,6 +40,7 @@
 #include "rt/rt_thread.hpp"
 #include "service/notify.hpp"
 #include "support/api_client.hpp"
+#include "support/reference_link.hpp"
 #include "uss/master/master.hpp"
 #include "uss/runner/pty_line.hpp"
 #include "uss/runner/uss_runner.hpp"
@@ -194,92 +195,6 @@ class ReferenceLoop {
   std::atomic<std::uint64_t> skipped_{0};
   std::atomic<bool> stop_{false};
   rt::RtThread thread_;
-};
-
-/// The platform's share of missing replies: a bare link over a pty of its own, no protocol. One
-/// real-time thread (the cycle's priority) writes 6 bytes every 15 ms and looks (TIOCINQ, every
-/// character time, as the cycle does) whether 6 bytes came back by 13.625 ms (DCP 7.2); an echo
-/// thread one priority below sends back what it reads as late as the simulated drive answers. Both
-/// directions pass the tty's flip-buffer worker, a normal-priority kernel thread, as every byte of
-/// a real UART does: a reply this link misses was held up there, whatever the reader does.
-class ReferenceLink {
- public:
-  ReferenceLink() : pty_(make()) {}
-  ~ReferenceLink() { stop(); }
-  int start(int priority) {
-    auto port = liftd::io::SerialPort::open(pty_.slave_path(), raw());
-    if (!port.ok()) return EIO;
-    port_ = std::move(port).value();
-    rt::RtThreadOptions echo;
-    echo.priority = std::max(1, priority - 1);
-    echo.lock_memory = true;
-    if (const int err = echo_.start(echo, [this] { echo_loop(); }); err != 0) return err;
-    rt::RtThreadOptions main;
-    main.priority = priority;
-    main.lock_memory = true;
-    return thread_.start(main, [this] { loop(); });
-  }
-  void stop() {
-    stop_ = true;
-    thread_.join();
-    echo_.join();
-  }
-  std::uint64_t exchanges() const { return exchanges_.load(std::memory_order_relaxed); }
-  std::uint64_t missing() const { return missing_.load(std::memory_order_relaxed); }
-
- private:
-  static liftd::io::SerialSettings raw() {
-    liftd::io::SerialSettings s;  // DCP 7.1: 38400 8N1
-    s.rs485 = liftd::io::Rs485Mode::Off;
-    return s;
-  }
-  static liftd::io::PtyPair make() {
-    auto created = liftd::io::PtyPair::create(raw());
-    if (!created.ok()) throw std::runtime_error(created.error().message());
-    return std::move(created).value();
-  }
-  void loop() noexcept {
-    constexpr auto kPeriod = 15ms;                                // DCP 7.2
-    constexpr auto kDeadline = std::chrono::microseconds(13625);  // DCP 7.2
-    const auto step = liftd::io::character_time(raw());
-    std::array<std::uint8_t, 6> frame{1, 2, 3, 4, 5, 6};
-    std::array<std::uint8_t, 6> reply{};
-    MonoTime next = mono_now() + kPeriod;
-    while (!stop_.load(std::memory_order_relaxed)) {
-      rt::sleep_until(next);
-      (void)port_.drain_queued();
-      const MonoTime sent = mono_now();
-      if (port_.write_frame(frame).status == liftd::io::IoStatus::Ok) {
-        const auto got = port_.read_queued_until(reply, sent + kDeadline, step);
-        exchanges_.fetch_add(1, std::memory_order_relaxed);
-        if (got.status != liftd::io::IoStatus::Ok) missing_.fetch_add(1, std::memory_order_relaxed);
-      }
-      next += kPeriod;
-      while (next < mono_now()) next += kPeriod;
-    }
-  }
-  void echo_loop() noexcept {
-    std::array<std::uint8_t, 64> buf{};
-    const int fd = pty_.master_fd();
-    while (!stop_.load(std::memory_order_relaxed)) {
-      pollfd pfd{fd, POLLIN, 0};
-      if (::poll(&pfd, 1, 20) <= 0) continue;
-      const ssize_t n = ::read(fd, buf.data(), buf.size());
-      if (n <= 0) continue;
-      // As the simulated drive does on a pty (dcp::sim::pty_wire_time): answer when a real RS485
-      // line would deliver the answer, after our frame's and the reply's wire time (DCP 7.1/7.2: 6
-      // bytes of 10 bits at 38400 baud, 1.5625 ms each).
-      rt::sleep_until(mono_now() + 2 * std::chrono::microseconds(1563));
-      (void)!::write(fd, buf.data(), static_cast<std::size_t>(n));
-    }
-  }
-  liftd::io::PtyPair pty_;
-  liftd::io::SerialPort port_;
-  rt::RtThread thread_;
-  rt::RtThread echo_;
-  std::atomic<bool> stop_{false};
-  std::atomic<std::uint64_t> exchanges_{0};
-  std::atomic<std::uint64_t> missing_{0};
 };
 
 /// The user side of the USS bus: drains what the master reports, nothing else.
@@ -563,8 +478,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "api-load-bench: reference loop: %s\n", std::strerror(err));
     return 1;
   }
-  ReferenceLink reference_link;
-  if (const int err = reference_link.start(cycle_config.thread.priority); err != 0) {
+  liftd::testing::ReferenceLink reference_link;
+  if (const int err = reference_link.start(cycle_config.thread.priority, true); err != 0) {
     std::fprintf(stderr, "api-load-bench: reference link: %s\n", std::strerror(err));
     return 1;
   }

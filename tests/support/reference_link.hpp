@@ -1,0 +1,128 @@
+// The platform's share of missing replies: a bare link over a pty of its own, no protocol, for
+// a benchmark or a live test to run beside the link it judges. One real-time thread writes 6
+// bytes every 15 ms and looks (TIOCINQ, every character time, as the cycle does) whether 6 bytes
+// came back by 13.625 ms (DCP 7.2); an echo thread one priority below sends back what it reads as
+// late as the simulated drive answers. Both directions pass the tty's flip-buffer worker, a
+// normal-priority kernel thread, as every byte of a real UART does: a reply this link misses was
+// held up by the machine, whatever the reader does (docs/architecture.md, "What the cycle may
+// wait for"). Header only: the benchmarks build without the tests.
+#pragma once
+
+#include <poll.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cstdint>
+#include <stdexcept>
+
+#include "common/mono_time.hpp"
+#include "io/pty.hpp"
+#include "io/serial_port.hpp"
+#include "rt/rt_thread.hpp"
+
+namespace liftd::testing {
+
+class ReferenceLink {
+ public:
+  ReferenceLink() : pty_(make()) {}
+  ReferenceLink(const ReferenceLink&) = delete;
+  ReferenceLink& operator=(const ReferenceLink&) = delete;
+  ~ReferenceLink() { stop(); }
+
+  /// Starts both threads, the link's at `priority` (SCHED_FIFO where permitted, as RtThread
+  /// falls back); 0 or an errno.
+  int start(int priority, bool lock_memory) {
+    auto port = io::SerialPort::open(pty_.slave_path(), raw());
+    if (!port.ok()) return EIO;
+    port_ = std::move(port).value();
+    rt::RtThreadOptions echo;
+    echo.priority = std::max(1, priority - 1);
+    echo.lock_memory = lock_memory;
+    if (const int err = echo_.start(echo, [this] { echo_loop(); }); err != 0) return err;
+    rt::RtThreadOptions main;
+    main.priority = priority;
+    main.lock_memory = lock_memory;
+    return thread_.start(main, [this] { loop(); });
+  }
+  void stop() {
+    stop_ = true;
+    thread_.join();
+    echo_.join();
+  }
+  std::uint64_t exchanges() const { return exchanges_.load(std::memory_order_relaxed); }
+  std::uint64_t missing() const { return missing_.load(std::memory_order_relaxed); }
+  /// The most replies missed in a row (DCP 7.3 faults a link at ten).
+  std::uint64_t longest_miss_run() const {
+    return longest_miss_run_.load(std::memory_order_relaxed);
+  }
+
+ private:
+  static io::SerialSettings raw() {
+    io::SerialSettings s;  // DCP 7.1: 38400 8N1
+    s.rs485 = io::Rs485Mode::Off;
+    return s;
+  }
+  static io::PtyPair make() {
+    auto created = io::PtyPair::create(raw());
+    if (!created.ok()) throw std::runtime_error(created.error().message());
+    return std::move(created).value();
+  }
+  void loop() noexcept {
+    constexpr auto kPeriod = std::chrono::milliseconds(15);       // DCP 7.2
+    constexpr auto kDeadline = std::chrono::microseconds(13625);  // DCP 7.2
+    const auto step = io::character_time(raw());
+    std::array<std::uint8_t, 6> frame{1, 2, 3, 4, 5, 6};
+    std::array<std::uint8_t, 6> reply{};
+    MonoTime next = mono_now() + kPeriod;
+    std::uint64_t run = 0;
+    while (!stop_.load(std::memory_order_relaxed)) {
+      rt::sleep_until(next);
+      (void)port_.drain_queued();
+      const MonoTime sent = mono_now();
+      if (port_.write_frame(frame).status == io::IoStatus::Ok) {
+        const auto got = port_.read_queued_until(reply, sent + kDeadline, step);
+        exchanges_.fetch_add(1, std::memory_order_relaxed);
+        if (got.status != io::IoStatus::Ok) {
+          missing_.fetch_add(1, std::memory_order_relaxed);
+          ++run;
+          if (run > longest_miss_run_.load(std::memory_order_relaxed)) {
+            longest_miss_run_.store(run, std::memory_order_relaxed);
+          }
+        } else {
+          run = 0;
+        }
+      }
+      next += kPeriod;
+      while (next < mono_now()) next += kPeriod;
+    }
+  }
+  void echo_loop() noexcept {
+    std::array<std::uint8_t, 64> buf{};
+    const int fd = pty_.master_fd();
+    while (!stop_.load(std::memory_order_relaxed)) {
+      pollfd pfd{fd, POLLIN, 0};
+      if (::poll(&pfd, 1, 20) <= 0) continue;
+      const ssize_t n = ::read(fd, buf.data(), buf.size());
+      if (n <= 0) continue;
+      // As the simulated drive does on a pty (dcp::sim::pty_wire_time): answer when a real RS485
+      // line would deliver the answer, after our frame's and the reply's wire time (DCP 7.1/7.2:
+      // 6 bytes of 10 bits at 38400 baud, 1.5625 ms each).
+      rt::sleep_until(mono_now() + 2 * std::chrono::microseconds(1563));
+      (void)!::write(fd, buf.data(), static_cast<std::size_t>(n));
+    }
+  }
+  io::PtyPair pty_;
+  io::SerialPort port_;
+  rt::RtThread thread_;
+  rt::RtThread echo_;
+  std::atomic<bool> stop_{false};
+  std::atomic<std::uint64_t> exchanges_{0};
+  std::atomic<std::uint64_t> missing_{0};
+  std::atomic<std::uint64_t> longest_miss_run_{0};
+};
+
+}  // namespace liftd::testing
