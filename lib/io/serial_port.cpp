@@ -384,7 +384,8 @@ IoResult SerialPort::wait_queued(MonoTime deadline, std::chrono::nanoseconds ste
 }
 
 IoResult SerialPort::read_queued_until(std::span<std::uint8_t> buffer, MonoTime deadline,
-                                       std::chrono::nanoseconds step) noexcept {
+                                       std::chrono::nanoseconds step,
+                                       MonoTime* complete_by) noexcept {
   if (step.count() <= 0) step = std::chrono::microseconds(100);
   std::size_t got = 0;
   for (;;) {
@@ -394,6 +395,7 @@ IoResult SerialPort::read_queued_until(std::span<std::uint8_t> buffer, MonoTime 
     got += r.bytes;
     if (r.status != IoStatus::Ok) return IoResult{r.status, got, r.error_number};
     if (got == buffer.size()) {
+      if (complete_by != nullptr) *complete_by = look;
       // Complete, but only a look started by the deadline proves it was complete in time.
       return IoResult{look <= deadline ? IoStatus::Ok : IoStatus::Timeout, got, 0};
     }

@@ -172,9 +172,12 @@ class SerialPort {
   /// read_until() through read_queued(): fills `buffer` from what the line discipline holds,
   /// looking every `step` (absolute sleeps) until `deadline`. Ok when a look started by the
   /// deadline completed it; Timeout otherwise, with the count (buffer.size() when it was complete
-  /// only at a look after the deadline: a late reply); DeviceLost on hang-up.
+  /// only at a look after the deadline: a late reply); DeviceLost on hang-up. When complete,
+  /// `complete_by` (if given) gets the start of the look that completed it: the bytes were there
+  /// by then, however long this thread was held up before it returned.
   IoResult read_queued_until(std::span<std::uint8_t> buffer, MonoTime deadline,
-                             std::chrono::nanoseconds step) noexcept;
+                             std::chrono::nanoseconds step,
+                             MonoTime* complete_by = nullptr) noexcept;
 
   /// Reads away everything the line discipline holds (stray bytes before a new request);
   /// `bytes` says how many. Unlike flush_input() no TCFLSH and no poll(2): bytes still in the

@@ -193,7 +193,9 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
           // Never read(2) or poll(2) an empty tty: both wait for the flip-buffer worker, a
           // normal-priority kernel thread (docs/architecture.md, "What the cycle may wait
           // for"). Look at what the line discipline holds every character time instead.
-          const io::IoResult got = port.read_queued_until(reply, deadline, input_check_);
+          MonoTime complete_by{};
+          const io::IoResult got =
+              port.read_queued_until(reply, deadline, input_check_, &complete_by);
           const MonoTime now = mono_now();
           const auto partial = reply.first(got.bytes);
           // DCP 7.2/7.3: a reply not complete by the deadline is lost. If only a look after the
@@ -203,7 +205,9 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
           const bool seen_late = got.status == io::IoStatus::Timeout && got.bytes == reply.size();
           if (seen_late) bump(counters_.late_replies);
           if (got.status == io::IoStatus::Ok && !seen_late) {
-            reply_latency_.record(now - sent_at);
+            // From the look that found it complete: a stall of this thread after it is not
+            // the drive's latency (and would put an accepted reply past its deadline).
+            reply_latency_.record(complete_by - sent_at);
             const bool good = engine_.on_reply(reply, now);
             bump(good ? counters_.good_replies : counters_.bad_replies);
             stray_possible_ = !good;

@@ -292,11 +292,17 @@ TEST(IoSerialPort, QueuedReadUntilCollectsAReplyAsItArrives) {
     }
   });
   std::array<std::uint8_t, 6> buf{};
-  const IoResult r =
-      port.value().read_queued_until(buf, mono_now() + milliseconds(2000), milliseconds(1));
+  const MonoTime asked = mono_now();
+  MonoTime complete_by{};
+  const IoResult r = port.value().read_queued_until(buf, asked + milliseconds(2000),
+                                                    milliseconds(1), &complete_by);
+  const MonoTime returned = mono_now();
   sender.join();
   EXPECT_EQ(r.status, IoStatus::Ok);
   EXPECT_EQ(r.bytes, 6U);
+  // The look that completed it started after the call and before it returned.
+  EXPECT_GE(complete_by, asked);
+  EXPECT_LE(complete_by, returned);
   EXPECT_EQ(buf, (std::array<std::uint8_t, 6>{1, 2, 3, 4, 5, 6}));
 }
 
