@@ -74,16 +74,34 @@ with open(console, "w") as out:
     try:
         sys.exit(guest.wait(timeout=840))
     except subprocess.TimeoutExpired:
-        # A guest that stopped making progress: what each of its tasks was doing (sysrq t, w
-        # through the management console) goes to the console log, then the whole guest goes.
-        for key in ("t", "w"):
-            subprocess.run(["uml_mconsole", umid, "sysrq", key], stdout=subprocess.DEVNULL,
-                           stderr=subprocess.DEVNULL, timeout=20, check=False)
-        time.sleep(3)
+        # A guest that stopped making progress: what its kernel and the host say about it goes
+        # to hang.txt beside the guest's logs, then the whole guest goes. Not `sysrq t`: the 6.1
+        # UML kernel panics in it ("Segfault with no mm" in print_worker_info).
+        with open(os.path.join(share, "hang.txt"), "w") as report:
+            def mconsole(*words):
+                r = subprocess.run(["uml_mconsole", umid, *words], capture_output=True, text=True,
+                                   timeout=20, check=False)
+                report.write(f"### uml_mconsole {' '.join(words)}\n{r.stdout}{r.stderr}\n")
+            mconsole("sysrq", "w")  # blocked tasks, to the console log
+            for name in ("loadavg", "stat", "interrupts", "timer_list"):
+                mconsole("proc", name)
+            time.sleep(2)  # does the guest's time move, do its timers fire?
+            mconsole("proc", "timer_list")
+            ps = subprocess.run(["ps", "-o", "pid,stat,pcpu,time,wchan:30,args", "--sid",
+                                 str(guest.pid)], capture_output=True, text=True, check=False)
+            report.write(f"### host processes of the guest\n{ps.stdout}\n")
+            for line in ps.stdout.splitlines()[1:]:
+                pid = line.split()[0]
+                for what in ("stack", "syscall"):
+                    try:
+                        with open(f"/proc/{pid}/{what}") as f:
+                            report.write(f"### host /proc/{pid}/{what}\n{f.read()}\n")
+                    except OSError as e:
+                        report.write(f"### host /proc/{pid}/{what}: {e}\n")
         os.killpg(guest.pid, signal.SIGKILL)
         guest.wait()
-        print("systemd stage: the guest made no progress for 840 s; its task states are in the "
-              "console log", file=sys.stderr)
+        print("systemd stage: the guest made no progress for 840 s; what it and the host said "
+              "about it is in hang.txt", file=sys.stderr)
         sys.exit(124)
 PY
 rc=$?
@@ -94,9 +112,10 @@ if [ ! -s "$work/share/guest.rc" ]; then
   tail -40 "$work/share/guest.log" 2>/dev/null
   echo "--- console (tail)"
   tail -40 "$work/console.log"
-  if grep -q "state:R" "$work/console.log"; then
-    echo "--- the guest's running tasks when it was stopped (sysrq t)"
-    grep -A14 "state:R" "$work/console.log" | head -120
+  if [ -s "$work/share/hang.txt" ]; then
+    echo "--- the hung guest's load, host processes and timers (head of hang.txt)"
+    grep -A3 -E "^### (uml_mconsole proc loadavg|host processes)" "$work/share/hang.txt"
+    grep -m2 -E "^now at" "$work/share/hang.txt"
   fi
   keep=/var/tmp/liftd-systemd-stage-failed
   rm -rf "$keep" && cp -r "$work/share" "$keep" && cp "$work/console.log" "$keep/" &&
