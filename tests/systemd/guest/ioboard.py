@@ -55,8 +55,12 @@ def main():
     if not os.path.exists(f"{RUN}/sim.cmd"):
         os.mkfifo(f"{RUN}/sim.cmd")
     # The encoder's socket is for liftd's user too (umask 0: connecting needs write access).
-    sim = subprocess.Popen([SIM, "--device", "/dev/ttyS2", "--status", "0.01", "--reconnect",
-                            "--encoder", f"unix:{ENCODER}"],
+    # The drive and its encoder are separate hardware on a real lift: real-time, one step below
+    # liftd's cycle (SCHED_FIFO 80), as `liftd --simulate` runs its own simulators. At normal
+    # priority a guest busy with other work starved them: the encoder's frames went stale and
+    # liftd rightly ended a travel with position_lost.
+    sim = subprocess.Popen(["chrt", "-f", "79", SIM, "--device", "/dev/ttyS2", "--status", "0.01",
+                            "--reconnect", "--encoder", f"unix:{ENCODER}"],
                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, bufsize=1,
                            preexec_fn=lambda: os.umask(0))
     threading.Thread(target=read_sim, args=(sim,), daemon=True).start()
