@@ -9,6 +9,7 @@
 // the sum.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <set>
@@ -17,7 +18,9 @@
 #include <utility>
 #include <vector>
 
+#include "common/mono_time.hpp"
 #include "e2e/harness.hpp"
+#include "support/reference_link.hpp"
 
 namespace liftd::e2e {
 namespace {
@@ -52,6 +55,11 @@ struct Leg {
   json status;           ///< status after the travel
   bool b0_off = false;   ///< B0 off in the newest frames once stationary
   double seconds = 0.0;  ///< request to end event
+  /// The reference link's longest run of missed replies during the travel.
+  std::uint64_t reference_miss_run = 0;
+  /// Ended by a link fault while the reference link missed ten or more in a row too: the machine
+  /// held up every pty, and the lift did what DCP 7.3 says. The leg is travelled again.
+  bool machine_stall = false;
 };
 
 /// What one daemon did on its trip.
@@ -63,14 +71,22 @@ struct TripResult {
   std::string log;  ///< the daemon's stderr, for failure messages
 };
 
-TripResult run_trip(const std::vector<int>& trip, int dcp, const std::string& name) {
+// DCP 7.3: ten replies missing in a row fault the link.
+constexpr std::uint64_t kLinkFaultRun = 10;
+// A trip travels a leg again after a machine stall at most this often.
+constexpr int kMachineStallsPerTrip = 2;
+
+TripResult run_trip(const std::vector<int>& trip, int dcp, const std::string& name,
+                    const liftd::testing::ReferenceLink& witness) {
   TripResult out;
   Lift lift(name, dcp);
   out.setup_error = lift.setup_error();
   if (!out.setup_error.empty()) return out;
+  int stalls = 0;
   for (std::size_t i = 1; i < trip.size(); ++i) {
     Leg leg;
-    leg.from = trip[i - 1];
+    // -1: where the car stopped after a machine stall.
+    leg.from = out.legs.empty() || !out.legs.back().machine_stall ? trip[i - 1] : -1;
     leg.to = trip[i];
     // As a dispatcher does: travel once the link is up. A communication-channel timeout (a
     // message cut by a lost reply on a loaded machine) re-runs the handshake at rest, DCP 5.4.
@@ -78,15 +94,24 @@ TripResult run_trip(const std::vector<int>& trip, int dcp, const std::string& na
       lift.api().drain(100ms);
     }
     const auto start = Clock::now();
+    const MonoTime mono_start = mono_now();
     leg.reply = lift.call({{"cmd", "travel"}, {"floor", leg.to}});
     if (leg.reply.is_object() && leg.reply.value("ok", false)) {
       leg.end = lift.wait_travel_end(90s);
     }
     leg.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    leg.reference_miss_run = witness.longest_miss_run_during(mono_start, mono_now());
     leg.b0_off = lift.b0_off_in_newest();
     leg.status = lift.status();
     const bool ok = leg.end.is_object() && leg.end["data"]["event"] == "finished";
+    leg.machine_stall = !ok && leg.end.is_object() && leg.end["data"]["cause"] == "link_down" &&
+                        leg.reference_miss_run >= kLinkFaultRun;
+    const bool again = leg.machine_stall && ++stalls <= kMachineStallsPerTrip;
     out.legs.push_back(std::move(leg));
+    if (again) {
+      --i;  // the same leg again, from where the car stopped
+      continue;
+    }
     if (!ok) break;  // the rest of the trip would start from the wrong floor
   }
   out.aborted = lift.count_events("travel", [](const json& d) { return d["event"] == "aborted"; });
@@ -95,12 +120,33 @@ TripResult run_trip(const std::vector<int>& trip, int dcp, const std::string& na
   return out;
 }
 
+std::string from_name(const Leg& leg) {
+  return leg.from < 0 ? "where the car stopped" : "floor " + std::to_string(leg.from);
+}
+
 void check_trip(const std::vector<int>& trip, const TripResult& r, double tolerance_mm) {
   ASSERT_TRUE(r.setup_error.empty()) << r.setup_error;
-  ASSERT_EQ(r.legs.size(), trip.size() - 1) << "trip ended early; daemon log:\n" << r.log;
+  const auto stalls = static_cast<int>(
+      std::count_if(r.legs.begin(), r.legs.end(), [](const Leg& l) { return l.machine_stall; }));
+  ASSERT_LE(stalls, kMachineStallsPerTrip) << "daemon log:\n" << r.log;
+  ASSERT_EQ(r.legs.size(), trip.size() - 1 + static_cast<std::size_t>(stalls))
+      << "trip ended early; daemon log:\n"
+      << r.log;
   for (const Leg& leg : r.legs) {
-    SCOPED_TRACE("floor " + std::to_string(leg.from) + " -> " + std::to_string(leg.to));
+    SCOPED_TRACE(from_name(leg) + " -> " + std::to_string(leg.to));
     ASSERT_TRUE(leg.reply.value("ok", false)) << leg.reply.dump();
+    if (leg.machine_stall) {
+      // What the lift must do when ten replies in a row are lost (DCP 7.3): the travel ends,
+      // the link fault is raised and drive enable is off.
+      // (The fault is counted below: one `fault` event per stall.)
+      EXPECT_TRUE(leg.b0_off) << "B0 still on after the link fault";
+      std::printf(
+          "  %s -> %d: link fault at %s mm while the reference link missed %llu in a "
+          "row (a machine stall); travelled again\n",
+          from_name(leg).c_str(), leg.to, leg.end["data"]["position_mm"].dump().c_str(),
+          static_cast<unsigned long long>(leg.reference_miss_run));
+      continue;
+    }
     ASSERT_TRUE(leg.end.is_object()) << "no end of travel within 90 s";
     const json& d = leg.end["data"];
     EXPECT_EQ(d["event"], "finished") << d.dump();
@@ -112,24 +158,28 @@ void check_trip(const std::vector<int>& trip, const TripResult& r, double tolera
     EXPECT_EQ(leg.status["travel"]["state"], "idle") << leg.status.dump();
     EXPECT_TRUE(leg.status["faults"].empty()) << leg.status.dump();
     EXPECT_TRUE(leg.b0_off) << "B0 still on in the newest frames once stationary";
-    std::printf("  %d -> %d: landed %+.0f mm off in %.1f s\n", leg.from, leg.to,
+    std::printf("  %s -> %d: landed %+.0f mm off in %.1f s\n", from_name(leg).c_str(), leg.to,
                 d["position_mm"].get<double>() - level_mm(leg.to), leg.seconds);
   }
-  EXPECT_EQ(r.aborted, 0);
-  EXPECT_EQ(r.faults, 0);
+  EXPECT_EQ(r.aborted, stalls);
+  EXPECT_EQ(r.faults, stalls);
 }
 
 /// Every trip of kTrips on each dialect, all at the same time, one daemon each; then the checks.
 void run_all_trips() {
   constexpr std::array<int, 2> kDialects = {4, 3};
+  // The witness of a machine that holds up every pty: a bare link at the daemons' cycle
+  // priority (SCHED_FIFO 80 where permitted), in this process, over the whole test.
+  liftd::testing::ReferenceLink witness;
+  ASSERT_EQ(witness.start(80, false), 0);
   std::vector<TripResult> results(kDialects.size() * kTrips.size());
   std::vector<std::thread> threads;
   for (std::size_t d = 0; d < kDialects.size(); ++d) {
     for (std::size_t t = 0; t < kTrips.size(); ++t) {
       threads.emplace_back([&, d, t] {
         const int dcp = kDialects[d];
-        results[d * kTrips.size() + t] =
-            run_trip(kTrips[t], dcp, "dcp" + std::to_string(dcp) + "-trip" + std::to_string(t));
+        results[d * kTrips.size() + t] = run_trip(
+            kTrips[t], dcp, "dcp" + std::to_string(dcp) + "-trip" + std::to_string(t), witness);
       });
     }
   }

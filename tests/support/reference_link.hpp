@@ -59,6 +59,21 @@ class ReferenceLink {
   std::uint64_t longest_miss_run() const {
     return longest_miss_run_.load(std::memory_order_relaxed);
   }
+  /// The longest run of misses in a row that overlapped [from, to]: a witness that the machine
+  /// held up every pty at that time (of the last kRuns runs of two or more).
+  std::uint64_t longest_miss_run_during(MonoTime from, MonoTime to) const {
+    const std::uint64_t count = runs_written_.load(std::memory_order_acquire);
+    std::uint64_t longest = 0;
+    for (std::uint64_t i = count > kRuns ? count - kRuns : 0; i < count; ++i) {
+      const Run& r = runs_[i % kRuns];
+      const MonoTime start{r.start_ns.load(std::memory_order_relaxed)};
+      const MonoTime end{r.end_ns.load(std::memory_order_relaxed)};
+      if (start <= to && end >= from) {
+        longest = std::max(longest, r.length.load(std::memory_order_relaxed));
+      }
+    }
+    return longest;
+  }
 
  private:
   static io::SerialSettings raw() {
@@ -92,6 +107,7 @@ class ReferenceLink {
           if (run > longest_miss_run_.load(std::memory_order_relaxed)) {
             longest_miss_run_.store(run, std::memory_order_relaxed);
           }
+          note_run(run, sent);
         } else {
           run = 0;
         }
@@ -100,6 +116,32 @@ class ReferenceLink {
       while (next < mono_now()) next += kPeriod;
     }
   }
+  // Runs of two misses or more, oldest overwritten; the run in progress is updated in place.
+  static constexpr std::uint64_t kRuns = 64;
+  struct Run {
+    std::atomic<std::int64_t> start_ns{0};
+    std::atomic<std::int64_t> end_ns{0};
+    std::atomic<std::uint64_t> length{0};
+  };
+  void note_run(std::uint64_t run, MonoTime sent) noexcept {
+    if (run < 2) return;
+    const std::int64_t at = sent.count();
+    std::uint64_t index = runs_written_.load(std::memory_order_relaxed);
+    if (run == 2) {
+      Run& r = runs_[index % kRuns];
+      // The first miss of the run was one period (DCP 7.2: 15 ms) before this one.
+      r.start_ns.store(at - MonoTime(std::chrono::milliseconds(15)).count(),
+                       std::memory_order_relaxed);
+      r.end_ns.store(at, std::memory_order_relaxed);
+      r.length.store(run, std::memory_order_relaxed);
+      runs_written_.store(++index, std::memory_order_release);
+      return;
+    }
+    Run& r = runs_[(index - 1) % kRuns];
+    r.end_ns.store(at, std::memory_order_relaxed);
+    r.length.store(run, std::memory_order_relaxed);
+  }
+
   void echo_loop() noexcept {
     std::array<std::uint8_t, 64> buf{};
     const int fd = pty_.master_fd();
@@ -123,6 +165,8 @@ class ReferenceLink {
   std::atomic<std::uint64_t> exchanges_{0};
   std::atomic<std::uint64_t> missing_{0};
   std::atomic<std::uint64_t> longest_miss_run_{0};
+  std::array<Run, kRuns> runs_{};
+  std::atomic<std::uint64_t> runs_written_{0};
 };
 
 }  // namespace liftd::testing
