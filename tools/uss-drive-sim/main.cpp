@@ -176,12 +176,12 @@ void print_slave(const liftd::uss::sim::UssSlaveSim& s) {
   const auto& st = s.stats();
   std::printf(
       "slave %u: %.*s STW %04X ZSW %04X HSW %d HIW %d car %.0f mm %.3f m/s; telegrams %llu "
-      "replies %llu faulted %llu violations %llu\n",
+      "replies %llu faulted %llu violations %llu unjudged %llu\n",
       s.address(), static_cast<int>(to_string(d.state).size()), to_string(d.state).data(), d.stw,
       d.zsw, d.hsw, d.hiw, d.position_mm, d.velocity_mps,
       static_cast<unsigned long long>(st.telegrams), static_cast<unsigned long long>(st.replies),
       static_cast<unsigned long long>(st.faulted_replies),
-      static_cast<unsigned long long>(st.violations));
+      static_cast<unsigned long long>(st.violations), static_cast<unsigned long long>(st.unjudged));
 }
 
 // One stdin line; false on "quit".
@@ -434,7 +434,8 @@ int main(int argc, char** argv) {
     std::printf(
         "summary slave %u: telegrams %llu replies %llu mirrors %llu broadcasts %llu specials "
         "%llu pkw-requests %llu pkw-errors %llu spontaneous %llu/%llu eeprom %llu faulted %llu "
-        "telegram-timeouts %llu violations %llu rx-good %llu rx-rejected %llu error-word %04X\n",
+        "telegram-timeouts %llu violations %llu unjudged %llu rx-good %llu rx-rejected %llu "
+        "error-word %04X\n",
         s.address(), static_cast<unsigned long long>(st.telegrams),
         static_cast<unsigned long long>(st.replies), static_cast<unsigned long long>(st.mirrors),
         static_cast<unsigned long long>(st.broadcasts),
@@ -446,7 +447,8 @@ int main(int argc, char** argv) {
         static_cast<unsigned long long>(st.eeprom_writes),
         static_cast<unsigned long long>(st.faulted_replies),
         static_cast<unsigned long long>(st.telegram_timeouts),
-        static_cast<unsigned long long>(st.violations), static_cast<unsigned long long>(rx.good),
+        static_cast<unsigned long long>(st.violations),
+        static_cast<unsigned long long>(st.unjudged), static_cast<unsigned long long>(rx.good),
         static_cast<unsigned long long>(rx.rejected), rx.error_word);
   }
   return device_lost ? 1 : 0;

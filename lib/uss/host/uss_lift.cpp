@@ -196,12 +196,21 @@ void SimulatedUssBus::stop() {
   log_violations();
   std::lock_guard<std::mutex> lock(mutex_);
   std::uint64_t violations = 0;
-  for (const auto& s : bus_->slaves()) violations += s.stats().violations;
+  std::uint64_t unjudged = 0;
+  for (const auto& s : bus_->slaves()) {
+    violations += s.stats().violations;
+    unjudged += s.stats().unjudged;
+  }
   const auto mm = std::llround(drive().position_mm());
   log::event(log::Level::info, "sim", "sim_stopped",
-             {{"position_mm", std::to_string(mm)}, {"violations", std::to_string(violations)}},
+             {{"position_mm", std::to_string(mm)},
+              {"violations", std::to_string(violations)},
+              {"unjudged", std::to_string(unjudged)}},
              "simulated USS bus stopped: car at " + std::to_string(mm) + " mm, " +
-                 std::to_string(violations) + " violation(s) of the USS specification seen");
+                 std::to_string(violations) + " violation(s) of the USS specification seen, " +
+                 std::to_string(unjudged) +
+                 " timing check(s) not judged (the master may have given up on a reply the "
+                 "machine delivered late)");
 }
 
 void SimulatedUssBus::loop() {
@@ -343,9 +352,11 @@ nlohmann::json SimulatedUssBus::state_json() const {
 nlohmann::json SimulatedUssBus::state_json_locked() const {
   const uss::sim::UssDriveView d = drive().drive();
   std::uint64_t violations = 0;
+  std::uint64_t unjudged = 0;
   nlohmann::json slaves = nlohmann::json::array();
   for (const auto& s : bus_->slaves()) {
     violations += s.stats().violations;
+    unjudged += s.stats().unjudged;
     slaves.push_back({{"address", s.address()},
                       {"telegrams", s.stats().telegrams},
                       {"replies", s.stats().replies}});
@@ -357,7 +368,8 @@ nlohmann::json SimulatedUssBus::state_json_locked() const {
                         {"brake_open", d.brake_open},
                         {"position_mm", std::llround(d.position_mm)},
                         {"slaves", std::move(slaves)},
-                        {"violations", violations}};
+                        {"violations", violations},
+                        {"unjudged_timing", unjudged}};
   board_.add_state(out);
   return out;
 }

@@ -127,7 +127,7 @@ void UssSlaveSim::on_char(const uss::RxChar& c, MonoTime at) noexcept {
     // is past the 20 ms the master waits (A 5.2.1.1), so the master may go on.
     for (std::size_t i = 0; i < reply_count_;) {
       if (!reply_late_[i] && replies_[i].send_at > at) {
-        violation(at, kRuleReplyPending);
+        timing_rule(at, replies_[i].awaited_until, kRuleReplyPending);
         std::move(replies_.begin() + static_cast<std::ptrdiff_t>(i + 1),
                   replies_.begin() + static_cast<std::ptrdiff_t>(reply_count_),
                   replies_.begin() + static_cast<std::ptrdiff_t>(i));
@@ -164,6 +164,7 @@ bool UssSlaveSim::take_reply(MonoTime now, UssReply& out) noexcept {
   ++stats_.replies;
   // Until told otherwise: sent now, back to back at the line's baud rate (A 6.2).
   bus_quiet_from_ = std::max(now, out.send_at) + uss::transmission_time(baud_, out.size);
+  last_reply_awaited_until_ = out.awaited_until;
   return true;
 }
 
@@ -176,7 +177,7 @@ void UssSlaveSim::on_complete(MonoTime at) noexcept {
   // receiver sees only the master's characters). Stamps mark character ends: STX end minus
   // reply end >= 2 tz leaves at least one character time of silence, the receiver's tolerance.
   if (bus_quiet_from_ && stx_at_ - *bus_quiet_from_ < start_pause_) {
-    if (mine) violation(at, kRuleStartPause);
+    if (mine) timing_rule(stx_at_, last_reply_awaited_until_, kRuleStartPause);
     return;
   }
   switch (a.type) {
@@ -341,6 +342,9 @@ void UssSlaveSim::queue(UssReply& reply, MonoTime at, bool carries_answer) noexc
   if (damaged || late) ++stats_.faulted_replies;
   if (!damaged && !late && carries_answer) answer_delivered_ = true;
   reply.send_at = at + delay;
+  // A 5.1.2, A 5.2.1.1: the master sent the request after the bus's last reply at the earliest
+  // (without one, the request's own STX stands in), and waits a start pause plus at most 20 ms.
+  reply.awaited_until = bus_quiet_from_.value_or(stx_at_) + start_pause_ + uss::kMaxReplyDelay;
   if (reply_count_ == replies_.size()) return;  // the master floods us: drop the newest
   std::size_t i = reply_count_;
   while (i > 0 && replies_[i - 1].send_at > reply.send_at) {
@@ -361,6 +365,17 @@ void UssSlaveSim::inject(UssReplyFault fault, std::uint32_t count) noexcept {
 
 void UssSlaveSim::clear_faults() noexcept {
   faults_.fill(0);
+}
+
+void UssSlaveSim::timing_rule(MonoTime at, MonoTime awaited_until, std::string_view rule) noexcept {
+  // Characters reach the slave no earlier than the master sent them: one that arrived while a
+  // master keeping the spec's times was still bound to wait was sent early for certain. Later
+  // it may follow a reply the machine delivered late, which the slave cannot see.
+  if (at < awaited_until) {
+    violation(at, rule);
+  } else {
+    ++stats_.unjudged;
+  }
 }
 
 void UssSlaveSim::violation(MonoTime at, std::string_view rule) noexcept {
@@ -437,7 +452,8 @@ bool UssBusSim::take_reply(MonoTime now, UssReply& out) noexcept {
     if (x && *x <= now && (first == nullptr || *x < *first->next_reply_at())) first = &s;
   }
   if (first == nullptr || !first->take_reply(now, out)) return false;
-  reply_sent(std::max(now, out.send_at) + uss::transmission_time(baud_, out.size));
+  const MonoTime end = std::max(now, out.send_at) + uss::transmission_time(baud_, out.size);
+  for (UssSlaveSim& s : slaves_) s.reply_sent(end, out.awaited_until);
   return true;
 }
 

@@ -162,7 +162,13 @@ std::optional<UssReplyFault> parse_uss_reply_fault(std::string_view name) noexce
 struct UssReply {
   std::array<std::uint8_t, uss::kMaxTelegramBytes> bytes{};
   std::size_t size = 0;
-  MonoTime send_at{};        ///< earliest time to start sending the STX
+  MonoTime send_at{};  ///< earliest time to start sending the STX
+  /// Until when a master certainly waits for this reply: the end of the bus's last reply before
+  /// the request (the earliest the master can have sent it), the start pause and the longest
+  /// reply delay (A 5.1.2, A 5.2.1.1: 20 ms). A telegram that arrives before then broke a rule
+  /// for certain; one that arrives later may come from a master that rightly gave up on a reply
+  /// the machine delayed (see UssSlaveStats::unjudged).
+  MonoTime awaited_until{};
   int parity_error_at = -1;  ///< index of the byte to send with a parity error; -1 = none
   std::uint8_t address = 0;  ///< the slave that answers
   std::span<const std::uint8_t> view() const noexcept { return {bytes.data(), size}; }
@@ -191,6 +197,11 @@ struct UssSlaveStats {
   std::uint64_t faulted_replies = 0;  ///< replies changed or withheld by injected faults
   std::uint64_t telegram_timeouts = 0;
   std::uint64_t violations = 0;
+  /// Timing rules (A 5, A 5.1.2) seen broken by a telegram that came after the master may have
+  /// given up on our reply (UssReply::awaited_until): on a pseudo-terminal characters arrive
+  /// only when the machine delivers them, so the slave cannot tell a late delivery from a master
+  /// at fault and counts the case here instead of as a violation.
+  std::uint64_t unjudged = 0;
 };
 
 /// The drive and car as the slave sees them.
@@ -226,6 +237,11 @@ class UssSlaveSim {
   /// The bus carried a reply (ours or another slave's) until `end`: the master's next STX must
   /// follow a start pause after it (A 5.1.2).
   void reply_sent(MonoTime end) noexcept { bus_quiet_from_ = end; }
+  /// The same, with the time until which the master certainly waited for that reply.
+  void reply_sent(MonoTime end, MonoTime awaited_until) noexcept {
+    bus_quiet_from_ = end;
+    last_reply_awaited_until_ = awaited_until;
+  }
   /// Moves the car up to `now` (also done by every other call).
   void advance(MonoTime now) noexcept;
 
@@ -317,6 +333,9 @@ class UssSlaveSim {
   std::uint8_t wire_place(std::size_t element) const noexcept;
   std::size_t pkw_capacity() const noexcept;  // PWE words the reply may carry
   void violation(MonoTime at, std::string_view rule) noexcept;
+  /// A timing rule broken by a telegram that arrived at `at`: a violation if a master waiting
+  /// as the spec says still waited for our reply then (`awaited_until`), unjudged otherwise.
+  void timing_rule(MonoTime at, MonoTime awaited_until, std::string_view rule) noexcept;
 
   UssSlaveConfig config_;
   std::uint32_t baud_;
@@ -328,8 +347,9 @@ class UssSlaveSim {
   bool was_receiving_ = false;
   MonoTime stx_at_{};
   std::optional<MonoTime> bus_quiet_from_;
-  std::array<UssReply, 4> replies_{};  // ordered by send_at
-  std::array<bool, 4> reply_late_{};   // the reply is an injected late one
+  MonoTime last_reply_awaited_until_{};  // of the reply that set bus_quiet_from_
+  std::array<UssReply, 4> replies_{};    // ordered by send_at
+  std::array<bool, 4> reply_late_{};     // the reply is an injected late one
   std::size_t reply_count_ = 0;
   std::array<std::uint32_t, kUssReplyFaultCount> faults_{};
 

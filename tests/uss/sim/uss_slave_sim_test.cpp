@@ -462,6 +462,55 @@ TEST(UssSlaveSim, TelegramBeforeTheReplyIsAViolation) {
   EXPECT_EQ(v[0].substr(0, 3), "A 5");
 }
 
+// Characters reach the slave no earlier than the master sent them, but on a pseudo-terminal they
+// can reach it much later: a request and the master's next telegram, sent 20 ms apart as A 5.2.1.1
+// allows, may arrive together. The slave judges a timing rule only where a master keeping the
+// spec's times was still bound to wait for its reply.
+TEST(UssSlaveSim, TimingRulesBrokenOnlyByALateDeliveryAreCountedNotJudged) {
+  Harness h(config(PkwLength::Four, 2));
+  const Bytes request = telegram(5, {pke(1, 18), 0, 0, 0, 0, 0});
+  ASSERT_TRUE(h.exchange(request));
+  const MonoTime last_reply_end = h.now;
+  // 40 ms of silence, then the request in one delivery, and the next telegram 1 ms after it
+  // while the reply is pending: the master may have sent the request at once and given up on
+  // the reply 20 ms later (A 5.2.1.1).
+  h.now += 40ms;
+  for (const auto x : request) h.sim.on_char({x, liftd::uss::LineError::None}, h.now);
+  h.send(request, 1ms);
+  EXPECT_TRUE(h.violations().empty());
+  EXPECT_EQ(h.sim.stats().unjudged, 1U) << "A 5: telegram before the reply, not judged";
+  // The second telegram is answered, late from the master's point of view; a telegram right
+  // after that reply has no start pause but may come from a master that gave up on it.
+  ASSERT_TRUE(h.wait_reply());
+  EXPECT_GT(h.last.send_at, last_reply_end + 20ms);
+  h.send(request, 0ns);
+  EXPECT_FALSE(h.wait_reply());
+  EXPECT_TRUE(h.violations().empty());
+  EXPECT_EQ(h.sim.stats().unjudged, 2U) << "A 5.1.2: no start pause, not judged";
+  EXPECT_EQ(h.sim.stats().violations, 0U);
+}
+
+TEST(UssSlaveSim, AMasterThatDoesNotWaitIsCaughtAfterEveryOnTimeReply) {
+  Harness h(config(PkwLength::Four, 2));
+  const Bytes request = telegram(5, {pke(1, 18), 0, 0, 0, 0, 0});
+  ASSERT_TRUE(h.exchange(request));
+  // A 5: the next telegram 1 ms after the request, while the reply (due after 2 ms) is pending.
+  h.send(request);
+  h.send(request, 1ms);
+  auto v = h.violations();
+  ASSERT_EQ(v.size(), 1U);
+  EXPECT_EQ(v[0].substr(0, 4), "A 5:");
+  ASSERT_TRUE(h.wait_reply());
+  // A 5.1.2: a request 5 ms after the last reply, its reply, and the next STX straight after it
+  // (about 17 ms after that last reply, before a master could give up on this one).
+  ASSERT_TRUE(h.exchange(request));
+  h.send(request, 0ns);
+  v = h.violations();
+  ASSERT_EQ(v.size(), 1U);
+  EXPECT_EQ(v[0].substr(0, 7), "A 5.1.2");
+  EXPECT_EQ(h.sim.stats().unjudged, 0U);
+}
+
 // ------------------------------------------------------------------------ drive profile C 5.2.1
 
 struct Step {
