@@ -76,6 +76,7 @@ class ReferenceLink {
   }
 
  private:
+  static constexpr auto kPeriod = std::chrono::milliseconds(15);  // DCP 7.2
   static io::SerialSettings raw() {
     io::SerialSettings s;  // DCP 7.1: 38400 8N1
     s.rs485 = io::Rs485Mode::Off;
@@ -87,7 +88,6 @@ class ReferenceLink {
     return std::move(created).value();
   }
   void loop() noexcept {
-    constexpr auto kPeriod = std::chrono::milliseconds(15);       // DCP 7.2
     constexpr auto kDeadline = std::chrono::microseconds(13625);  // DCP 7.2
     const auto step = io::character_time(raw());
     std::array<std::uint8_t, 6> frame{1, 2, 3, 4, 5, 6};
@@ -129,9 +129,8 @@ class ReferenceLink {
     std::uint64_t index = runs_written_.load(std::memory_order_relaxed);
     if (run == 2) {
       Run& r = runs_[index % kRuns];
-      // The first miss of the run was one period (DCP 7.2: 15 ms) before this one.
-      r.start_ns.store(at - MonoTime(std::chrono::milliseconds(15)).count(),
-                       std::memory_order_relaxed);
+      // The first miss of the run was one period before this one.
+      r.start_ns.store(at - MonoTime(kPeriod).count(), std::memory_order_relaxed);
       r.end_ns.store(at, std::memory_order_relaxed);
       r.length.store(run, std::memory_order_relaxed);
       runs_written_.store(++index, std::memory_order_release);
