@@ -438,6 +438,8 @@ TEST(LiveLink, DeviceLossAndReappearanceRecoverWithoutRestart) {
   alias.point_to(first->slave_path());
   auto drive = serve(first->master_fd(), drive_config());
   std::unique_ptr<dcp::sim::SerialDriveRunner> drive2;  // outlives the master reading its encoder
+  liftd::testing::ReferenceLink reference;
+  ASSERT_EQ(start_reference(reference), 0);
   LiveMaster m(alias.path());
   m.position.attach(drive.get());
   ASSERT_EQ(m.start(), 0);
@@ -463,8 +465,33 @@ TEST(LiveLink, DeviceLossAndReappearanceRecoverWithoutRestart) {
   io::PtyPair second = make_pty();
   drive2 = serve(second.master_fd(), drive_config());
   m.position.attach(drive2.get());
+  const dcp::LinkCounters at_replug = m.controller.snapshot().link_counters;
+  const std::uint64_t cycles_at_replug = m.runner.stats().counters.cycles;
+  const MonoTime replugged = mono_now();
   alias.point_to(second.slave_path());
-  ASSERT_TRUE(m.wait_until([&] { return m.ready(); }, 10000ms)) << tail_of_trace(m.runner, 80);
+  // The handshake (STX ETX, I0, I1, I3) takes some 60 clean frames. A reply the machine held up
+  // loses the channel bytes it carried (DCP 5.1), the message arrives spoilt, and the master
+  // rightly starts the handshake again after the request's timeout (DCP 5.12.2): 10 s, and
+  // 1.5 s more for every such restart, at most 40 s. Each restart must follow a lost reply, and
+  // the lost replies must be the machine's (the reference link's share, as above).
+  const auto restarts = [&] {
+    return m.controller.snapshot().link_counters.request_timeouts - at_replug.request_timeouts;
+  };
+  while (!m.wait_until([&] { return m.ready(); }, 250ms)) {
+    const MonoTime allowed =
+        replugged + 10000ms +
+        std::chrono::milliseconds(1500 * std::min<std::uint64_t>(20, restarts()));
+    ASSERT_LT(mono_now(), std::min(allowed, replugged + 40000ms))
+        << "the link is not up in the time allowed; handshake restarts since the replug: "
+        << restarts() << "\n"
+        << tail_of_trace(m.runner, 80);
+  }
+  const dcp::LinkCounters at_ready = m.controller.snapshot().link_counters;
+  const std::uint64_t lost_replies = at_ready.missing_replies - at_replug.missing_replies;
+  EXPECT_LE(restarts(), lost_replies) << "a handshake restarted without a lost reply";
+  EXPECT_LE(lost_replies,
+            (m.runner.stats().counters.cycles - cycles_at_replug) / 100 + 2 * reference.missing())
+      << "reference link " << reference.missing();
   EXPECT_TRUE(drive2->status().initialised);
   EXPECT_GE(count_i0(master_channel(m.runner.recorder().copy(), lost_at)), 1U);
   const rt::CycleCounters c = m.runner.stats().counters;
