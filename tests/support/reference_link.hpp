@@ -5,7 +5,9 @@
 // late as the simulated drive answers. Both directions pass the tty's flip-buffer worker, a
 // normal-priority kernel thread, as every byte of a real UART does: a reply this link misses was
 // held up by the machine, whatever the reader does (docs/architecture.md, "What the cycle may
-// wait for"). Header only: the benchmarks build without the tests.
+// wait for"). A period the thread wakes too late to send in (DCP 7.2 send window) is skipped and
+// counted, as the cycle does: then the machine held up even a real-time thread. Header only: the
+// benchmarks build without the tests.
 #pragma once
 
 #include <poll.h>
@@ -55,12 +57,15 @@ class ReferenceLink {
   }
   std::uint64_t exchanges() const { return exchanges_.load(std::memory_order_relaxed); }
   std::uint64_t missing() const { return missing_.load(std::memory_order_relaxed); }
-  /// The most replies missed in a row (DCP 7.3 faults a link at ten).
+  /// Periods skipped because the thread woke past the send window (not counted in missing()).
+  std::uint64_t skipped() const { return skipped_.load(std::memory_order_relaxed); }
+  /// The most periods in a row without a good exchange, a reply missed or the period skipped
+  /// (DCP 7.3 faults a link at ten; a drive without frames for as long stops the car).
   std::uint64_t longest_miss_run() const {
     return longest_miss_run_.load(std::memory_order_relaxed);
   }
-  /// The longest run of misses in a row that overlapped [from, to]: a witness that the machine
-  /// held up every pty at that time (of the last kRuns runs of two or more).
+  /// The longest such run that overlapped [from, to]: a witness that the machine held up every
+  /// pty, or every real-time thread, at that time (of the last kRuns runs of two or more).
   std::uint64_t longest_miss_run_during(MonoTime from, MonoTime to) const {
     const std::uint64_t count = runs_written_.load(std::memory_order_acquire);
     std::uint64_t longest = 0;
@@ -88,14 +93,30 @@ class ReferenceLink {
     return std::move(created).value();
   }
   void loop() noexcept {
-    constexpr auto kDeadline = std::chrono::microseconds(13625);  // DCP 7.2
+    constexpr auto kDeadline = std::chrono::microseconds(13625);   // DCP 7.2
+    constexpr auto kSendWindow = std::chrono::microseconds(1375);  // DCP 7.2, as the cycle's
     const auto step = io::character_time(raw());
     std::array<std::uint8_t, 6> frame{1, 2, 3, 4, 5, 6};
     std::array<std::uint8_t, 6> reply{};
     MonoTime next = mono_now() + kPeriod;
     std::uint64_t run = 0;
+    const auto miss = [&](MonoTime at) {
+      ++run;
+      if (run > longest_miss_run_.load(std::memory_order_relaxed)) {
+        longest_miss_run_.store(run, std::memory_order_relaxed);
+      }
+      note_run(run, at);
+    };
     while (!stop_.load(std::memory_order_relaxed)) {
+      // A period whose send window the thread woke too late for is skipped, as the cycle skips
+      // it: the machine held up the thread itself, not only the pty.
       rt::sleep_until(next);
+      while (mono_now() - next > kSendWindow) {
+        skipped_.fetch_add(1, std::memory_order_relaxed);
+        miss(next);
+        next += kPeriod;
+        if (next > mono_now()) rt::sleep_until(next);
+      }
       (void)port_.drain_queued();
       const MonoTime sent = mono_now();
       if (port_.write_frame(frame).status == io::IoStatus::Ok) {
@@ -103,17 +124,12 @@ class ReferenceLink {
         exchanges_.fetch_add(1, std::memory_order_relaxed);
         if (got.status != io::IoStatus::Ok) {
           missing_.fetch_add(1, std::memory_order_relaxed);
-          ++run;
-          if (run > longest_miss_run_.load(std::memory_order_relaxed)) {
-            longest_miss_run_.store(run, std::memory_order_relaxed);
-          }
-          note_run(run, sent);
+          miss(sent);
         } else {
           run = 0;
         }
       }
       next += kPeriod;
-      while (next < mono_now()) next += kPeriod;
     }
   }
   // Runs of two misses or more, oldest overwritten; the run in progress is updated in place.
@@ -163,6 +179,7 @@ class ReferenceLink {
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> exchanges_{0};
   std::atomic<std::uint64_t> missing_{0};
+  std::atomic<std::uint64_t> skipped_{0};
   std::atomic<std::uint64_t> longest_miss_run_{0};
   std::array<Run, kRuns> runs_{};
   std::atomic<std::uint64_t> runs_written_{0};
