@@ -203,7 +203,10 @@ struct ProxiedLink {
     if (!opened.ok()) throw std::runtime_error(opened.error().message());
     b_slave = std::move(opened).value();
     drive = serve(side_b.master_fd(), drive_config());
-    proxy = std::make_unique<FaultProxy>(side_a.master_fd(), b_slave.fd(), std::move(plan));
+    // The proxy stands for the wire: at the cycle's priority (where permitted), so that only
+    // what holds up the reference link beside it can hold it up too.
+    proxy = std::make_unique<FaultProxy>(side_a.master_fd(), b_slave.fd(), std::move(plan),
+                                         cycle_config("").thread.priority);
     if (proxy->start() != 0) throw std::runtime_error("proxy did not start");
   }
   ~ProxiedLink() {
