@@ -5,6 +5,7 @@
 // C 5.2.1: STW bit 0 ON together with bit 3 enable operation).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <regex>
 #include <sstream>
 
@@ -183,11 +184,27 @@ void expect_uss_telegrams(const std::string& text) {
   }
 }
 
+/// Waits until both slaves have answered twice: a recorder saved earlier (the lift is ready after
+/// the drive's first replies) may not hold the door operator's reply yet on a loaded machine.
+bool both_slaves_answered(Lift& lift) {
+  for (int i = 0; i < 100; ++i) {
+    const json slaves = lift.call({{"cmd", "stats"}})["result"]["uss"]["slaves"];
+    if (slaves.size() == 2 && std::all_of(slaves.begin(), slaves.end(),
+                                          [](const json& s) { return s.value("good", 0) >= 2; })) {
+      return true;
+    }
+    lift.api().drain(100ms);
+  }
+  return false;
+}
+
 TEST_F(UssTest, TraceSaveWritesTheFlightRecorderAsOnEveryLift) {
+  ASSERT_TRUE(both_slaves_answered(*lift_)) << lift_->call({{"cmd", "stats"}}).dump();
   expect_uss_telegrams(expect_trace_save_writes_file(*lift_, "uss", 4));
 }
 
 TEST_F(UssTest, Sigusr1WritesTheFlightRecorder) {
+  ASSERT_TRUE(both_slaves_answered(*lift_)) << lift_->call({{"cmd", "stats"}}).dump();
   expect_uss_telegrams(expect_sigusr1_writes_file(*lift_));
 }
 

@@ -397,7 +397,12 @@ TEST(SerialDriveRunner, QuietKeepsOnlyFaultEvents) {
   std::vector<SimEvent> events;
   rig.runner.drain_events(events);
   ASSERT_FALSE(events.empty());
-  for (const auto& e : events) EXPECT_EQ(e.kind, SimEvent::Kind::Fault);
+  // Raised and cleared faults only (a loaded machine may stall the test's master long enough
+  // for the drive's DCP 7.3 supervision: that fault is raised and cleared too).
+  for (const auto& e : events) {
+    EXPECT_TRUE(e.kind == SimEvent::Kind::Fault || e.kind == SimEvent::Kind::FaultCleared)
+        << to_string(e.kind);
+  }
 }
 
 TEST(SerialDriveRunner, EndsWithDeviceLostWhenNotReconnecting) {
