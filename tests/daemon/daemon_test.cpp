@@ -425,7 +425,14 @@ TEST(DaemonSocketActivation, RefusesPassedSocketsItCannotServeAndLeavesTheirFile
       std::this_thread::sleep_for(10ms);
     }
     ASSERT_TRUE(exists(first)) << manager.err();
-    testing::ApiClient trigger(first);  // systemd-socket-activate starts liftd on a connection
+    // systemd-socket-activate starts liftd on a connection. The file appears at bind(), a moment
+    // before it listens: connect until it takes the connection (a refused one starts nothing).
+    std::unique_ptr<testing::ApiClient> trigger;
+    do {
+      trigger = std::make_unique<testing::ApiClient>(first);
+      if (trigger->connected()) break;
+      std::this_thread::sleep_for(10ms);
+    } while (std::chrono::steady_clock::now() < end);
     const auto code = manager.wait(kStartupLimit);
     ASSERT_TRUE(code.has_value()) << "liftd ran on sockets it cannot serve";
     EXPECT_NE(*code, 0);
