@@ -275,6 +275,19 @@ pid_t wait_for_child(pid_t parent, std::chrono::milliseconds limit) {
   return 0;
 }
 
+// A client of a socket systemd-socket-activate holds. Its file appears at bind(), a moment
+// before the manager listens: connects until the socket takes the connection (a refused connect
+// starts nothing) or `end`.
+std::unique_ptr<testing::ApiClient> connect_when_listening(
+    const std::string& path, std::chrono::steady_clock::time_point end) {
+  auto client = std::make_unique<testing::ApiClient>(path);
+  while (!client->connected() && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(10ms);
+    client = std::make_unique<testing::ApiClient>(path);
+  }
+  return client;
+}
+
 TEST(DaemonSocketActivation, AClientConnectingDuringARestartIsQueuedNotRefused) {
   const std::string activate = "/usr/bin/systemd-socket-activate";
   if (::access(activate.c_str(), X_OK) != 0) {
@@ -321,15 +334,8 @@ TEST(DaemonSocketActivation, AClientConnectingDuringARestartIsQueuedNotRefused) 
   struct stat before {};
   ASSERT_EQ(::lstat(socket.c_str(), &before), 0);
 
-  // The first client starts the first liftd and is served by it. The file appears at bind(),
-  // a moment before the manager listens: connect until it takes the connection (a refused
-  // connect starts nothing).
-  std::unique_ptr<testing::ApiClient> first_client;
-  do {
-    first_client = std::make_unique<testing::ApiClient>(socket);
-    if (first_client->connected()) break;
-    std::this_thread::sleep_for(10ms);
-  } while (std::chrono::steady_clock::now() < end);
+  // The first client starts the first liftd and is served by it.
+  const std::unique_ptr<testing::ApiClient> first_client = connect_when_listening(socket, end);
   testing::ApiClient& first = *first_client;
   ASSERT_TRUE(first.connected());
   const auto hello = first.next(kStartupLimit);
@@ -425,14 +431,8 @@ TEST(DaemonSocketActivation, RefusesPassedSocketsItCannotServeAndLeavesTheirFile
       std::this_thread::sleep_for(10ms);
     }
     ASSERT_TRUE(exists(first)) << manager.err();
-    // systemd-socket-activate starts liftd on a connection. The file appears at bind(), a moment
-    // before it listens: connect until it takes the connection (a refused one starts nothing).
-    std::unique_ptr<testing::ApiClient> trigger;
-    do {
-      trigger = std::make_unique<testing::ApiClient>(first);
-      if (trigger->connected()) break;
-      std::this_thread::sleep_for(10ms);
-    } while (std::chrono::steady_clock::now() < end);
+    // systemd-socket-activate starts liftd on a connection.
+    const std::unique_ptr<testing::ApiClient> trigger = connect_when_listening(first, end);
     const auto code = manager.wait(kStartupLimit);
     ASSERT_TRUE(code.has_value()) << "liftd ran on sockets it cannot serve";
     EXPECT_NE(*code, 0);
