@@ -28,6 +28,11 @@
 
 namespace liftd::testing {
 
+/// Periods in a row without a good exchange that witness a stall long enough for a drive to stop
+/// the car on its own supervision (DCP 7.3: ten frames; the reference link, at another phase and
+/// with fewer pty hops than the drive's link, may see two fewer).
+inline constexpr std::uint64_t kDriveStallRun = 8;
+
 class ReferenceLink {
  public:
   ReferenceLink() : pty_(make()) {}
