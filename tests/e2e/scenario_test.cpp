@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "e2e/harness.hpp"
+#include "e2e/witness.hpp"
 
 namespace liftd::e2e {
 namespace {
@@ -66,24 +67,27 @@ TEST(SimCommand, ValidatesItsArgumentsAndReportsTheInjectedState) {
 // ---- travels changed or ended mid-way ----
 
 TEST(Travel, ExtendedMidTravelLandsOnTheNewFloor) {
-  START_LIFT(lift, 4);
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "travel"}, {"floor", 2}})));
-  ASSERT_TRUE(lift.wait_moved(0, 500)) << lift.log();
-  const json r = lift.call({{"cmd", "travel"}, {"floor", 4}});
-  ASSERT_TRUE(is_ok(r)) << r.dump();
-  EXPECT_EQ(r["result"]["extended"], true) << r.dump();
-  const json end = lift.wait_travel_end();
-  ASSERT_FALSE(end.is_null()) << lift.log();
-  EXPECT_EQ(end["data"]["event"], "finished") << end.dump() << lift.log();
-  EXPECT_EQ(end["data"]["target_mm"], level_mm(4));
-  EXPECT_NEAR(end["data"]["position_mm"].get<double>(), level_mm(4), kLandingMm);
-  // One travel, moved on: no second start; the drive's S5 confirmed the new target once.
-  EXPECT_EQ(lift.count_events("travel", [](const json& d) { return d["event"] == "started"; }), 1);
-  EXPECT_EQ(
-      lift.count_events("travel", [](const json& d) { return d["event"] == "target_extended"; }),
-      1);
-  EXPECT_EQ(lift.status()["car"]["floor"], 4);
-  EXPECT_TRUE(lift.b0_off_in_newest());
+  judged_unless_stalled([&] {
+    START_LIFT(lift, 4);
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "travel"}, {"floor", 2}})));
+    ASSERT_TRUE(lift.wait_moved(0, 500)) << lift.log();
+    const json r = lift.call({{"cmd", "travel"}, {"floor", 4}});
+    ASSERT_TRUE(is_ok(r)) << r.dump();
+    EXPECT_EQ(r["result"]["extended"], true) << r.dump();
+    const json end = lift.wait_travel_end();
+    ASSERT_FALSE(end.is_null()) << lift.log();
+    EXPECT_EQ(end["data"]["event"], "finished") << end.dump() << lift.log();
+    EXPECT_EQ(end["data"]["target_mm"], level_mm(4));
+    EXPECT_NEAR(end["data"]["position_mm"].get<double>(), level_mm(4), kLandingMm);
+    // One travel, moved on: no second start; the drive's S5 confirmed the new target once.
+    EXPECT_EQ(lift.count_events("travel", [](const json& d) { return d["event"] == "started"; }),
+              1);
+    EXPECT_EQ(
+        lift.count_events("travel", [](const json& d) { return d["event"] == "target_extended"; }),
+        1);
+    EXPECT_EQ(lift.status()["car"]["floor"], 4);
+    EXPECT_TRUE(lift.b0_off_in_newest());
+  });
 }
 
 /// Travels 0 -> 5, and once the car is 3000 mm on its way sends `cmd`; returns how far the car
@@ -112,24 +116,26 @@ double stop_distance(Lift& lift, const std::string& cmd) {
 }
 
 TEST(Travel, StopAndFastStopMidTravelAndTheFastStopIsShorter) {
-  // Two daemons at once: the same travel, the same point, one stop each way.
-  double normal = std::nan("");
-  double fast = std::nan("");
-  std::thread other([&] {
-    Lift lift("stop-normal", 4);
-    if (lift.setup_error().empty()) normal = stop_distance(lift, "stop");
+  judged_unless_stalled([&] {
+    // Two daemons at once: the same travel, the same point, one stop each way.
+    double normal = std::nan("");
+    double fast = std::nan("");
+    std::thread other([&] {
+      Lift lift("stop-normal", 4);
+      if (lift.setup_error().empty()) normal = stop_distance(lift, "stop");
+    });
+    {
+      START_LIFT(lift, 4);
+      fast = stop_distance(lift, "fast_stop");
+    }
+    other.join();
+    ASSERT_FALSE(std::isnan(normal));
+    ASSERT_FALSE(std::isnan(fast));
+    std::printf("  stop: %.0f mm, fast stop: %.0f mm after the request\n", normal, fast);
+    EXPECT_GT(normal, 0.0);
+    EXPECT_GT(fast, 0.0);
+    EXPECT_LT(fast, normal) << "a fast stop (DCP 13) must stop sooner than the normal stop";
   });
-  {
-    START_LIFT(lift, 4);
-    fast = stop_distance(lift, "fast_stop");
-  }
-  other.join();
-  ASSERT_FALSE(std::isnan(normal));
-  ASSERT_FALSE(std::isnan(fast));
-  std::printf("  stop: %.0f mm, fast stop: %.0f mm after the request\n", normal, fast);
-  EXPECT_GT(normal, 0.0);
-  EXPECT_GT(fast, 0.0);
-  EXPECT_LT(fast, normal) << "a fast stop (DCP 13) must stop sooner than the normal stop";
 }
 
 // ---- inspection through the API ----
@@ -144,71 +150,78 @@ std::int64_t last_b0_on_us(Lift& lift) {
 }
 
 TEST(Inspection, HeldByRepeatingStopsAtOnceOnRelease) {
-  START_LIFT(lift, 4);
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "inspection"}, {"mode", "on"}, {"direction", "up"}})));
-  // Hold: repeat well inside travel.inspection_hold_ms (500 ms) until the car moved 300 mm.
-  bool moved = false;
-  for (int i = 0; i < 100 && !moved; ++i) {
-    lift.api().drain(150ms);
+  judged_unless_stalled([&] {
+    START_LIFT(lift, 4);
     ASSERT_TRUE(is_ok(lift.call({{"cmd", "inspection"}, {"mode", "on"}, {"direction", "up"}})));
-    moved = lift.position_mm() >= 300;
-  }
-  ASSERT_TRUE(moved) << lift.log();
-  EXPECT_EQ(lift.status()["travel"]["state"], "inspection");
-  const std::int64_t released_us = mono_us();
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "inspection"}, {"mode", "on"}, {"direction", "none"}})));
-  const json end = lift.wait_travel_end(10s);
-  ASSERT_FALSE(end.is_null());
-  EXPECT_EQ(end["data"]["kind"], "inspection");
-  ASSERT_TRUE(lift.b0_off_in_newest());
-  // B0 drops in the first cycles after the release (2 cycles are 30 ms; 150 ms allows for a
-  // loaded machine), not after the hold time.
-  const std::int64_t dropped_after_us = last_b0_on_us(lift) - released_us;
-  EXPECT_LT(dropped_after_us, 150'000) << "B0 stayed on " << dropped_after_us << " us";
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "inspection"}, {"mode", "off"}})));
+    // Hold: repeat well inside travel.inspection_hold_ms (500 ms) until the car moved 300 mm.
+    bool moved = false;
+    for (int i = 0; i < 100 && !moved; ++i) {
+      lift.api().drain(150ms);
+      ASSERT_TRUE(is_ok(lift.call({{"cmd", "inspection"}, {"mode", "on"}, {"direction", "up"}})));
+      moved = lift.position_mm() >= 300;
+    }
+    ASSERT_TRUE(moved) << lift.log();
+    EXPECT_EQ(lift.status()["travel"]["state"], "inspection");
+    const std::int64_t released_us = mono_us();
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "inspection"}, {"mode", "on"}, {"direction", "none"}})));
+    const json end = lift.wait_travel_end(10s);
+    ASSERT_FALSE(end.is_null());
+    EXPECT_EQ(end["data"]["kind"], "inspection");
+    ASSERT_TRUE(lift.b0_off_in_newest());
+    // B0 drops in the first cycles after the release (2 cycles are 30 ms; 150 ms allows for a
+    // loaded machine), not after the hold time.
+    const std::int64_t dropped_after_us = last_b0_on_us(lift) - released_us;
+    EXPECT_LT(dropped_after_us, 150'000) << "B0 stayed on " << dropped_after_us << " us";
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "inspection"}, {"mode", "off"}})));
+  });
 }
 
 TEST(Inspection, NotRepeatedStopsAfterTheHoldTime) {
-  START_LIFT(lift, 4);
-  const std::int64_t held_us = mono_us();
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "inspection"}, {"mode", "on"}, {"direction", "up"}})));
-  ASSERT_FALSE(lift.wait_travel("started").is_null()) << lift.log();
-  const json end = lift.wait_travel_end(10s);
-  ASSERT_FALSE(end.is_null());
-  EXPECT_EQ(end["data"]["kind"], "inspection");
-  ASSERT_TRUE(lift.b0_off_in_newest());
-  // travel.inspection_hold_ms = 500: B0 stays on until the hold runs out, then drops.
-  const std::int64_t on_for_us = last_b0_on_us(lift) - held_us;
-  EXPECT_GT(on_for_us, 450'000);
-  EXPECT_LT(on_for_us, 800'000);
-  EXPECT_GT(lift.position_mm(), 0.0) << "the car moved while the direction was held";
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "inspection"}, {"mode", "off"}})));
+  judged_unless_stalled([&] {
+    START_LIFT(lift, 4);
+    const std::int64_t held_us = mono_us();
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "inspection"}, {"mode", "on"}, {"direction", "up"}})));
+    ASSERT_FALSE(lift.wait_travel("started").is_null()) << lift.log();
+    const json end = lift.wait_travel_end(10s);
+    ASSERT_FALSE(end.is_null());
+    EXPECT_EQ(end["data"]["kind"], "inspection");
+    ASSERT_TRUE(lift.b0_off_in_newest());
+    // travel.inspection_hold_ms = 500: B0 stays on until the hold runs out, then drops.
+    const std::int64_t on_for_us = last_b0_on_us(lift) - held_us;
+    EXPECT_GT(on_for_us, 450'000);
+    EXPECT_LT(on_for_us, 800'000);
+    EXPECT_GT(lift.position_mm(), 0.0) << "the car moved while the direction was held";
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "inspection"}, {"mode", "off"}})));
+  });
 }
 
 // ---- relevelling ----
 
 TEST(Relevel, DriftOf25MmIsRelevelledByItselfOnDcp4) {
-  START_LIFT(lift, 4);
-  // The controller relevels to the level of its last travel: travel there first.
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "travel"}, {"floor", 1}})));
-  const json arrived = lift.wait_travel_end();
-  ASSERT_FALSE(arrived.is_null()) << lift.log();
-  ASSERT_EQ(arrived["data"]["event"], "finished") << arrived.dump();
-  ASSERT_TRUE(lift.b0_off_in_newest());
-  // 25 mm up is beyond travel.relevel_threshold_mm (15).
-  const json r = lift.call({{"cmd", "sim"}, {"action", "drift"}, {"drift_mm", 25}});
-  ASSERT_TRUE(is_ok(r)) << r.dump();
-  const json started = lift.wait_travel("started");
-  ASSERT_FALSE(started.is_null()) << "no relevelling after a 25 mm drift\n" << lift.log();
-  EXPECT_EQ(started["data"]["kind"], "relevel_distance") << started.dump();  // DCP 11.1.4: VN'
-  EXPECT_NEAR(started["data"]["position_mm"].get<double>(), level_mm(1) + 25, 1.0);
-  const json end = lift.wait_travel_end(30s);
-  ASSERT_FALSE(end.is_null());
-  EXPECT_EQ(end["data"]["event"], "finished") << end.dump();
-  EXPECT_NEAR(end["data"]["position_mm"].get<double>(), level_mm(1), kLandingMm);
-  EXPECT_TRUE(lift.b0_off_in_newest());
-  EXPECT_EQ(lift.status()["car"]["floor"], 1);
-  EXPECT_EQ(lift.count_events("travel", [](const json& d) { return d["event"] == "aborted"; }), 0);
+  judged_unless_stalled([&] {
+    START_LIFT(lift, 4);
+    // The controller relevels to the level of its last travel: travel there first.
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "travel"}, {"floor", 1}})));
+    const json arrived = lift.wait_travel_end();
+    ASSERT_FALSE(arrived.is_null()) << lift.log();
+    ASSERT_EQ(arrived["data"]["event"], "finished") << arrived.dump();
+    ASSERT_TRUE(lift.b0_off_in_newest());
+    // 25 mm up is beyond travel.relevel_threshold_mm (15).
+    const json r = lift.call({{"cmd", "sim"}, {"action", "drift"}, {"drift_mm", 25}});
+    ASSERT_TRUE(is_ok(r)) << r.dump();
+    const json started = lift.wait_travel("started");
+    ASSERT_FALSE(started.is_null()) << "no relevelling after a 25 mm drift\n" << lift.log();
+    EXPECT_EQ(started["data"]["kind"], "relevel_distance") << started.dump();  // DCP 11.1.4: VN'
+    EXPECT_NEAR(started["data"]["position_mm"].get<double>(), level_mm(1) + 25, 1.0);
+    const json end = lift.wait_travel_end(30s);
+    ASSERT_FALSE(end.is_null());
+    EXPECT_EQ(end["data"]["event"], "finished") << end.dump();
+    EXPECT_NEAR(end["data"]["position_mm"].get<double>(), level_mm(1), kLandingMm);
+    EXPECT_TRUE(lift.b0_off_in_newest());
+    EXPECT_EQ(lift.status()["car"]["floor"], 1);
+    EXPECT_EQ(lift.count_events("travel", [](const json& d) { return d["event"] == "aborted"; }),
+              0);
+  });
 }
 
 // ---- fast start (DCP 12) with the simulated doors ----
@@ -229,55 +242,61 @@ void open_doors(Lift& lift) {
 const json kFastStartTravel = {{"fast_start_timeout_ms", 5000}};
 
 TEST(FastStart, DoorReversalWhileArmedAbortsIt) {
-  START_LIFT(lift, 4, kFastStartTravel);
-  open_doors(lift);
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "fast_start"}, {"action", "arm"}, {"floor", 2}})));
-  ASSERT_FALSE(lift.wait_travel("fast_start_armed").is_null()) << lift.log();
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "close_doors"}})));
-  lift.api().drain(800ms);
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "door_reversal"}})));
-  const json end = lift.wait_travel_end(10s);
-  ASSERT_FALSE(end.is_null()) << lift.log();
-  EXPECT_EQ(end["data"]["event"], "aborted") << end.dump();
-  EXPECT_EQ(end["data"]["cause"], "door_reversal") << end.dump();
-  EXPECT_TRUE(lift.b0_off_in_newest());
-  const json status = lift.status();
-  EXPECT_EQ(status["travel"]["state"], "idle");
-  EXPECT_NEAR(status["car"]["position_mm"].get<double>(), 0.0, 1.0) << "the car never left";
+  judged_unless_stalled([&] {
+    START_LIFT(lift, 4, kFastStartTravel);
+    open_doors(lift);
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "fast_start"}, {"action", "arm"}, {"floor", 2}})));
+    ASSERT_FALSE(lift.wait_travel("fast_start_armed").is_null()) << lift.log();
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "close_doors"}})));
+    lift.api().drain(800ms);
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "door_reversal"}})));
+    const json end = lift.wait_travel_end(10s);
+    ASSERT_FALSE(end.is_null()) << lift.log();
+    EXPECT_EQ(end["data"]["event"], "aborted") << end.dump();
+    EXPECT_EQ(end["data"]["cause"], "door_reversal") << end.dump();
+    EXPECT_TRUE(lift.b0_off_in_newest());
+    const json status = lift.status();
+    EXPECT_EQ(status["travel"]["state"], "idle");
+    EXPECT_NEAR(status["car"]["position_mm"].get<double>(), 0.0, 1.0) << "the car never left";
+  });
 }
 
 TEST(FastStart, ADoorReversalFromTheInputsApiEndsItAsDcp12_2Says) {
-  // The I/O board's daemon reports the reversal through `inputs` (not the simulated doors).
-  START_LIFT(lift, 4, kFastStartTravel);
-  open_doors(lift);
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "fast_start"}, {"action", "arm"}, {"floor", 2}})));
-  ASSERT_FALSE(lift.wait_travel("fast_start_armed").is_null()) << lift.log();
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "close_doors"}})));
-  lift.api().drain(800ms);
-  const json reply = lift.call({{"cmd", "inputs"}, {"door_reversal", true}});
-  ASSERT_TRUE(is_ok(reply)) << reply.dump();
-  EXPECT_EQ(reply["result"]["door_reversal"], true);
-  const json end = lift.wait_travel_end(10s);
-  ASSERT_FALSE(end.is_null()) << lift.log();
-  EXPECT_EQ(end["data"]["event"], "aborted") << end.dump();
-  EXPECT_EQ(end["data"]["cause"], "door_reversal") << end.dump();
-  EXPECT_TRUE(lift.b0_off_in_newest());
-  EXPECT_NEAR(lift.position_mm(), 0.0, 1.0) << "the car never left";
+  judged_unless_stalled([&] {
+    // The I/O board's daemon reports the reversal through `inputs` (not the simulated doors).
+    START_LIFT(lift, 4, kFastStartTravel);
+    open_doors(lift);
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "fast_start"}, {"action", "arm"}, {"floor", 2}})));
+    ASSERT_FALSE(lift.wait_travel("fast_start_armed").is_null()) << lift.log();
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "close_doors"}})));
+    lift.api().drain(800ms);
+    const json reply = lift.call({{"cmd", "inputs"}, {"door_reversal", true}});
+    ASSERT_TRUE(is_ok(reply)) << reply.dump();
+    EXPECT_EQ(reply["result"]["door_reversal"], true);
+    const json end = lift.wait_travel_end(10s);
+    ASSERT_FALSE(end.is_null()) << lift.log();
+    EXPECT_EQ(end["data"]["event"], "aborted") << end.dump();
+    EXPECT_EQ(end["data"]["cause"], "door_reversal") << end.dump();
+    EXPECT_TRUE(lift.b0_off_in_newest());
+    EXPECT_NEAR(lift.position_mm(), 0.0, 1.0) << "the car never left";
+  });
 }
 
 TEST(FastStart, ArmedThenDoorsLockedTravelsAndFinishes) {
-  START_LIFT(lift, 4, kFastStartTravel);
-  open_doors(lift);
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "fast_start"}, {"action", "arm"}, {"floor", 2}})));
-  ASSERT_FALSE(lift.wait_travel("fast_start_armed").is_null()) << lift.log();
-  EXPECT_EQ(lift.status()["travel"]["state"], "fast_start");
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "close_doors"}})));
-  const json end = lift.wait_travel_end(60s);
-  ASSERT_FALSE(end.is_null()) << lift.log();
-  EXPECT_EQ(end["data"]["event"], "finished") << end.dump();
-  EXPECT_NEAR(end["data"]["position_mm"].get<double>(), level_mm(2), kLandingMm);
-  EXPECT_TRUE(lift.b0_off_in_newest());
-  EXPECT_EQ(lift.status()["car"]["floor"], 2);
+  judged_unless_stalled([&] {
+    START_LIFT(lift, 4, kFastStartTravel);
+    open_doors(lift);
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "fast_start"}, {"action", "arm"}, {"floor", 2}})));
+    ASSERT_FALSE(lift.wait_travel("fast_start_armed").is_null()) << lift.log();
+    EXPECT_EQ(lift.status()["travel"]["state"], "fast_start");
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "close_doors"}})));
+    const json end = lift.wait_travel_end(60s);
+    ASSERT_FALSE(end.is_null()) << lift.log();
+    EXPECT_EQ(end["data"]["event"], "finished") << end.dump();
+    EXPECT_NEAR(end["data"]["position_mm"].get<double>(), level_mm(2), kLandingMm);
+    EXPECT_TRUE(lift.b0_off_in_newest());
+    EXPECT_EQ(lift.status()["car"]["floor"], 2);
+  });
 }
 
 // ---- faults while the car moves ----
@@ -296,27 +315,29 @@ bool newest_frames_all(Lift& lift, const std::function<bool(int)>& pred) {
 }
 
 TEST(ShaftSignals, ADcp3TravelUpAtV4SlowsOnlyAtTheV4UpPointFromTheInputsApi) {
-  // DCP 10.1.1 step 3: B1 off at the deceleration point of the travel's own speed. The shaft's
-  // points come through `inputs`; those of other speeds and of the other direction pass by.
-  START_LIFT(lift, 3, json{{"dcp3_reference", "shaft_signals"}});
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "travel"}, {"floor", 4}, {"speed", "V4"}})));
-  ASSERT_TRUE(lift.wait_moved(level_mm(0), 1500.0)) << lift.log();
-  ASSERT_TRUE(newest_frames_all(lift, [](int c) { return (c & 0x02) != 0; })) << "B1 on at V4";
-  const json others = {{"cmd", "inputs"},     {"decel_v1_down", true}, {"decel_v1_up", true},
-                       {"decel_v3_up", true}, {"decel_v4_down", true}, {"decel_v2_up", true},
-                       {"decel_v7_up", true}, {"decel_v5_up", true}};
-  ASSERT_TRUE(is_ok(lift.call(others)));
-  lift.api().drain(500ms);
-  for (const auto& [t, command] : lift.newest_commands(20)) {
-    EXPECT_NE(command & 0x02, 0) << "B1 went off at another speed's or direction's point";
-  }
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "inputs"}, {"decel_v4_up", true}})));
-  EXPECT_TRUE(newest_frames_all(lift, [](int c) { return (c & 0x07) == 0x05; }))
-      << "B1 off, B2 and B0 on at the V4-up point";
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "inputs"}, {"zone_level", true}})));
-  const json end = lift.wait_travel_end(20s);
-  ASSERT_FALSE(end.is_null()) << lift.log();
-  EXPECT_EQ(end["data"]["event"], "finished") << end.dump();
+  judged_unless_stalled([&] {
+    // DCP 10.1.1 step 3: B1 off at the deceleration point of the travel's own speed. The shaft's
+    // points come through `inputs`; those of other speeds and of the other direction pass by.
+    START_LIFT(lift, 3, json{{"dcp3_reference", "shaft_signals"}});
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "travel"}, {"floor", 4}, {"speed", "V4"}})));
+    ASSERT_TRUE(lift.wait_moved(level_mm(0), 1500.0)) << lift.log();
+    ASSERT_TRUE(newest_frames_all(lift, [](int c) { return (c & 0x02) != 0; })) << "B1 on at V4";
+    const json others = {{"cmd", "inputs"},     {"decel_v1_down", true}, {"decel_v1_up", true},
+                         {"decel_v3_up", true}, {"decel_v4_down", true}, {"decel_v2_up", true},
+                         {"decel_v7_up", true}, {"decel_v5_up", true}};
+    ASSERT_TRUE(is_ok(lift.call(others)));
+    lift.api().drain(500ms);
+    for (const auto& [t, command] : lift.newest_commands(20)) {
+      EXPECT_NE(command & 0x02, 0) << "B1 went off at another speed's or direction's point";
+    }
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "inputs"}, {"decel_v4_up", true}})));
+    EXPECT_TRUE(newest_frames_all(lift, [](int c) { return (c & 0x07) == 0x05; }))
+        << "B1 off, B2 and B0 on at the V4-up point";
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "inputs"}, {"zone_level", true}})));
+    const json end = lift.wait_travel_end(20s);
+    ASSERT_FALSE(end.is_null()) << lift.log();
+    EXPECT_EQ(end["data"]["event"], "finished") << end.dump();
+  });
 }
 
 struct FaultCase {
@@ -334,25 +355,28 @@ void PrintTo(const FaultCase& c, std::ostream* os) {
 class FaultMidTravel : public ::testing::TestWithParam<FaultCase> {};
 
 TEST_P(FaultMidTravel, AbortsWithTheCauseRaisesTheFaultOnceAndDropsB0) {
-  const FaultCase& c = GetParam();
-  START_LIFT(lift, 4);
-  ASSERT_TRUE(is_ok(lift.call({{"cmd", "travel"}, {"floor", 4}})));
-  ASSERT_TRUE(lift.wait_moved(0, 1500)) << lift.log();
-  json inject = c.inject;
-  inject["cmd"] = "sim";
-  ASSERT_TRUE(is_ok(lift.call(inject)));
-  const json end = lift.wait_travel_end(20s);
-  ASSERT_FALSE(end.is_null()) << lift.log();
-  EXPECT_EQ(end["data"]["event"], "aborted") << end.dump();
-  EXPECT_EQ(end["data"]["cause"], c.cause) << end.dump();
-  EXPECT_TRUE(lift.b0_off_in_newest());
-  lift.api().drain(1s);  // a repeated fault event would show by now
-  const std::string code = c.fault;
-  EXPECT_EQ(
-      lift.count_events("fault", [&](const json& d) { return d["code"] == code && d["active"]; }),
-      1);
-  EXPECT_EQ(lift.count_events("travel", [](const json& d) { return d["event"] == "aborted"; }), 1);
-  EXPECT_EQ(lift.status()["travel"]["state"], "idle");
+  judged_unless_stalled([&] {
+    const FaultCase& c = GetParam();
+    START_LIFT(lift, 4);
+    ASSERT_TRUE(is_ok(lift.call({{"cmd", "travel"}, {"floor", 4}})));
+    ASSERT_TRUE(lift.wait_moved(0, 1500)) << lift.log();
+    json inject = c.inject;
+    inject["cmd"] = "sim";
+    ASSERT_TRUE(is_ok(lift.call(inject)));
+    const json end = lift.wait_travel_end(20s);
+    ASSERT_FALSE(end.is_null()) << lift.log();
+    EXPECT_EQ(end["data"]["event"], "aborted") << end.dump();
+    EXPECT_EQ(end["data"]["cause"], c.cause) << end.dump();
+    EXPECT_TRUE(lift.b0_off_in_newest());
+    lift.api().drain(1s);  // a repeated fault event would show by now
+    const std::string code = c.fault;
+    EXPECT_EQ(
+        lift.count_events("fault", [&](const json& d) { return d["code"] == code && d["active"]; }),
+        1);
+    EXPECT_EQ(lift.count_events("travel", [](const json& d) { return d["event"] == "aborted"; }),
+              1);
+    EXPECT_EQ(lift.status()["travel"]["state"], "idle");
+  });
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -5,17 +5,19 @@
 // the same stall at the same time; only then is the fault the machine's.
 #pragma once
 
+#include <gtest/gtest-spi.h>
+#include <gtest/gtest.h>
+
 #include <cstdint>
+#include <cstdio>
+#include <string>
 
 #include "common/mono_time.hpp"
 #include "support/reference_link.hpp"
 
 namespace liftd::e2e {
 
-/// Periods in a row without a good exchange that witness a stall long enough for a drive to stop
-/// the car on its own supervision (DCP 7.3: ten frames; the witness, at another phase and one
-/// pty hop shorter than the drive's link, may see two fewer).
-inline constexpr std::uint64_t kDriveStallRun = 8;
+using liftd::testing::kDriveStallRun;
 
 /// Started on first use (SCHED_FIFO 80 where permitted), stopped at exit.
 inline liftd::testing::ReferenceLink& machine_witness() {
@@ -28,6 +30,59 @@ inline liftd::testing::ReferenceLink& machine_witness() {
 /// Everything the witness missed or skipped so far.
 inline std::uint64_t witness_misses() {
   return machine_witness().missing() + machine_witness().skipped();
+}
+
+/// Runs `body` (a whole scenario: it starts its own daemon) and reports its failures, unless
+/// they came while the witness saw a stall long enough for a drive to stop the car on its own
+/// (kDriveStallRun periods in a row): then that try cannot be judged, its failures are printed
+/// as notes and the scenario runs again, at most three times in all. A failure of the code
+/// comes back on a try without a stall and is reported; the last try is always judged.
+template <class Body>
+void judged_unless_stalled(Body body) {
+  constexpr int kTries = 3;
+  (void)machine_witness();  // watching from the first try's start
+  for (int attempt = 1;; ++attempt) {
+    ::testing::TestPartResultArray results;
+    const MonoTime from = mono_now();
+    {
+      const ::testing::ScopedFakeTestPartResultReporter intercept(
+          ::testing::ScopedFakeTestPartResultReporter::INTERCEPT_ONLY_CURRENT_THREAD, &results);
+      body();
+    }
+    const std::uint64_t stall = machine_witness().longest_miss_run_during(from, mono_now());
+    bool failed = false;
+    for (int i = 0; i < results.size(); ++i) {
+      failed = failed || results.GetTestPartResult(i).failed();
+    }
+    if (failed && stall >= kDriveStallRun && attempt < kTries) {
+      std::printf("[ stalled  ] try %d: the witness missed %llu periods in a row; not judged:\n",
+                  attempt, static_cast<unsigned long long>(stall));
+      for (int i = 0; i < results.size(); ++i) {
+        const auto& r = results.GetTestPartResult(i);
+        if (r.failed()) {
+          std::printf("%s:%d: %s\n", r.file_name() ? r.file_name() : "?", r.line_number(),
+                      r.message());
+        }
+      }
+      continue;
+    }
+    for (int i = 0; i < results.size(); ++i) {
+      const auto& r = results.GetTestPartResult(i);
+      if (r.failed()) {
+        // The message as it was reported, without the "Failed" line ADD_FAILURE_AT adds again.
+        std::string message = r.message();
+        if (message.rfind("Failed\n", 0) == 0) message.erase(0, 7);
+        ADD_FAILURE_AT(r.file_name() ? r.file_name() : "?", r.line_number())
+            << message
+            << (stall > 0 ? "\n(the witness missed at most " + std::to_string(stall) +
+                                " periods in a row)"
+                          : std::string());
+      } else if (r.skipped()) {
+        GTEST_SKIP() << r.message();
+      }
+    }
+    return;
+  }
 }
 
 }  // namespace liftd::e2e
