@@ -37,18 +37,14 @@ inline int start_reference(liftd::testing::ReferenceLink& reference) {
 /// some 60 clean frames. A reply the machine held up loses the channel bytes it carried (DCP
 /// 5.1), the message arrives spoilt, and the master rightly starts the handshake again after
 /// the request's timeout (DCP 5.12.2): `base`, and 1.5 s more for every such restart, at most
-/// 40 s. Then every restart must have followed a lost reply, and the lost replies must be
-/// within the machine's share unless the test itself withheld replies just before: 1 % of the
-/// cycles, at least 2, beyond twice what the reference link lost for each pty the master's
-/// exchanges cross (`ptys`: 1 with the drive on the far end of the master's pty, 2 with a relay
-/// between two; the reference link crosses one, and each crossing is a flip-buffer delivery
-/// the machine can hold up).
+/// 40 s. Then every restart must have followed a lost reply. How many replies the machine may
+/// lose is judged by the long tests over thousands of cycles against the reference link: a
+/// handshake of a few dozen frames is too short for a share (under two CPU hogs it lost 3 where
+/// the reference link, sampling other instants, lost none of 29, and 13 where it lost 5 of 251).
 inline ::testing::AssertionResult ready_within(LiveMaster& m,
                                                const liftd::testing::ReferenceLink& reference,
-                                               std::chrono::milliseconds base,
-                                               bool losses_injected = false, unsigned ptys = 1) {
+                                               std::chrono::milliseconds base) {
   const dcp::LinkCounters from = m.controller.snapshot().link_counters;
-  const std::uint64_t cycles_from = m.runner.stats().counters.cycles;
   const MonoTime began = mono_now();
   const auto restarts = [&] {
     return m.controller.snapshot().link_counters.request_timeouts - from.request_timeouts;
@@ -57,10 +53,19 @@ inline ::testing::AssertionResult ready_within(LiveMaster& m,
     const MonoTime allowed =
         began + base + std::chrono::milliseconds(1500 * std::min<std::uint64_t>(20, restarts()));
     if (mono_now() > std::min(allowed, began + std::chrono::milliseconds(40000))) {
+      const auto snapshot = m.controller.snapshot();
+      const dcp::LinkCounters& now = snapshot.link_counters;
       return ::testing::AssertionFailure()
-             << "the link is not up in the time allowed; handshake restarts: " << restarts()
+             << "the link is not up in the time allowed: " << dcp::to_string(snapshot.link)
+             << "; handshake restarts " << restarts() << ", handshakes started "
+             << now.handshake_attempts << ", link faults " << now.link_faults - from.link_faults
+             << ", replies good " << now.good_replies - from.good_replies << " missing "
+             << now.missing_replies - from.missing_replies << " bad "
+             << now.bad_checksum - from.bad_checksum << " (longest run " << now.longest_error_run
+             << "), cycles skipped " << m.runner.stats().counters.skipped_cycles
              << "; reference link: " << reference.missing() << " of " << reference.exchanges()
-             << " missed\n"
+             << " missed, " << reference.skipped() << " skipped, at most "
+             << reference.longest_miss_run() << " in a row\n"
              << tail_of_trace(m.runner, 80);
     }
   }
@@ -69,15 +74,6 @@ inline ::testing::AssertionResult ready_within(LiveMaster& m,
   if (restarts() > lost) {
     return ::testing::AssertionFailure()
            << restarts() << " handshake restarts but only " << lost << " lost replies";
-  }
-  const std::uint64_t share =
-      std::max<std::uint64_t>(2, (m.runner.stats().counters.cycles - cycles_from) / 100) +
-      2 * ptys * reference.missing();
-  if (!losses_injected && lost > share) {
-    return ::testing::AssertionFailure() << lost << " replies lost before the link was up, "
-                                         << "more than the machine's share " << share
-                                         << " (reference link: " << reference.missing() << " of "
-                                         << reference.exchanges() << " missed)";
   }
   return ::testing::AssertionSuccess();
 }

@@ -89,10 +89,11 @@ TEST(LiveLink, HandshakeThousandsOfCleanCyclesAndADcp4TravelLandsWithin2mm) {
   EXPECT_EQ(lc.s7_seen, 0U);
   EXPECT_EQ(lc.b7_sent, 0U);
   // An I-message whose reply went missing arrives incomplete (DCP 5.1: the channel bytes of a
-  // lost reply are lost with it): a decode error needs a missing reply to explain it.
+  // lost reply are lost with it): a decode error, or a channel frame the parser drops as
+  // malformed, needs a missing reply to explain it.
   EXPECT_LE(lc.decode_errors, c.missing_replies);
   EXPECT_EQ(lc.data_word_errors, 0U);
-  EXPECT_EQ(lc.channel_errors, 0U);
+  EXPECT_LE(lc.channel_errors, c.missing_replies);
   EXPECT_EQ(lc.link_faults, 0U);
   EXPECT_EQ(c.port_losses, 0U);
   EXPECT_EQ(drive->status().sim.bad_frames, 0U);
@@ -138,7 +139,8 @@ TEST(LiveLink, HandshakeThousandsOfCleanCyclesAndADcp4TravelLandsWithin2mm) {
 }
 
 // The master's pty (A) relays through the fault proxy to the simulator's pty (B).
-/// A master's exchange through ProxiedLink crosses two ptys (ready_within's `ptys`).
+/// A master's exchange through ProxiedLink crosses two ptys, the reference link's one: each
+/// crossing is a flip-buffer delivery the machine can hold up.
 constexpr unsigned kProxiedPtys = 2;
 
 struct ProxiedLink {
@@ -192,7 +194,7 @@ TEST(LiveLink, DamagedRepliesAreCountedAsChapter6Says) {
   liftd::testing::ReferenceLink reference;
   ASSERT_EQ(start_reference(reference), 0);
   ASSERT_EQ(m.start(), 0);
-  ASSERT_TRUE(ready_within(m, reference, 5000ms, false, kProxiedPtys));
+  ASSERT_TRUE(ready_within(m, reference, 5000ms));
   m.run_for(300ms);
 
   const MonoTime faults_from = mono_now();
@@ -221,17 +223,22 @@ TEST(LiveLink, DamagedRepliesAreCountedAsChapter6Says) {
   EXPECT_EQ(m.link_events_to(dcp::LinkState::Fault), 0U);
   EXPECT_TRUE(m.link_up());
   EXPECT_LT(after.longest_error_run, 10U);
-  // Bad checksums are the flipped bits. Margin of one each way: the machine may push a
-  // flipped reply past its deadline, or tear a stalled reply's flush across two cycles.
-  const auto bad = after.bad_checksum - before.bad_checksum;
-  EXPECT_GE(bad + 1, n(Fault::FlipBit));
-  EXPECT_LE(bad, n(Fault::FlipBit) + 1);
-  EXPECT_GE(after.b7_sent - before.b7_sent, bad);
   // Missing: dropped, truncated, silenced once each, stalled twice.
   const auto missing = after.missing_replies - before.missing_replies;
   const auto expected_missing =
       n(Fault::DropByte) + n(Fault::Truncate) + n(Fault::Silence) + 2 * n(Fault::Stall);
   EXPECT_GE(missing + 2, expected_missing);
+  // Bad checksums are the flipped bits. Margin of one each way: the machine may push a
+  // flipped reply past its deadline, or tear a stalled reply's flush across two cycles. Beyond
+  // that, a reply the machine held up past its deadline may be torn the same way (its head
+  // flushed before the next frame, its tail read with the next reply): each such bad checksum
+  // needs one of the missing replies the injected faults do not explain.
+  const auto bad = after.bad_checksum - before.bad_checksum;
+  const auto machine_missing = missing > expected_missing ? missing - expected_missing : 0;
+  EXPECT_GE(bad + 1, n(Fault::FlipBit));
+  EXPECT_LE(bad, n(Fault::FlipBit) + 1 + machine_missing)
+      << "missing " << missing << ", " << expected_missing << " of them injected";
+  EXPECT_GE(after.b7_sent - before.b7_sent, bad);
   // Beyond the injected ones, a stalled shared machine may deliver a reply late now and then:
   // what the clean-link test allows (1 % of cycles beyond twice the reference link's losses),
   // plus the margin for torn stalls.
@@ -298,7 +305,7 @@ TEST(LiveLink, DamagedRepliesAreCountedAsChapter6Says) {
     if ((lr.code == ReplyCode::Fault || lr.code == ReplyCode::NotReady) &&
         m.controller.snapshot().link_counters.missing_replies > s7_before.missing_replies &&
         ++link_restarts <= 2) {
-      ASSERT_TRUE(ready_within(m, reference, 10000ms, false, kProxiedPtys));
+      ASSERT_TRUE(ready_within(m, reference, 10000ms));
       lr = ask();
     }
     EXPECT_EQ(lr.code, ReplyCode::Ok) << lr.detail;
@@ -373,7 +380,7 @@ TEST(LiveLink, TenLostRepliesFaultTheLinkStopTheTravelThenItRecoversAndReinitial
   liftd::testing::ReferenceLink reference;
   ASSERT_EQ(start_reference(reference), 0);
   ASSERT_EQ(m.start(), 0);
-  ASSERT_TRUE(ready_within(m, reference, 5000ms, false, kProxiedPtys));
+  ASSERT_TRUE(ready_within(m, reference, 5000ms));
   m.run_for(300ms);
 
   // A long travel; once the car runs, the drive's replies stop reaching us.
@@ -420,7 +427,7 @@ TEST(LiveLink, TenLostRepliesFaultTheLinkStopTheTravelThenItRecoversAndReinitial
 
   // Replies come back: 10 good while stationary end the fault, then the handshake runs again.
   silent = false;
-  ASSERT_TRUE(ready_within(m, reference, 10000ms, true, kProxiedPtys));
+  ASSERT_TRUE(ready_within(m, reference, 10000ms));
   EXPECT_FALSE(m.controller.snapshot().faults[static_cast<std::size_t>(FaultCode::LinkFault)]);
   EXPECT_GE(m.link_events_to(dcp::LinkState::Init), 2U);  // at start and after the recovery
   EXPECT_GE(count_i0(master_channel(m.runner.recorder().copy(), fault_at)), 1U);
