@@ -86,6 +86,33 @@ json.dump(c, open(path, "w"), indent=2)
 PY
 }
 conf=/etc/liftd/liftd.json
+# The guest is one process on a shared host: when the host starves it, liftd's 15 ms cycle wakes
+# too late (it skips cycles and says so: a warning "overrun" line, LIFTD_EVENT=overrun_started),
+# the drive stops after ten missing frames (DCP 7.3) and a travel ends short. That is the host's
+# doing, not the package's. guest_stalled MARK: liftd's journal since MARK has such a warning.
+guest_stalled() { [ -n "$(since "$1" -u liftd -p warning LIFTD_EVENT=overrun_started)" ]; }
+# attempt NAME FUNCTION: runs a section whose checks depend on travels. Its checks go to the
+# results as they are, unless one failed while the guest was stalled (guest_stalled): then that
+# try's results are kept as notes and the section runs once more. A failure without a stall, or
+# a second one, stands.
+attempt() {
+  local name=$1 fn=$2 try kept=$results
+  for try in 1 2; do
+    mark attempt
+    results=$share/attempt.txt
+    : >"$results"
+    "$fn" "$try"
+    results=$kept
+    if [ $try = 1 ] && grep -q '^FAIL' $share/attempt.txt && guest_stalled attempt; then
+      note "$name: a check failed while the guest was stalled; its first try, then once more:"
+      sed 's/^/# first try: /' $share/attempt.txt >>"$results"
+      since attempt -u liftd -p warning LIFTD_EVENT=overrun_started | head -3 | sed 's/^/# /' >>"$results"
+      continue
+    fi
+    cat $share/attempt.txt >>"$results"
+    return
+  done
+}
 
 systemctl is-system-running --wait >/dev/null
 note "booted: $(uname -r), systemd $(systemctl --version | sed -n '1s/systemd \([0-9]*\).*/\1/p'), PID 1 is $(cat /proc/1/comm), $((SECONDS - t0)) s"
@@ -131,11 +158,14 @@ rt_ok() {
   [ "$(field rt.realtime) $(field rt.policy) $(field rt.priority) $(field rt.memory_locked)" = 'true "SCHED_FIFO" 80 true' ]
 }
 check "the cycle runs SCHED_FIFO 80 with memory locked" rt_ok || note "rt: $(field rt)"
-check "liftctl travel 2" travel_to 2
-check "the car arrives at floor 2" wait_for 60 idle_at 2
 at_6000() { at_a_level && python3 -c "import sys; sys.exit(0 if abs(float(sys.argv[1]) - 6000) <= 5 else 1)" "$(sim_pos)"; }
-check "the drive stands at 6000 mm (within 5 mm)" at_6000
-level_note
+first_travel() {
+  check "liftctl travel 2" travel_to 2
+  check "the car arrives at floor 2" wait_for 60 idle_at 2
+  check "the drive stands at 6000 mm (within 5 mm)" at_6000
+  level_note
+}
+attempt "a travel" first_travel
 
 # ---- users and groups: each role from a real login user
 section "users and groups: each role from a real login user"
@@ -277,30 +307,45 @@ check "the link comes up again" wait_for 30 link_up
 
 # ---- systemctl stop during a travel
 section "systemctl stop during a travel"
-check "liftctl travel 5" travel_to 5
-check "the car moves" wait_for 20 moving
-# The I/O board keeps the inputs coming while liftd lands the car, then stays away (its
-# reconnect would start liftd again through the socket).
-touch /run/stage/io.pause-at-end
-mark stop
-check "systemctl stop liftd during a travel" systemctl stop liftd
-check "the stopped liftd exited 0" test "$(prop liftd ExecMainStatus) $(prop liftd Result)" = "0 success"
-check "the car landed at a level" wait_for 20 at_a_level
-level_note
-rm /run/stage/io.pause
-check "the I/O board's reconnect starts liftd through the socket" wait_for 30 link_up
+stop_during_travel() {
+  # A second try starts from the floor the first left the car nearest to.
+  local to=5
+  [ "$1" = 2 ] && [ "$(field car.floor)" = 5 ] && to=0
+  check "liftctl travel $to" travel_to $to
+  check "the car moves" wait_for 20 moving
+  # The I/O board keeps the inputs coming while liftd lands the car, then stays away (its
+  # reconnect would start liftd again through the socket).
+  touch /run/stage/io.pause-at-end
+  check "systemctl stop liftd during a travel" systemctl stop liftd
+  check "the stopped liftd exited 0" test "$(prop liftd ExecMainStatus) $(prop liftd Result)" = "0 success"
+  check "the car landed at a level" wait_for 20 at_a_level
+  level_note
+  rm -f /run/stage/io.pause /run/stage/io.pause-at-end
+  check "the I/O board's reconnect starts liftd through the socket" wait_for 30 link_up
+}
+attempt "systemctl stop during a travel" stop_during_travel
 
 # ---- dpkg --remove during a travel
 section "dpkg --remove during a travel"
-rm -f /run/stage/io.pause-at-end
-check "liftctl travel 0" travel_to 0
-check "the car moves" wait_for 20 moving
-touch /run/stage/io.pause-at-end
-check "dpkg --remove liftd during a travel" dpkg --remove liftd >/dev/null
-check "the car landed at a level after dpkg --remove" wait_for 20 at_a_level
-level_note
-check "the journal has liftd's stop with exit code 0" \
-  bash -c "journalctl -q -u liftd LIFTD_EVENT=stopped -o verbose -n 1 | grep -q 'LIFTD_EXIT_CODE=0'"
+remove_during_travel() {
+  if [ "$1" = 2 ]; then  # the first try removed the package: install it again
+    rm -f /run/stage/io.pause-at-end /run/stage/io.pause
+    (cd /root && apt install -y ./liftd_*.deb >/dev/null 2>&1)
+    wait_for 30 link_up
+  fi
+  local to=0
+  [ "$(field car.floor)" = 0 ] && to=5
+  rm -f /run/stage/io.pause-at-end
+  check "liftctl travel $to" travel_to $to
+  check "the car moves" wait_for 20 moving
+  touch /run/stage/io.pause-at-end
+  check "dpkg --remove liftd during a travel" dpkg --remove liftd >/dev/null
+  check "the car landed at a level after dpkg --remove" wait_for 20 at_a_level
+  level_note
+  check "the journal has liftd's stop with exit code 0" \
+    bash -c "journalctl -q -u liftd LIFTD_EVENT=stopped -o verbose -n 1 | grep -q 'LIFTD_EXIT_CODE=0'"
+}
+attempt "dpkg --remove during a travel" remove_during_travel
 
 # ---- a stop with a line that cannot drain
 section "a stop with a line that cannot drain"
