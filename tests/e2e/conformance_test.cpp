@@ -202,11 +202,11 @@ TEST(DriveNotReady, DuringATravelTheTravelFinishesAndNoNewOneStarts) {
     EXPECT_EQ(refused["error"]["code"], "not_ready") << refused.dump();
     EXPECT_EQ(refused["error"]["message"], "drive not ready (S0 = 0)") << refused.dump();
     ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "not_ready"}, {"on", false}})));
-    // Wait for the drive's S0 to come back (a condition, not a fixed time).
-    for (int i = 0; i < 50 && lift.status()["dcp"]["status"]["ready"] != true; ++i) {
-      lift.api().drain(50ms);
-    }
-    ASSERT_TRUE(is_ok(lift.call({{"cmd", "travel"}, {"floor", 0}})));
+    // Wait for the drive's S0 to come back and the lift to be ready again (a condition with a
+    // deadline, not a fixed time).
+    ASSERT_TRUE(lift.wait_drive_state("ready", 10s)) << lift.status().dump();
+    const json again = lift.call({{"cmd", "travel"}, {"floor", 0}});
+    ASSERT_TRUE(is_ok(again)) << again.dump();
     EXPECT_EQ(lift.wait_travel_end()["data"]["event"], "finished");
   });
 }

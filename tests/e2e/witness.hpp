@@ -69,14 +69,13 @@ void judged_unless_stalled(Body body) {
     for (int i = 0; i < results.size(); ++i) {
       const auto& r = results.GetTestPartResult(i);
       if (r.failed()) {
-        // The message as it was reported, without the "Failed" line ADD_FAILURE_AT adds again.
-        std::string message = r.message();
-        if (message.rfind("Failed\n", 0) == 0) message.erase(0, 7);
-        ADD_FAILURE_AT(r.file_name() ? r.file_name() : "?", r.line_number())
-            << message
-            << (stall > 0 ? "\n(the witness missed at most " + std::to_string(stall) +
-                                " periods in a row)"
-                          : std::string());
+        // The message as it was reported (ADD_FAILURE_AT would add a "Failed" line).
+        const std::string message =
+            std::string(r.message()) + (stall > 0 ? "\n(the witness missed at most " +
+                                                        std::to_string(stall) + " periods in a row)"
+                                                  : std::string());
+        GTEST_MESSAGE_AT_(r.file_name() ? r.file_name() : "?", r.line_number(), message.c_str(),
+                          ::testing::TestPartResult::kNonFatalFailure);
       } else if (r.skipped()) {
         GTEST_SKIP() << r.message();
       }
