@@ -149,7 +149,17 @@ TEST_F(UssTest, StatusCarriesTheUssObjectAndParametersAreReachable) {
   ASSERT_TRUE(back.value("ok", false)) << back.dump();
   EXPECT_EQ(back["result"]["value"], 123456);
   EXPECT_TRUE(lift_->call({{"cmd", "uss_read"}, {"pnu", 52}, {"address", 5}}).value("ok", false));
-  const json mirror = lift_->call({{"cmd", "uss_mirror"}, {"address", 5}});
+  // USS A 5.3: one mirror telegram, one reply delay. A reply the machine held up past it fails
+  // the request; asked again (at most twice) only if the witness missed something meanwhile.
+  json mirror;
+  for (int attempt = 1; attempt <= 3; ++attempt) {
+    const std::uint64_t witness_before = witness_misses();
+    mirror = lift_->call({{"cmd", "uss_mirror"}, {"address", 5}});
+    if (mirror.value("ok", false) || witness_misses() == witness_before) break;
+    std::printf("mirror try %d failed while the witness missed %llu: %s\n", attempt,
+                static_cast<unsigned long long>(witness_misses() - witness_before),
+                mirror.dump().c_str());
+  }
   ASSERT_TRUE(mirror.value("ok", false)) << mirror.dump();
   EXPECT_EQ(mirror["result"]["ok"], true);
   // Wrong requests change nothing and say why.
