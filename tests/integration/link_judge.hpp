@@ -75,12 +75,12 @@ inline ::testing::AssertionResult ready_within(LiveMaster& m,
     }
   }
   const dcp::LinkCounters now = m.controller.snapshot().link_counters;
-  const std::uint64_t lost = now.missing_replies - from.missing_replies +
-                             (now.bad_checksum - from.bad_checksum);
+  const std::uint64_t lost =
+      now.missing_replies - from.missing_replies + (now.bad_checksum - from.bad_checksum);
   if (now.request_timeouts - from.request_timeouts > lost) {
-    return ::testing::AssertionFailure() << now.request_timeouts - from.request_timeouts
-                                         << " handshake restarts but only " << lost
-                                         << " lost or spoilt replies";
+    return ::testing::AssertionFailure()
+           << now.request_timeouts - from.request_timeouts << " handshake restarts but only "
+           << lost << " lost or spoilt replies";
   }
   return ::testing::AssertionSuccess();
 }
