@@ -241,12 +241,22 @@ void open_doors(Lift& lift) {
 // The hold must outlast closing (2 s) and locking (300 ms) in the simulator.
 const json kFastStartTravel = {{"fast_start_timeout_ms", 5000}};
 
+/// Opens the doors, arms a fast start to floor 2 (DCP 12) and waits until the lift says so.
+::testing::AssertionResult fast_start_armed_at_open_doors(Lift& lift) {
+  open_doors(lift);
+  if (!is_ok(lift.call({{"cmd", "fast_start"}, {"action", "arm"}, {"floor", 2}}))) {
+    return ::testing::AssertionFailure() << "fast_start arm refused\n" << lift.log();
+  }
+  if (lift.wait_travel("fast_start_armed").is_null()) {
+    return ::testing::AssertionFailure() << "no fast_start_armed event\n" << lift.log();
+  }
+  return ::testing::AssertionSuccess();
+}
+
 TEST(FastStart, DoorReversalWhileArmedAbortsIt) {
   judged_unless_stalled([&] {
     START_LIFT(lift, 4, kFastStartTravel);
-    open_doors(lift);
-    ASSERT_TRUE(is_ok(lift.call({{"cmd", "fast_start"}, {"action", "arm"}, {"floor", 2}})));
-    ASSERT_FALSE(lift.wait_travel("fast_start_armed").is_null()) << lift.log();
+    ASSERT_TRUE(fast_start_armed_at_open_doors(lift));
     ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "close_doors"}})));
     lift.api().drain(800ms);
     ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "door_reversal"}})));
@@ -265,9 +275,7 @@ TEST(FastStart, ADoorReversalFromTheInputsApiEndsItAsDcp12_2Says) {
   judged_unless_stalled([&] {
     // The I/O board's daemon reports the reversal through `inputs` (not the simulated doors).
     START_LIFT(lift, 4, kFastStartTravel);
-    open_doors(lift);
-    ASSERT_TRUE(is_ok(lift.call({{"cmd", "fast_start"}, {"action", "arm"}, {"floor", 2}})));
-    ASSERT_FALSE(lift.wait_travel("fast_start_armed").is_null()) << lift.log();
+    ASSERT_TRUE(fast_start_armed_at_open_doors(lift));
     ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "close_doors"}})));
     lift.api().drain(800ms);
     const json reply = lift.call({{"cmd", "inputs"}, {"door_reversal", true}});
@@ -285,9 +293,7 @@ TEST(FastStart, ADoorReversalFromTheInputsApiEndsItAsDcp12_2Says) {
 TEST(FastStart, ArmedThenDoorsLockedTravelsAndFinishes) {
   judged_unless_stalled([&] {
     START_LIFT(lift, 4, kFastStartTravel);
-    open_doors(lift);
-    ASSERT_TRUE(is_ok(lift.call({{"cmd", "fast_start"}, {"action", "arm"}, {"floor", 2}})));
-    ASSERT_FALSE(lift.wait_travel("fast_start_armed").is_null()) << lift.log();
+    ASSERT_TRUE(fast_start_armed_at_open_doors(lift));
     EXPECT_EQ(lift.status()["travel"]["state"], "fast_start");
     ASSERT_TRUE(is_ok(lift.call({{"cmd", "sim"}, {"action", "close_doors"}})));
     const json end = lift.wait_travel_end(60s);
