@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "common/cpu_set.hpp"
 #include "common/version.hpp"
 #include "config/config.hpp"
 #include "daemon/cli.hpp"
@@ -20,6 +21,7 @@
 #include "host/lift_common.hpp"
 #include "kinds/config_schema.hpp"
 #include "log/log.hpp"
+#include "rt/cpu_split.hpp"
 #include "rt/rt_thread.hpp"
 #include "service/notify.hpp"
 
@@ -109,6 +111,27 @@ std::optional<std::string> realtime_refusal(const config::Config& cfg) {
   return status.describe();
 }
 
+// With rt.cpu set, every thread but the real-time loops (the io thread with the API, the port
+// keepers) runs on the other CPUs the process may use, so that nothing of liftd's own at normal
+// priority competes on the real-time CPU with the tty's flip-buffer worker that a board's
+// settings put there (docs/operations.md, "Real-time settings of a board"). Before any thread
+// starts: the threads inherit it; the real-time threads pin themselves to rt.cpu.
+void keep_normal_threads_off_the_cycle_cpu(const config::Config& cfg) {
+  const liftd::rt::CpuSplit split = liftd::rt::keep_normal_threads_off(cfg.rt.cpu);
+  if (split.error != 0) {
+    log::event(log::Level::warn, "rt", "cpu_split_refused",
+               {{"cpu", std::to_string(cfg.rt.cpu)}, {"errno", std::to_string(split.error)}},
+               "could not keep the normal threads off CPU " + std::to_string(cfg.rt.cpu) + ": " +
+                   std::strerror(split.error) + "; they share it with the cycle");
+  } else if (!split.normal_cpus.empty()) {
+    const std::string normal = liftd::cpu_list_text(split.normal_cpus);
+    log::event(log::Level::info, "rt", "cpu_split",
+               {{"cpu", std::to_string(cfg.rt.cpu)}, {"normal_cpus", normal}},
+               "real-time threads on CPU " + std::to_string(cfg.rt.cpu) +
+                   ", every other thread on CPU(s) " + normal);
+  }
+}
+
 // A start that ends with exit 2 while systemd holds the API socket (liftd.socket): the clients
 // waiting on it, and those that come within the next seconds, get one error line saying why
 // instead of waiting; and since they are answered, the socket does not start liftd again at once
@@ -160,6 +183,7 @@ int run_daemon(const CommandLine& cl) {
     log::flush();
     return exit_code::kBadConfig;
   }
+  keep_normal_threads_off_the_cycle_cpu(*cfg);
   log::event(
       log::Level::info, "daemon", "starting",
       {{"version", std::string(liftd::kVersion)},

@@ -1,6 +1,5 @@
 // Loading: the file, the JSON text, the document against a Schema, and the host checks.
 #include <fcntl.h>
-#include <sched.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -8,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 
+#include "common/cpu_set.hpp"
 #include "config/schema.hpp"
 
 namespace liftd::config {
@@ -321,15 +321,9 @@ LoadResult load_file(const std::filesystem::path& path, const Schema& schema) {
 
 HostFacts HostFacts::current() {
   HostFacts facts;
-  cpu_set_t set;
-  CPU_ZERO(&set);
   // The affinity mask holds only CPUs that are online and that this process (its cgroup's
   // cpuset, the unit's CPUAffinity=) may use: exactly where the cycle thread can be pinned.
-  if (::sched_getaffinity(0, sizeof set, &set) == 0) {
-    for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
-      if (CPU_ISSET(static_cast<std::size_t>(cpu), &set)) facts.usable_cpus.push_back(cpu);
-    }
-  }
+  facts.usable_cpus = current_cpus();
   return facts;
 }
 
@@ -337,19 +331,7 @@ std::vector<Problem> check_host(const Config& config, const HostFacts& host) {
   Problems problems;
   if (config.rt.cpu >= 0 && std::find(host.usable_cpus.begin(), host.usable_cpus.end(),
                                       config.rt.cpu) == host.usable_cpus.end()) {
-    std::string usable;
-    for (std::size_t i = 0; i < host.usable_cpus.size(); ++i) {
-      // Ranges as the kernel writes them: 0-3,6.
-      std::size_t j = i;
-      while (j + 1 < host.usable_cpus.size() &&
-             host.usable_cpus[j + 1] == host.usable_cpus[j] + 1) {
-        ++j;
-      }
-      if (!usable.empty()) usable += ",";
-      usable += std::to_string(host.usable_cpus[i]);
-      if (j > i) usable += "-" + std::to_string(host.usable_cpus[j]);
-      i = j;
-    }
+    const std::string usable = cpu_list_text(host.usable_cpus);
     problems.push_back({"rt.cpu", std::to_string(config.rt.cpu) +
                                       " is not a CPU this machine lets liftd run on: use -1 or "
                                       "one of " +

@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/cpu_set.hpp"
 #include "daemon/process.hpp"
 #include "daemon/test_socket.hpp"
 #include "support/api_client.hpp"
@@ -499,6 +500,58 @@ TEST(DaemonReload, SighupAppliesWhatItCanAndNamesWhatNeedsARestart) {
   EXPECT_FALSE(liftd.process.wait(200ms).has_value());
   liftd.process.signal(SIGTERM);
   EXPECT_EQ(liftd.process.wait(kStopLimit), 0) << liftd.process.err();
+}
+
+// `Cpus_allowed_list` of one of liftd's threads ("" when it cannot be read).
+std::string cpus_allowed(int pid, const std::string& tid) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/task/" + tid + "/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("Cpus_allowed_list:", 0) == 0) {
+      return line.substr(line.find_first_not_of(" \t", sizeof "Cpus_allowed_list:" - 1));
+    }
+  }
+  return "";
+}
+
+// rt.cpu set: the cycle thread runs on it, the main thread (the io thread with the API) and
+// the threads it started on the other CPUs, and the journal says so once.
+TEST(DaemonRealTimeCpu, TheCycleOwnsRtCpuAndEveryNormalThreadRunsOffIt) {
+  const std::vector<int> usable = current_cpus();
+  if (usable.size() < 2) GTEST_SKIP() << "one usable CPU: there is nothing to split";
+  const int rt_cpu = usable.back();
+  const std::string others = cpu_list_text({usable.begin(), usable.end() - 1});
+  TestSocket notify;
+  const std::string config = write_file(
+      notify.dir(), "liftd.json",
+      R"({"rt": {"cpu": )" + std::to_string(rt_cpu) + R"(}, "api": {"socket": ")" + notify.dir() +
+          R"(/api.sock", "socket_group": "", "read_group": "", "control_group": "",
+             "inputs_group": ""}})");
+  SimDaemon liftd(notify, config);
+  std::vector<std::string> seen;
+  ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit)) << liftd.process.err();
+  const int pid = liftd.process.pid();
+  EXPECT_EQ(cpus_allowed(pid, std::to_string(pid)), others);
+  int cycles = 0;
+  for (const auto& task :
+       std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/task")) {
+    const std::string tid = task.path().filename();
+    std::string comm;
+    std::getline(std::ifstream(task.path() / "comm"), comm);
+    if (comm == "liftd-cycle") {
+      ++cycles;
+      EXPECT_EQ(cpus_allowed(pid, tid), std::to_string(rt_cpu));
+    } else if (comm != "liftd") {
+      // Named threads other than the cycle are liftd's other loops; every unnamed one is
+      // normal or a simulator standing in for the drive.
+      ADD_FAILURE() << "unexpected thread " << comm;
+    }
+  }
+  EXPECT_EQ(cycles, 1);
+  EXPECT_THAT(liftd.process.err(), HasSubstr("real-time threads on CPU " + std::to_string(rt_cpu) +
+                                             ", every other thread on CPU(s) " + others +
+                                             " [event=cpu_split cpu=" + std::to_string(rt_cpu) +
+                                             " normal_cpus=" + others + "]"));
 }
 
 TEST(DaemonWatchdog, PingsAtHalfTheTimeout) {
