@@ -41,18 +41,20 @@ class ReferenceLink {
   ~ReferenceLink() { stop(); }
 
   /// Starts both threads, the link's at `priority` (SCHED_FIFO where permitted, as RtThread
-  /// falls back); 0 or an errno.
-  int start(int priority, bool lock_memory) {
+  /// falls back), both pinned to `cpu` when it is >= 0 (where the cycle runs); 0 or an errno.
+  int start(int priority, bool lock_memory, int cpu = -1) {
     auto port = io::SerialPort::open(pty_.slave_path(), raw());
     if (!port.ok()) return EIO;
     port_ = std::move(port).value();
     rt::RtThreadOptions echo;
     echo.priority = std::max(1, priority - 1);
     echo.lock_memory = lock_memory;
+    echo.cpu = cpu;
     if (const int err = echo_.start(echo, [this] { echo_loop(); }); err != 0) return err;
     rt::RtThreadOptions main;
     main.priority = priority;
     main.lock_memory = lock_memory;
+    main.cpu = cpu;
     return thread_.start(main, [this] { loop(); });
   }
   void stop() {

@@ -9,7 +9,18 @@
 // read against the reference's under the same load in the same run (the criterion: at most 1.1
 // times the reference's p99, no skipped cycle the reference does not also show, no missing reply,
 // no link fault). Also prints requests per second and request latency per load.
+// With --board CPU it runs as docs/operations.md sets up a board ("Real-time settings of a
+// board"): the real-time threads (the cycle, the USS bus, the reference loop and link, and the
+// simulated drive and slaves, which stand for hardware outside the board) on that CPU, every
+// other thread (liftd's io thread, the API clients) off it, and the unbound workqueue, where the
+// tty's flip-buffer worker runs, on it for the run (put back at the end). A SCHED_IDLE thread
+// keeps that CPU from halting (--no-idle-poll leaves it out): what the CPU's resume-latency
+// setting does on a board with a cpuidle driver (docs/operations.md); a virtual machine's guest
+// without one halts its virtual CPU whenever the real-time threads sleep, and its host then
+// wakes it up to milliseconds late (measured here: the reference loop 2.2 ms late at worst, 3
+// cycles skipped in 15 s, with no load at all).
 #include <poll.h>
+#include <sched.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -22,6 +33,7 @@
 #include <cstring>
 #include <ctime>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -29,12 +41,14 @@
 #include <thread>
 #include <vector>
 
+#include "common/cpu_set.hpp"
 #include "common/mono_time.hpp"
 #include "daemon/daemon.hpp"
 #include "dcp/host/lift_app.hpp"
 #include "host/lift_common.hpp"
 #include "io/pty.hpp"
 #include "log/log.hpp"
+#include "rt/cpu_split.hpp"
 #include "rt/cycle_runner.hpp"
 #include "rt/histogram.hpp"
 #include "rt/rt_thread.hpp"
@@ -222,7 +236,7 @@ class UssBus {
  public:
   static constexpr std::uint32_t kBaud = 38400;
 
-  explicit UssBus(int priority, bool lock_memory)
+  UssBus(int priority, bool lock_memory, int cpu)
       : pty_(make_pty()),
         slaves_(make_slaves()),
         bus_(std::make_unique<uss::sim::UssBusSim>(slaves_, kBaud, mono_now())),
@@ -234,12 +248,14 @@ class UssBus {
     rc.serial = uss::uss_serial_settings(kBaud);
     rc.thread.priority = priority;
     rc.thread.lock_memory = lock_memory;
+    rc.thread.cpu = cpu;
     runner_ = std::make_unique<uss::UssRunner>(rc, *master_, hooks_);
     line_priority_ = std::max(1, priority - 1);
+    cpu_ = cpu;
   }
   ~UssBus() { stop(); }
   int start() {
-    if (const int err = line_.start(line_priority_); err != 0) return err;
+    if (const int err = line_.start(line_priority_, cpu_); err != 0) return err;
     return runner_->start();
   }
   void stop() {
@@ -283,6 +299,87 @@ class UssBus {
   liftd::uss::testing::PtyLine<uss::sim::UssBusSim, uss::sim::UssReply> line_;
   std::unique_ptr<uss::UssRunner> runner_;
   int line_priority_ = 1;
+  int cpu_ = -1;
+};
+
+/// The unbound workqueue's CPU mask (sysfs; root only): where the kernel runs the tty's
+/// flip-buffer work, which carries every received byte to the line discipline. Set for the run
+/// and put back when this object goes.
+class WorkqueueMask {
+ public:
+  static constexpr const char* kPath = "/sys/devices/virtual/workqueue/cpumask";
+  WorkqueueMask() = default;
+  WorkqueueMask(const WorkqueueMask&) = delete;
+  WorkqueueMask& operator=(const WorkqueueMask&) = delete;
+  ~WorkqueueMask() {
+    if (!saved_.empty()) write(saved_);
+  }
+  static std::string read() {
+    std::string mask;
+    std::getline(std::ifstream(kPath), mask);
+    return mask;
+  }
+  /// Only `cpu` (below 32: one 32-bit word of the kernel's hexadecimal mask). Returns false,
+  /// with the mask unchanged, when it could not be written.
+  bool set_only(int cpu) {
+    const std::string before = read();
+    char mask[16];
+    std::snprintf(mask, sizeof mask, "%x", 1U << static_cast<unsigned>(cpu));
+    if (before.empty() || !write(mask)) return false;
+    saved_ = before;
+    return true;
+  }
+
+ private:
+  static bool write(const std::string& mask) {
+    std::ofstream out(kPath);
+    out << mask << "\n";
+    out.flush();
+    return static_cast<bool>(out);
+  }
+  std::string saved_;
+};
+
+/// Keeps one CPU from halting between the real-time threads' wake-ups: a SCHED_IDLE spin, which
+/// any other thread on that CPU preempts at once (the kernel preempts an idle-policy task for
+/// every waking task of another policy).
+class IdlePoller {
+ public:
+  IdlePoller() = default;
+  IdlePoller(const IdlePoller&) = delete;
+  IdlePoller& operator=(const IdlePoller&) = delete;
+  ~IdlePoller() { stop(); }
+  /// 0, or an errno (the thread, its pinning or SCHED_IDLE refused).
+  int start(int cpu) {
+    stop_ = false;
+    int error = 0;
+    std::atomic<bool> ready{false};
+    thread_ = std::thread([this, cpu, &error, &ready] {
+      cpu_set_t set;
+      CPU_ZERO(&set);
+      CPU_SET(static_cast<std::size_t>(cpu), &set);
+      sched_param idle{};
+      if (::sched_setaffinity(0, sizeof set, &set) != 0 ||
+          ::sched_setscheduler(0, SCHED_IDLE, &idle) != 0) {
+        error = errno;
+      }
+      ready = true;
+      if (error != 0) return;
+      while (!stop_.load(std::memory_order_relaxed)) {
+      }
+    });
+    while (!ready) std::this_thread::yield();
+    if (error != 0) stop();
+    return error;
+  }
+  void stop() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
 };
 
 /// Everything one window measured.
@@ -426,17 +523,60 @@ Verdict print_verdicts(const std::vector<Window>& windows, bool with_uss_bus) {
 int main(int argc, char** argv) {
   std::chrono::seconds phase{20};
   bool with_uss = true;
+  int board_cpu = -1;
+  bool idle_poll = true;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--seconds") == 0 && i + 1 < argc) {
       phase = std::chrono::seconds(std::max(1, std::atoi(argv[++i])));
     } else if (std::strcmp(argv[i], "--no-uss") == 0) {
       with_uss = false;
+    } else if (std::strcmp(argv[i], "--board") == 0 && i + 1 < argc) {
+      board_cpu = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--no-idle-poll") == 0) {
+      idle_poll = false;
     } else {
       std::fprintf(stderr,
-                   "usage: api-load-bench [--seconds N] [--no-uss]\n"
+                   "usage: api-load-bench [--seconds N] [--no-uss] [--board CPU [--no-idle-poll]]\n"
                    "  N seconds per window (default 20): quiet, then 1, 8 and 32 clients\n"
-                   "  --no-uss  without the USS bus beside the DCP cycle\n");
+                   "  --no-uss     without the USS bus beside the DCP cycle\n"
+                   "  --board CPU  a board's real-time settings (docs/operations.md): the\n"
+                   "               real-time threads and the unbound workqueue on CPU (0..31),\n"
+                   "               every other thread off it, a SCHED_IDLE spin keeping CPU\n"
+                   "               from halting; root, two CPUs or more\n"
+                   "  --no-idle-poll  --board without the spin\n");
       return 2;
+    }
+  }
+  // Before any thread starts: the threads started from here on inherit it.
+  WorkqueueMask workqueue;
+  IdlePoller poller;
+  std::string board_text =
+      "none (every thread on any CPU; unbound workqueue mask " + WorkqueueMask::read() + ")";
+  if (board_cpu >= 0) {
+    const liftd::rt::CpuSplit split =
+        board_cpu < 32 ? liftd::rt::keep_normal_threads_off(board_cpu) : liftd::rt::CpuSplit{};
+    if (split.normal_cpus.empty()) {
+      std::fprintf(stderr,
+                   "api-load-bench: --board %d: not a CPU to give the real-time threads (this "
+                   "process may use CPUs %s; it needs one of 0..31 and another beside it)\n",
+                   board_cpu, liftd::cpu_list_text(liftd::current_cpus()).c_str());
+      return 2;
+    }
+    const std::string before = WorkqueueMask::read();
+    board_text = "real-time threads on CPU " + std::to_string(board_cpu) +
+                 ", the others on CPU(s) " + liftd::cpu_list_text(split.normal_cpus) + ", " +
+                 (workqueue.set_only(board_cpu)
+                      ? "the unbound workqueue on CPU " + std::to_string(board_cpu) +
+                            " for the run (mask " + WorkqueueMask::read() + ", was " + before + ")"
+                      : "the unbound workqueue NOT moved (could not write " +
+                            std::string(WorkqueueMask::kPath) + ": run as root), mask " + before);
+    if (idle_poll) {
+      const int error = poller.start(board_cpu);
+      board_text += error == 0
+                        ? ", kept from halting by a SCHED_IDLE spin"
+                        : ", NOT kept from halting (" + std::string(std::strerror(error)) + ")";
+    } else {
+      board_text += ", left to halt when idle (--no-idle-poll)";
     }
   }
   namespace fs = std::filesystem;
@@ -448,6 +588,7 @@ int main(int argc, char** argv) {
   ::signal(SIGPIPE, SIG_IGN);  // a refused or dropped client must not end the benchmark
   liftd::config::Config cfg = liftd::daemon::simulation_defaults();
   cfg.rt.lock_memory = true;  // as the service runs
+  cfg.rt.cpu = board_cpu;
   // 32 load clients plus the dispatcher and the `stats` look of each window.
   cfg.api.max_clients = 40;
   liftd::daemon::Daemon daemon(cfg, liftd::service::Notifier::from_environment(), std::nullopt);
@@ -473,20 +614,22 @@ int main(int argc, char** argv) {
   rt::RtThreadOptions ref_options;
   ref_options.priority = cycle_config.thread.priority;
   ref_options.lock_memory = true;
+  ref_options.cpu = board_cpu;
   ReferenceLoop reference(cycle_config.period, cycle_config.send_window);
   if (const int err = reference.start(ref_options); err != 0) {
     std::fprintf(stderr, "api-load-bench: reference loop: %s\n", std::strerror(err));
     return 1;
   }
   liftd::testing::ReferenceLink reference_link;
-  if (const int err = reference_link.start(cycle_config.thread.priority, true); err != 0) {
+  if (const int err = reference_link.start(cycle_config.thread.priority, true, board_cpu);
+      err != 0) {
     std::fprintf(stderr, "api-load-bench: reference link: %s\n", std::strerror(err));
     return 1;
   }
   std::unique_ptr<UssBus> uss_bus;
   if (with_uss) {
     try {
-      uss_bus = std::make_unique<UssBus>(cycle_config.thread.priority, true);
+      uss_bus = std::make_unique<UssBus>(cycle_config.thread.priority, true, board_cpu);
       if (const int err = uss_bus->start(); err != 0) throw std::runtime_error(std::strerror(err));
     } catch (const std::exception& e) {
       std::fprintf(stderr, "api-load-bench: USS bus: %s (left out)\n", e.what());
@@ -501,13 +644,13 @@ int main(int argc, char** argv) {
   std::printf(
       "api-load-bench: cycle thread %s priority %d, memory %s; reference loop %s at the same "
       "priority and period (%lld us); USS bus %s; %lld s per window; the car travels 0 <-> 5 "
-      "throughout\n",
+      "throughout\nboard settings: %s\n",
       rt_status.realtime ? "SCHED_FIFO" : "SCHED_OTHER (not real-time: run as root)",
       cycle_config.thread.priority, rt_status.memory_locked ? "locked" : "not locked",
       reference.status().realtime ? "SCHED_FIFO" : "SCHED_OTHER",
       static_cast<long long>(cycle_config.period.count() / 1000),
       uss_bus ? "at 38400 baud, 3 slaves, its thread at the same priority" : "left out",
-      static_cast<long long>(phase.count()));
+      static_cast<long long>(phase.count()), board_text.c_str());
   std::this_thread::sleep_for(2s);  // the USS bus settles, the car starts
 
   std::vector<Window> windows;

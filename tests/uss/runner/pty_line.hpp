@@ -41,12 +41,13 @@ class PtyLine {
   PtyLine& operator=(const PtyLine&) = delete;
   ~PtyLine() { stop(); }
 
-  /// Starts the line thread; `priority` > 0: SCHED_FIFO where allowed (normal otherwise).
-  /// Returns 0 or an errno.
-  int start(int priority = 0) {
+  /// Starts the line thread; `priority` > 0: SCHED_FIFO where allowed (normal otherwise);
+  /// `cpu` >= 0: pinned to that CPU. Returns 0 or an errno.
+  int start(int priority = 0, int cpu = -1) {
     stop_.store(false);
     rt::RtThreadOptions options;
     options.priority = priority;
+    options.cpu = cpu;
     options.lock_memory = false;
     return thread_.start(options, [this] { loop(); });
   }
