@@ -21,6 +21,7 @@
 #include "host/lift_common.hpp"
 #include "kinds/config_schema.hpp"
 #include "log/log.hpp"
+#include "rt/board_settings.hpp"
 #include "rt/cpu_split.hpp"
 #include "rt/rt_thread.hpp"
 #include "service/notify.hpp"
@@ -132,6 +133,23 @@ void keep_normal_threads_off_the_cycle_cpu(const config::Config& cfg) {
   }
 }
 
+// The board settings around the real-time threads that liftd cannot make itself (the unbound
+// workqueue's CPUs, the real-time CPU's idle states; docs/operations.md): one line naming what
+// is missing, for the technician reading the journal. A warning when rt.cpu is set (the board is
+// meant to be tuned), otherwise information.
+void report_missing_board_settings(const config::Config& cfg) {
+  const auto missing =
+      liftd::rt::missing_board_settings(cfg.rt.cpu, liftd::rt::BoardFacts::current(cfg.rt.cpu));
+  if (missing.empty()) return;
+  std::string text;
+  for (const auto& m : missing) text += (text.empty() ? "" : "; ") + m;
+  log::event(cfg.rt.cpu >= 0 ? log::Level::warn : log::Level::info, "rt", "rt_settings_missing",
+             {{"missing", std::to_string(missing.size())}},
+             "real-time settings of this board missing (docs/operations.md, \"Real-time "
+             "settings of a board\"): " +
+                 text);
+}
+
 // A start that ends with exit 2 while systemd holds the API socket (liftd.socket): the clients
 // waiting on it, and those that come within the next seconds, get one error line saying why
 // instead of waiting; and since they are answered, the socket does not start liftd again at once
@@ -183,6 +201,7 @@ int run_daemon(const CommandLine& cl) {
     log::flush();
     return exit_code::kBadConfig;
   }
+  report_missing_board_settings(*cfg);  // first: it reads the CPUs the whole process may use
   keep_normal_threads_off_the_cycle_cpu(*cfg);
   log::event(
       log::Level::info, "daemon", "starting",

@@ -3,7 +3,7 @@
 # liftd's cycle against a bare reference loop, the DCP engine against the echo engine, the
 # cycle with and without API load, API throughput against the real daemon, and how many
 # cycles events and commands take. Each benchmark's full output is kept in the log folder.
-#   tools/bench.sh                 build (default preset) if needed, then run (about 4 min)
+#   tools/bench.sh                 build (default preset) if needed, then run (about 5 min)
 #   LIFTD_BENCH_CYCLES=N ...       cycles per engine, over 3 alternating rounds (default 2000)
 # Run as root on a quiet machine (SCHED_FIFO and memory locking need it).
 set -euo pipefail
@@ -38,6 +38,13 @@ for r in $(seq "$rounds"); do
   run "cycle-echo-$r" "$bin/cycle-bench" --engine echo --cycles "$round_cycles"
 done
 run api-load "$bin/api-load-bench" --seconds 5
+# Again with a board's real-time settings (docs/operations.md): the real-time threads and the
+# unbound workqueue (the tty's flip-buffer worker) on the last CPU, every other thread off it.
+# Root and two CPUs or more; longer windows, since its lateness figures are tens of us.
+board_cpu=$(( $(nproc) - 1 ))
+if [ "$(id -u)" = 0 ] && [ "$board_cpu" -ge 1 ]; then
+  run api-load-board "$bin/api-load-bench" --seconds 15 --board "$board_cpu"
+fi
 run event "$bin/event-bench" --travels 4
 run travel "$bin/travel-bench"
 # Its exit status says whether a rate missed 10 %: the table shows that, the run goes on.
@@ -98,10 +105,14 @@ printf '%-50s %12s   %s\n' "  inside the engine's calls, us: DCP / echo" "$dcp_w
 # most 1.1 x the reference loop's in the same window, no skipped cycle the reference does not
 # show, no missing reply, no link fault. api-load-bench prints one verdict line per link and load;
 # a MISS is marked at the end of the row, with liftd's own share (misses the reference link did
-# not also have) beside it.
+# not also have) beside it. Rows marked [board] are the run with the board settings.
+for setting in api-load api-load-board; do
+  [ -f "$logs/$setting.txt" ] || continue
+  where=""
+  [ "$setting" = api-load-board ] && where=" [board]"
 for link in dcp uss; do
   for n in 8 32; do
-    line=$(grep "^verdict $link $n clients:" "$logs/api-load.txt" || true)
+    line=$(grep "^verdict $link $n clients:" "$logs/$setting.txt" || true)
     ratio=$(sed -n 's/.* p99 \([0-9.]*\) x reference.*/\1/p' <<<"$line")
     if [ "$link" = dcp ]; then
       lost=$(sed -n 's/.*missing \([0-9]*\) (reference link \([0-9]*\)).*/\1 (\2)/p' <<<"$line")
@@ -110,10 +121,11 @@ for link in dcp uss; do
     fi
     mark=$(sed -n 's/.*: \([A-Za-z]*\) (own share \([A-Za-z]*\))$/\1, own share \2/p' <<<"$line")
     case "$mark" in MISS*) mark="$mark  <-- MISS" ;; esac
-    printf '%-50s %12s   %s\n' "$link lateness p99 / reference, $n API clients" "${ratio:-n/a}" \
-      "<= 1.1; $mark"
+    printf '%-50s %12s   %s\n' "$link lateness p99 / reference, $n API clients$where" \
+      "${ratio:-n/a}" "<= 1.1; $mark"
     printf '%-50s %12s   %s\n' "  replies lost (reference link), $n clients" "${lost:-n/a}" "0"
   done
+done
 done
 printf '%-50s %12s   %s\n' "API status req/s, 8 clients, liftd --simulate" "$api8" ">= 50000"
 printf '%-50s %12s   %s\n' "API status p99 (us), 8 clients, liftd --simulate" "$api8_p99" "< 1000"

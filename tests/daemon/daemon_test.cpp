@@ -22,6 +22,7 @@
 #include "common/cpu_set.hpp"
 #include "daemon/process.hpp"
 #include "daemon/test_socket.hpp"
+#include "rt/board_settings.hpp"
 #include "support/api_client.hpp"
 
 namespace liftd {
@@ -552,6 +553,16 @@ TEST(DaemonRealTimeCpu, TheCycleOwnsRtCpuAndEveryNormalThreadRunsOffIt) {
                                              ", every other thread on CPU(s) " + others +
                                              " [event=cpu_split cpu=" + std::to_string(rt_cpu) +
                                              " normal_cpus=" + others + "]"));
+  // The board settings it cannot make itself: named when missing on this machine, else silent.
+  const auto missing = rt::missing_board_settings(rt_cpu, rt::BoardFacts::current(rt_cpu));
+  if (missing.empty()) {
+    EXPECT_THAT(liftd.process.err(), Not(HasSubstr("rt_settings_missing")));
+  } else {
+    EXPECT_THAT(liftd.process.err(), HasSubstr(missing.front()));
+    EXPECT_THAT(
+        liftd.process.err(),
+        HasSubstr("[event=rt_settings_missing missing=" + std::to_string(missing.size()) + "]"));
+  }
 }
 
 TEST(DaemonWatchdog, PingsAtHalfTheTimeout) {
