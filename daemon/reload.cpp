@@ -39,6 +39,7 @@ const std::vector<std::string>& live_keys() {
       "api.control_group",
       "api.inputs_group",
       "api.max_clients",
+      "api.max_requests_per_s",
       "api.idle_timeout_s",
       "api.max_clients_per_uid",
       "api.reserved_clients",
@@ -61,6 +62,7 @@ ReloadPlan plan_reload(const config::Config& running, const config::Config& next
   plan.effective.api.control_group = next.api.control_group;
   plan.effective.api.inputs_group = next.api.inputs_group;
   plan.effective.api.max_clients = next.api.max_clients;
+  plan.effective.api.max_requests_per_s = next.api.max_requests_per_s;
   plan.effective.api.idle_timeout_s = next.api.idle_timeout_s;
   plan.effective.api.max_clients_per_uid = next.api.max_clients_per_uid;
   plan.effective.api.reserved_clients = next.api.reserved_clients;

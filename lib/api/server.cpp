@@ -21,6 +21,7 @@
 
 #include "api/access.hpp"
 #include "api/commands.hpp"
+#include "api/request_budget.hpp"
 #include "common/version.hpp"
 
 namespace liftd::api {
@@ -78,7 +79,9 @@ class Server::Impl : public std::enable_shared_from_this<Server::Impl> {
             AccessPolicy::resolve(config_.read_group, config_.control_group, config_.inputs_group)),
         dispatcher_(DispatchLimits{config_.max_depth, config_.max_in_flight}),
         acceptor_(io),
-        retry_timer_(io) {}
+        retry_timer_(io),
+        budget_(config_.max_requests_per_second, kLinesPerTurn, SteadyClock::now()),
+        budget_timer_(io) {}
 
   void register_builtins() {
     std::weak_ptr<Impl> weak = weak_from_this();
@@ -99,6 +102,13 @@ class Server::Impl : public std::enable_shared_from_this<Server::Impl> {
   /// Why a new connection from `peer` is refused (limits), or nothing.
   std::optional<std::string> admission_refusal(const Peer& peer) const;
   void remove(const std::shared_ptr<Session>& session) { sessions_.erase(session); }
+  /// Takes one request's share of the budget (api.max_requests_per_s), or false.
+  bool take_budget() { return budget_.take(SteadyClock::now()); }
+  /// `session` ran out of budget: it takes its next turn when there is some again, behind the
+  /// clients that ran out before it (one queue, so every waiting client gets an equal share).
+  void wait_for_budget(std::shared_ptr<Session> session);
+  void arm_budget_timer();
+  void on_budget_timer();
 
   asio::io_context& io_;
   Backend& backend_;
@@ -108,6 +118,10 @@ class Server::Impl : public std::enable_shared_from_this<Server::Impl> {
   Dispatcher dispatcher_;
   asio::local::stream_protocol::acceptor acceptor_;
   asio::steady_timer retry_timer_;
+  RequestBudget budget_;
+  asio::steady_timer budget_timer_;
+  bool budget_timer_armed_ = false;
+  std::deque<std::shared_ptr<Session>> budget_queue_;  // waiting for budget, oldest first
   std::set<std::shared_ptr<Session>> sessions_;
   ServerCounters counters_{};
   std::uint64_t next_session_id_ = 1;
@@ -121,6 +135,8 @@ namespace {
 
 /// One connected client.
 class Session final : public std::enable_shared_from_this<Session>, public SessionControl {
+  friend class Server::Impl;  // on_budget_timer() gives waiting clients their turn
+
  public:
   Session(std::shared_ptr<Server::Impl> server, Socket socket, Peer peer, std::vector<gid_t> groups,
           std::uint64_t id)
@@ -311,6 +327,11 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
         owe_turn();
         break;
       }
+      if (!server_->take_budget()) {
+        // The requests of all clients together reached api.max_requests_per_s.
+        wait_for_budget();
+        break;
+      }
       std::string_view line(pending_.data() + start, newline - start);
       start = newline + 1;
       if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
@@ -335,18 +356,29 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
   void owe_turn() {
     if (turn_owed_) return;
     turn_owed_ = true;
-    asio::post(server_->io_, [self = shared_from_this()] {
-      self->turn_owed_ = false;
-      if (self->closed_) return;
-      self->process_lines();
-      if (self->closed_) return;
-      if (self->peer_done_) {
-        self->close_if_done();
-      } else if (!self->paused_ && !self->turn_owed_ && !self->closing_) {
-        self->read_more();
-      }
-      if (!self->closed_) self->arm_timer();
-    });
+    asio::post(server_->io_, [self = shared_from_this()] { self->take_turn(); });
+  }
+
+  /// Its next turn waits for the request budget (once).
+  void wait_for_budget() {
+    if (turn_owed_) return;
+    turn_owed_ = true;
+    ++server_->counters_.budget_waits;
+    server_->wait_for_budget(shared_from_this());
+  }
+
+  /// The turn owe_turn() or wait_for_budget() promised: the lines waiting, then reading on.
+  void take_turn() {
+    turn_owed_ = false;
+    if (closed_) return;
+    process_lines();
+    if (closed_) return;
+    if (peer_done_) {
+      close_if_done();
+    } else if (!paused_ && !turn_owed_ && !closing_) {
+      read_more();
+    }
+    if (!closed_) arm_timer();
   }
 
   /// After a line was written or a reply queued: resume a paused client once drained.
@@ -605,10 +637,42 @@ void Server::Impl::start() {
   accept_next();
 }
 
+void Server::Impl::wait_for_budget(std::shared_ptr<Session> session) {
+  budget_queue_.push_back(std::move(session));
+  arm_budget_timer();
+}
+
+void Server::Impl::arm_budget_timer() {
+  if (budget_timer_armed_ || budget_queue_.empty()) return;
+  budget_timer_armed_ = true;
+  budget_timer_.expires_at(budget_.next_at(SteadyClock::now()));
+  budget_timer_.async_wait([weak = weak_from_this()](const asio::error_code& ec) {
+    const auto self = weak.lock();
+    if (!self || ec) return;
+    self->budget_timer_armed_ = false;
+    self->on_budget_timer();
+  });
+}
+
+void Server::Impl::on_budget_timer() {
+  // Each client that waited takes its turn in order while there is budget; one that runs out
+  // again goes to the back. At most one round per expiry: the next comes with the budget.
+  for (std::size_t n = budget_queue_.size(); n > 0 && !budget_queue_.empty(); --n) {
+    const auto now = SteadyClock::now();
+    if (budget_.next_at(now) > now) break;
+    const auto session = std::move(budget_queue_.front());
+    budget_queue_.pop_front();
+    session->take_turn();
+  }
+  arm_budget_timer();
+}
+
 void Server::Impl::stop() {
   asio::error_code ignored;
   acceptor_.close(ignored);
   retry_timer_.cancel();
+  budget_timer_.cancel();
+  budget_queue_.clear();
   const auto sessions = std::vector<std::shared_ptr<Session>>(sessions_.begin(), sessions_.end());
   for (const auto& session : sessions) session->close("server stopping");
   sessions_.clear();
@@ -646,12 +710,22 @@ void Server::Impl::reconfigure(const ServerConfig& next) {
   config_.max_clients_per_uid = next.max_clients_per_uid;
   config_.reserved_clients = next.reserved_clients;
   config_.stalled_reader_timeout = next.stalled_reader_timeout;
+  config_.max_requests_per_second = next.max_requests_per_second;
+  budget_.set_rate(next.max_requests_per_second, SteadyClock::now());
+  if (budget_timer_armed_) budget_timer_.cancel();  // its expiry was for the old rate
+  budget_timer_armed_ = false;
+  arm_budget_timer();
   const auto sessions = std::vector<std::shared_ptr<Session>>(sessions_.begin(), sessions_.end());
   for (const auto& session : sessions) session->settings_changed();
-  log_(LogLevel::Info, "api: settings changed: max_clients " + std::to_string(config_.max_clients) +
-                           ", idle timeout " + std::to_string(config_.idle_timeout.count()) +
-                           " ms, groups read \"" + config_.read_group + "\" control \"" +
-                           config_.control_group + "\" inputs \"" + config_.inputs_group + "\"");
+  log_(LogLevel::Info,
+       "api: settings changed: max_clients " + std::to_string(config_.max_clients) +
+           ", idle timeout " + std::to_string(config_.idle_timeout.count()) +
+           " ms, requests per second " +
+           (budget_.limited()
+                ? std::to_string(static_cast<long long>(config_.max_requests_per_second))
+                : std::string("unlimited")) +
+           " ms, groups read \"" + config_.read_group + "\" control \"" + config_.control_group +
+           "\" inputs \"" + config_.inputs_group + "\"");
 }
 
 void Server::Impl::accept_next() {
@@ -779,11 +853,17 @@ ServerCounters Server::counters() const {
 }
 
 nlohmann::json to_json(const ServerCounters& c) {
-  return {{"clients", c.clients},         {"watchers", c.watchers},
-          {"connections", c.connections}, {"rejected", c.rejected},
-          {"requests", c.requests},       {"errors", c.errors},
-          {"dropped", c.dropped},         {"timeouts", c.timeouts},
-          {"events", c.events},           {"missed_events", c.missed_events}};
+  return {{"clients", c.clients},
+          {"watchers", c.watchers},
+          {"connections", c.connections},
+          {"rejected", c.rejected},
+          {"requests", c.requests},
+          {"errors", c.errors},
+          {"dropped", c.dropped},
+          {"timeouts", c.timeouts},
+          {"events", c.events},
+          {"missed_events", c.missed_events},
+          {"budget_waits", c.budget_waits}};
 }
 
 }  // namespace liftd::api

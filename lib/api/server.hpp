@@ -31,6 +31,9 @@ struct ServerConfig {
   std::string control_group;     ///< members may run control and read commands
   std::string inputs_group;      ///< members may send inputs and run read commands
   std::size_t max_clients = 32;  ///< more connections get `busy` and are closed
+  /// Request lines answered per second over all clients; more wait their turn (nothing is
+  /// refused), every waiting client an equal share. 0 = no limit.
+  double max_requests_per_second = 0;
   /// Connections one uid may hold at once (root is exempt); more get `busy`.
   std::size_t max_clients_per_uid = 8;
   /// Of max_clients, this many are kept for peers with control access (the control group, root,
@@ -65,6 +68,7 @@ struct ServerCounters {
   std::uint64_t errors = 0;         ///< replies with ok:false
   std::uint64_t dropped = 0;        ///< clients dropped: a stalled reader
   std::uint64_t missed_events = 0;  ///< events not sent to a watcher that fell behind
+  std::uint64_t budget_waits = 0;   ///< turns a client waited for (max_requests_per_second)
   std::uint64_t timeouts = 0;       ///< clients closed by the idle or partial-line timeout
   std::uint64_t events = 0;         ///< events published
   std::size_t clients = 0;          ///< clients connected now

@@ -79,6 +79,7 @@ struct ApiConfig {
   std::string control_group = "liftd-control";  ///< api.control_group
   std::string inputs_group = "liftd-io";        ///< api.inputs_group
   int max_clients = 32;                         ///< api.max_clients
+  int max_requests_per_s = 5000;                ///< api.max_requests_per_s, 0 = no limit
   int max_clients_per_uid = 8;                  ///< api.max_clients_per_uid (root exempt)
   int reserved_clients = 4;                     ///< api.reserved_clients, for control access
   int stalled_reader_timeout_s = 30;            ///< api.stalled_reader_timeout_s

@@ -105,6 +105,11 @@ std::vector<Key> api_keys() {
                          &Config::api, &ApiConfig::inputs_group));
   t.push_back(int_key("api.max_clients", 1, 256, "API connections served at once", &Config::api,
                       &ApiConfig::max_clients));
+  t.push_back(int_key("api.max_requests_per_s", 0, 1000000,
+                      "requests answered per second over all clients; beyond it they wait their "
+                      "turn (none is refused), every client an equal share; bounds the CPU the "
+                      "API takes from the rest of the board; 0 = no limit",
+                      &Config::api, &ApiConfig::max_requests_per_s));
   t.push_back(int_key("api.max_clients_per_uid", 1, 256,
                       "API connections one user (uid) may hold at once; root is exempt",
                       &Config::api, &ApiConfig::max_clients_per_uid));

@@ -79,6 +79,7 @@ api::ServerConfig api_reload_config(const config::Config& c) {
   server.control_group = c.api.control_group;
   server.inputs_group = c.api.inputs_group;
   server.max_clients = static_cast<std::size_t>(c.api.max_clients);
+  server.max_requests_per_second = c.api.max_requests_per_s;
   server.idle_timeout = std::chrono::seconds(c.api.idle_timeout_s);
   server.max_clients_per_uid = static_cast<std::size_t>(c.api.max_clients_per_uid);
   server.reserved_clients = static_cast<std::size_t>(c.api.reserved_clients);

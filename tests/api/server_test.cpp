@@ -143,6 +143,92 @@ TEST_F(ApiServer, APipeliningClientTakesTurnsWithTheOthers) {
   EXPECT_LE(b_at, 8) << "the second client waited behind " << b_at << " of the batch";
 }
 
+TEST_F(ApiServer, RequestsBeyondTheBudgetWaitTheirTurnAndAreAllAnswered) {
+  // 40 requests a second over all clients, so the first 4 are answered at once and the rest
+  // one every 25 ms: 40 pipelined requests take at least (40 - 4) x 25 ms. None is refused.
+  ServerConfig config = default_config();
+  config.max_requests_per_second = 40;
+  start_server(config);
+  auto client = connect();
+  std::string batch;
+  for (int i = 0; i < 40; ++i) batch += json{{"cmd", "version"}, {"id", i}}.dump() + "\n";
+  const auto sent = std::chrono::steady_clock::now();
+  ASSERT_TRUE(client->send(batch));
+  for (int i = 0; i < 40; ++i) {
+    const auto reply = client->read_json(5s);
+    ASSERT_TRUE(reply) << "reply " << i;
+    EXPECT_EQ(reply->at("id"), i);
+    EXPECT_EQ(reply->at("ok"), true);
+  }
+  EXPECT_GE(std::chrono::steady_clock::now() - sent, 36 * 25ms);
+  const auto counters = on_io([&] { return server_->counters(); });
+  EXPECT_GE(counters.budget_waits, 1U);
+  EXPECT_EQ(counters.requests, 40U);
+}
+
+TEST_F(ApiServer, ClientsWaitingForTheBudgetShareItEvenly) {
+  // Two clients pipeline far more than the budget allows; while both wait, each gets every
+  // other turn. Counted on the io thread: of the first 40 answered after the burst, each had
+  // between 16 and 24 (a turn is at most four lines, so shares may differ by a turn).
+  ServerConfig config = default_config();
+  config.max_requests_per_second = 200;
+  start_server(config);
+  std::vector<std::string> order;  // io thread only
+  on_io([&] {
+    server_->dispatcher().add({"mark",
+                               Access::Read,
+                               {},
+                               "",
+                               [&order](const Call& call, Responder done) {
+                                 order.push_back(call.request.at("id").get<std::string>());
+                                 done(Result::ok());
+                               },
+                               kEveryDriveKind});
+  });
+  auto a = connect();
+  auto b = connect();
+  std::string batch_a;
+  std::string batch_b;
+  for (int i = 0; i < 60; ++i) {
+    batch_a += json{{"cmd", "mark"}, {"id", "a" + std::to_string(i)}}.dump() + "\n";
+    batch_b += json{{"cmd", "mark"}, {"id", "b" + std::to_string(i)}}.dump() + "\n";
+  }
+  ASSERT_TRUE(a->send(batch_a));
+  ASSERT_TRUE(b->send(batch_b));
+  for (int i = 0; i < 60; ++i) {
+    ASSERT_TRUE(a->read_json(5s)) << "a " << i;
+    ASSERT_TRUE(b->read_json(5s)) << "b " << i;
+  }
+  const auto seen = on_io([&] { return order; });
+  ASSERT_EQ(seen.size(), 120U);
+  // The burst (20: a tenth of a second's worth) may go to whoever came first.
+  const auto from = seen.begin() + 20;
+  const auto a_share =
+      std::count_if(from, from + 40, [](const std::string& id) { return id.front() == 'a'; });
+  EXPECT_GE(a_share, 16) << "a had " << a_share << " of 40 turns' lines";
+  EXPECT_LE(a_share, 24) << "a had " << a_share << " of 40 turns' lines";
+}
+
+TEST_F(ApiServer, ReconfigureLiftsTheBudgetForClientsAlreadyWaiting) {
+  ServerConfig config = default_config();
+  config.max_requests_per_second = 1;  // 4 at once, then one a second
+  start_server(config);
+  auto client = connect();
+  std::string batch;
+  for (int i = 0; i < 20; ++i) batch += json{{"cmd", "version"}, {"id", i}}.dump() + "\n";
+  ASSERT_TRUE(client->send(batch));
+  for (int i = 0; i < 4; ++i) ASSERT_TRUE(client->read_json(5s));
+  ServerConfig next = config;
+  next.max_requests_per_second = 0;
+  on_io([&] { server_->reconfigure(next); });
+  // The other 16 come now, not over 16 seconds.
+  for (int i = 4; i < 20; ++i) {
+    const auto reply = client->read_json(3s);
+    ASSERT_TRUE(reply) << "reply " << i;
+    EXPECT_EQ(reply->at("id"), i);
+  }
+}
+
 TEST_F(ApiServer, OversizedLineGetsTooLargeThenClose) {
   ServerConfig config = default_config();
   config.max_line_bytes = 1024;

@@ -68,6 +68,7 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/api/control_group", "liftd-control"},
       {"/api/inputs_group", "liftd-io"},
       {"/api/max_clients", 32},
+      {"/api/max_requests_per_s", 5000},
       {"/api/max_clients_per_uid", 8},
       {"/api/reserved_clients", 4},
       {"/api/stalled_reader_timeout_s", 30},

@@ -45,8 +45,9 @@ TEST(ReloadPlan, ClassifiesEveryKindOfKey) {
        [](config::Config& c) {
          c.api.max_clients = 8;
          c.api.idle_timeout_s = 600;
+         c.api.max_requests_per_s = 200;
        },
-       {"api.idle_timeout_s", "api.max_clients"},
+       {"api.idle_timeout_s", "api.max_clients", "api.max_requests_per_s"},
        {}},
       {"drive kind and device",
        [](config::Config& c) {
@@ -101,6 +102,7 @@ TEST(ReloadPlan, ClassifiesEveryKindOfKey) {
     expected.api.inputs_group = next.api.inputs_group;
     expected.api.max_clients = next.api.max_clients;
     expected.api.idle_timeout_s = next.api.idle_timeout_s;
+    expected.api.max_requests_per_s = next.api.max_requests_per_s;
     EXPECT_EQ(config::to_json(plan.effective, kinds::config_schema()),
               config::to_json(expected, kinds::config_schema()))
         << c.legend;
@@ -117,11 +119,12 @@ TEST(ReloadPlan, NamesRunningAndRequestedValues) {
             (KeyChange{"drive.device", "\"/dev/ttyS1\"", "\"/dev/ttyUSB0\""}));
 }
 
-TEST(ReloadPlan, LiveKeysAreExactlyTheseNine) {
+TEST(ReloadPlan, LiveKeysAreExactlyTheseTen) {
   EXPECT_EQ(live_keys(), (std::vector<std::string>{
                              "log.level", "api.read_group", "api.control_group", "api.inputs_group",
-                             "api.max_clients", "api.idle_timeout_s", "api.max_clients_per_uid",
-                             "api.reserved_clients", "api.stalled_reader_timeout_s"}));
+                             "api.max_clients", "api.max_requests_per_s", "api.idle_timeout_s",
+                             "api.max_clients_per_uid", "api.reserved_clients",
+                             "api.stalled_reader_timeout_s"}));
 }
 
 }  // namespace

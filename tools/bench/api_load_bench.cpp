@@ -99,7 +99,8 @@ struct LoadResult {
 };
 
 /// `clients` threads sending `status` back to back for `duration`.
-LoadResult hammer(const std::string& socket, int clients, std::chrono::seconds duration) {
+LoadResult hammer(const std::string& socket, int clients, std::chrono::seconds duration,
+                  double total_rate) {
   std::atomic<bool> stop{false};
   std::vector<std::vector<double>> latencies(static_cast<std::size_t>(clients));
   std::vector<std::thread> threads;
@@ -109,7 +110,14 @@ LoadResult hammer(const std::string& socket, int clients, std::chrono::seconds d
       if (!client.ok()) return;
       auto& mine = latencies[static_cast<std::size_t>(c)];
       mine.reserve(1 << 20);
+      const auto gap = total_rate > 0 ? std::chrono::duration<double>(clients / total_rate)
+                                      : std::chrono::duration<double>(0);
+      auto next = std::chrono::steady_clock::now();
       while (!stop.load(std::memory_order_relaxed)) {
+        if (total_rate > 0) {
+          next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(gap);
+          std::this_thread::sleep_until(next);
+        }
         const auto t0 = std::chrono::steady_clock::now();
         if (client.call({{"cmd", "status"}}).is_null()) return;
         mine.push_back(
@@ -525,6 +533,7 @@ int main(int argc, char** argv) {
   bool with_uss = true;
   int board_cpu = -1;
   bool idle_poll = true;
+  double total_rate = 0;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--seconds") == 0 && i + 1 < argc) {
       phase = std::chrono::seconds(std::max(1, std::atoi(argv[++i])));
@@ -532,6 +541,8 @@ int main(int argc, char** argv) {
       with_uss = false;
     } else if (std::strcmp(argv[i], "--board") == 0 && i + 1 < argc) {
       board_cpu = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--rate") == 0 && i + 1 < argc) {
+      total_rate = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--no-idle-poll") == 0) {
       idle_poll = false;
     } else {
@@ -669,7 +680,7 @@ int main(int argc, char** argv) {
     if (clients == 0) {
       std::this_thread::sleep_for(phase);
     } else {
-      w.load = hammer(cfg.api.socket, clients, phase);
+      w.load = hammer(cfg.api.socket, clients, phase, total_rate);
     }
     const auto c1 = app.cycle().stats();
     w.reference = window(r0, reference.lateness());
