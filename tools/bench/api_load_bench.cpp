@@ -99,8 +99,7 @@ struct LoadResult {
 };
 
 /// `clients` threads sending `status` back to back for `duration`.
-LoadResult hammer(const std::string& socket, int clients, std::chrono::seconds duration,
-                  double total_rate) {
+LoadResult hammer(const std::string& socket, int clients, std::chrono::seconds duration) {
   std::atomic<bool> stop{false};
   std::vector<std::vector<double>> latencies(static_cast<std::size_t>(clients));
   std::vector<std::thread> threads;
@@ -110,14 +109,7 @@ LoadResult hammer(const std::string& socket, int clients, std::chrono::seconds d
       if (!client.ok()) return;
       auto& mine = latencies[static_cast<std::size_t>(c)];
       mine.reserve(1 << 20);
-      const auto gap = total_rate > 0 ? std::chrono::duration<double>(clients / total_rate)
-                                      : std::chrono::duration<double>(0);
-      auto next = std::chrono::steady_clock::now();
       while (!stop.load(std::memory_order_relaxed)) {
-        if (total_rate > 0) {
-          next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(gap);
-          std::this_thread::sleep_until(next);
-        }
         const auto t0 = std::chrono::steady_clock::now();
         if (client.call({{"cmd", "status"}}).is_null()) return;
         mine.push_back(
@@ -533,7 +525,7 @@ int main(int argc, char** argv) {
   bool with_uss = true;
   int board_cpu = -1;
   bool idle_poll = true;
-  double total_rate = 0;
+  int api_limit = -1;  // -1: the configuration's default
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--seconds") == 0 && i + 1 < argc) {
       phase = std::chrono::seconds(std::max(1, std::atoi(argv[++i])));
@@ -541,15 +533,18 @@ int main(int argc, char** argv) {
       with_uss = false;
     } else if (std::strcmp(argv[i], "--board") == 0 && i + 1 < argc) {
       board_cpu = std::atoi(argv[++i]);
-    } else if (std::strcmp(argv[i], "--rate") == 0 && i + 1 < argc) {
-      total_rate = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--api-limit") == 0 && i + 1 < argc) {
+      api_limit = std::max(0, std::atoi(argv[++i]));
     } else if (std::strcmp(argv[i], "--no-idle-poll") == 0) {
       idle_poll = false;
     } else {
       std::fprintf(stderr,
-                   "usage: api-load-bench [--seconds N] [--no-uss] [--board CPU [--no-idle-poll]]\n"
+                   "usage: api-load-bench [--seconds N] [--no-uss] [--api-limit R]\n"
+                   "                      [--board CPU [--no-idle-poll]]\n"
                    "  N seconds per window (default 20): quiet, then 1, 8 and 32 clients\n"
                    "  --no-uss     without the USS bus beside the DCP cycle\n"
+                   "  --api-limit R  api.max_requests_per_s (default: the configuration's\n"
+                   "               default; 0 = no limit, as before it existed)\n"
                    "  --board CPU  a board's real-time settings (docs/operations.md): the\n"
                    "               real-time threads and the unbound workqueue on CPU (0..31),\n"
                    "               every other thread off it, a SCHED_IDLE spin keeping CPU\n"
@@ -600,6 +595,7 @@ int main(int argc, char** argv) {
   liftd::config::Config cfg = liftd::daemon::simulation_defaults();
   cfg.rt.lock_memory = true;  // as the service runs
   cfg.rt.cpu = board_cpu;
+  if (api_limit >= 0) cfg.api.max_requests_per_s = api_limit;
   // 32 load clients plus the dispatcher and the `stats` look of each window.
   cfg.api.max_clients = 40;
   liftd::daemon::Daemon daemon(cfg, liftd::service::Notifier::from_environment(), std::nullopt);
@@ -655,13 +651,16 @@ int main(int argc, char** argv) {
   std::printf(
       "api-load-bench: cycle thread %s priority %d, memory %s; reference loop %s at the same "
       "priority and period (%lld us); USS bus %s; %lld s per window; the car travels 0 <-> 5 "
-      "throughout\nboard settings: %s\n",
+      "throughout\nboard settings: %s\nAPI requests per second over all clients "
+      "(api.max_requests_per_s): %s\n",
       rt_status.realtime ? "SCHED_FIFO" : "SCHED_OTHER (not real-time: run as root)",
       cycle_config.thread.priority, rt_status.memory_locked ? "locked" : "not locked",
       reference.status().realtime ? "SCHED_FIFO" : "SCHED_OTHER",
       static_cast<long long>(cycle_config.period.count() / 1000),
       uss_bus ? "at 38400 baud, 3 slaves, its thread at the same priority" : "left out",
-      static_cast<long long>(phase.count()), board_text.c_str());
+      static_cast<long long>(phase.count()), board_text.c_str(),
+      cfg.api.max_requests_per_s > 0 ? std::to_string(cfg.api.max_requests_per_s).c_str()
+                                     : "no limit");
   std::this_thread::sleep_for(2s);  // the USS bus settles, the car starts
 
   std::vector<Window> windows;
@@ -680,7 +679,7 @@ int main(int argc, char** argv) {
     if (clients == 0) {
       std::this_thread::sleep_for(phase);
     } else {
-      w.load = hammer(cfg.api.socket, clients, phase, total_rate);
+      w.load = hammer(cfg.api.socket, clients, phase);
     }
     const auto c1 = app.cycle().stats();
     w.reference = window(r0, reference.lateness());
