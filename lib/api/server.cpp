@@ -367,23 +367,21 @@ class Session final : public std::enable_shared_from_this<Session>, public Sessi
     server_->wait_for_budget(shared_from_this());
   }
 
-  /// The turn owe_turn() or wait_for_budget() promised: the lines waiting, then reading on.
+  /// The turn owe_turn() or wait_for_budget() promised.
   void take_turn() {
     turn_owed_ = false;
     if (closed_) return;
-    process_lines();
-    if (closed_) return;
-    if (peer_done_) {
-      close_if_done();
-    } else if (!paused_ && !turn_owed_ && !closing_) {
-      read_more();
-    }
-    if (!closed_) arm_timer();
+    handle_waiting_lines();
   }
 
   /// After a line was written or a reply queued: resume a paused client once drained.
   void maybe_resume() {
     if (!paused_ || closed_ || closing_ || !drained()) return;
+    handle_waiting_lines();
+  }
+
+  /// The lines waiting in pending_, then reading on (or finishing a client that is done).
+  void handle_waiting_lines() {
     process_lines();
     if (closed_) return;
     if (peer_done_) {

@@ -16,7 +16,24 @@ namespace {
 
 using nlohmann::json;
 
-class ApiServer : public ServerFixture {};
+class ApiServer : public ServerFixture {
+ protected:
+  /// A `mark` command that notes each request's id in `order`, in the order the io thread
+  /// handles them (read `order` on the io thread).
+  void add_mark_command(std::vector<std::string>& order) {
+    on_io([&] {
+      server_->dispatcher().add({"mark",
+                                 Access::Read,
+                                 {},
+                                 "",
+                                 [&order](const Call& call, Responder done) {
+                                   order.push_back(call.request.at("id").get<std::string>());
+                                   done(Result::ok());
+                                 },
+                                 kEveryDriveKind});
+    });
+  }
+};
 
 TEST_F(ApiServer, GreetsWithVersionAndAccess) {
   start_server();
@@ -108,17 +125,7 @@ TEST_F(ApiServer, APipeliningClientTakesTurnsWithTheOthers) {
   // of the first (a handful of lines), not after the whole batch.
   start_server();
   std::vector<std::string> order;  // io thread only
-  on_io([&] {
-    server_->dispatcher().add({"mark",
-                               Access::Read,
-                               {},
-                               "",
-                               [&order](const Call& call, Responder done) {
-                                 order.push_back(call.request.at("id").get<std::string>());
-                                 done(Result::ok());
-                               },
-                               kEveryDriveKind});
-  });
+  add_mark_command(order);
   auto batcher = connect();
   auto single = connect();
   std::promise<void> release;
@@ -174,17 +181,7 @@ TEST_F(ApiServer, ClientsWaitingForTheBudgetShareItEvenly) {
   config.max_requests_per_second = 200;
   start_server(config);
   std::vector<std::string> order;  // io thread only
-  on_io([&] {
-    server_->dispatcher().add({"mark",
-                               Access::Read,
-                               {},
-                               "",
-                               [&order](const Call& call, Responder done) {
-                                 order.push_back(call.request.at("id").get<std::string>());
-                                 done(Result::ok());
-                               },
-                               kEveryDriveKind});
-  });
+  add_mark_command(order);
   auto a = connect();
   auto b = connect();
   std::string batch_a;
