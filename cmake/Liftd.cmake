@@ -39,7 +39,7 @@ endfunction()
 #   liftd_pch_app    nlohmann-json and Asio: the API, config, daemon and tool targets (PCH)
 #   liftd_pch_tests  GoogleTest, GoogleMock, nlohmann-json and Asio: every test binary
 function(liftd_add_pch_hosts)
-  if(NOT LIFTD_PCH OR NOT LIFTD_UNITY_BUILD OR LIFTD_FUZZ)
+  if(NOT LIFTD_PCH OR NOT LIFTD_UNITY_BUILD)
     return()
   endif()
   set(common <nlohmann/json.hpp> <asio.hpp> <algorithm> <array> <chrono> <cstdint> <filesystem>
