@@ -29,7 +29,9 @@ void CanRunner::adopt(can::CanSocket socket) {
 int CanRunner::start() {
   if (wake_fd_ < 0) return EMFILE;
   stop_.store(false, std::memory_order_release);
-  return thread_.start(config_.rt, [this] { loop(); });
+  RtThreadOptions options = config_.rt;
+  if (options.name.empty()) options.name = "liftd-can";  // ps -L, chrt -p, ftrace
+  return thread_.start(options, [this] { loop(); });
 }
 
 void CanRunner::stop() noexcept {

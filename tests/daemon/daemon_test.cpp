@@ -515,40 +515,52 @@ std::string cpus_allowed(int pid, const std::string& tid) {
   return "";
 }
 
-// rt.cpu set: the cycle thread runs on it, the main thread (the io thread with the API) and
-// the threads it started on the other CPUs, and the journal says so once.
-TEST(DaemonRealTimeCpu, TheCycleOwnsRtCpuAndEveryNormalThreadRunsOffIt) {
+// One drive kind's simulated lift and the name of its real-time loop.
+struct RtLoopCase {
+  const char* kind;       // drive.kind
+  const char* rt_thread;  // what ps -L shows for the loop that runs on rt.cpu
+};
+
+class DaemonRealTimeCpu : public ::testing::TestWithParam<RtLoopCase> {};
+
+// rt.cpu set: the kind's real-time loop runs on it, the main thread (the io thread with the API)
+// and the threads it started on the other CPUs, and the journal says so once.
+TEST_P(DaemonRealTimeCpu, TheRealTimeLoopOwnsRtCpuAndEveryNormalThreadRunsOffIt) {
+  const RtLoopCase& c = GetParam();
   const std::vector<int> usable = current_cpus();
   if (usable.size() < 2) GTEST_SKIP() << "one usable CPU: there is nothing to split";
   const int rt_cpu = usable.back();
   const std::string others = cpu_list_text({usable.begin(), usable.end() - 1});
   TestSocket notify;
-  const std::string config = write_file(
-      notify.dir(), "liftd.json",
-      R"({"rt": {"cpu": )" + std::to_string(rt_cpu) + R"(}, "api": {"socket": ")" + notify.dir() +
-          R"(/api.sock", "socket_group": "", "read_group": "", "control_group": "",
+  const std::string config =
+      write_file(notify.dir(), "liftd.json",
+                 R"({"drive": {"kind": ")" + std::string(c.kind) + R"("}, "rt": {"cpu": )" +
+                     std::to_string(rt_cpu) + R"(}, "api": {"socket": ")" + notify.dir() +
+                     R"(/api.sock", "socket_group": "", "read_group": "", "control_group": "",
              "inputs_group": ""}})");
   SimDaemon liftd(notify, config);
   std::vector<std::string> seen;
   ASSERT_TRUE(receive_until(notify, "READY=1", seen, kStartupLimit)) << liftd.process.err();
   const int pid = liftd.process.pid();
   EXPECT_EQ(cpus_allowed(pid, std::to_string(pid)), others);
-  int cycles = 0;
+  int loops = 0;
   for (const auto& task :
        std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/task")) {
     const std::string tid = task.path().filename();
     std::string comm;
     std::getline(std::ifstream(task.path() / "comm"), comm);
-    if (comm == "liftd-cycle") {
-      ++cycles;
+    if (comm == c.rt_thread) {
+      ++loops;
       EXPECT_EQ(cpus_allowed(pid, tid), std::to_string(rt_cpu));
     } else if (comm != "liftd") {
-      // Named threads other than the cycle are liftd's other loops; every unnamed one is
-      // normal or a simulator standing in for the drive.
+      // Named threads are liftd's real-time loops, and this kind runs one; every unnamed one
+      // is normal or a simulator standing in for the drive, the card or the bus.
       ADD_FAILURE() << "unexpected thread " << comm;
+    } else {
+      EXPECT_EQ(cpus_allowed(pid, tid), others) << "thread " << tid;
     }
   }
-  EXPECT_EQ(cycles, 1);
+  EXPECT_EQ(loops, 1);
   EXPECT_THAT(liftd.process.err(), HasSubstr("real-time threads on CPU " + std::to_string(rt_cpu) +
                                              ", every other thread on CPU(s) " + others +
                                              " [event=cpu_split cpu=" + std::to_string(rt_cpu) +
@@ -563,7 +575,15 @@ TEST(DaemonRealTimeCpu, TheCycleOwnsRtCpuAndEveryNormalThreadRunsOffIt) {
         liftd.process.err(),
         HasSubstr("[event=rt_settings_missing missing=" + std::to_string(missing.size()) + "]"));
   }
+  liftd.process.signal(SIGTERM);
+  EXPECT_EQ(liftd.process.wait(kStopLimit), 0) << liftd.process.err();
 }
+
+INSTANTIATE_TEST_SUITE_P(EveryDriveKind, DaemonRealTimeCpu,
+                         ::testing::Values(RtLoopCase{"dcp", "liftd-cycle"},
+                                           RtLoopCase{"sch001", "liftd-sch001"},
+                                           RtLoopCase{"uss", "liftd-uss-bus"}),
+                         [](const auto& p) { return std::string(p.param.kind); });
 
 TEST(DaemonWatchdog, PingsAtHalfTheTimeout) {
   TestSocket notify;

@@ -139,6 +139,7 @@ LiftApp::LiftApp(Host& daemon, const config::Config& config, bool simulate)
       rc.rt.priority = std::max(1, config.rt.priority - 1);  // below the DCP cycle
       rc.rt.cpu = config.rt.cpu;
       rc.rt.lock_memory = config.rt.lock_memory;
+      rc.rt.name = "liftd-encoder";  // as ps -L and chrt -p show it
       encoder_runner_ = std::make_unique<rt::CanRunner>(rc, *encoder_tap_);
       position_ = encoder_.get();
     }

@@ -418,6 +418,7 @@ HydraulicLift::HydraulicLift(Host& daemon, const config::Config& config, bool si
   rc.rt.priority = config.rt.priority;
   rc.rt.cpu = config.rt.cpu;
   rc.rt.lock_memory = config.rt.lock_memory;
+  rc.rt.name = "liftd-sch001";  // the card's loop, as ps -L and chrt -p show it
   const PositionSource* position = nullptr;
   if (simulate_) {
     // Beside the API socket, in the daemon's own runtime directory.
