@@ -404,6 +404,7 @@ api::StatusSnapshot UssBackend::status() {
                       {"pkw_busy", sl.pkw_busy}});
   }
   d["slaves"] = std::move(slaves);
+  d["line_echo"] = line_echo_json(runner_.config().echo, runner_.echo_state());
   out.details = std::move(d);
   out.brake_open = s.brake_open;
   out.contactors_on = s.contactors_on;
@@ -457,6 +458,7 @@ api::StatsSnapshot UssBackend::stats() {
                  {"lateness_p99_us", r.wake_lateness.percentile_us(0.99)},
                  {"reply_p99_us", r.reply_time.percentile_us(0.99)},
                  {"line_errors", r.counters.line_errors},
+                 {"echo_collisions", r.counters.echo_collisions},
                  {"receive", std::move(rx)},
                  {"slaves", std::move(slaves)}};
   return out;
@@ -660,6 +662,7 @@ UssLift::UssLift(Host& daemon, const config::Config& config, bool simulate)
   rc.serial.rs485 = config.drive.rs485 == config::Rs485Mode::required ? io::Rs485Mode::Required
                     : config.drive.rs485 == config::Rs485Mode::off    ? io::Rs485Mode::Off
                                                                       : io::Rs485Mode::Auto;
+  rc.echo = echo_mode(config.drive.echo);
   rc.thread.priority = config.rt.priority;
   rc.thread.cpu = config.rt.cpu;
   rc.thread.lock_memory = config.rt.lock_memory;
