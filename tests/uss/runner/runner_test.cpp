@@ -480,7 +480,13 @@ TEST_P(UssRunnerEcho, KeepsEverySlaveAnsweringAndNeverTakesItsOwnTelegramForTheR
   });
   const UssRunnerStats stats = runner.stats();
   EXPECT_EQ(runner.echo_state(), t.decided);
-  EXPECT_EQ(stats.counters.echo_collisions, 0U);
+  // A reply the machine held past its deadline (a timeout) may reach the master only while its
+  // next telegram goes out, ahead of that telegram's echo: the slave drove the line while the
+  // master sent, a collision. Never on a line without echo, never without such a timeout.
+  EXPECT_LE(stats.counters.echo_collisions, stats.counters.reply_timeouts);
+  if (!t.line_echoes) {
+    EXPECT_EQ(stats.counters.echo_collisions, 0U);
+  }
   // As in MasterAgainstSimulatedSlaves: a bad reply only after a reply the machine held up.
   const std::uint64_t failed =
       hooks.with([](TestHooks& h) { return h.states_[1].failures + h.states_[2].failures; });
