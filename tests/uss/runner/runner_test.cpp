@@ -544,9 +544,8 @@ TEST(UssRunnerPty, EchoOfASilentBusIsNoReply) {
     line.stop();
     const UssRunnerStats stats = runner.stats();
     // The start mirror (A 5.3) comes back as sent. In on that is the echo. In auto it is the
-    // echo if it was there before a reply could have begun, else the echo or the mirror reply:
-    // nobody can tell, and it is taken as the reply. The line thread echoes at once, but a
-    // loaded machine may deliver the copy late: at most that one reply, which decides nothing.
+    // echo or the mirror reply, nobody can tell, and it is taken as the reply: at most that one
+    // good reply, which decides nothing.
     const std::uint64_t mirror_taken = mode == io::EchoMode::Auto ? 1U : 0U;
     EXPECT_LE(stats.counters.good_replies, mirror_taken);
     EXPECT_EQ(stats.counters.bad_replies, 0U);
