@@ -233,6 +233,16 @@ TEST_P(LiveLinkEcho, HandshakeTwoTravelsAndCollisionsOnAnEchoingLine) {
   for (const auto& e : m.cycle_events) {
     found += e.kind == rt::CycleEventKind::LineEcho && e.count == 1 ? 1U : 0U;
   }
+  std::printf(
+      "[ info     ] %llu frames, %llu good, %llu missing (reference link %llu of %llu), %llu bad "
+      "of them %llu collisions (3 made)\n",
+      static_cast<unsigned long long>(c.frames_sent),
+      static_cast<unsigned long long>(c.good_replies),
+      static_cast<unsigned long long>(c.missing_replies),
+      static_cast<unsigned long long>(reference.missing()),
+      static_cast<unsigned long long>(reference.exchanges()),
+      static_cast<unsigned long long>(c.bad_replies),
+      static_cast<unsigned long long>(c.echo_collisions));
   EXPECT_EQ(found, GetParam().mode == io::EchoMode::Auto ? 1U : 0U);
 }
 
