@@ -322,6 +322,11 @@ class ControllerLift : public LiftRunner {
       case Kind::FaultCleared:
         report_fault(*server_, event.fault, Drive::fault_text(event.fault),
                      event.kind == Kind::FaultRaised);
+        // The frames that led to a link fault are what a technician needs first: the recorder
+        // goes to a file at once, on every kind (docs/operations.md "The flight recorder").
+        if (event.kind == Kind::FaultRaised && event.fault == lift::FaultCode::LinkFault) {
+          (void)backend_->write_flight_recorder("link fault");
+        }
         break;
       case Kind::CallServed:
         report_call_served(*server_, event.floor);

@@ -57,6 +57,8 @@ control::ControllerConfig dcp_controller_config(const config::Config& c) {
   out.travel.level_tolerance_mm = static_cast<std::uint32_t>(c.travel.level_tolerance_mm);
   out.travel.relevel_threshold_mm = static_cast<std::uint32_t>(c.travel.relevel_threshold_mm);
   out.travel.auto_relevel = c.travel.relevel_with_doors != config::RelevelDoors::never;
+  out.travel.relevel_doors_open = c.travel.relevel_with_doors == config::RelevelDoors::open ||
+                                  c.travel.relevel_with_doors == config::RelevelDoors::both;
   out.travel.relevel_electric_stop = c.travel.relevel_electric_stop;
   out.travel.dcp3_speed_count = c.travel.dcp3_speed_count;
   out.travel.dcp3_stop_lead_mm = static_cast<std::uint32_t>(c.travel.dcp3_stop_lead_mm);
