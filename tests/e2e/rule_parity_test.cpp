@@ -110,49 +110,37 @@ TEST_P(RuleParity, InspectionOrRecallMidTravelEndsItAsModeChangedAndRefusesTheNe
   }
 }
 
-// `travel.relevel_with_doors` "closed": a car that sank at a floor relevels only once its doors
-// are locked again, never with them open, though the door zone is bridged.
-TEST_P(RuleParity, RelevelWithDoorsClosedWaitsUntilTheDoorsAreLocked) {
-  judged_unless_stalled([&] {
-    const std::unique_ptr<Lift> lift =
-        make_lift("relevel-closed", {{"travel", {{"relevel_with_doors", "closed"}}}});
-    ASSERT_EQ(lift->setup_error(), "");
-    double level = 0;
-    sink_at_floor_1_with_doors_open(*lift, level);
-    EXPECT_FALSE(lift->wait_travel("started", 3s).is_object()) << "relevelled with the doors open\n"
-                                                               << lift->log();
-    ASSERT_TRUE(lift->call({{"cmd", "sim"}, {"action", "obstruct_doors"}, {"on", false}})
-                    .value("ok", false));
-    ASSERT_TRUE(lift->call({{"cmd", "sim"}, {"action", "close_doors"}}).value("ok", false));
-    const json started = lift->wait_travel("started", 15s);
-    ASSERT_TRUE(started.is_object()) << "no relevelling once the doors were locked\n"
-                                     << lift->log();
-    EXPECT_NE(started["data"]["kind"].get<std::string>().find("relevel"), std::string::npos)
-        << started.dump();
-    const json ended = lift->wait_travel_end(20s);
-    ASSERT_TRUE(ended.is_object()) << lift->log();
-    EXPECT_EQ(ended["data"]["event"], "finished") << ended.dump();
-    EXPECT_NEAR(lift->position_mm(), level, 10.0) << lift->status().dump();
-  });
-}
-
-// `travel.relevel_with_doors` "both" (the default): the same car relevels with its doors open
-// over the bridged door zone. (The counterpart of the case above: the bridge is what lets it.)
-TEST_P(RuleParity, RelevelWithDoorsBothRelevelsWithTheDoorsOpen) {
-  judged_unless_stalled([&] {
-    const std::unique_ptr<Lift> lift = make_lift("relevel-both");
-    ASSERT_EQ(lift->setup_error(), "");
-    double level = 0;
-    sink_at_floor_1_with_doors_open(*lift, level);
-    const json started = lift->wait_travel("started", 10s);
-    ASSERT_TRUE(started.is_object()) << "no relevelling with the doors open\n" << lift->log();
-    EXPECT_NE(started["data"]["kind"].get<std::string>().find("relevel"), std::string::npos)
-        << started.dump();
-    const json ended = lift->wait_travel_end(20s);
-    ASSERT_TRUE(ended.is_object()) << lift->log();
-    EXPECT_EQ(ended["data"]["event"], "finished") << ended.dump();
-    EXPECT_NEAR(lift->position_mm(), level, 10.0) << lift->status().dump();
-  });
+// `travel.relevel_with_doors`: a car that sank at a floor with its doors held open and the door
+// zone bridged relevels at once with "both" (the default: the bridge stands for locked doors),
+// and with "closed" only once its doors are locked again.
+TEST_P(RuleParity, RelevelWithDoorsDecidesWhetherASunkCarRelevelsWithItsDoorsOpen) {
+  for (const bool doors_open_allowed : {true, false}) {
+    const std::string mode = doors_open_allowed ? "both" : "closed";
+    SCOPED_TRACE(mode);
+    judged_unless_stalled([&] {
+      const std::unique_ptr<Lift> lift =
+          make_lift("relevel-" + mode, {{"travel", {{"relevel_with_doors", mode}}}});
+      ASSERT_EQ(lift->setup_error(), "");
+      double level = 0;
+      sink_at_floor_1_with_doors_open(*lift, level);
+      if (!doors_open_allowed) {
+        EXPECT_FALSE(lift->wait_travel("started", 3s).is_object())
+            << "relevelled with the doors open\n"
+            << lift->log();
+        ASSERT_TRUE(lift->call({{"cmd", "sim"}, {"action", "obstruct_doors"}, {"on", false}})
+                        .value("ok", false));
+        ASSERT_TRUE(lift->call({{"cmd", "sim"}, {"action", "close_doors"}}).value("ok", false));
+      }
+      const json started = lift->wait_travel("started", 15s);
+      ASSERT_TRUE(started.is_object()) << "no relevelling\n" << lift->log();
+      EXPECT_NE(started["data"]["kind"].get<std::string>().find("relevel"), std::string::npos)
+          << started.dump();
+      const json ended = lift->wait_travel_end(20s);
+      ASSERT_TRUE(ended.is_object()) << lift->log();
+      EXPECT_EQ(ended["data"]["event"], "finished") << ended.dump();
+      EXPECT_NEAR(lift->position_mm(), level, 10.0) << lift->status().dump();
+    });
+  }
 }
 
 // A link fault writes the flight recorder once, on every kind: the frames that led to it are
