@@ -1,5 +1,5 @@
 // The registry of drive kinds: drive.kind -> the daemon's lift, each in its kind's folder (the DCP
-// lift lib/dcp/host/lift_app.*, the hydraulic SCH001 lift lib/sch001/host/hydraulic_lift.*, the
+// lift lib/dcp/host/dcp_lift.*, the hydraulic SCH001 lift lib/sch001/host/hydraulic_lift.*, the
 // USS lift lib/uss/host/uss_lift.*). Each builds its controller, its runner, its API backend and,
 // with --simulate, its simulated drive, and registers them with the daemon (lib/host/host.hpp).
 // A kind with API commands of its own adds them from its folder (lib/<kind>/host/commands.*), and

@@ -185,10 +185,17 @@ class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore
   void handle(const ControllerCommand& command, TickInput& in) noexcept;
   TickInput build_input(MonoTime now) noexcept;
   void update_faults(const TickInput& in, MonoTime now) noexcept;
-  void serve_calls(TickInput& in) noexcept;
-  void maybe_relevel(TickInput& in) noexcept;
-  /// The learn command's and the next leg's gates beyond the shared ones (ControllerCore).
-  std::optional<lift::Answer> learn_refusal(const TickInput& in) const noexcept;
+  // What only the hydraulic lift knows, for ControllerCore::step_lift.
+  friend class lift::ControllerCore<Sch001CoreTypes>;
+  void inspect_run(lift::Direction direction, const TickInput& in) noexcept;
+  void start_call_travel(std::size_t floor, const TickInput& in) noexcept;
+  lift::Cause start_relevel_run(std::size_t floor, lift::Direction direction,
+                                const TickInput& in) noexcept;
+  void run_travel(const TickInput& in) noexcept;
+  bool start_learn_leg(std::int64_t target_mm, lift::Direction direction,
+                       const TickInput& in) noexcept;
+  static std::optional<lift::Answer> drive_learn_refusal(const TickInput& in) noexcept;
+  lift::RelevelPolicy relevel_policy() const noexcept;
   void publish(MonoTime now) noexcept;
   static ReplyCode code_for(lift::Cause cause) noexcept;
   static std::string_view text_for(lift::Cause cause) noexcept;

@@ -234,7 +234,8 @@ TEST_F(ControllerCoreTest, TravelCommandGatesInOrder) {
   EXPECT_EQ(command(5, StubTravelCommand{2, StubSpeed::V4}).code, ReplyCode::Ok);
   EXPECT_EQ(command(6, StubTravelCommand{3, StubSpeed::V4}).code, ReplyCode::Busy);
   EXPECT_EQ(command(7, InspectionCommand{true, Direction::Up}).code, ReplyCode::Ok);
-  EXPECT_EQ(command(8, StubTravelCommand{3, StubSpeed::V4}).detail, "inspection is on");
+  EXPECT_EQ(command(8, StubTravelCommand{3, StubSpeed::V4}).detail,
+            "inspection or recall is switched on");
   EXPECT_EQ(command(9, ShutdownCommand{false}).code, ReplyCode::Ok);
   const CommandReply stopping = command(10, StubTravelCommand{9, StubSpeed::V1});
   EXPECT_EQ(stopping.code, ReplyCode::NotReady);

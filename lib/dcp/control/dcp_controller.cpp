@@ -21,16 +21,8 @@ std::string_view abort_text(lift::Cause cause) noexcept {
       return "drive advance warning (S2 = 1)";
     case lift::Cause::DriveFault:
       return "drive general fault (S3 = 1)";
-    case lift::Cause::SafetyChainOpen:
-      return "safety chain open";
-    case lift::Cause::DoorsNotLocked:
-      return "doors not locked";
-    case lift::Cause::PositionLost:
-      return "no valid car position";
-    case lift::Cause::InputsLost:
-      return "machine inputs missing or stale";
-    default:
-      return "not ready";
+    default:  // the machine's: the same words on every drive kind
+      return lift::shared_cause_text(cause);
   }
 }
 
@@ -725,14 +717,11 @@ void DcpController::serve_calls() noexcept {
 
 void DcpController::update_faults(const travel::CycleInput& in, MonoTime now) noexcept {
   const bool link_up = link_.state() == dcp::LinkState::Up;
-  const bool started = start_grace_over(now);
   set_fault(FaultCode::LinkFault, link_.state() == dcp::LinkState::Fault, now);
   set_fault(FaultCode::DriveFault, link_up && in.status.general_fault, now);
   set_fault(FaultCode::AdvanceWarning, link_up && in.status.advance_warning, now);
-  set_fault(FaultCode::InputsLost, started && !in.inputs.valid, now);
-  set_fault(FaultCode::SafetyChain, in.inputs.valid && !in.inputs.safety_chain_closed, now);
-  set_fault(FaultCode::PositionLost,
-            started && link_.protocol() == dcp::Protocol::Dcp4 && !in.position_mm, now);
+  set_machine_faults(in.inputs, in.position_mm.has_value(), link_.protocol() == dcp::Protocol::Dcp4,
+                     now);
 }
 
 void DcpController::publish(MonoTime now) noexcept {

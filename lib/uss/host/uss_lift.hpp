@@ -1,7 +1,7 @@
 // The daemon's USS lift (drive.kind "uss"): the USS master and the lift controller on the USS
 // runner's real-time thread, the API backend over them and, with --simulate, the simulated USS
 // slaves (the lift drive with its car, and every other configured slave) on the far end of a
-// pseudo-terminal. The DCP lift is lib/dcp/host/lift_app.*, the hydraulic one
+// pseudo-terminal. The DCP lift is lib/dcp/host/dcp_lift.*, the hydraulic one
 // lib/sch001/host/hydraulic_lift.*; daemon/drives.cpp picks one by drive.kind.
 #pragma once
 
