@@ -391,9 +391,9 @@ class ControllerCore {
   // ---- the step of a kind whose travels run through the core (SCH001, USS) ----
 
   /// One step in the one order: the commands (each judged against the input after the ones
-  /// before it), the car's floor, inspection and recall, the next call and the automatic
-  /// relevelling (so that what they start runs in this step's output), the travel, the learning
-  /// travel, then the fault table. Returns the step's input (the kind writes its protocol from it).
+  /// before it), the car's floor, inspection and recall, the fault table, the next call and the
+  /// automatic relevelling (so that what they start runs in this step's output), the travel,
+  /// then the learning travel. Returns the step's input (the kind writes its protocol from it).
   template <typename Kind>
   typename Types::Input step_lift(MonoTime now, Kind& kind) noexcept {
     ++steps_;
@@ -405,6 +405,8 @@ class ControllerCore {
     }
     locate_car(in);
     follow_inspection(in, [&](Direction d) { kind.inspect_run(d, in); });
+    // The faults before the travel: a watcher hears the fault before the travel it ends.
+    kind.update_faults(in, now);
     if (!shutting_down_) {
       if (const auto floor = next_call(in)) kind.start_call_travel(*floor, in);  // waits if refused
       auto_relevel(in, kind);
@@ -423,7 +425,6 @@ class ControllerCore {
       kind.run_travel(in);
       drain_travel(now);
     }
-    kind.update_faults(in, now);
     return in;
   }
 

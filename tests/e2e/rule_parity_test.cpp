@@ -112,6 +112,8 @@ TEST_P(RuleParity, InspectionOrRecallMidTravelEndsItAsModeChangedAndRefusesTheNe
       ASSERT_TRUE(
           lift->call({{"cmd", "calls"}, {"action", "add"}, {"floor", 0}}).value("ok", false));
       EXPECT_FALSE(lift->wait_travel("started", 2s).is_object()) << lift->log();
+      ASSERT_TRUE(
+          lift->call({{"cmd", "calls"}, {"action", "cancel"}, {"floor", 0}}).value("ok", false));
       // Switched off, the car is in service again.
       ASSERT_TRUE(lift->call(s.off).value("ok", false));
       ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump() << lift->log();

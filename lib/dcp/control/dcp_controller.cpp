@@ -100,6 +100,7 @@ std::span<const std::uint8_t> DcpController::frame_to_send(MonoTime now) noexcep
     }
   }
   last_input_ = build_input(now);
+  travel_.observe(last_input_);
   for (std::size_t i = 0; i < deferred; ++i) handle(deferred_[i], last_input_);
   // DCP 5.12.9: the next travel begins once the I9 for the last stop has reached the drive.
   travel_.hold_start(position_owed_ || (internal_.active &&
@@ -316,6 +317,11 @@ void DcpController::handle_travel(std::uint32_t tag, const TravelCommand& cmd) n
     reply(tag, ReplyCode::NotReady, abort_text(lift::Cause::LinkDown));
     return;
   }
+  // Before a running travel's target is extended too (DCP 9.1.1), as on every kind.
+  if (last_input_.inputs.button_mode()) {
+    reply(tag, ReplyCode::NotReady, lift::kButtonModeText);
+    return;
+  }
   const std::int64_t target_mm = lift_.floors().level_mm(cmd.floor);
   const dcp::Protocol protocol = *link_.protocol();
   const TravelKind running = travel_.active_kind();
@@ -515,8 +521,7 @@ void DcpController::handle_relevel(std::uint32_t tag) noexcept {
     // remaining distance, DCP 9.2.3); with neither there is nothing to relevel to.
     const lift::Inputs& shaft = last_input_.inputs;
     if (shaft.relevel_up == shaft.relevel_down) {
-      reply(tag, ReplyCode::NotReady,
-            "no position and no single relevelling signal (relevel_up / relevel_down)");
+      reply(tag, ReplyCode::NotReady, lift::kNoRelevelReference);
       return;
     }
     travel::TravelRequest request;
