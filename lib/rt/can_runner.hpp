@@ -22,10 +22,10 @@
 //   nothing), on_reply / on_no_reply feed it what arrived by the deadline, after_cycle is the
 //   tick, on_port_ready / on_port_lost the endpoint.
 // - The USS bus (uss::UssHooks, lib/uss/runner/uss_runner.hpp): the master (uss::Master)
-//   decides each telegram when the bus's timing allows (USS A 5.1.1: start pause, reply
-//   deadline) and is fed the reply's characters; the hooks' after_exchange(now) is the tick
-//   and on_port the endpoint. What the lift sends goes into the master's PZD and PKW requests,
-//   its outbox, which the next telegram carries.
+//   decides each telegram when the bus's timing allows (start pause A 5.1.2, reply delay
+//   A 5.2.1.1, cycle time A 5.1.1) and is fed the reply's characters; the hooks'
+//   after_exchange(now) is the tick and on_port the endpoint. What the lift sends goes into the
+//   master's PZD and PKW requests, its outbox, which the next telegram carries.
 // The CAN seam is the general one (any number of frames at any time); the serial two are its
 // special case where the bus lets the master send only at its own turn.
 #pragma once
@@ -92,7 +92,7 @@ class CanEngine {
   /// An error frame arrived.
   virtual void on_bus_error(const can::ErrorReport& report, MonoTime now) noexcept = 0;
   /// The endpoint opened (true) or failed / closed (false). An engine that sends on opening
-  /// (a CANopen NMT start) does so in the on_tick() that follows in the same loop pass.
+  /// (a CANopen NMT start) does so in its next on_tick(), at most one tick period later.
   virtual void on_endpoint(bool up, MonoTime now) noexcept = 0;
   /// Called on every loop pass, at least every tick period (CanRunnerConfig::tick), after the
   /// frames of that pass: timeouts, sequencing, and what the engine sends on its own schedule.
