@@ -156,7 +156,7 @@ class CanRunner {
   void set_notify_fd(int fd) noexcept { notify_fd_ = fd; }
 
  private:
-  /// What failed last, published by the loop as numbers (pack_error()).
+  /// What failed last, published by the loop as numbers (publish_error()).
   enum class ErrorWhat : std::uint8_t {
     None,
     Open,         ///< opening failed: the step in the packed word
@@ -200,7 +200,7 @@ class CanRunner {
   std::atomic<std::uint64_t> dropped_{0};
   std::atomic<std::uint64_t> overflowed_{0};
   std::atomic<std::uint64_t> outbox_overflows_{0};
-  /// The last error: errno in the low 32 bits, ErrorWhat and OpenStep above (pack_error()), in
+  /// The last error: errno in the low 32 bits, ErrorWhat and OpenStep above (publish_error()), in
   /// one word so that a reader never sees one error's number with another's words. Written by
   /// the loop, read by last_error() on any thread; no lock is shared with the loop.
   std::atomic<std::uint64_t> last_error_{0};
