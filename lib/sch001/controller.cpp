@@ -50,8 +50,8 @@ Sch001Controller::Sch001Controller(const ControllerConfig& config, const Positio
 
 // ---- rt::CanEngine ----
 
-std::optional<can::Frame> Sch001Controller::on_frame(const can::Frame& frame,
-                                                     MonoTime now) noexcept {
+void Sch001Controller::on_frame(const can::Frame& frame, MonoTime now,
+                                rt::CanOutbox& out) noexcept {
   const FrameResult r = link_.on_frame(frame, now);
   if (r.change != LinkChange::None) {
     ControllerEvent e;
@@ -69,10 +69,13 @@ std::optional<can::Frame> Sch001Controller::on_frame(const can::Frame& frame,
   answer_ = r.answer;
   // The sequencing sees the new status at once (the answer already obeyed it: 3d, 3e).
   step(now);
-  return r.answer;
+  // The runner sends it when this returns and tells on_sent(); each call starts with an empty
+  // outbox, so there is room for this one answer.
+  if (answer_ && !out.send(*answer_)) answer_.reset();
 }
 
-void Sch001Controller::on_sent(bool delivered, MonoTime now) noexcept {
+void Sch001Controller::on_sent(const can::Frame& /*frame: answer_*/, bool delivered,
+                               MonoTime now) noexcept {
   // on_frame() stepped already: step again only when the link fault comes or goes.
   const bool was_failing = send_failures_ >= kSendFailuresForFault;
   if (delivered) {
@@ -121,7 +124,7 @@ void Sch001Controller::on_endpoint(bool up, MonoTime now) noexcept {
   step(now);
 }
 
-void Sch001Controller::on_tick(MonoTime now) noexcept {
+void Sch001Controller::on_tick(MonoTime now, rt::CanOutbox& /*out: only answers*/) noexcept {
   if (link_.on_tick(now) == LinkChange::Silent) {
     ControllerEvent e;
     e.kind = ControllerEvent::Kind::Link;

@@ -171,11 +171,13 @@ class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore
   std::span<const std::int64_t> floors_mm() const noexcept { return config_.floors_mm; }
 
   // ---- rt::CanEngine (CAN thread) ----
-  std::optional<can::Frame> on_frame(const can::Frame& frame, MonoTime now) noexcept override;
+  /// Queues the answer to a card frame in `out` (card document 3c, 3f); the card is answered,
+  /// never sent to unasked.
+  void on_frame(const can::Frame& frame, MonoTime now, rt::CanOutbox& out) noexcept override;
   void on_bus_error(const can::ErrorReport& report, MonoTime now) noexcept override;
   void on_endpoint(bool up, MonoTime now) noexcept override;
-  void on_tick(MonoTime now) noexcept override;
-  void on_sent(bool delivered, MonoTime now) noexcept override;
+  void on_tick(MonoTime now, rt::CanOutbox& out) noexcept override;
+  void on_sent(const can::Frame& frame, bool delivered, MonoTime now) noexcept override;
 
   /// Direct access for single-threaded tests (and travel()).
   const CardLink& link() const noexcept { return link_; }
