@@ -9,6 +9,7 @@
 #include <string>
 #include <thread>
 
+#include "e2e/drive_cases.hpp"
 #include "e2e/harness.hpp"
 
 namespace liftd::e2e {
@@ -36,11 +37,7 @@ void PrintTo(const ShapeCase& c, std::ostream* out) {
   *out << c.kind;
 }
 
-// Three floors 1200 mm apart for the hydraulic and USS cars, as in their own e2e tests.
-const json kThreeFloors = json::array({{{"name", "0"}, {"level_mm", 0}},
-                                       {{"name", "1"}, {"level_mm", 1200}},
-                                       {{"name", "2"}, {"level_mm", 2400}}});
-
+// The floors of the hydraulic and USS cars: kThreeFloors (e2e/drive_cases.hpp).
 const ShapeCase kCases[] = {
     {"dcp",
      json::object(),
@@ -115,6 +112,10 @@ TEST_P(ApiShapeTest, StatsHaveTheNeutralCountersAndTheKindsOwnUnderItsName) {
   EXPECT_EQ(keys_of(stats[kind]), GetParam().stats_keys) << stats.dump();
   EXPECT_GT(stats["link"]["frames_sent"].get<long long>(), 0) << stats.dump();
   EXPECT_GT(stats["cycle"]["cycles"].get<long long>(), 0) << stats.dump();
+}
+
+TEST(ApiShapeCases, EveryRegisteredDriveKindHasItsCase) {
+  expect_a_case_for_every_kind(kCases, [](const ShapeCase& c) { return c.kind; });
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryDriveKind, ApiShapeTest, ::testing::ValuesIn(kCases),

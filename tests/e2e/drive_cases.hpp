@@ -5,8 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cstddef>
 #include <ostream>
 #include <string>
+#include <vector>
+
+#include "drive/drive.hpp"
 
 #include "e2e/harness.hpp"
 
@@ -59,6 +63,18 @@ inline const DriveCase kDriveCases[] = {
      2,
      kNoReplies},
 };
+
+/// Every registered drive kind (drive::kKindNames, the registry's order) has exactly one case in
+/// `cases`, named `name_of(case)`: a kind added to the registry fails here until its cases are
+/// written, instead of being skipped by every parametrised suite.
+template <typename Case, std::size_t N, typename NameOf>
+void expect_a_case_for_every_kind(const Case (&cases)[N], NameOf name_of) {
+  std::vector<std::string> named;
+  for (const Case& c : cases) named.emplace_back(name_of(c));
+  std::vector<std::string> registered;
+  for (const std::string_view kind : drive::kKindNames) registered.emplace_back(kind);
+  EXPECT_EQ(named, registered);
+}
 
 /// The test's name of a case: its kind.
 inline std::string drive_case_name(const ::testing::TestParamInfo<DriveCase>& param) {

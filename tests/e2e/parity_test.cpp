@@ -556,5 +556,10 @@ INSTANTIATE_TEST_SUITE_P(EveryDriveKind, LearnParity, ::testing::ValuesIn(kLearn
                            return std::string(param.param.name);
                          });
 
+TEST(ParityCases, EveryRegisteredDriveKindHasItsCases) {
+  expect_a_case_for_every_kind(kDriveCases, [](const DriveCase& c) { return c.name; });
+  expect_a_case_for_every_kind(kLearnCases, [](const LearnCase& c) { return c.name; });
+}
+
 }  // namespace
 }  // namespace liftd::e2e
