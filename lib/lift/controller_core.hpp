@@ -20,7 +20,7 @@
 // start_call_travel(floor, in), start_relevel_run(floor, direction, in) -> Cause,
 // run_travel(in), start_learn_leg(target_mm, direction, in) -> bool,
 // drive_learn_refusal(in) -> optional<Answer>, update_faults(in, now), relevel_policy(), and the
-// static code_for(cause) / text_for(cause) of its refusals.
+// static refusal(cause) of its travels' causes (refusal_for over its own table).
 //
 // Threads: the real-time thread calls the protected members; ONE other thread (the daemon's io
 // thread) calls post(), poll_reply(), poll_event(), snapshot() and dropped_events().
@@ -134,6 +134,22 @@ constexpr std::string_view shared_cause_text(Cause cause) noexcept {
     default:
       return "not possible now";
   }
+}
+
+/// A drive kind's own answer to a refusal for a cause its travels report: the reply code and
+/// text (a kind's table of them, refusal_for()).
+struct CauseRefusal {
+  Cause cause = Cause::None;
+  ReplyCode code = ReplyCode::NotReady;
+  std::string_view text;  ///< a static string
+};
+
+/// The refusal for `cause` by a kind's own table, else the one every kind gives.
+constexpr Refusal refusal_for(std::span<const CauseRefusal> own, Cause cause) noexcept {
+  for (const CauseRefusal& r : own) {
+    if (r.cause == cause) return Refusal{r.code, r.text};
+  }
+  return Refusal{shared_cause_code(cause), shared_cause_text(cause)};
 }
 
 /// The refusal of a normal travel, a learning travel or a relevelling while the inspection or
@@ -295,12 +311,12 @@ class ControllerCore {
 
   /// The travel command's gates in order (stopping, floor, the drive's own check, inspection,
   /// a run in progress, already there), then `start()` (the travel's start_travel; its Cause
-  /// refusal is answered through `code_for` / `text_for`). `drive_gate()` answers an optional
+  /// refusal is answered through `refusal_of`). `drive_gate()` answers an optional
   /// Refusal of the drive (e.g. a speed without setpoint). True when it started.
-  template <typename DriveGate, typename Start, typename CodeFor, typename TextFor>
+  template <typename DriveGate, typename Start, typename RefusalOf>
   bool handle_travel(std::uint32_t tag, const typename Types::TravelCommand& body,
                      const typename Types::Input& in, DriveGate drive_gate, Start start,
-                     CodeFor code_for, TextFor text_for) noexcept {
+                     RefusalOf refusal_of) noexcept {
     if (const std::optional<Refusal> refusal = first_travel_refusal(body.floor)) {
       return refuse(tag, refusal->code, refusal->detail);
     }
@@ -313,7 +329,10 @@ class ControllerCore {
       return refuse(tag, ReplyCode::NotReady, "the car is already at that level");
     }
     const Cause why = start();
-    if (why != Cause::None) return refuse(tag, code_for(why), text_for(why));
+    if (why != Cause::None) {
+      const Refusal r = refusal_of(why);
+      return refuse(tag, r.code, r.detail);
+    }
     reply(tag, ReplyCode::Ok);
     return true;
   }
@@ -451,7 +470,10 @@ class ControllerCore {
       return (void)refuse(tag, ReplyCode::NotReady, kNoRelevelReference);
     }
     const Cause why = kind.start_relevel_run(floor, direction, in);
-    if (why != Cause::None) return (void)refuse(tag, Kind::code_for(why), Kind::text_for(why));
+    if (why != Cause::None) {
+      const Refusal r = Kind::refusal(why);
+      return (void)refuse(tag, r.code, r.detail);
+    }
     reply(tag, ReplyCode::Ok, {}, floor);
   }
 
@@ -493,7 +515,10 @@ class ControllerCore {
     if (travel_.busy()) return Answer{ReplyCode::Busy, "a travel is running"};
     if (const std::optional<Answer> refusal = kind.drive_learn_refusal(in)) return refusal;
     const Cause why = travel_.forbidding(Types::TravelKind::Learn, in);
-    if (why != Cause::None) return Answer{Kind::code_for(why), Kind::text_for(why)};
+    if (why != Cause::None) {
+      const Refusal r = Kind::refusal(why);
+      return Answer{r.code, r.detail};
+    }
     return std::nullopt;
   }
 

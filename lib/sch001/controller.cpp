@@ -169,31 +169,22 @@ void Sch001Controller::step(MonoTime now) noexcept {
 
 // ---- commands ----
 
-ReplyCode Sch001Controller::code_for(lift::Cause cause) noexcept {
-  switch (cause) {
-    case lift::Cause::DriveFault:
-    case lift::Cause::CardSilent:
-    case lift::Cause::BusFault:
-      return ReplyCode::Fault;
-    default:
-      return lift::shared_cause_code(cause);
-  }
-}
+namespace {
 
-std::string_view Sch001Controller::text_for(lift::Cause cause) noexcept {
-  switch (cause) {
-    case lift::Cause::DriveFault:
-      return "the SCH001 card reports ERR (card document 3d)";
-    case lift::Cause::DriveNotReady:
-      return "the SCH001 card is not ready (RDY = 0, or no status frame heard yet; card document "
-             "3e)";
-    case lift::Cause::CardSilent:
-      return "no frame from the SCH001 card for 10 s (card document 3f)";
-    case lift::Cause::BusFault:
-      return "the CAN bus or socket is not working";
-    default:
-      return lift::shared_cause_text(cause);
-  }
+/// The card's own refusals (card document 3d, 3e, 3f); the machine's are every kind's.
+constexpr lift::CauseRefusal kCardRefusals[] = {
+    {lift::Cause::DriveFault, ReplyCode::Fault, "the SCH001 card reports ERR (card document 3d)"},
+    {lift::Cause::DriveNotReady, ReplyCode::NotReady,
+     "the SCH001 card is not ready (RDY = 0, or no status frame heard yet; card document 3e)"},
+    {lift::Cause::CardSilent, ReplyCode::Fault,
+     "no frame from the SCH001 card for 10 s (card document 3f)"},
+    {lift::Cause::BusFault, ReplyCode::Fault, "the CAN bus or socket is not working"},
+};
+
+}  // namespace
+
+lift::Refusal Sch001Controller::refusal(lift::Cause cause) noexcept {
+  return lift::refusal_for(kCardRefusals, cause);
 }
 
 void Sch001Controller::handle(const ControllerCommand& command, TickInput& in) noexcept {
@@ -205,7 +196,7 @@ void Sch001Controller::handle(const ControllerCommand& command, TickInput& in) n
           (void)handle_travel(
               tag, body, in, [] { return std::optional<lift::Refusal>(); },
               [&] { return travel_.start_travel(lift_.floors(), body.floor, body.speed, in); },
-              code_for, text_for);
+              refusal);
         } else if constexpr (std::is_same_v<T, RelevelCommand>) {
           handle_relevel(tag, in, *this);
         } else if constexpr (std::is_same_v<T, LearnCommand>) {

@@ -199,8 +199,8 @@ class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore
   static std::optional<lift::Answer> drive_learn_refusal(const TickInput& in) noexcept;
   lift::RelevelPolicy relevel_policy() const noexcept;
   void publish(MonoTime now) noexcept;
-  static ReplyCode code_for(lift::Cause cause) noexcept;
-  static std::string_view text_for(lift::Cause cause) noexcept;
+  /// The answer to a refusal for `cause` (the card's own, else every kind's).
+  static lift::Refusal refusal(lift::Cause cause) noexcept;
 
   ControllerConfig config_;
   const PositionSource& position_;

@@ -197,36 +197,30 @@ void UssController::drain_master(MonoTime now) noexcept {
 
 // ---- commands ----
 
-ReplyCode UssController::code_for(lift::Cause cause) noexcept {
-  switch (cause) {
-    case lift::Cause::LinkDown:
-    case lift::Cause::DriveFault:
-    case lift::Cause::DriveDidNotStart:
-    case lift::Cause::DriveDidNotStop:
-      return ReplyCode::Fault;
-    case lift::Cause::SpeedNotConfigured:
-      return ReplyCode::BadRequest;
-    default:
-      return lift::shared_cause_code(cause);
-  }
-}
+namespace {
 
-std::string_view UssController::text_for(lift::Cause cause) noexcept {
-  switch (cause) {
-    case lift::Cause::LinkDown:
-      return "the USS link to the drive is down (no current reply)";
-    case lift::Cause::DriveFault:
-      return "the drive reports a fault (ZSW bit 3) or missed a state in time: drive_reset "
-             "acknowledges it";
-    case lift::Cause::DriveNotReady:
-      return "the drive is not ready (not ready to switch on, or ZSW bit 9 = 0: local control)";
-    case lift::Cause::AdvanceWarning:
-      return "the drive reports a warning (ZSW bit 7)";
-    case lift::Cause::SpeedNotConfigured:
-      return "that speed has no setpoint in this installation (uss.speeds)";
-    default:
-      return lift::shared_cause_text(cause);
-  }
+/// The USS drive's own refusals (its status word, C 5.1; the installation's speeds); the
+/// machine's are every kind's.
+constexpr lift::CauseRefusal kDriveRefusals[] = {
+    {lift::Cause::LinkDown, ReplyCode::Fault,
+     "the USS link to the drive is down (no current reply)"},
+    {lift::Cause::DriveFault, ReplyCode::Fault,
+     "the drive reports a fault (ZSW bit 3) or missed a state in time: drive_reset "
+     "acknowledges it"},
+    {lift::Cause::DriveDidNotStart, ReplyCode::Fault,
+     "the drive did not start the motor in time after it was enabled"},
+    {lift::Cause::DriveDidNotStop, ReplyCode::Fault, "the drive did not report the stop in time"},
+    {lift::Cause::DriveNotReady, ReplyCode::NotReady,
+     "the drive is not ready (not ready to switch on, or ZSW bit 9 = 0: local control)"},
+    {lift::Cause::AdvanceWarning, ReplyCode::NotReady, "the drive reports a warning (ZSW bit 7)"},
+    {lift::Cause::SpeedNotConfigured, ReplyCode::BadRequest,
+     "that speed has no setpoint in this installation (uss.speeds)"},
+};
+
+}  // namespace
+
+lift::Refusal UssController::refusal(lift::Cause cause) noexcept {
+  return lift::refusal_for(kDriveRefusals, cause);
 }
 
 void UssController::handle(const ControllerCommand& command, DriveInput& in) noexcept {
@@ -238,14 +232,14 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
           const auto speed_refusal = [&]() -> std::optional<lift::Refusal> {
             if (speed_number(body.speed) == 0 || !travel_.speed_available(body.speed)) {
               return lift::Refusal{ReplyCode::BadRequest,
-                                   text_for(lift::Cause::SpeedNotConfigured)};
+                                   refusal(lift::Cause::SpeedNotConfigured).detail};
             }
             return std::nullopt;
           };
           (void)handle_travel(
               tag, body, in, speed_refusal,
               [&] { return travel_.start_travel(lift_.floors(), body.floor, body.speed, in); },
-              code_for, text_for);
+              refusal);
         } else if constexpr (std::is_same_v<T, RelevelCommand>) {
           handle_relevel(tag, in, *this);
         } else if constexpr (std::is_same_v<T, DriveResetCommand>) {
@@ -289,7 +283,7 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
 
 std::optional<lift::Answer> UssController::drive_learn_refusal(const DriveInput&) const noexcept {
   if (!travel_.speed_available(SpeedName::V0)) {
-    return lift::Answer{ReplyCode::BadRequest, text_for(lift::Cause::SpeedNotConfigured)};
+    return lift::Answer{ReplyCode::BadRequest, refusal(lift::Cause::SpeedNotConfigured).detail};
   }
   return std::nullopt;
 }

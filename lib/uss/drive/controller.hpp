@@ -252,8 +252,8 @@ class UssController final : public uss::UssHooks, public lift::ControllerCore<Us
   bool start_learn_leg(std::int64_t target_mm, lift::Direction direction,
                        const DriveInput& in) noexcept;
   void publish(MonoTime now) noexcept;
-  static ReplyCode code_for(lift::Cause cause) noexcept;
-  static std::string_view text_for(lift::Cause cause) noexcept;
+  /// The answer to a refusal for `cause` (the drive's own, else every kind's).
+  static lift::Refusal refusal(lift::Cause cause) noexcept;
 
   UssControllerConfig config_;
   Master& master_;
