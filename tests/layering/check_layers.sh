@@ -28,8 +28,9 @@ declare -A allowed=(
   [dcp]="common io log can drive lift sim rt config api host"
   [sch001]="common io log can drive lift sim rt config api host"
   [uss]="common io log can drive lift sim rt config api host"
-  # The drive kinds put together (the configuration schema): the one folder that knows them all.
-  [kinds]="common drive config dcp sch001 uss"
+  # The drive kinds put together (the configuration schema, the lifts with their commands and
+  # `sim` actions): the one folder that knows them all, the registry the daemon reads.
+  [kinds]="common drive log config api host dcp sch001 uss"
 )
 
 status=0

@@ -2,7 +2,7 @@
 // API backend over it with the commands only a DCP drive offers (display, keypad, power, load,
 // fast start and fast stop, drive reset by I2), and with --simulate the simulated drive on a
 // pseudo-terminal, its encoder and the I/O board. The io-thread side every kind shares is
-// host/controller_lift.hpp; daemon/drives.cpp picks the lift by drive.kind.
+// host/controller_lift.hpp; lib/kinds/lifts.cpp picks the lift by drive.kind.
 #pragma once
 
 #include <chrono>

@@ -2,7 +2,7 @@
 // runner's real-time thread, the API backend over them and, with --simulate, the simulated USS
 // slaves (the lift drive with its car, and every other configured slave) on the far end of a
 // pseudo-terminal. The DCP lift is lib/dcp/host/dcp_lift.*, the hydraulic one
-// lib/sch001/host/hydraulic_lift.*; daemon/drives.cpp picks one by drive.kind.
+// lib/sch001/host/hydraulic_lift.*; lib/kinds/lifts.cpp picks one by drive.kind.
 #pragma once
 
 #include <atomic>

@@ -1,4 +1,4 @@
-#include "daemon/drives.hpp"
+#include "kinds/lifts.hpp"
 
 #include <array>
 #include <cstddef>
@@ -16,7 +16,9 @@
 #include "uss/host/sim_actions.hpp"
 #include "uss/host/uss_lift.hpp"
 
-namespace liftd::daemon {
+namespace liftd::kinds {
+
+using namespace daemon;
 namespace {
 
 /// How one drive kind's lift is made, which API commands only it has and which `sim` actions its
@@ -69,4 +71,4 @@ void add_drive_kind_commands(api::Dispatcher& dispatcher, api::Backend& backend)
   api::add_sim_command(dispatcher, backend, sim_actions);
 }
 
-}  // namespace liftd::daemon
+}  // namespace liftd::kinds
