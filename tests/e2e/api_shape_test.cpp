@@ -45,7 +45,7 @@ const ShapeCase kCases[] = {
      {"replies_good", "checksum_errors", "missing_replies", "repeats", "link_losses", "b7_sent",
       "channel_resets", "decode_errors", "request_timeouts", "longest_error_run", "late_sends",
       "overruns", "skipped_cycles", "max_lateness_us", "lateness_p99_us", "reply_p99_us",
-      "max_work_us"}},
+      "max_work_us", "serial"}},
     {"sch001",
      {{"drive", {{"kind", "sch001"}}},
       {"floors", kThreeFloors},

@@ -11,6 +11,7 @@
 #include "dcp/messages.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
+#include "host/serial_device_report.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -146,6 +147,12 @@ DcpLift::DcpLift(Host& daemon, const config::Config& config, bool simulate)
 DcpLift::~DcpLift() {
   shut_down();
   if (encoder_runner_) encoder_runner_->stop();
+}
+
+void DcpLift::before_start() {
+  const std::string& device = runner_->config().device_path;
+  dcp_backend().set_serial_device(simulate_ ? io::query_serial_device(device)
+                                            : prepare_serial_device(device, "dcp"));
 }
 
 void DcpLift::journal_started() {

@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "api/backend.hpp"
 #include "can/encoder.hpp"
@@ -20,6 +21,7 @@
 #include "dcp/host/simulated_lift.hpp"
 #include "host/controller_lift.hpp"
 #include "host/host.hpp"
+#include "io/serial_device.hpp"
 #include "rt/can_runner.hpp"
 #include "rt/cycle_runner.hpp"
 #include "rt/encoder_tap.hpp"
@@ -99,8 +101,11 @@ class DcpBackend final : public ControllerBackend<DcpDrive>, public DcpCommandBa
 
   /// Sends the wall clock to the cycle for I3 (DCP 5.12.5).
   void send_clock(std::chrono::system_clock::time_point now);
+  /// The serial device's facts for `stats` (read before the cycle starts).
+  void set_serial_device(io::SerialDeviceInfo info) { serial_ = std::move(info); }
 
  private:
+  io::SerialDeviceInfo serial_;
   DcpStatusFacts dcp_facts_{};                        ///< what dcp_details_ was built from
   api::SharedJson dcp_details_{dcp_status_json({})};  ///< status.dcp, shared by the snapshots
 };
@@ -117,6 +122,8 @@ class DcpLift final : public ControllerLift<DcpDrive> {
   const rt::CycleRunner& cycle() const { return *runner_; }
 
  private:
+  /// The serial device's driver and settings, a USB adapter's latency timer (serial_device.hpp).
+  void before_start() override;
   void journal_started() override;
   void handle_event(const control::ControllerEvent& event) override;
   /// The clock for I3 every second, the drive's display when it changed.
