@@ -194,8 +194,6 @@ void register_api(Host& daemon, api::Server& server, const std::string& socket_p
                                        {{"socket", socket_path}}, e.what());
                             return false;
                           }
-                          log::event(log::Level::info, "api", "api_listening",
-                                     {{"socket", socket_path}}, "API listening on " + socket_path);
                           return true;
                         },
                         [s] { s->stop(); }});

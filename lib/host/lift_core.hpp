@@ -241,7 +241,7 @@ nlohmann::json calls_list(const Snapshot& s) {
   return list;
 }
 
-/// The API server as a daemon component ("api", journalled as listening on `socket_path`) with
+/// The API server as a daemon component ("api"; a failure to start names `socket_path`) with
 /// reloads applied to it.
 void register_api(Host& daemon, api::Server& server, const std::string& socket_path);
 /// The daemon's watchdog probe over a counter a live real-time thread keeps raising.
