@@ -9,9 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "uss/timing.hpp"
-
 #include "uss/sim/uss_slave_sim.hpp"
+#include "uss/timing.hpp"
 
 namespace {
 
