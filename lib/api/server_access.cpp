@@ -1,4 +1,4 @@
-// The API server's access side: accepting a peer, its admission or refusal, access on reload.
+// The API server's access side: accepting a peer, its credentials, admission or refusal.
 #include <algorithm>
 #include <memory>
 #include <optional>
@@ -8,18 +8,6 @@
 #include "api/server_impl.hpp"
 
 namespace liftd::api {
-
-void Session::settings_changed() {
-  if (closed_) return;
-  peer_.access = server_->policy_.access_for(peer_.uid, groups_);
-  if (watching_ && !peer_.access.allows(Access::Read)) {
-    const nlohmann::json why = {{"reason", "read access revoked by a configuration reload"}};
-    enqueue(std::make_shared<const std::string>(event_line("watch_ended", why)), false);
-    set_watching(false);
-    server_->log_(LogLevel::Info, describe() + ": watch ended, read access revoked");
-  }
-  arm_timer();
-}
 
 void Server::Impl::accept_next() {
   acceptor_.async_accept([self = shared_from_this()](const asio::error_code& ec, Socket socket) {

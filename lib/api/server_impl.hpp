@@ -40,7 +40,7 @@ constexpr std::chrono::milliseconds kAcceptRetry{100};
 /// a fair share and none holds the thread for a whole batch.
 constexpr std::size_t kLinesPerTurn = 4;
 
-// One connected client (server_session.cpp); internal to the server.
+// One connected client; internal to the server.
 class Session;
 
 class Server::Impl : public std::enable_shared_from_this<Server::Impl> {

@@ -1,4 +1,4 @@
-// The API server's connection and line handling: one client's reads, turns, writes, timeouts.
+// The API server's connection and line handling: a client's reads, turns, budget, writes, timeouts.
 #include <poll.h>
 
 #include <memory>
@@ -8,19 +8,8 @@
 #include <utility>
 
 #include "api/server_impl.hpp"
-#include "common/version.hpp"
 
 namespace liftd::api {
-
-void Session::start() {
-  nlohmann::json hello = {{"version", std::string(kVersion)},
-                          {"api", kApiVersion},
-                          {"access", peer_.access.to_json()},
-                          {"max_line_bytes", server_->config_.max_line_bytes}};
-  enqueue(std::make_shared<const std::string>(event_line("hello", hello)), false);
-  read_more();
-  arm_timer();
-}
 
 void Session::close(std::string_view reason) {
   if (closed_) return;
@@ -302,6 +291,36 @@ void Session::on_timer() {
                                            std::to_string(cfg.idle_timeout.count()) +
                                            " ms; closing idle connection");
   }
+}
+
+void Server::Impl::wait_for_budget(std::shared_ptr<Session> session) {
+  budget_queue_.push_back(std::move(session));
+  arm_budget_timer();
+}
+
+void Server::Impl::arm_budget_timer() {
+  if (budget_timer_armed_ || budget_queue_.empty()) return;
+  budget_timer_armed_ = true;
+  budget_timer_.expires_at(budget_.next_at(SteadyClock::now()));
+  budget_timer_.async_wait([weak = weak_from_this()](const asio::error_code& ec) {
+    const auto self = weak.lock();
+    if (!self || ec) return;
+    self->budget_timer_armed_ = false;
+    self->on_budget_timer();
+  });
+}
+
+void Server::Impl::on_budget_timer() {
+  // Each client that waited takes its turn in order while there is budget; one that runs out
+  // again goes to the back. At most one round per expiry: the next comes with the budget.
+  for (std::size_t n = budget_queue_.size(); n > 0 && !budget_queue_.empty(); --n) {
+    const auto now = SteadyClock::now();
+    if (budget_.next_at(now) > now) break;
+    const auto session = std::move(budget_queue_.front());
+    budget_queue_.pop_front();
+    session->take_turn();
+  }
+  arm_budget_timer();
 }
 
 }  // namespace liftd::api
