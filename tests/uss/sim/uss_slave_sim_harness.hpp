@@ -16,6 +16,7 @@ namespace {
 
 using namespace std::chrono_literals;
 using liftd::MonoTime;
+using liftd::uss::PkwLength;
 using liftd::uss::sim::UssDriveState;
 using liftd::uss::sim::UssReply;
 using liftd::uss::sim::UssReplyFault;

@@ -45,7 +45,6 @@ struct PkwCase {
   Words expected;  // reply PKW words
 };
 
-using liftd::uss::PkwLength;
 const std::vector<PkwCase> kPkwCases = {
     // reads of every kind
     {"read word, 4 words: PWE2",
