@@ -39,6 +39,7 @@
 #include "host/learn_report.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
+#include "host/serial_device_report.hpp"
 #include "host/trace_files.hpp"
 #include "host/travel_log.hpp"
 #include "lift/learning_travel.hpp"
@@ -144,6 +145,9 @@ class ControllerBackend : public api::Backend {
     travel_log_.end(at, travel_end_cause(t.type == Type::Aborted, lift::to_string(t.cause)));
   }
 
+  /// The serial device of a drive link on a serial line (serial_device_report.hpp), for `stats`.
+  void set_serial_device(io::SerialDeviceInfo info) { serial_device_ = std::move(info); }
+
   /// Writes the flight recorder to `<runtime dir>/liftd-trace-<UTC time>.txt` and journals it
   /// with `why` (SIGUSR1).
   api::Result write_flight_recorder(std::string_view why) { return flight_recorder_.write(why); }
@@ -211,6 +215,11 @@ class ControllerBackend : public api::Backend {
     return out;
   }
 
+  /// `stats.<kind>.serial` of a drive on a serial line, once the lift read it.
+  void add_serial_device(nlohmann::json& details) const {
+    if (serial_device_) details["serial"] = serial_device_json(*serial_device_);
+  }
+
   const config::Config& config_;
   const config::Schema& schema_;  ///< the configuration file's, for the `config` dump
   Controller& controller_;
@@ -221,6 +230,7 @@ class ControllerBackend : public api::Backend {
   /// The runner's recorder to files in the runtime directory.
   FlightRecorderFiles flight_recorder_;
   TravelLog travel_log_;  ///< the last travels and their curves (`travels`)
+  std::optional<io::SerialDeviceInfo> serial_device_;  ///< set before the link's thread starts
 
  private:
   void send_inputs(const lift::Inputs& inputs) {
@@ -304,8 +314,16 @@ class ControllerLift : public LiftRunner {
     controller_.reset();
   }
 
-  /// Before the thread starts (the hydraulic lift checks its CAN interface).
+  /// Before the thread starts (the hydraulic lift checks its CAN interface; a drive on a serial
+  /// line calls prepare_serial_device()).
   virtual void before_start() {}
+  /// The serial device `device` of the drive link: journalled with its driver and settings, a USB
+  /// adapter's latency timer set to 1 ms where liftd may (not under --simulate: a pty), and
+  /// handed to the backend for `stats`.
+  void prepare_serial_device(const std::string& device) {
+    backend_->set_serial_device(simulate_ ? io::query_serial_device(device)
+                                          : daemon::prepare_serial_device(device, Drive::kName));
+  }
   /// Journals the thread's link once it runs.
   virtual void journal_started() = 0;
   /// An event of the controller; the drive-neutral ones go to report_lift_event().

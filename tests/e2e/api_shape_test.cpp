@@ -64,7 +64,7 @@ const ShapeCase kCases[] = {
       "control_bits", "status_bits", "setpoint", "actual", "phase", "speed", "slaves"},
      {"baud", "expected_cycle_time_us", "last_cycle_time_us", "cycle_time_p99_us", "replies_good",
       "replies_rejected", "port_losses", "max_lateness_us", "lateness_p99_us", "reply_p99_us",
-      "line_errors", "receive", "slaves"}},
+      "line_errors", "receive", "slaves", "serial"}},
 };
 
 class ApiShapeTest : public ::testing::TestWithParam<ShapeCase> {

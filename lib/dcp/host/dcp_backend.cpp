@@ -9,7 +9,6 @@
 #include "dcp/charset.hpp"
 #include "dcp/host/dcp_lift.hpp"
 #include "dcp/trace.hpp"
-#include "host/serial_device_report.hpp"
 
 namespace liftd::daemon {
 namespace {
@@ -111,7 +110,7 @@ api::StatsSnapshot DcpBackend::stats() {
   d["lateness_p99_us"] = cycle.wake_lateness.percentile_us(0.99);
   d["reply_p99_us"] = cycle.reply_latency.percentile_us(0.99);
   d["max_work_us"] = static_cast<std::uint64_t>(cycle.work_time.max_us());
-  d["serial"] = serial_device_json(serial_);
+  add_serial_device(d);
   return out;
 }
 

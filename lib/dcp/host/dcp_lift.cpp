@@ -11,7 +11,6 @@
 #include "dcp/messages.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
-#include "host/serial_device_report.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -150,9 +149,7 @@ DcpLift::~DcpLift() {
 }
 
 void DcpLift::before_start() {
-  const std::string& device = runner_->config().device_path;
-  dcp_backend().set_serial_device(simulate_ ? io::query_serial_device(device)
-                                            : prepare_serial_device(device, "dcp"));
+  prepare_serial_device(runner_->config().device_path);
 }
 
 void DcpLift::journal_started() {

@@ -21,7 +21,6 @@
 #include "dcp/host/simulated_lift.hpp"
 #include "host/controller_lift.hpp"
 #include "host/host.hpp"
-#include "io/serial_device.hpp"
 #include "rt/can_runner.hpp"
 #include "rt/cycle_runner.hpp"
 #include "rt/encoder_tap.hpp"
@@ -101,11 +100,8 @@ class DcpBackend final : public ControllerBackend<DcpDrive>, public DcpCommandBa
 
   /// Sends the wall clock to the cycle for I3 (DCP 5.12.5).
   void send_clock(std::chrono::system_clock::time_point now);
-  /// The serial device's facts for `stats` (read before the cycle starts).
-  void set_serial_device(io::SerialDeviceInfo info) { serial_ = std::move(info); }
 
  private:
-  io::SerialDeviceInfo serial_;
   DcpStatusFacts dcp_facts_{};                        ///< what dcp_details_ was built from
   api::SharedJson dcp_details_{dcp_status_json({})};  ///< status.dcp, shared by the snapshots
 };

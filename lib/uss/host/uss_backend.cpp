@@ -112,6 +112,7 @@ api::StatsSnapshot UssBackend::stats() {
                  {"line_errors", r.counters.line_errors},
                  {"receive", std::move(rx)},
                  {"slaves", std::move(slaves)}};
+  add_serial_device(out.details);
   return out;
 }
 

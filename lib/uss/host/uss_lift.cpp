@@ -127,6 +127,10 @@ UssLift::~UssLift() {
   shut_down();
 }
 
+void UssLift::before_start() {
+  prepare_serial_device(runner_->config().device_path);
+}
+
 void UssLift::journal_started() {
   // The cycle the polling list should take by the spec's timing rules (USS A 5.1.1, A 6).
   const auto expected =

@@ -152,6 +152,8 @@ class UssLift final : public ControllerLift<UssDrive> {
   ~UssLift() override;
 
  private:
+  /// The serial device's driver and settings, a USB adapter's latency timer.
+  void before_start() override;
   void journal_started() override;
   void handle_event(const uss::ControllerEvent& event) override;
   /// The count of drive state lines the throttle held back, once its interval ends.
