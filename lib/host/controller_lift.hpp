@@ -215,6 +215,17 @@ class ControllerBackend : public api::Backend {
     return out;
   }
 
+  /// The drive-neutral part of `stats`: the frames (or telegrams) the link sent and the steps its
+  /// thread made, and what the controller's queues dropped; the kind adds its `details`.
+  api::StatsSnapshot neutral_stats(std::uint64_t frames_sent, std::uint64_t cycles) const {
+    api::StatsSnapshot out;
+    out.drive_kind = Drive::kKind;
+    out.frames_sent = frames_sent;
+    out.cycles = cycles;
+    out.dropped_events = controller_.dropped_events();
+    out.dropped_travel_samples = controller_.dropped_travel_samples();
+    return out;
+  }
   /// `stats.<kind>.serial` of a drive on a serial line, once the lift read it.
   void add_serial_device(nlohmann::json& details) const {
     if (serial_device_) details["serial"] = serial_device_json(*serial_device_);

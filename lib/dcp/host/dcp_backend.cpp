@@ -85,12 +85,7 @@ api::StatusSnapshot DcpBackend::status() {
 api::StatsSnapshot DcpBackend::stats() {
   const rt::CycleStats cycle = runner_.stats();
   const dcp::LinkCounters link = controller_.snapshot().link_counters;
-  api::StatsSnapshot out;
-  out.drive_kind = drive::Kind::Dcp;
-  out.frames_sent = cycle.counters.frames_sent;
-  out.cycles = cycle.counters.cycles;
-  out.dropped_events = controller_.dropped_events();
-  out.dropped_travel_samples = controller_.dropped_travel_samples();
+  api::StatsSnapshot out = neutral_stats(cycle.counters.frames_sent, cycle.counters.cycles);
   nlohmann::json& d = out.details;
   // The link (DCP 6, 7) and the 15 ms cycle's timing (DCP 7.2): docs/api.md `stats`.
   d["replies_good"] = link.good_replies;

@@ -66,12 +66,7 @@ api::StatusSnapshot UssBackend::status() {
 api::StatsSnapshot UssBackend::stats() {
   const uss::ControllerSnapshot s = controller_.snapshot();
   const uss::UssRunnerStats r = runner_.stats();
-  api::StatsSnapshot out;
-  out.drive_kind = drive::Kind::Uss;
-  out.frames_sent = r.counters.exchanges;
-  out.cycles = r.counters.cycles;
-  out.dropped_events = controller_.dropped_events();
-  out.dropped_travel_samples = controller_.dropped_travel_samples();
+  api::StatsSnapshot out = neutral_stats(r.counters.exchanges, r.counters.cycles);
   nlohmann::json rx = {{"good", s.rx.good},
                        {"rejected", s.rx.rejected},
                        {"framing", s.rx.framing},
