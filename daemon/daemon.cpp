@@ -5,9 +5,9 @@
 #include <csignal>
 #include <cstring>
 
-#include "daemon/drives.hpp"
 #include "daemon/reload.hpp"
 #include "kinds/config_schema.hpp"
+#include "kinds/lifts.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
@@ -214,7 +214,7 @@ void Daemon::set_dump_handler(std::function<void()> dump) {
 }
 
 void Daemon::add_drive_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
-  add_drive_kind_commands(dispatcher, backend);
+  kinds::add_drive_kind_commands(dispatcher, backend);
 }
 
 const config::Schema& Daemon::config_schema() const {

@@ -17,9 +17,9 @@
 #include "config/config.hpp"
 #include "daemon/cli.hpp"
 #include "daemon/daemon.hpp"
-#include "daemon/drives.hpp"
 #include "host/lift_common.hpp"
 #include "kinds/config_schema.hpp"
+#include "kinds/lifts.hpp"
 #include "log/log.hpp"
 #include "rt/board_settings.hpp"
 #include "rt/cpu_split.hpp"
@@ -229,7 +229,7 @@ int run_daemon(const CommandLine& cl) {
   std::unique_ptr<liftd::daemon::LiftRunner> app;
   try {
     // The daemon's copy: a reload updates it in place, and the parts read the keys it applies.
-    app = liftd::daemon::make_lift(daemon, daemon.config(), cl.simulate);
+    app = liftd::kinds::make_lift(daemon, daemon.config(), cl.simulate);
   } catch (const std::exception& error) {
     log::event(log::Level::error, "daemon", "setup_failed", {}, error.what(),
                log::Catalogued::StartFailed);

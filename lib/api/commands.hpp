@@ -42,7 +42,7 @@ inline constexpr std::int64_t kMaxSimDriftMm = 1000;
 
 /// Adds `sim`, the simulated lift's fault injection (a backend without one refuses it): the
 /// shared actions, then each of `kinds`' own actions in the order of `kinds` (the registry of
-/// drive kinds, daemon/drives.cpp, adds it with every kind's list).
+/// drive kinds, lib/kinds/lifts.cpp, adds it with every kind's list).
 void add_sim_command(Dispatcher& dispatcher, Backend& backend,
                      std::span<const KindSimActions* const> kinds);
 

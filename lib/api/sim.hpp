@@ -1,7 +1,7 @@
 // The `sim` command's actions (liftd --simulate only). lib/api holds the actions the simulators
 // of several drive kinds take and the form of a kind's own list; each kind declares which shared
 // actions its simulator takes and adds its own actions, with their arguments, from its folder
-// (lib/<kind>/host/sim_actions.*), named in the registry of drive kinds (daemon/drives.cpp).
+// (lib/<kind>/host/sim_actions.*), named in the registry of drive kinds (lib/kinds/lifts.cpp).
 #pragma once
 
 #include <array>

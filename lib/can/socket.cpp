@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <cstddef>
 #include <cstring>
 
 namespace liftd::can {
@@ -113,68 +114,105 @@ std::pair<std::uint32_t, std::array<std::uint8_t, kMaxData>> encode_error_frame(
   return {id, data};
 }
 
-io::Expected<CanSocket, SocketError> CanSocket::open(std::string_view endpoint,
-                                                     std::vector<std::uint32_t> ids) {
-  if (endpoint.substr(0, kUnixPrefix.size()) == kUnixPrefix) {
-    const std::string path(endpoint.substr(kUnixPrefix.size()));
+EndpointOpener::EndpointOpener(std::string_view endpoint, std::span<const std::uint32_t> ids)
+    : endpoint_(endpoint), unix_(endpoint.substr(0, kUnixPrefix.size()) == kUnixPrefix) {
+  target_ = unix_ ? std::string(endpoint.substr(kUnixPrefix.size())) : std::string(endpoint);
+  // Kernel receive filters (CAN interfaces): exactly the identifiers we read, 11-bit data
+  // frames only.
+  filters_.reserve(ids.size());
+  for (const std::uint32_t id : ids) {
+    filters_.push_back({id, CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG});
+  }
+}
+
+io::Expected<int, OpenFailure> EndpointOpener::open() const noexcept {
+  static_assert(sizeof(Filter) == sizeof(can_filter) &&
+                offsetof(can_filter, can_mask) == offsetof(Filter, mask));
+  if (unix_) {
     sockaddr_un address{};
-    if (!fill_unix_address(path, address)) {
-      return error_of(ENAMETOOLONG, "unix socket path \"" + path + "\" is empty or too long");
-    }
+    if (!fill_unix_address(target_, address)) return OpenFailure{ENAMETOOLONG, OpenStep::UnixPath};
     const int fd = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-    if (fd < 0) return error_of(errno, "socket(AF_UNIX, SOCK_SEQPACKET)");
+    if (fd < 0) return OpenFailure{errno, OpenStep::UnixSocket};
     // NOLINTNEXTLINE(cppcoreguidelines-pro-type-reinterpret-cast): the sockets API
     if (::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0) {
       const int code = errno;
       ::close(fd);
-      return error_of(code, "connect to " + path);
+      return OpenFailure{code, OpenStep::UnixConnect};
     }
-    return CanSocket(fd, std::move(ids));
+    return fd;
   }
-  const std::string name(endpoint);
-  if (name.empty() || name.size() >= IFNAMSIZ) {
-    return error_of(ENODEV, "CAN interface name \"" + name + "\" is empty or too long");
+  if (target_.empty() || target_.size() >= IFNAMSIZ) {
+    return OpenFailure{ENODEV, OpenStep::InterfaceName};
   }
   const int fd = ::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
-  if (fd < 0) return error_of(errno, "socket(PF_CAN, SOCK_RAW, CAN_RAW)");
-  const auto fail = [fd](std::string what) {
+  if (fd < 0) return OpenFailure{errno, OpenStep::CanSocket};
+  const auto fail = [fd](OpenStep step) noexcept {
     const int code = errno;
     ::close(fd);
-    return error_of(code, std::move(what));
+    return OpenFailure{code, step};
   };
-  const unsigned index = ::if_nametoindex(name.c_str());
-  if (index == 0) return fail("no network interface \"" + name + "\"");
-  // Kernel receive filters: exactly the identifiers we read, 11-bit data frames only.
-  std::vector<can_filter> filters;
-  for (const std::uint32_t id : ids) {
-    filters.push_back({id, CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG});
-  }
-  if (!filters.empty() &&
-      ::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filters.data(),
-                   static_cast<socklen_t>(filters.size() * sizeof(can_filter))) != 0) {
-    return fail("setsockopt(CAN_RAW_FILTER)");
+  const unsigned index = ::if_nametoindex(target_.c_str());
+  if (index == 0) return fail(OpenStep::NoInterface);
+  if (!filters_.empty() &&
+      ::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filters_.data(),
+                   static_cast<socklen_t>(filters_.size() * sizeof(can_filter))) != 0) {
+    return fail(OpenStep::ReceiveFilter);
   }
   // Error frames: everything but CAN_ERR_BUSERROR, which may flood a broken bus.
   const can_err_mask_t errors = CAN_ERR_TX_TIMEOUT | CAN_ERR_LOSTARB | CAN_ERR_CRTL | CAN_ERR_PROT |
                                 CAN_ERR_TRX | CAN_ERR_ACK | CAN_ERR_BUSOFF | CAN_ERR_RESTARTED |
                                 CAN_ERR_CNT;
   if (::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &errors, sizeof errors) != 0) {
-    return fail("setsockopt(CAN_RAW_ERR_FILTER)");
+    return fail(OpenStep::ErrorFilter);
   }
   // Each record then carries the kernel's count of frames dropped on this socket's full
   // receive queue, so a reader that falls behind the bus is seen, not guessed.
   const int on = 1;
   if (::setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on) != 0) {
-    return fail("setsockopt(SO_RXQ_OVFL)");
+    return fail(OpenStep::OverflowOption);
   }
   sockaddr_can address{};
   address.can_family = AF_CAN;
   address.can_ifindex = static_cast<int>(index);
   // NOLINTNEXTLINE(cppcoreguidelines-pro-type-reinterpret-cast): the sockets API
   if (::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0) {
-    return fail("bind to CAN interface " + name);
+    return fail(OpenStep::Bind);
   }
-  return CanSocket(fd, std::move(ids));
+  return fd;
+}
+
+std::string EndpointOpener::describe(const OpenFailure& failure) const {
+  switch (failure.step) {
+    case OpenStep::UnixPath:
+      return "unix socket path \"" + target_ + "\" is empty or too long";
+    case OpenStep::UnixSocket:
+      return "socket(AF_UNIX, SOCK_SEQPACKET)";
+    case OpenStep::UnixConnect:
+      return "connect to " + target_;
+    case OpenStep::InterfaceName:
+      return "CAN interface name \"" + target_ + "\" is empty or too long";
+    case OpenStep::CanSocket:
+      return "socket(PF_CAN, SOCK_RAW, CAN_RAW)";
+    case OpenStep::NoInterface:
+      return "no network interface \"" + target_ + "\"";
+    case OpenStep::ReceiveFilter:
+      return "setsockopt(CAN_RAW_FILTER)";
+    case OpenStep::ErrorFilter:
+      return "setsockopt(CAN_RAW_ERR_FILTER)";
+    case OpenStep::OverflowOption:
+      return "setsockopt(SO_RXQ_OVFL)";
+    case OpenStep::Bind:
+      return "bind to CAN interface " + target_;
+  }
+  return "opening " + endpoint_;
+}
+
+io::Expected<CanSocket, SocketError> CanSocket::open(std::string_view endpoint,
+                                                     std::vector<std::uint32_t> ids) {
+  const EndpointOpener opener(endpoint, ids);
+  const auto opened = opener.open();
+  if (!opened) return error_of(opened.error().code, opener.describe(opened.error()));
+  return CanSocket(opened.value(), std::move(ids));
 }
 
 io::Expected<std::pair<CanSocket, CanSocket>, SocketError> CanSocket::pair() {
@@ -187,6 +225,21 @@ io::Expected<std::pair<CanSocket, CanSocket>, SocketError> CanSocket::pair() {
 
 CanSocket CanSocket::adopt(int fd, std::vector<std::uint32_t> ids) {
   return CanSocket(fd, std::move(ids));
+}
+
+CanSocket CanSocket::unattached(std::vector<std::uint32_t> ids) {
+  return CanSocket(-1, std::move(ids));
+}
+
+void CanSocket::attach(int fd) noexcept {
+  close();
+  fd_ = fd;
+  kernel_overflow_total_ = 0;  // SO_RXQ_OVFL counts per socket, from 0
+}
+
+void CanSocket::close() noexcept {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
 }
 
 CanSocket::CanSocket(CanSocket&& other) noexcept

@@ -58,6 +58,56 @@ struct SocketError {
   std::string what;
 };
 
+/// The step of opening an endpoint that failed (EndpointOpener::open()), named without
+/// building text so that a real-time thread can report it; describe() makes the words.
+enum class OpenStep : std::uint8_t {
+  UnixPath,        ///< the unix: path is empty or too long for sockaddr_un
+  UnixSocket,      ///< socket(AF_UNIX, SOCK_SEQPACKET)
+  UnixConnect,     ///< connect() to the path (nobody listens, no such file)
+  InterfaceName,   ///< the interface name is empty or too long (IFNAMSIZ)
+  CanSocket,       ///< socket(PF_CAN, SOCK_RAW, CAN_RAW)
+  NoInterface,     ///< if_nametoindex(): no network interface of that name
+  ReceiveFilter,   ///< setsockopt(CAN_RAW_FILTER)
+  ErrorFilter,     ///< setsockopt(CAN_RAW_ERR_FILTER)
+  OverflowOption,  ///< setsockopt(SO_RXQ_OVFL)
+  Bind,            ///< bind() to the interface
+};
+
+/// Why one open failed: the errno value and the step.
+struct OpenFailure {
+  int code = 0;
+  OpenStep step = OpenStep::UnixPath;
+};
+
+/// Everything opening one endpoint needs ("can0" or "unix:PATH", the identifiers to receive),
+/// prepared once when it is built (which allocates), so that open() can be called again and
+/// again from a real-time thread without allocating or building text: the CAN runner reopens a
+/// lost endpoint with it. The interface index is looked up at every open (an adapter plugged
+/// in again may get a new one).
+class EndpointOpener {
+ public:
+  EndpointOpener(std::string_view endpoint, std::span<const std::uint32_t> ids);
+  /// A fresh connected (unix:) or bound (CAN) non-blocking descriptor, or the failed step.
+  /// Never allocates.
+  io::Expected<int, OpenFailure> open() const noexcept;
+  /// The words of a failure, as CanSocket::open() reports them ("connect to PATH"), without
+  /// the errno text. Allocates: call it off the real-time thread.
+  std::string describe(const OpenFailure& failure) const;
+  const std::string& endpoint() const noexcept { return endpoint_; }
+
+ private:
+  /// struct can_filter's layout (linux/can.h: two canid_t), so no kernel header is needed here.
+  struct Filter {
+    std::uint32_t id;
+    std::uint32_t mask;
+  };
+
+  std::string endpoint_;
+  bool unix_ = false;
+  std::string target_;  ///< the unix socket path, or the interface name
+  std::vector<Filter> filters_;
+};
+
 /// What one read() found.
 struct Received {
   enum class Kind : std::uint8_t {
@@ -98,6 +148,10 @@ class CanSocket {
   static io::Expected<std::pair<CanSocket, CanSocket>, SocketError> pair();
   /// Takes a connected SOCK_SEQPACKET descriptor (from accept()).
   static CanSocket adopt(int fd, std::vector<std::uint32_t> ids = {});
+  /// An endpoint with no descriptor yet that will pass on the frames of `ids` (empty: all)
+  /// once attach() gives it one: a real-time thread builds it up front and then attaches and
+  /// closes descriptors without allocating.
+  static CanSocket unattached(std::vector<std::uint32_t> ids);
 
   CanSocket(CanSocket&& other) noexcept;
   CanSocket& operator=(CanSocket&& other) noexcept;
@@ -105,8 +159,15 @@ class CanSocket {
   CanSocket& operator=(const CanSocket&) = delete;
   ~CanSocket();
 
-  /// The descriptor, for poll(); -1 after a move.
+  /// The descriptor, for poll(); -1 after a move, close() or before attach().
   int fd() const noexcept { return fd_; }
+  bool is_open() const noexcept { return fd_ >= 0; }
+  /// Takes `fd` (from EndpointOpener::open()), closing the descriptor held, if any. The
+  /// identifier filter and the drop counters stay: they count over every descriptor this
+  /// endpoint had. Never allocates.
+  void attach(int fd) noexcept;
+  /// Closes the descriptor; the filter and the drop counters stay. Never allocates.
+  void close() noexcept;
   /// Reads at most one record, never blocks.
   Received read() noexcept;
   /// Sends one frame, never blocks; 0 or the errno value (EAGAIN: the queue is full).

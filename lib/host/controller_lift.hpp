@@ -1,10 +1,11 @@
 // The io-thread side of a lift whose controller runs on a real-time thread of its own behind
-// lock-free queues (SCH001 on the CAN runner, USS on the USS runner), written once for both:
+// lock-free queues (DCP on the cycle runner, SCH001 on the CAN runner, USS on the USS runner),
+// written once for every drive kind:
 // the API backend's drive-neutral commands and `status` fields, the flight recorder's files (the
 // API's `trace` with `save`, SIGUSR1), and the lift's start and stop, its io-thread poll and its
 // service-stop wind-down. What only one drive has (its link and events, its status details,
-// stats and trace) stays in the kind's lift (lib/sch001/host/hydraulic_lift.*,
-// lib/uss/host/uss_lift.*).
+// stats and trace) stays in the kind's lift (lib/dcp/host/dcp_lift.*,
+// lib/sch001/host/hydraulic_lift.*, lib/uss/host/uss_lift.*).
 //
 // `Drive` names the parts of one drive kind (see Sch001Drive, UssDrive):
 //   Controller, Runner, Simulator, Snapshot, Command, CommandReply, Event, TravelKind,
@@ -12,7 +13,9 @@
 //   LearnCommand; kKind, kName (drive.kind, journal and daemon component), kThread (as the
 //   journal names the thread), kStartFailedEvent, kReplyGrace, kShutdownGrace, fault_text(),
 //   travel_bit_names() (the names of the drive's bits in a travel's curve), learn_leg_base_ms()
-//   (the run-time limit a learning leg's allowance is added to).
+//   (the run-time limit a learning leg's allowance is added to); where the car can move with no
+//   travel of the controller's running (a drive that still reports travel active), also
+//   car_moving(snapshot).
 #pragma once
 
 #include <chrono>
@@ -36,6 +39,7 @@
 #include "host/learn_report.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
+#include "host/serial_device_report.hpp"
 #include "host/trace_files.hpp"
 #include "host/travel_log.hpp"
 #include "lift/learning_travel.hpp"
@@ -52,9 +56,10 @@ class ControllerBackend : public api::Backend {
   using Runner = typename Drive::Runner;
   using Simulator = typename Drive::Simulator;
 
+  /// `decoder`: the flight recorder files' decoded column (none: the bytes only).
   ControllerBackend(const config::Config& config, const config::Schema& schema,
                     Controller& controller, Runner& runner, PositionFeed* position_feed,
-                    Simulator* sim)
+                    Simulator* sim, FlightRecorderFiles::DecoderSource decoder = {})
       : config_(config),
         schema_(schema),
         controller_(controller),
@@ -63,7 +68,7 @@ class ControllerBackend : public api::Backend {
         inputs_(config, position_feed, sim != nullptr),
         flight_recorder_(runner.recorder(), default_runtime_dir(config),
                          static_cast<std::size_t>(config.rt.trace_files_kept),
-                         std::string(Drive::kName)),
+                         std::string(Drive::kName), std::move(decoder)),
         travel_log_(Drive::travel_bit_names(), floor_levels_mm(config)),
         mono_at_start_(mono_now()),
         wall_at_start_(std::chrono::system_clock::now()) {}
@@ -136,9 +141,12 @@ class ControllerBackend : public api::Backend {
   template <typename TravelEvent>
   void record_travel_event(const TravelEvent& t, MonoTime at) {
     using Type = decltype(t.type);
-    if (t.type == Type::Started) return;
+    if (t.type != Type::Finished && t.type != Type::Aborted) return;
     travel_log_.end(at, travel_end_cause(t.type == Type::Aborted, lift::to_string(t.cause)));
   }
+
+  /// The serial device of a drive link on a serial line (serial_device_report.hpp), for `stats`.
+  void set_serial_device(io::SerialDeviceInfo info) { serial_device_ = std::move(info); }
 
   /// Writes the flight recorder to `<runtime dir>/liftd-trace-<UTC time>.txt` and journals it
   /// with `why` (SIGUSR1).
@@ -207,6 +215,22 @@ class ControllerBackend : public api::Backend {
     return out;
   }
 
+  /// The drive-neutral part of `stats`: the frames (or telegrams) the link sent and the steps its
+  /// thread made, and what the controller's queues dropped; the kind adds its `details`.
+  api::StatsSnapshot neutral_stats(std::uint64_t frames_sent, std::uint64_t cycles) const {
+    api::StatsSnapshot out;
+    out.drive_kind = Drive::kKind;
+    out.frames_sent = frames_sent;
+    out.cycles = cycles;
+    out.dropped_events = controller_.dropped_events();
+    out.dropped_travel_samples = controller_.dropped_travel_samples();
+    return out;
+  }
+  /// `stats.<kind>.serial` of a drive on a serial line, once the lift read it.
+  void add_serial_device(nlohmann::json& details) const {
+    if (serial_device_) details["serial"] = serial_device_json(*serial_device_);
+  }
+
   const config::Config& config_;
   const config::Schema& schema_;  ///< the configuration file's, for the `config` dump
   Controller& controller_;
@@ -217,6 +241,7 @@ class ControllerBackend : public api::Backend {
   /// The runner's recorder to files in the runtime directory.
   FlightRecorderFiles flight_recorder_;
   TravelLog travel_log_;  ///< the last travels and their curves (`travels`)
+  std::optional<io::SerialDeviceInfo> serial_device_;  ///< set before the link's thread starts
 
  private:
   void send_inputs(const lift::Inputs& inputs) {
@@ -281,7 +306,7 @@ class ControllerLift : public LiftRunner {
     daemon_.add_component({std::string(Drive::kName), [this] { return start_runner(); },
                            [this] { stop_runner(); },
                            [this](std::function<void()> done) { wind_down(std::move(done)); }});
-    register_api(daemon_, *server_);
+    register_api(daemon_, *server_, socket_path_);
     daemon_.set_dump_handler([this] { (void)backend_->write_flight_recorder("SIGUSR1"); });
     daemon_.set_progress_probe(progress_probe([this] { return runner_->progress(); }));
     daemon_.set_running_status(running_status);
@@ -300,14 +325,24 @@ class ControllerLift : public LiftRunner {
     controller_.reset();
   }
 
-  /// Before the thread starts (the hydraulic lift checks its CAN interface).
+  /// Before the thread starts (the hydraulic lift checks its CAN interface; a drive on a serial
+  /// line calls prepare_serial_device()).
   virtual void before_start() {}
+  /// The serial device `device` of the drive link: journalled with its driver and settings, a USB
+  /// adapter's latency timer set to 1 ms where liftd may (not under --simulate: a pty), and
+  /// handed to the backend for `stats`.
+  void prepare_serial_device(const std::string& device) {
+    backend_->set_serial_device(simulate_ ? io::query_serial_device(device)
+                                          : daemon::prepare_serial_device(device, Drive::kName));
+  }
   /// Journals the thread's link once it runs.
   virtual void journal_started() = 0;
   /// An event of the controller; the drive-neutral ones go to report_lift_event().
   virtual void handle_event(const typename Drive::Event& event) = 0;
   /// Every poll, after the controller's events: what only this drive watches.
   virtual void after_events(MonoTime) {}
+  /// An event of the runner's own (its port, its timing), where it has them.
+  virtual void handle_runner_event(const rt::CycleEvent& event) { journal_port_event(event); }
 
   /// Journals and publishes the events every such controller reports alike: a travel, a fault
   /// raised or cleared, a served call.
@@ -322,6 +357,11 @@ class ControllerLift : public LiftRunner {
       case Kind::FaultCleared:
         report_fault(*server_, event.fault, Drive::fault_text(event.fault),
                      event.kind == Kind::FaultRaised);
+        // The frames that led to a link fault are what a technician needs first: the recorder
+        // goes to a file at once, on every kind (docs/operations.md "The flight recorder").
+        if (event.kind == Kind::FaultRaised && event.fault == lift::FaultCode::LinkFault) {
+          (void)backend_->write_flight_recorder("link fault");
+        }
         break;
       case Kind::CallServed:
         report_call_served(*server_, event.floor);
@@ -381,7 +421,7 @@ class ControllerLift : public LiftRunner {
     backend_->poll(now);
     if constexpr (requires(typename Drive::Runner & r, rt::CycleEvent & e) { r.poll_event(e); }) {
       rt::CycleEvent cycle_event;
-      while (runner_->poll_event(cycle_event)) journal_port_event(cycle_event);
+      while (runner_->poll_event(cycle_event)) handle_runner_event(cycle_event);
     }
     typename Drive::Event event;
     while (controller_->poll_event(event)) handle_event(event);
@@ -397,8 +437,9 @@ class ControllerLift : public LiftRunner {
       return;
     }
     const typename Drive::Snapshot s = controller_->snapshot();
-    wind_down_.start(std::move(done), s.travel_kind != Drive::TravelKind::None, s.target_floor,
-                     mono_now());
+    bool moving = s.travel_kind != Drive::TravelKind::None;
+    if constexpr (requires { Drive::car_moving(s); }) moving = Drive::car_moving(s);
+    wind_down_.start(std::move(done), moving, s.target_floor, mono_now());
   }
 
   std::string socket_path_;

@@ -148,6 +148,15 @@ std::optional<lift::Inputs> MachineInputs::current() const {
   const lift::Inputs api = to_lift(api_);
   lift::Inputs out = *sample_;
   out.door_reversal = out.door_reversal || api.door_reversal;
+  // The switches and buttons of the simulated board have nobody to turn them: the API's turn
+  // them on (the recall key switch, the car roof's inspection switch, their buttons).
+  out.inspection = out.inspection || api.inspection;
+  out.recall = out.recall || api.recall;
+  out.button_up = out.button_up || api.button_up;
+  out.button_down = out.button_down || api.button_down;
+  // The door zone's bridge is the I/O board's safety circuit, which the simulated machine does
+  // not model, as it does not model the shaft's zones.
+  out.door_zone_bridge = api.door_zone_bridge;
   out.level_zone = api.level_zone;
   out.relevel_up = api.relevel_up;
   out.relevel_down = api.relevel_down;

@@ -183,14 +183,15 @@ lift::Direction direction_of(std::string_view name) noexcept {
                           : lift::Direction::None;
 }
 
-void register_api(Host& daemon, api::Server& server) {
+void register_api(Host& daemon, api::Server& server, const std::string& socket_path) {
   api::Server* s = &server;
   daemon.add_component({"api",
-                        [s] {
+                        [s, socket_path] {
                           try {
                             s->start();
                           } catch (const std::exception& e) {
-                            log::event(log::Level::error, "api", "api_start_failed", {}, e.what());
+                            log::event(log::Level::error, "api", "api_start_failed",
+                                       {{"socket", socket_path}}, e.what());
                             return false;
                           }
                           return true;

@@ -241,8 +241,9 @@ nlohmann::json calls_list(const Snapshot& s) {
   return list;
 }
 
-/// The API server as a daemon component ("api") with reloads applied to it.
-void register_api(Host& daemon, api::Server& server);
+/// The API server as a daemon component ("api"; a failure to start names `socket_path`) with
+/// reloads applied to it.
+void register_api(Host& daemon, api::Server& server, const std::string& socket_path);
 /// The daemon's watchdog probe over a counter a live real-time thread keeps raising.
 std::function<bool()> progress_probe(std::function<std::uint64_t()> progress);
 /// After a real-time thread started: journals what it lacks, and false (the caller stops it)
@@ -283,17 +284,24 @@ void report_travel(api::Server& server, std::string_view type, std::string_view 
                    lift::Cause cause, bool aborted, std::int64_t target_mm,
                    std::optional<std::int64_t> position_mm);
 /// report_travel() for a controller's travel event (`type` Started/Finished/Aborted, `kind`,
-/// `cause`, `floor`; to_string() of the kind found beside its type).
+/// `cause`, `floor`; to_string() of the kind found beside its type). A DCP travel event carries
+/// its target and position itself and has types of its own (a target extended, a fast start
+/// armed, a drive fault: DCP 4.1, 12, 9.1.6), named by its to_string().
 template <typename TravelEvent, typename Controller>
 void report_travel(api::Server& server, const TravelEvent& t, Controller& controller) {
   using Type = decltype(t.type);
   const bool aborted = t.type == Type::Aborted;
-  const char* type = t.type == Type::Started    ? "started"
-                     : t.type == Type::Finished ? "finished"
-                                                : "aborted";
-  const auto floors = controller.floors_mm();
-  report_travel(server, type, to_string(t.kind), t.cause, aborted,
-                t.floor < floors.size() ? floors[t.floor] : 0, controller.snapshot().position_mm);
+  if constexpr (requires { t.target_mm; }) {
+    report_travel(server, to_string(t.type), to_string(t.kind), t.cause, aborted, t.target_mm,
+                  t.position_mm);
+  } else {
+    const char* type = t.type == Type::Started    ? "started"
+                       : t.type == Type::Finished ? "finished"
+                                                  : "aborted";
+    const auto floors = controller.floors_mm();
+    report_travel(server, type, to_string(t.kind), t.cause, aborted,
+                  t.floor < floors.size() ? floors[t.floor] : 0, controller.snapshot().position_mm);
+  }
 }
 /// Journals and publishes a served call.
 void report_call_served(api::Server& server, std::size_t floor);

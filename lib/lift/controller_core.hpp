@@ -14,6 +14,14 @@
 // dropped_events(), reporting causes as lift::Cause (lift/cause.hpp); the DCP controller
 // sequences its travels itself (DCP 10-13) and uses the rest.
 //
+// A kind whose travels run through the core (SCH001, USS) steps them with step_lift(), one order
+// for every such kind, and supplies what only it knows through these members (ControllerCore is
+// its friend): build_input(now), handle(command, in), inspect_run(direction, in),
+// start_call_travel(floor, in), start_relevel_run(floor, direction, in) -> Cause,
+// run_travel(in), start_learn_leg(target_mm, direction, in) -> bool,
+// drive_learn_refusal(in) -> optional<Answer>, update_faults(in, now), relevel_policy(), and the
+// static refusal(cause) of its travels' causes (refusal_for over its own table).
+//
 // Threads: the real-time thread calls the protected members; ONE other thread (the daemon's io
 // thread) calls post(), poll_reply(), poll_event(), snapshot() and dropped_events().
 #pragma once
@@ -36,6 +44,7 @@
 #include "lift/calls.hpp"
 #include "lift/cause.hpp"
 #include "lift/faults.hpp"
+#include "lift/floors.hpp"
 #include "lift/inputs.hpp"
 #include "lift/learning_travel.hpp"
 #include "lift/lift_model.hpp"
@@ -119,13 +128,45 @@ constexpr std::string_view shared_cause_text(Cause cause) noexcept {
     case Cause::DoorsNotLocked:
       return "doors not locked";
     case Cause::InputsLost:
-      return "machine inputs lost";
+      return "machine inputs missing or stale";
     case Cause::PositionLost:
-      return "car position unknown";
+      return "no valid car position";
     default:
       return "not possible now";
   }
 }
+
+/// A drive kind's own answer to a refusal for a cause its travels report: the reply code and
+/// text (a kind's table of them, refusal_for()).
+struct CauseRefusal {
+  Cause cause = Cause::None;
+  ReplyCode code = ReplyCode::NotReady;
+  std::string_view text;  ///< a static string
+};
+
+/// The refusal for `cause` by a kind's own table, else the one every kind gives.
+constexpr Refusal refusal_for(std::span<const CauseRefusal> own, Cause cause) noexcept {
+  for (const CauseRefusal& r : own) {
+    if (r.cause == cause) return Refusal{r.code, r.text};
+  }
+  return Refusal{shared_cause_code(cause), shared_cause_text(cause)};
+}
+
+/// The refusal of a normal travel, a learning travel or a relevelling while the inspection or
+/// recall switch is on (DCP 9.1.1), on every drive kind.
+inline constexpr std::string_view kButtonModeText = "inspection or recall is switched on";
+
+/// The relevel command's refusal without a position and without a single relevelling signal.
+inline constexpr std::string_view kNoRelevelReference =
+    "no position and no single relevelling signal (relevel_up / relevel_down)";
+
+/// When a lift relevels by itself and when the relevel command finds nothing to do.
+struct RelevelPolicy {
+  bool automatic = false;                  ///< relevel by itself
+  std::uint32_t threshold_mm = 0;          ///< once the car at rest is further than this
+  std::uint32_t zone_mm = kRelevelZoneMm;  ///< ... and no further (beyond: it was moved away)
+  std::uint32_t level_tolerance_mm = 0;    ///< the relevel command: "the car is level" within
+};
 
 /// What a controller's command handling needs besides its travel sequencer's own settings.
 struct ControllerCoreConfig {
@@ -270,25 +311,28 @@ class ControllerCore {
 
   /// The travel command's gates in order (stopping, floor, the drive's own check, inspection,
   /// a run in progress, already there), then `start()` (the travel's start_travel; its Cause
-  /// refusal is answered through `code_for` / `text_for`). `drive_gate()` answers an optional
+  /// refusal is answered through `refusal_of`). `drive_gate()` answers an optional
   /// Refusal of the drive (e.g. a speed without setpoint). True when it started.
-  template <typename DriveGate, typename Start, typename CodeFor, typename TextFor>
+  template <typename DriveGate, typename Start, typename RefusalOf>
   bool handle_travel(std::uint32_t tag, const typename Types::TravelCommand& body,
                      const typename Types::Input& in, DriveGate drive_gate, Start start,
-                     CodeFor code_for, TextFor text_for) noexcept {
+                     RefusalOf refusal_of) noexcept {
     if (const std::optional<Refusal> refusal = first_travel_refusal(body.floor)) {
       return refuse(tag, refusal->code, refusal->detail);
     }
     if (const std::optional<Refusal> refusal = drive_gate()) {
       return refuse(tag, refusal->code, refusal->detail);
     }
-    if (in.inputs.inspection) return refuse(tag, ReplyCode::NotReady, "inspection is on");
+    if (in.inputs.button_mode()) return refuse(tag, ReplyCode::NotReady, kButtonModeText);
     if (travel_.busy()) return refuse(tag, ReplyCode::Busy, "a travel is running");
     if (at_level(in, body.floor)) {
       return refuse(tag, ReplyCode::NotReady, "the car is already at that level");
     }
     const Cause why = start();
-    if (why != Cause::None) return refuse(tag, code_for(why), text_for(why));
+    if (why != Cause::None) {
+      const Refusal r = refusal_of(why);
+      return refuse(tag, r.code, r.detail);
+    }
     reply(tag, ReplyCode::Ok);
     return true;
   }
@@ -363,6 +407,132 @@ class ControllerCore {
   /// would relevel to may be the one the learning just found wrong.
   bool relevel_held() const noexcept { return relevel_held_; }
 
+  // ---- the step of a kind whose travels run through the core (SCH001, USS) ----
+
+  /// One step in the one order: the commands (each judged against the input after the ones
+  /// before it), the car's floor, inspection and recall, the fault table, the next call and the
+  /// automatic relevelling (so that what they start runs in this step's output), the travel,
+  /// then the learning travel. Returns the step's input (the kind writes its protocol from it).
+  template <typename Kind>
+  typename Types::Input step_lift(MonoTime now, Kind& kind) noexcept {
+    ++steps_;
+    typename Types::Input in = kind.build_input(now);
+    typename Types::Command command;
+    while (next_command(command)) {
+      kind.handle(command, in);
+      in = kind.build_input(now);  // an inputs command changes what follows
+    }
+    locate_car(in);
+    follow_inspection(in, [&](Direction d) { kind.inspect_run(d, in); });
+    // The faults before the travel: a watcher hears the fault before the travel it ends.
+    kind.update_faults(in, now);
+    if (!shutting_down_) {
+      if (const auto floor = next_call(in)) kind.start_call_travel(*floor, in);  // waits if refused
+      auto_relevel(in, kind);
+    }
+    kind.run_travel(in);
+    sample_learning(in.position_mm, in.inputs, now, travel_.direction(),
+                    [this](std::int64_t target_mm) { return travel_.end_learning_at(target_mm); });
+    drain_travel(now);
+    const bool was_busy = travel_.busy();
+    step_learning(
+        was_busy, [&] { return learn_gate(in, kind); },
+        [&](std::int64_t target_mm, Direction direction) {
+          return kind.start_learn_leg(target_mm, direction, in);
+        });
+    if (!was_busy && travel_.busy()) {  // the leg up after the approach: its output now
+      kind.run_travel(in);
+      drain_travel(now);
+    }
+    return in;
+  }
+
+  /// The relevel command: to the nearest floor's level by the position, or without one in the
+  /// direction of the single relevelling signal (relevel_up / relevel_down); answered with the
+  /// floor it relevels to.
+  template <typename Kind>
+  void handle_relevel(std::uint32_t tag, const typename Types::Input& in, Kind& kind) noexcept {
+    if (relevel_refused(tag)) return;
+    if (in.inputs.button_mode()) return (void)refuse(tag, ReplyCode::NotReady, kButtonModeText);
+    std::size_t floor = travel_.current_floor();
+    Direction direction = Direction::None;
+    if (in.position_mm) {
+      const auto nearest = lift_.floors().nearest(*in.position_mm);
+      if (!nearest) return (void)refuse(tag, ReplyCode::NotReady, "no floor");
+      floor = *nearest;
+      if (std::llabs(*in.position_mm - lift_.floors().level_mm(floor)) <=
+          static_cast<std::int64_t>(kind.relevel_policy().level_tolerance_mm)) {
+        return (void)refuse(tag, ReplyCode::NotReady, "the car is level: nothing to relevel");
+      }
+    } else if (in.inputs.relevel_up != in.inputs.relevel_down) {
+      direction = in.inputs.relevel_up ? Direction::Up : Direction::Down;
+    } else {
+      return (void)refuse(tag, ReplyCode::NotReady, kNoRelevelReference);
+    }
+    const Cause why = kind.start_relevel_run(floor, direction, in);
+    if (why != Cause::None) {
+      const Refusal r = Kind::refusal(why);
+      return (void)refuse(tag, r.code, r.detail);
+    }
+    reply(tag, ReplyCode::Ok, {}, floor);
+  }
+
+  /// The automatic relevelling of a car at rest that left its floor's level (relevel_policy():
+  /// beyond the threshold, inside the zone), or without a position one the shaft's single
+  /// relevelling signal asks for. Only where it may start now; otherwise it waits (a refused
+  /// relevelling is no event).
+  template <typename Kind>
+  void auto_relevel(const typename Types::Input& in, Kind& kind) noexcept {
+    const RelevelPolicy policy = kind.relevel_policy();
+    if (!policy.automatic || travel_.busy() || in.inputs.button_mode() || learning() ||
+        relevel_held()) {
+      return;
+    }
+    std::size_t floor = travel_.current_floor();
+    Direction direction = Direction::None;
+    if (in.position_mm) {
+      const auto nearest =
+          floor_to_relevel(lift_.floors(), *in.position_mm, policy.threshold_mm, policy.zone_mm);
+      if (!nearest) return;
+      floor = *nearest;
+    } else if (in.inputs.relevel_up != in.inputs.relevel_down) {
+      direction = in.inputs.relevel_up ? Direction::Up : Direction::Down;
+    } else {
+      return;
+    }
+    if (travel_.forbidding(Types::TravelKind::Relevel, in) == Cause::None) {
+      (void)kind.start_relevel_run(floor, direction, in);
+    }
+  }
+
+  /// The learn command's and the next leg's gates beyond the first ones (handle_learn): not in
+  /// inspection or recall, not while a run is in progress, the drive's own (a speed it lacks),
+  /// then every gate of a travel (the drive, the safety chain, the doors, the inputs, the
+  /// position: the travel's forbidding()).
+  template <typename Kind>
+  std::optional<Answer> learn_gate(const typename Types::Input& in, Kind& kind) const noexcept {
+    if (in.inputs.button_mode()) return Answer{ReplyCode::NotReady, kButtonModeText};
+    if (travel_.busy()) return Answer{ReplyCode::Busy, "a travel is running"};
+    if (const std::optional<Answer> refusal = kind.drive_learn_refusal(in)) return refusal;
+    const Cause why = travel_.forbidding(Types::TravelKind::Learn, in);
+    if (why != Cause::None) {
+      const Refusal r = Kind::refusal(why);
+      return Answer{r.code, r.detail};
+    }
+    return std::nullopt;
+  }
+
+  /// The faults of the machine every lift raises alike: its inputs lost (after the start
+  /// grace), the safety chain open, and the position lost where the drive steers by it
+  /// (`position_needed`).
+  void set_machine_faults(const Inputs& inputs, bool position_known, bool position_needed,
+                          MonoTime now) noexcept {
+    const bool started = start_grace_over(now);
+    set_fault(FaultCode::InputsLost, started && !inputs.valid, now);
+    set_fault(FaultCode::SafetyChain, inputs.valid && !inputs.safety_chain_closed, now);
+    set_fault(FaultCode::PositionLost, started && position_needed && !position_known, now);
+  }
+
   // ---- each step ----
 
   /// Once per step, after the travel's output: a sample of the curve while a run is in progress
@@ -385,16 +555,16 @@ class ControllerCore {
       place_known_ = true;
     }
   }
-  /// Inspection (the car-roof switch, or the API's): hold-to-run with the buttons; a travel or
-  /// relevelling running when it comes on ends with `abort_cause`. `inspect(direction)` hands the
-  /// wanted direction to the travel (None: stand still).
+  /// Inspection or recall (the car-roof switch, the API's, the recall key switch): hold-to-run
+  /// with the buttons; a travel or relevelling running when either comes on ends with
+  /// `mode_changed` (DCP 9.1.1). `inspect(direction)` hands the wanted direction to the travel
+  /// (None: stand still).
   template <typename Inspect>
-  void follow_inspection(const typename Types::Input& in, Cause abort_cause,
-                         Inspect inspect) noexcept {
-    if (in.inputs.inspection) {
+  void follow_inspection(const typename Types::Input& in, Inspect inspect) noexcept {
+    if (in.inputs.button_mode()) {
       if (travel_.kind() != Types::TravelKind::None &&
           travel_.kind() != Types::TravelKind::Inspection) {
-        travel_.abort(abort_cause, in.now);  // a travel, a relevelling or a learning leg
+        travel_.abort(Cause::ModeChanged, in.now);  // a travel, a relevelling or a learning leg
       }
       const Direction d = in.inputs.button_up == in.inputs.button_down
                               ? Direction::None
@@ -451,9 +621,9 @@ class ControllerCore {
   }
 
   /// The floor of the first call to travel to now, if any: none while a run is in progress or
-  /// inspection is on; a call to the floor the car is at is served at once.
+  /// inspection or recall is on; a call to the floor the car is at is served at once.
   std::optional<std::size_t> next_call(const typename Types::Input& in) noexcept {
-    if (travel_.busy() || in.inputs.inspection || learning_.active()) return std::nullopt;
+    if (travel_.busy() || in.inputs.button_mode() || learning_.active()) return std::nullopt;
     const auto front = lift_.calls().front();
     if (!front) return std::nullopt;
     const std::size_t floor = *front;

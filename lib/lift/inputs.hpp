@@ -51,6 +51,9 @@ struct Inputs {
   bool relevel_towards(Direction direction) const noexcept {
     return direction == Direction::Up ? relevel_up : direction == Direction::Down && relevel_down;
   }
+  /// The inspection or the recall (test control) switch is on: the car moves only while a
+  /// button is held, and no normal travel runs (DCP 9.1.1, 9.2.1, 9.2.2; every drive kind).
+  bool button_mode() const noexcept { return inspection || recall; }
   bool operator==(const Inputs&) const = default;
 };
 

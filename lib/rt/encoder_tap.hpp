@@ -3,8 +3,6 @@
 // and the encoder may share a bus; a DCP lift runs a runner for the encoder alone).
 #pragma once
 
-#include <optional>
-
 #include "can/encoder.hpp"
 #include "rt/can_runner.hpp"
 
@@ -15,9 +13,9 @@ class EncoderTap final : public CanEngine {
   /// `inner` may be nullptr (a bus with the encoder only).
   EncoderTap(can::CanEncoder& encoder, CanEngine* inner) noexcept
       : encoder_(encoder), inner_(inner) {}
-  std::optional<can::Frame> on_frame(const can::Frame& frame, MonoTime now) noexcept override {
-    if (encoder_.on_frame(frame, now)) return std::nullopt;
-    return inner_ != nullptr ? inner_->on_frame(frame, now) : std::nullopt;
+  void on_frame(const can::Frame& frame, MonoTime now, CanOutbox& out) noexcept override {
+    if (encoder_.on_frame(frame, now)) return;  // the encoder is only listened to
+    if (inner_ != nullptr) inner_->on_frame(frame, now, out);
   }
   void on_bus_error(const can::ErrorReport& report, MonoTime now) noexcept override {
     if (inner_ != nullptr) inner_->on_bus_error(report, now);
@@ -25,11 +23,12 @@ class EncoderTap final : public CanEngine {
   void on_endpoint(bool up, MonoTime now) noexcept override {
     if (inner_ != nullptr) inner_->on_endpoint(up, now);
   }
-  void on_tick(MonoTime now) noexcept override {
-    if (inner_ != nullptr) inner_->on_tick(now);
+  void on_tick(MonoTime now, CanOutbox& out) noexcept override {
+    if (inner_ != nullptr) inner_->on_tick(now, out);
   }
-  void on_sent(bool delivered, MonoTime now) noexcept override {
-    if (inner_ != nullptr) inner_->on_sent(delivered, now);
+  /// Every frame sent was the inner engine's.
+  void on_sent(const can::Frame& frame, bool delivered, MonoTime now) noexcept override {
+    if (inner_ != nullptr) inner_->on_sent(frame, delivered, now);
   }
 
  private:

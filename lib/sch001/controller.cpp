@@ -50,8 +50,8 @@ Sch001Controller::Sch001Controller(const ControllerConfig& config, const Positio
 
 // ---- rt::CanEngine ----
 
-std::optional<can::Frame> Sch001Controller::on_frame(const can::Frame& frame,
-                                                     MonoTime now) noexcept {
+void Sch001Controller::on_frame(const can::Frame& frame, MonoTime now,
+                                rt::CanOutbox& out) noexcept {
   const FrameResult r = link_.on_frame(frame, now);
   if (r.change != LinkChange::None) {
     ControllerEvent e;
@@ -69,10 +69,13 @@ std::optional<can::Frame> Sch001Controller::on_frame(const can::Frame& frame,
   answer_ = r.answer;
   // The sequencing sees the new status at once (the answer already obeyed it: 3d, 3e).
   step(now);
-  return r.answer;
+  // The runner sends it when this returns and tells on_sent(); each call starts with an empty
+  // outbox, so there is room for this one answer.
+  if (answer_ && !out.send(*answer_)) answer_.reset();
 }
 
-void Sch001Controller::on_sent(bool delivered, MonoTime now) noexcept {
+void Sch001Controller::on_sent(const can::Frame& /*frame: answer_*/, bool delivered,
+                               MonoTime now) noexcept {
   // on_frame() stepped already: step again only when the link fault comes or goes.
   const bool was_failing = send_failures_ >= kSendFailuresForFault;
   if (delivered) {
@@ -121,7 +124,7 @@ void Sch001Controller::on_endpoint(bool up, MonoTime now) noexcept {
   step(now);
 }
 
-void Sch001Controller::on_tick(MonoTime now) noexcept {
+void Sch001Controller::on_tick(MonoTime now, rt::CanOutbox& /*out: only answers*/) noexcept {
   if (link_.on_tick(now) == LinkChange::Silent) {
     ControllerEvent e;
     e.kind = ControllerEvent::Kind::Link;
@@ -148,38 +151,8 @@ TickInput Sch001Controller::build_input(MonoTime now) noexcept {
 }
 
 void Sch001Controller::step(MonoTime now) noexcept {
-  ++steps_;
   foreign_sender_ = own_id_at_ && now - *own_id_at_ < kCardTimeout;
-  TickInput in = build_input(now);
-  ControllerCommand command;
-  while (next_command(command)) {
-    handle(command, in);
-    in = build_input(now);  // an inputs command changes what follows
-  }
-  locate_car(in);  // 3c: the current floor is the one the car last stopped at
-  follow_inspection(in, lift::Cause::StopRequested,
-                    [&](lift::Direction d) { (void)travel_.inspect(d, in); });
-  update_faults(in, now);
-  last_output_ = travel_.tick(lift_.floors(), in);
-  sample_learning(in.position_mm, in.inputs, now, travel_.direction(),
-                  [this](std::int64_t target_mm) { return travel_.end_learning_at(target_mm); });
-  drain_travel(now);
-  const bool was_busy = travel_.busy();
-  step_learning(
-      was_busy, [&] { return learn_refusal(in); },
-      [&](std::int64_t target_mm, lift::Direction direction) {
-        return travel_.start_learning(target_mm, direction, in) == lift::Cause::None;
-      });
-  if (!was_busy && travel_.busy()) {  // the leg up after the approach: its signals now
-    last_output_ = travel_.tick(lift_.floors(), in);
-    drain_travel(now);
-  }
-  if (!shutting_down_) {
-    serve_calls(in);
-    maybe_relevel(in);
-    if (travel_.kind() != TravelKind::None) last_output_ = travel_.tick(lift_.floors(), in);
-    drain_travel(now);
-  }
+  const TickInput in = step_lift(now, *this);
   Command wanted;
   wanted.bits = last_output_.bits;
   wanted.current_floor = static_cast<std::uint8_t>(last_output_.current_floor);
@@ -196,31 +169,22 @@ void Sch001Controller::step(MonoTime now) noexcept {
 
 // ---- commands ----
 
-ReplyCode Sch001Controller::code_for(lift::Cause cause) noexcept {
-  switch (cause) {
-    case lift::Cause::DriveFault:
-    case lift::Cause::CardSilent:
-    case lift::Cause::BusFault:
-      return ReplyCode::Fault;
-    default:
-      return lift::shared_cause_code(cause);
-  }
-}
+namespace {
 
-std::string_view Sch001Controller::text_for(lift::Cause cause) noexcept {
-  switch (cause) {
-    case lift::Cause::DriveFault:
-      return "the SCH001 card reports ERR (card document 3d)";
-    case lift::Cause::DriveNotReady:
-      return "the SCH001 card is not ready (RDY = 0, or no status frame heard yet; card document "
-             "3e)";
-    case lift::Cause::CardSilent:
-      return "no frame from the SCH001 card for 10 s (card document 3f)";
-    case lift::Cause::BusFault:
-      return "the CAN bus or socket is not working";
-    default:
-      return lift::shared_cause_text(cause);
-  }
+/// The card's own refusals (card document 3d, 3e, 3f); the machine's are every kind's.
+constexpr lift::CauseRefusal kCardRefusals[] = {
+    {lift::Cause::DriveFault, ReplyCode::Fault, "the SCH001 card reports ERR (card document 3d)"},
+    {lift::Cause::DriveNotReady, ReplyCode::NotReady,
+     "the SCH001 card is not ready (RDY = 0, or no status frame heard yet; card document 3e)"},
+    {lift::Cause::CardSilent, ReplyCode::Fault,
+     "no frame from the SCH001 card for 10 s (card document 3f)"},
+    {lift::Cause::BusFault, ReplyCode::Fault, "the CAN bus or socket is not working"},
+};
+
+}  // namespace
+
+lift::Refusal Sch001Controller::refusal(lift::Cause cause) noexcept {
+  return lift::refusal_for(kCardRefusals, cause);
 }
 
 void Sch001Controller::handle(const ControllerCommand& command, TickInput& in) noexcept {
@@ -232,27 +196,15 @@ void Sch001Controller::handle(const ControllerCommand& command, TickInput& in) n
           (void)handle_travel(
               tag, body, in, [] { return std::optional<lift::Refusal>(); },
               [&] { return travel_.start_travel(lift_.floors(), body.floor, body.speed, in); },
-              code_for, text_for);
+              refusal);
         } else if constexpr (std::is_same_v<T, RelevelCommand>) {
-          if (relevel_refused(tag)) return;
-          if (!in.position_mm) {
-            return reply(tag, ReplyCode::Fault, text_for(lift::Cause::PositionLost));
-          }
-          const auto nearest = lift_.floors().nearest(*in.position_mm);
-          if (!nearest) return reply(tag, ReplyCode::NotReady, "no floor");
-          if (std::llabs(*in.position_mm - lift_.floors().level_mm(*nearest)) <=
-              static_cast<std::int64_t>(config_.hydraulic.stop_tolerance_mm)) {
-            return reply(tag, ReplyCode::NotReady, "the car is level: nothing to relevel");
-          }
-          const lift::Cause why = travel_.start_relevel(lift_.floors(), *nearest, in);
-          if (why != lift::Cause::None) return reply(tag, code_for(why), text_for(why));
-          reply(tag, ReplyCode::Ok, {}, nearest);
+          handle_relevel(tag, in, *this);
         } else if constexpr (std::is_same_v<T, LearnCommand>) {
           handle_learn(
               tag, in.position_mm, config_.lift.level_tolerance_mm,
-              [&] { return learn_refusal(in); },
+              [&] { return learn_gate(in, *this); },
               [&](std::int64_t target_mm, lift::Direction direction) {
-                return travel_.start_learning(target_mm, direction, in) == lift::Cause::None;
+                return start_learn_leg(target_mm, direction, in);
               });
         } else {
           handle_shared(tag, body, in);
@@ -261,36 +213,42 @@ void Sch001Controller::handle(const ControllerCommand& command, TickInput& in) n
       command.body);
 }
 
-std::optional<lift::Answer> Sch001Controller::learn_refusal(const TickInput& in) const noexcept {
-  if (in.inputs.inspection) return lift::Answer{ReplyCode::NotReady, "inspection is on"};
-  if (travel_.busy()) return lift::Answer{ReplyCode::Busy, "a travel is running"};
-  // Every gate of a travel: the card (RDY, ERR, fresh status, the bus), the safety chain, the
-  // doors, the inputs and the position (HydraulicTravel::forbidding).
-  const lift::Cause why = travel_.forbidding(TravelKind::Learn, in);
-  if (why != lift::Cause::None) return lift::Answer{code_for(why), text_for(why)};
-  return std::nullopt;
+// ---- what only the hydraulic lift knows (ControllerCore::step_lift) ----
+
+void Sch001Controller::inspect_run(lift::Direction direction, const TickInput& in) noexcept {
+  (void)travel_.inspect(direction, in);
 }
 
-// ---- travels, calls, faults ----
-
-void Sch001Controller::serve_calls(TickInput& in) noexcept {
-  if (const auto floor = next_call(in)) {
-    (void)travel_.start_travel(lift_.floors(), *floor, Speed::V4, in);  // waits while refused
-  }
+void Sch001Controller::start_call_travel(std::size_t floor, const TickInput& in) noexcept {
+  (void)travel_.start_travel(lift_.floors(), floor, Speed::V4, in);
 }
 
-void Sch001Controller::maybe_relevel(TickInput& in) noexcept {
-  if (!config_.auto_relevel || travel_.kind() != TravelKind::None || in.inputs.inspection ||
-      !in.position_mm || learning() || relevel_held()) {
-    return;
-  }
-  const auto nearest = lift::floor_to_relevel(
-      lift_.floors(), *in.position_mm, config_.hydraulic.relevel_start_mm, lift::kRelevelZoneMm);
-  if (!nearest)
-    return;  // Only where it may start now; otherwise it waits (a refused relevel is no event).
-  if (travel_.forbidding(TravelKind::Relevel, in) == lift::Cause::None) {
-    (void)travel_.start_relevel(lift_.floors(), *nearest, in);
-  }
+lift::Cause Sch001Controller::start_relevel_run(std::size_t floor, lift::Direction,
+                                                const TickInput& in) noexcept {
+  // The hydraulic lift relevels by position only (HydraulicTravel: it steers by position); a
+  // relevelling signal alone finds the position missing.
+  return travel_.start_relevel(lift_.floors(), floor, in);
+}
+
+void Sch001Controller::run_travel(const TickInput& in) noexcept {
+  last_output_ = travel_.tick(lift_.floors(), in);
+}
+
+bool Sch001Controller::start_learn_leg(std::int64_t target_mm, lift::Direction direction,
+                                       const TickInput& in) noexcept {
+  return travel_.start_learning(target_mm, direction, in) == lift::Cause::None;
+}
+
+std::optional<lift::Answer> Sch001Controller::drive_learn_refusal(const TickInput&) noexcept {
+  return std::nullopt;  // the unit's slow speed is always there
+}
+
+lift::RelevelPolicy Sch001Controller::relevel_policy() const noexcept {
+  lift::RelevelPolicy policy;
+  policy.automatic = config_.auto_relevel;
+  policy.threshold_mm = config_.hydraulic.relevel_start_mm;
+  policy.level_tolerance_mm = config_.hydraulic.stop_tolerance_mm;
+  return policy;
 }
 
 void Sch001Controller::update_faults(const TickInput& in, MonoTime now) noexcept {
@@ -302,9 +260,7 @@ void Sch001Controller::update_faults(const TickInput& in, MonoTime now) noexcept
                 foreign_sender_ || endpoint_lost_ || (started && !endpoint_up_),
             now);
   set_fault(FaultCode::DriveFault, in.card_error && !in.card_silent, now);
-  set_fault(FaultCode::InputsLost, started && !in.inputs.valid, now);
-  set_fault(FaultCode::SafetyChain, in.inputs.valid && !in.inputs.safety_chain_closed, now);
-  set_fault(FaultCode::PositionLost, started && !in.position_mm, now);
+  set_machine_faults(in.inputs, in.position_mm.has_value(), /*position_needed=*/true, now);
 }
 
 void Sch001Controller::publish(MonoTime now) noexcept {

@@ -171,11 +171,13 @@ class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore
   std::span<const std::int64_t> floors_mm() const noexcept { return config_.floors_mm; }
 
   // ---- rt::CanEngine (CAN thread) ----
-  std::optional<can::Frame> on_frame(const can::Frame& frame, MonoTime now) noexcept override;
+  /// Queues the answer to a card frame in `out` (card document 3c, 3f); the card is answered,
+  /// never sent to unasked.
+  void on_frame(const can::Frame& frame, MonoTime now, rt::CanOutbox& out) noexcept override;
   void on_bus_error(const can::ErrorReport& report, MonoTime now) noexcept override;
   void on_endpoint(bool up, MonoTime now) noexcept override;
-  void on_tick(MonoTime now) noexcept override;
-  void on_sent(bool delivered, MonoTime now) noexcept override;
+  void on_tick(MonoTime now, rt::CanOutbox& out) noexcept override;
+  void on_sent(const can::Frame& frame, bool delivered, MonoTime now) noexcept override;
 
   /// Direct access for single-threaded tests (and travel()).
   const CardLink& link() const noexcept { return link_; }
@@ -185,13 +187,20 @@ class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore
   void handle(const ControllerCommand& command, TickInput& in) noexcept;
   TickInput build_input(MonoTime now) noexcept;
   void update_faults(const TickInput& in, MonoTime now) noexcept;
-  void serve_calls(TickInput& in) noexcept;
-  void maybe_relevel(TickInput& in) noexcept;
-  /// The learn command's and the next leg's gates beyond the shared ones (ControllerCore).
-  std::optional<lift::Answer> learn_refusal(const TickInput& in) const noexcept;
+  // What only the hydraulic lift knows, for ControllerCore::step_lift.
+  friend class lift::ControllerCore<Sch001CoreTypes>;
+  void inspect_run(lift::Direction direction, const TickInput& in) noexcept;
+  void start_call_travel(std::size_t floor, const TickInput& in) noexcept;
+  lift::Cause start_relevel_run(std::size_t floor, lift::Direction direction,
+                                const TickInput& in) noexcept;
+  void run_travel(const TickInput& in) noexcept;
+  bool start_learn_leg(std::int64_t target_mm, lift::Direction direction,
+                       const TickInput& in) noexcept;
+  static std::optional<lift::Answer> drive_learn_refusal(const TickInput& in) noexcept;
+  lift::RelevelPolicy relevel_policy() const noexcept;
   void publish(MonoTime now) noexcept;
-  static ReplyCode code_for(lift::Cause cause) noexcept;
-  static std::string_view text_for(lift::Cause cause) noexcept;
+  /// The answer to a refusal for `cause` (the card's own, else every kind's).
+  static lift::Refusal refusal(lift::Cause cause) noexcept;
 
   ControllerConfig config_;
   const PositionSource& position_;

@@ -191,7 +191,7 @@ const std::vector<std::string> kEvents = {
 TEST(ApiDocs, EventListMatchesWhatTheDaemonPublishes) {
   std::set<std::string> published;
   for (const char* lift :
-       {"lib/dcp/host/lift_app.cpp", "lib/sch001/host/hydraulic_lift.cpp",
+       {"lib/dcp/host/dcp_lift.cpp", "lib/sch001/host/hydraulic_lift.cpp",
         "lib/uss/host/uss_lift.cpp", "lib/host/lift_core.cpp", "lib/host/learn_report.cpp"}) {
     const std::string app = read_source(lift);
     for (const auto& pattern : {R"re(\bname = "([a-z_]+)";)re", R"re(publish\(\s*"([a-z_]+)")re"}) {

@@ -146,7 +146,7 @@ class QuietSession : public SessionControl {
 };
 
 /// Every drive kind's own commands and `sim` on `dispatcher`, served by `backend`, as the
-/// daemon's registry of drive kinds (daemon/drives.cpp) adds them to a lift's server.
+/// daemon's registry of drive kinds (lib/kinds/lifts.cpp) adds them to a lift's server.
 inline void add_drive_kind_commands(Dispatcher& dispatcher, FakeBackend& backend) {
   daemon::add_dcp_commands(dispatcher, backend);
   daemon::add_uss_commands(dispatcher, backend);

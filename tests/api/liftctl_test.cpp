@@ -2,6 +2,7 @@
 // is missing.
 
 #include "api/test_support.hpp"
+#include "format.hpp"
 
 namespace liftd::api::testing {
 namespace {
@@ -66,6 +67,27 @@ TEST_F(Liftctl, StatsOfAUssLiftPrintTheBussNestedFiguresByPath) {
   const RunResult r = run_command(liftctl("stats"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("uss:\n  receive.bcc: 2\n"), std::string::npos) << r.output;
+}
+
+// A drive kind this liftctl was built without (a fourth kind, a newer daemon): its `stats` and
+// `status` objects are printed all the same, under their own name.
+TEST(LiftctlFormat, PrintsAnyDriveKindsObjectsWithoutKnowingTheKind) {
+  const nlohmann::json stats = {{"link", {{"frames_sent", 5}}},
+                                {"cycle", {{"cycles", 5}}},
+                                {"canopen", {{"sync_sent", 7}, {"pdo", {{"tx", 3}}}}},
+                                {"api", {{"requests", 1}}}};
+  EXPECT_EQ(liftctl::format_stats(stats),
+            "link:\n  frames_sent: 5\ncycle:\n  cycles: 5\ncanopen:\n  pdo.tx: 3\n  "
+            "sync_sent: 7\napi:\n  requests: 1\n");
+  const nlohmann::json status = {{"link", {{"state", "up"}}},
+                                 {"drive", {{"kind", "canopen"}, {"state", "not_ready"}}},
+                                 {"canopen", {{"nmt", "operational"}}}};
+  const std::string text = liftctl::format_status(status);
+  EXPECT_NE(text.find("drive:    canopen, not_ready (the drive is not ready: no travel starts)"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("canopen:  nmt: operational\n"), std::string::npos) << text;
+  EXPECT_EQ(text.find("dcp:"), std::string::npos) << text;
 }
 
 TEST_F(Liftctl, ControlCommandsReachTheBackend) {

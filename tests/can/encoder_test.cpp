@@ -132,10 +132,10 @@ TEST(CanEncoder, FramesReachItThroughACanRunner) {
 /// Counts what a CAN runner tells its engine.
 class CountingEngine final : public rt::CanEngine {
  public:
-  std::optional<Frame> on_frame(const Frame&, MonoTime) noexcept override { return std::nullopt; }
+  void on_frame(const Frame&, MonoTime, rt::CanOutbox&) noexcept override {}
   void on_bus_error(const ErrorReport&, MonoTime) noexcept override {}
   void on_endpoint(bool up, MonoTime) noexcept override { (up ? opened : failed).fetch_add(1); }
-  void on_tick(MonoTime) noexcept override {}
+  void on_tick(MonoTime, rt::CanOutbox&) noexcept override {}
   std::atomic<int> opened{0};
   std::atomic<int> failed{0};
 };

@@ -198,6 +198,51 @@ TEST(CanUnixEndpoint, SaysWhatFailed) {
   EXPECT_EQ(missing.error().what, "connect to /nonexistent/liftd-can.sock");
 }
 
+TEST(CanUnixEndpoint, AnOpenerReopensIntoOneEndpointThatKeepsItsFilterAndCounters) {
+  // What the CAN runner does on its real-time thread: one endpoint built up front, descriptors
+  // from an opener prepared up front attached and closed again and again.
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("liftd-can-opener-" + std::to_string(::getpid())))
+          .string();
+  const std::vector<std::uint32_t> ids{0x581};
+  const EndpointOpener opener("unix:" + path, ids);
+  EXPECT_EQ(opener.endpoint(), "unix:" + path);
+  const auto absent = opener.open();
+  ASSERT_FALSE(absent);
+  EXPECT_EQ(absent.error().code, ENOENT);
+  EXPECT_EQ(absent.error().step, OpenStep::UnixConnect);
+  EXPECT_EQ(opener.describe(absent.error()), "connect to " + path);
+
+  auto listener = listen_unix(path);
+  ASSERT_TRUE(listener) << listener.error().what;
+  CanSocket client = CanSocket::unattached(ids);
+  EXPECT_FALSE(client.is_open());
+  for (int round = 1; round <= 2; ++round) {
+    const auto fd = opener.open();
+    ASSERT_TRUE(fd) << opener.describe(fd.error());
+    client.attach(fd.value());
+    ASSERT_TRUE(client.is_open());
+    pollfd p{listener.value(), POLLIN, 0};
+    ASSERT_EQ(::poll(&p, 1, 1000), 1);
+    CanSocket server = CanSocket::adopt(
+        ::accept4(listener.value(), nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC));
+    ASSERT_EQ(server.write(make_frame(0x551, Bytes{0x01})), 0);  // filtered out
+    ASSERT_EQ(server.write(make_frame(0x581, Bytes{0x61, static_cast<std::uint8_t>(round)})), 0);
+    const Received r = read_one(client);
+    ASSERT_EQ(r.kind, Received::Kind::Frame);
+    EXPECT_EQ(r.frame, make_frame(0x581, Bytes{0x61, static_cast<std::uint8_t>(round)}));
+    EXPECT_EQ(client.drops().filtered, static_cast<std::uint64_t>(round)) << "over both sockets";
+    client.close();
+    EXPECT_FALSE(client.is_open());
+    EXPECT_EQ(client.fd(), -1);
+  }
+  ::close(listener.value());
+  ::unlink(path.c_str());
+  const auto gone = opener.open();
+  ASSERT_FALSE(gone);
+  EXPECT_EQ(gone.error().code, ENOENT);
+}
+
 // The same endpoint over the kernel's SocketCAN is tested in real_socket_test.cpp (label "vcan",
 // run by tools/uml/can-stage.sh inside user-mode Linux). What a kernel without AF_CAN says:
 TEST(CanRealSocket, WithoutAfCanOpeningSaysSo) {

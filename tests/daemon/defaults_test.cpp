@@ -3,7 +3,7 @@
 // builds a sequencer directly runs the lift the daemon runs.
 #include <gtest/gtest.h>
 
-#include "dcp/host/lift_app.hpp"
+#include "dcp/host/dcp_lift.hpp"
 #include "sch001/host/hydraulic_lift.hpp"
 #include "uss/host/uss_lift.hpp"
 

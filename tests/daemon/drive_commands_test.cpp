@@ -1,4 +1,4 @@
-// The registry of drive kinds (daemon/drives.cpp) adds every kind's own API commands to a lift's
+// The registry of drive kinds (lib/kinds/lifts.cpp) adds every kind's own API commands to a lift's
 // dispatcher: the lift's kind serves its own, and another kind's command is answered
 // `not_offered` with the message every lift gives.
 #include <gtest/gtest.h>
@@ -10,7 +10,7 @@
 #include "api/commands.hpp"
 #include "api/dispatcher.hpp"
 #include "api/fake_backend.hpp"
-#include "daemon/drives.hpp"
+#include "kinds/lifts.hpp"
 
 namespace liftd::daemon {
 namespace {
@@ -25,7 +25,7 @@ class DriveCommandsTest : public ::testing::Test {
   void make_lift(drive::Kind kind) {
     backend_.status_snapshot.drive_kind = kind;
     api::add_builtin_commands(dispatcher_, backend_);
-    add_drive_kind_commands(dispatcher_, backend_);
+    kinds::add_drive_kind_commands(dispatcher_, backend_);
   }
   json handle(std::string_view line) {
     api::Peer peer;

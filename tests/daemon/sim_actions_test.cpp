@@ -1,4 +1,4 @@
-// `sim` as the registry of drive kinds (daemon/drives.cpp) builds it: every kind's actions in the
+// `sim` as the registry of drive kinds (lib/kinds/lifts.cpp) builds it: every kind's actions in the
 // documented order, each once; and an action reaches only the simulator of a kind that declared
 // it (lib/<kind>/host/sim_actions.*, routed by apply_sim of lib/host/lift_common.hpp).
 #include <gtest/gtest.h>
@@ -15,9 +15,9 @@
 #include "api/fake_backend.hpp"
 #include "common/mono_time.hpp"
 #include "config/config.hpp"
-#include "daemon/drives.hpp"
 #include "dcp/host/sim_actions.hpp"
 #include "host/lift_common.hpp"
+#include "kinds/lifts.hpp"
 #include "sch001/host/sim_actions.hpp"
 #include "uss/host/sim_actions.hpp"
 
@@ -133,7 +133,7 @@ TEST(SimActions, TheSimCommandListsEveryKindsActionsOnceInTheDocumentedOrder) {
     backend.status_snapshot.drive_kind = kind;
     api::Dispatcher dispatcher;
     api::add_builtin_commands(dispatcher, backend);
-    add_drive_kind_commands(dispatcher, backend);
+    kinds::add_drive_kind_commands(dispatcher, backend);
     const api::CommandSpec* sim = dispatcher.find("sim");
     ASSERT_NE(sim, nullptr) << drive::to_string(kind);
     std::vector<std::string> arg_names;
@@ -152,7 +152,7 @@ TEST(SimActions, AnActionReachesOnlyTheSimulatorOfAKindThatDeclaredIt) {
     RecordingSimBackend backend(expected.kind);
     api::Dispatcher dispatcher;
     api::add_builtin_commands(dispatcher, backend);
-    add_drive_kind_commands(dispatcher, backend);
+    kinds::add_drive_kind_commands(dispatcher, backend);
     for (const std::string& action : kDocumentedActions) {
       SCOPED_TRACE(std::string(drive::to_string(expected.kind)) + " " + action);
       backend.reached.clear();
@@ -183,7 +183,7 @@ TEST(SimActions, AKindsOwnArgumentIsCheckedOnEveryLift) {
     RecordingSimBackend backend(kind);
     api::Dispatcher dispatcher;
     api::add_builtin_commands(dispatcher, backend);
-    add_drive_kind_commands(dispatcher, backend);
+    kinds::add_drive_kind_commands(dispatcher, backend);
     const json reply = handle_sim(dispatcher, {{"cmd", "sim"}, {"action", "channel_fault"}});
     ASSERT_TRUE(reply.contains("error")) << reply.dump();
     EXPECT_EQ(reply.at("error").at("message"), "channel_fault needs a channel");

@@ -9,6 +9,7 @@
 #include <string>
 #include <thread>
 
+#include "e2e/drive_cases.hpp"
 #include "e2e/harness.hpp"
 
 namespace liftd::e2e {
@@ -36,11 +37,7 @@ void PrintTo(const ShapeCase& c, std::ostream* out) {
   *out << c.kind;
 }
 
-// Three floors 1200 mm apart for the hydraulic and USS cars, as in their own e2e tests.
-const json kThreeFloors = json::array({{{"name", "0"}, {"level_mm", 0}},
-                                       {{"name", "1"}, {"level_mm", 1200}},
-                                       {{"name", "2"}, {"level_mm", 2400}}});
-
+// The floors of the hydraulic and USS cars: kThreeFloors (e2e/drive_cases.hpp).
 const ShapeCase kCases[] = {
     {"dcp",
      json::object(),
@@ -48,7 +45,7 @@ const ShapeCase kCases[] = {
      {"replies_good", "checksum_errors", "echo_collisions", "missing_replies", "repeats",
       "link_losses", "b7_sent", "channel_resets", "decode_errors", "request_timeouts",
       "longest_error_run", "late_sends", "overruns", "skipped_cycles", "max_lateness_us",
-      "lateness_p99_us", "reply_p99_us", "max_work_us"}},
+      "lateness_p99_us", "reply_p99_us", "max_work_us", "serial"}},
     {"sch001",
      {{"drive", {{"kind", "sch001"}}},
       {"floors", kThreeFloors},
@@ -67,7 +64,7 @@ const ShapeCase kCases[] = {
       "control_bits", "status_bits", "setpoint", "actual", "phase", "speed", "slaves", "line_echo"},
      {"baud", "expected_cycle_time_us", "last_cycle_time_us", "cycle_time_p99_us", "replies_good",
       "replies_rejected", "port_losses", "max_lateness_us", "lateness_p99_us", "reply_p99_us",
-      "line_errors", "echo_collisions", "receive", "slaves"}},
+      "line_errors", "echo_collisions", "receive", "slaves", "serial"}},
 };
 
 class ApiShapeTest : public ::testing::TestWithParam<ShapeCase> {
@@ -115,6 +112,10 @@ TEST_P(ApiShapeTest, StatsHaveTheNeutralCountersAndTheKindsOwnUnderItsName) {
   EXPECT_EQ(keys_of(stats[kind]), GetParam().stats_keys) << stats.dump();
   EXPECT_GT(stats["link"]["frames_sent"].get<long long>(), 0) << stats.dump();
   EXPECT_GT(stats["cycle"]["cycles"].get<long long>(), 0) << stats.dump();
+}
+
+TEST(ApiShapeCases, EveryRegisteredDriveKindHasItsCase) {
+  expect_a_case_for_every_kind(kCases, [](const ShapeCase& c) { return c.kind; });
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryDriveKind, ApiShapeTest, ::testing::ValuesIn(kCases),

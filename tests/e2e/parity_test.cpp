@@ -19,50 +19,12 @@
 #include <thread>
 #include <vector>
 
+#include "e2e/drive_cases.hpp"
 #include "e2e/harness.hpp"
 #include "e2e/witness.hpp"
 
 namespace liftd::e2e {
 namespace {
-
-struct DriveCase {
-  const char* name;        ///< the test's name: the drive kind (and its journal component)
-  json config;             ///< merged into the lift's config
-  const char* refusal;     ///< what the refused travel's message says
-  const char* journal;     ///< what the journal says of the drive not being ready ("" for nothing)
-  bool fault_needs_reset;  ///< the drive latches its fault until `drive_reset` (USS C 5.2.1)
-  int far_floor;           ///< a floor far enough for a stop mid-travel
-};
-
-void PrintTo(const DriveCase& c, std::ostream* out) {
-  *out << c.name;
-}
-
-// Three floors 1200 mm apart for the hydraulic and USS cars, as in their own e2e tests.
-const json kThreeFloors = json::array({{{"name", "0"}, {"level_mm", 0}},
-                                       {{"name", "1"}, {"level_mm", 1200}},
-                                       {{"name", "2"}, {"level_mm", 2400}}});
-
-const DriveCase kCases[] = {
-    {"dcp", json::object(), "drive not ready (S0 = 0)", "", false, 4},
-    {"sch001",
-     {{"drive", {{"kind", "sch001"}}},
-      {"floors", kThreeFloors},
-      {"sch001", {{"star_delta_ms", 500}, {"slowdown_up_mm", 300}, {"slowdown_down_mm", 350}}}},
-     "RDY = 0",
-     "[event=card_fault relays=",
-     false,
-     2},
-    {"uss",
-     {{"drive", {{"kind", "uss"}}},
-      {"floors", kThreeFloors},
-      {"travel", {{"dcp3_decel_distance_mm", {{"V4", 700}, {"V3", 500}}}}},
-      {"uss", {{"speeds", {{"V0", 10}, {"VN", 3}, {"VI", 30}, {"V3", 63}, {"V4", 100}}}}}},
-     "local control",
-     "in local control (status word bit 9 = 0): no travel starts",
-     true,
-     2},
-};
 
 class LiftParity : public ::testing::TestWithParam<DriveCase> {
  protected:
@@ -426,10 +388,8 @@ TEST_P(LiftParity, TravelsReturnsTheTravelWithItsCurveToTheFloorsLevel) {
   });
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryDriveKind, LiftParity, ::testing::ValuesIn(kCases),
-                         [](const ::testing::TestParamInfo<DriveCase>& param) {
-                           return std::string(param.param.name);
-                         });
+INSTANTIATE_TEST_SUITE_P(EveryDriveKind, LiftParity, ::testing::ValuesIn(kDriveCases),
+                         drive_case_name);
 
 // ---- the learning travel on every kind ----
 
@@ -595,6 +555,11 @@ INSTANTIATE_TEST_SUITE_P(EveryDriveKind, LearnParity, ::testing::ValuesIn(kLearn
                          [](const ::testing::TestParamInfo<LearnCase>& param) {
                            return std::string(param.param.name);
                          });
+
+TEST(ParityCases, EveryRegisteredDriveKindHasItsCases) {
+  expect_a_case_for_every_kind(kDriveCases, [](const DriveCase& c) { return c.name; });
+  expect_a_case_for_every_kind(kLearnCases, [](const LearnCase& c) { return c.name; });
+}
 
 }  // namespace
 }  // namespace liftd::e2e

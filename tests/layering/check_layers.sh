@@ -24,12 +24,13 @@ declare -A allowed=(
   [api]="common drive log"
   # What every kind's lift shares on the daemon's io thread, below the kinds' own lifts
   # (lib/<kind>/host).
-  [host]="common drive log service can lift sim rt config api"
+  [host]="common drive io log service can lift sim rt config api"
   [dcp]="common io log can drive lift sim rt config api host"
   [sch001]="common io log can drive lift sim rt config api host"
   [uss]="common io log can drive lift sim rt config api host"
-  # The drive kinds put together (the configuration schema): the one folder that knows them all.
-  [kinds]="common drive config dcp sch001 uss"
+  # The drive kinds put together (the configuration schema, the lifts with their commands and
+  # `sim` actions): the one folder that knows them all, the registry the daemon reads.
+  [kinds]="common drive log config api host dcp sch001 uss"
 )
 
 status=0

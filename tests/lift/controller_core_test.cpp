@@ -157,8 +157,8 @@ class StubController : public ControllerCore<StubTypes> {
                     }
                     return std::nullopt;
                   },
-                  [&] { return travel_.start_travel(body.floor, now); }, shared_cause_code,
-                  shared_cause_text);
+                  [&] { return travel_.start_travel(body.floor, now); },
+                  [](Cause cause) { return refusal_for({}, cause); });
             } else {
               handle_shared(command.tag, body, in);
             }
@@ -234,7 +234,8 @@ TEST_F(ControllerCoreTest, TravelCommandGatesInOrder) {
   EXPECT_EQ(command(5, StubTravelCommand{2, StubSpeed::V4}).code, ReplyCode::Ok);
   EXPECT_EQ(command(6, StubTravelCommand{3, StubSpeed::V4}).code, ReplyCode::Busy);
   EXPECT_EQ(command(7, InspectionCommand{true, Direction::Up}).code, ReplyCode::Ok);
-  EXPECT_EQ(command(8, StubTravelCommand{3, StubSpeed::V4}).detail, "inspection is on");
+  EXPECT_EQ(command(8, StubTravelCommand{3, StubSpeed::V4}).detail,
+            "inspection or recall is switched on");
   EXPECT_EQ(command(9, ShutdownCommand{false}).code, ReplyCode::Ok);
   const CommandReply stopping = command(10, StubTravelCommand{9, StubSpeed::V1});
   EXPECT_EQ(stopping.code, ReplyCode::NotReady);
@@ -354,6 +355,13 @@ TEST(TravelHelpers, MachineNeedsAndRefusalCauses) {
   EXPECT_EQ(shared_cause_code(Cause::InputsLost), ReplyCode::Fault);
   EXPECT_EQ(shared_cause_code(Cause::DoorsNotLocked), ReplyCode::NotReady);
   EXPECT_EQ(shared_cause_text(Cause::DriveNotReady), "not possible now");
+  // A kind's own table wins over the shared answer; a cause it does not name keeps the shared.
+  const CauseRefusal own[] = {{Cause::DriveNotReady, ReplyCode::NotReady, "RDY = 0"},
+                              {Cause::InputsLost, ReplyCode::NotReady, "own inputs text"}};
+  EXPECT_EQ(refusal_for(own, Cause::DriveNotReady).detail, "RDY = 0");
+  EXPECT_EQ(refusal_for(own, Cause::InputsLost).code, ReplyCode::NotReady);
+  EXPECT_EQ(refusal_for(own, Cause::SafetyChainOpen).code, ReplyCode::Fault);
+  EXPECT_EQ(refusal_for(own, Cause::SafetyChainOpen).detail, "safety chain open");
 }
 
 TEST_F(ControllerCoreTest, ATravelThatEndsEarlyEmptiesTheCallsQueue) {

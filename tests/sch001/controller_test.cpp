@@ -8,6 +8,7 @@
 #include <map>
 #include <vector>
 
+#include "engine_calls.hpp"
 #include "sch001/controller.hpp"
 
 namespace liftd::sch001 {
@@ -44,17 +45,17 @@ class Sch001ControllerTest : public ::testing::Test {
   /// The card's status frame at the current time; the answer's command byte.
   std::uint8_t status(std::uint8_t byte = kReady) {
     const std::array<std::uint8_t, 2> bytes = {kStatusFrame, byte};
-    const auto answer = controller_.on_frame(can::make_frame(0x581, bytes), now_);
+    const auto answer = test::feed_frame(controller_, can::make_frame(0x581, bytes), now_);
     EXPECT_TRUE(answer);
     if (!answer) return 0xFF;
-    controller_.on_sent(true, now_);
+    controller_.on_sent(*answer, true, now_);
     return answer->data[1];
   }
   /// 100 ms of the card's life: ticks and one status frame.
   std::uint8_t run_100ms(std::uint8_t byte = kReady) {
     for (int i = 0; i < 9; ++i) {
       now_ += 10ms;
-      controller_.on_tick(now_);
+      test::feed_tick(controller_, now_);
     }
     now_ += 10ms;
     send_inputs();
@@ -82,7 +83,7 @@ class Sch001ControllerTest : public ::testing::Test {
     (void)replies();
     EXPECT_TRUE(controller_.post({++tag_, body}));
     now_ += 10ms;
-    controller_.on_tick(now_);
+    test::feed_tick(controller_, now_);
     const auto got = replies();
     EXPECT_EQ(got.size(), 1U);
     return got.empty() ? CommandReply{} : got.front();
@@ -103,7 +104,7 @@ TEST_F(Sch001ControllerTest, AReopenedEndpointVoidsTheOldCardStatus) {
   controller_.on_endpoint(true, now_);
   for (int i = 0; i < 10; ++i) {
     now_ += 10ms;
-    controller_.on_tick(now_);
+    test::feed_tick(controller_, now_);
   }
   const ControllerSnapshot s = controller_.snapshot();
   EXPECT_FALSE(s.heard) << "the old connection's status was kept";
@@ -122,7 +123,7 @@ TEST_F(Sch001ControllerTest, ALostEndpointIsOneFaultHoweverOftenItIsReopened) {
     now_ += 100ms;
     controller_.on_endpoint(true, now_);
     now_ += 10ms;
-    controller_.on_tick(now_);
+    test::feed_tick(controller_, now_);
   }
   auto es = events();
   EXPECT_EQ(count(es, ControllerEvent::Kind::FaultRaised, FaultCode::LinkFault), 1);
@@ -180,13 +181,13 @@ TEST_F(Sch001ControllerTest, NoReplyIsLostWhenCommandsComeFasterThanRepliesAreRe
       }
     }
     now_ += 10ms;
-    controller_.on_tick(now_);
+    test::feed_tick(controller_, now_);
     if (round % 8 == 7) {
       for (const auto& r : replies()) ++answered[r.tag];
     }
   }
   now_ += 10ms;
-  controller_.on_tick(now_);
+  test::feed_tick(controller_, now_);
   for (const auto& r : replies()) ++answered[r.tag];
   EXPECT_GT(refused, 0) << "the test never filled the queues";
   EXPECT_EQ(static_cast<int>(answered.size()), accepted);
@@ -210,11 +211,11 @@ TEST_F(Sch001ControllerTest, FaultRaisesAndClearsStayPairedWhenTheEventQueueOver
   for (int i = 0; i < 1000; ++i) {
     send_inputs(i % 2 == 1);
     now_ += 1ms;
-    controller_.on_tick(now_);
+    test::feed_tick(controller_, now_);
   }
   send_inputs(false);  // ends open
   now_ += 1ms;
-  controller_.on_tick(now_);
+  test::feed_tick(controller_, now_);
   // Drain as the io thread would, with the controller stepping between polls.
   std::vector<ControllerEvent> all;
   for (int i = 0; i < 50; ++i) {
@@ -222,7 +223,7 @@ TEST_F(Sch001ControllerTest, FaultRaisesAndClearsStayPairedWhenTheEventQueueOver
     all.insert(all.end(), es.begin(), es.end());
     now_ += 1ms;
     send_inputs(false);
-    controller_.on_tick(now_);
+    test::feed_tick(controller_, now_);
   }
   bool active = false;
   int raises = 0;
@@ -251,7 +252,7 @@ TEST_F(Sch001ControllerTest, AnotherNodeOnOurIdentifierStopsTravelCommands) {
   (void)events();
   // A frame on 0x551, our identifier (card document 1.6).
   const std::array<std::uint8_t, 4> foreign = {0x68, 0x01, 0x00, 0x03};
-  EXPECT_FALSE(controller_.on_frame(can::make_frame(0x551, foreign), now_));
+  EXPECT_FALSE(test::feed_frame(controller_, can::make_frame(0x551, foreign), now_));
   EXPECT_EQ(run_100ms(), 0x00) << "travel bits while another node commands the card";
   EXPECT_TRUE(controller_.snapshot().foreign_sender);
   EXPECT_EQ(count(events(), ControllerEvent::Kind::FaultRaised, FaultCode::LinkFault), 1);
@@ -272,8 +273,9 @@ TEST_F(Sch001ControllerTest, AnswersThatCannotBeSentAreALinkFaultAndNotShownAsSe
   for (std::uint32_t i = 0; i < kSendFailuresForFault; ++i) {
     now_ += 100ms;
     const std::array<std::uint8_t, 2> bytes = {kStatusFrame, kReady};
-    ASSERT_TRUE(controller_.on_frame(can::make_frame(0x581, bytes), now_));
-    controller_.on_sent(false, now_);
+    const auto answer = test::feed_frame(controller_, can::make_frame(0x581, bytes), now_);
+    ASSERT_TRUE(answer);
+    controller_.on_sent(*answer, false, now_);
   }
   const ControllerSnapshot s = controller_.snapshot();
   EXPECT_TRUE(s.send_failing);
@@ -329,12 +331,12 @@ class Sch001LearnTest : public ::testing::Test {
     if (++ticks_ % 10 == 0) {
       send_inputs();
       const std::array<std::uint8_t, 2> bytes = {kStatusFrame, kReady};
-      const auto answer = controller_.on_frame(can::make_frame(0x581, bytes), now_);
+      const auto answer = test::feed_frame(controller_, can::make_frame(0x581, bytes), now_);
       ASSERT_TRUE(answer);
-      controller_.on_sent(true, now_);
+      controller_.on_sent(*answer, true, now_);
       sent_ = answer->data[1];
     } else {
-      controller_.on_tick(now_);
+      test::feed_tick(controller_, now_);
     }
   }
   /// Runs until the learn command (tag 1) is answered, at most `limit` of fake time.

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "engine_calls.hpp"
 #include "sch001/controller.hpp"
 
 namespace liftd::sch001 {
@@ -83,14 +84,14 @@ std::string run_seed(unsigned seed, Totals& totals) {
       if (e.is_fault()) endpoint_ok = false;
       if (e.restarted) endpoint_ok = true;
     }
-    controller.on_tick(now);
+    test::feed_tick(controller, now);
     // Every 100 ms the card's status frame, unless the card is silent for a while.
     if (step % 10 == 0 && !(step % 700 > 600)) {
       if (chance(10)) status = static_cast<std::uint8_t>(rng() & 0xFF);
       if (chance(10)) status = 0x02;
       const std::array<std::uint8_t, 2> bytes = {kStatusFrame, status};
       const bool after_bus_fault = !endpoint_ok;
-      const auto answer = controller.on_frame(can::make_frame(0x581, bytes), now);
+      const auto answer = test::feed_frame(controller, can::make_frame(0x581, bytes), now);
       endpoint_ok = true;  // a frame from the card: the bus carries frames again
       if (!answer) return "seed " + std::to_string(seed) + ": a status frame got no answer";
       ++totals.answers;

@@ -45,6 +45,22 @@ inline void reset() noexcept {
 inline void note_malloc() noexcept {
   if (counting) mallocs.fetch_add(1, std::memory_order_relaxed);
 }
+/// True when the hooks really count on this thread: one operator new and one malloc made while
+/// counting are both seen (a test checks it before it trusts a count of zero). Leaves the
+/// counters at zero.
+inline bool counts_allocations() {
+  void* (*volatile allocate)(std::size_t) = &std::malloc;  // volatile: kept by the optimiser
+  reset();
+  counting = true;
+  void* by_new = ::operator new(32);
+  void* by_malloc = allocate(32);
+  counting = false;
+  ::operator delete(by_new);
+  std::free(by_malloc);
+  const bool seen = news.load() >= 1 && mallocs.load() >= 1;
+  reset();
+  return seen;
+}
 
 }  // namespace liftd::heap_hooks
 

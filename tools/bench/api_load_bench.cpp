@@ -1,5 +1,5 @@
 // api-load-bench: what API load does to the real-time threads. Runs the real daemon wiring in
-// process (Daemon + LiftApp with the simulated lift on a pty, the cycle thread at its configured
+// process (Daemon + DcpLift with the simulated lift on a pty, the cycle thread at its configured
 // priority, the API server), keeps the car travelling between the lowest and the top floor, and
 // beside it a USS bus (uss::UssRunner + uss::Master against simulated slaves on a pty at 38400
 // baud, the bus thread at the cycle's priority) and a reference loop: a bare SCHED_FIFO
@@ -44,7 +44,7 @@
 #include "common/cpu_set.hpp"
 #include "common/mono_time.hpp"
 #include "daemon/daemon.hpp"
-#include "dcp/host/lift_app.hpp"
+#include "dcp/host/dcp_lift.hpp"
 #include "host/lift_common.hpp"
 #include "io/pty.hpp"
 #include "log/log.hpp"
@@ -599,7 +599,7 @@ int main(int argc, char** argv) {
   // 32 load clients plus the dispatcher and the `stats` look of each window.
   cfg.api.max_clients = 40;
   liftd::daemon::Daemon daemon(cfg, liftd::service::Notifier::from_environment(), std::nullopt);
-  liftd::daemon::LiftApp app(daemon, cfg, true);
+  liftd::daemon::DcpLift app(daemon, cfg, true);
   std::thread daemon_thread([&] { daemon.run(); });
 
   // Wait for the link.

@@ -1,5 +1,5 @@
 // event-bench: how fast the daemon passes news both ways. Runs the real daemon wiring in
-// process (Daemon + LiftApp with the simulated lift on a pty, the cycle thread at its configured
+// process (Daemon + DcpLift with the simulated lift on a pty, the cycle thread at its configured
 // priority, the API server) with one watcher and one dispatcher client, and measures, from the
 // flight recorder's timestamps (the cycle thread's CLOCK_MONOTONIC) and the clients' own:
 //   - drive reply -> watcher: from the reply in which the drive's status byte changed to the
@@ -26,7 +26,7 @@
 
 #include "common/mono_time.hpp"
 #include "daemon/daemon.hpp"
-#include "dcp/host/lift_app.hpp"
+#include "dcp/host/dcp_lift.hpp"
 #include "host/lift_common.hpp"
 #include "log/log.hpp"
 #include "rt/flight_recorder.hpp"
@@ -103,7 +103,7 @@ int main(int argc, char** argv) {
   liftd::config::Config cfg = liftd::daemon::simulation_defaults();
   cfg.rt.lock_memory = true;  // as the service runs
   liftd::daemon::Daemon daemon(cfg, liftd::service::Notifier::from_environment(), std::nullopt);
-  liftd::daemon::LiftApp app(daemon, cfg, true);
+  liftd::daemon::DcpLift app(daemon, cfg, true);
   std::thread daemon_thread([&] { daemon.run(); });
   auto fail = [&](const char* why) {
     std::fprintf(stderr, "event-bench: %s\n", why);

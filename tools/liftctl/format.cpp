@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <sstream>
+#include <vector>
 
 namespace liftctl {
 namespace {
@@ -15,7 +16,7 @@ std::string text(const json& value) {
   return value.dump();
 }
 
-const json& at(const json& object, const char* key) {
+const json& at(const json& object, const std::string& key) {
   static const json null_value = nullptr;
   if (!object.is_object()) return null_value;
   const auto it = object.find(key);
@@ -63,7 +64,8 @@ std::string drive_state_text(const json& kind, const json& state) {
   const std::string why = kind == "sch001" ? "the card reports RDY = 0"
                           : kind == "uss"  ? "the drive is in local control or not ready to "
                                              "switch on"
-                                           : "the drive reports S0 = 0";
+                          : kind == "dcp" || kind.is_null() ? "the drive reports S0 = 0"
+                                                            : "the drive is not ready";
   return "not_ready (" + why + ": no travel starts)";
 }
 
@@ -114,8 +116,19 @@ std::string format_status(const json& s) {
     out << "slaves:   " << (slaves.is_array() ? slaves.size() : 0) << " on the bus"
         << (silent.empty() ? "" : ", not sending: " + silent) << '\n';
   }
+  const json& kind = at(drive, "kind");
+  if (kind.is_string() && kind != "dcp" && kind != "sch001" && kind != "uss" &&
+      at(s, kind.get<std::string>()).is_object()) {
+    // A drive kind this liftctl has no lines of its own for: its status object as it comes.
+    std::ostringstream lines;
+    flatten(at(s, kind.get<std::string>()), "", lines);
+    std::istringstream each(lines.str());
+    for (std::string line; std::getline(each, line);) {
+      out << kind.get<std::string>() << ":  " << line << '\n';
+    }
+  }
   const json& dcp = dcp_of(s);
-  if (at(drive, "kind").is_null() || at(drive, "kind") == "dcp") {
+  if (kind.is_null() || kind == "dcp") {
     out << "dcp:      " << text(at(dcp, "mode")) << ", status: " << true_flags(at(dcp, "status"))
         << '\n';
     if (!at(dcp, "extended").is_null()) {
@@ -210,15 +223,27 @@ std::string format_event_line(const std::string& name, const json& data) {
 std::string format_stats(const json& stats) {
   // API 3: the drive-neutral `link` and `cycle`, the drive kind's own counters under its name.
   // An API 2 daemon has every counter in `link` and `cycle`: printed as they come.
+  // Any drive kind's object is printed, whatever its name: liftctl need not know the kind.
   std::ostringstream out;
-  for (const char* section : {"link", "cycle", "dcp", "sch001", "uss", "api"}) {
-    const json& part = at(stats, section);
-    if (!part.is_object()) continue;
+  const auto print = [&out](const std::string& section, const json& part) {
     out << section << ":\n";
     std::ostringstream lines;
     flatten(part, "", lines);
     std::istringstream each(lines.str());
     for (std::string line; std::getline(each, line);) out << "  " << line << '\n';
+  };
+  std::vector<std::string> sections = {"link", "cycle"};
+  if (stats.is_object()) {
+    for (const auto& [key, part] : stats.items()) {
+      if (part.is_object() && key != "link" && key != "cycle" && key != "api") {
+        sections.push_back(key);
+      }
+    }
+  }
+  sections.emplace_back("api");
+  for (const std::string& section : sections) {
+    const json& part = at(stats, section);
+    if (part.is_object()) print(section, part);
   }
   return out.str();
 }

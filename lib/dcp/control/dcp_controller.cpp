@@ -21,16 +21,8 @@ std::string_view abort_text(lift::Cause cause) noexcept {
       return "drive advance warning (S2 = 1)";
     case lift::Cause::DriveFault:
       return "drive general fault (S3 = 1)";
-    case lift::Cause::SafetyChainOpen:
-      return "safety chain open";
-    case lift::Cause::DoorsNotLocked:
-      return "doors not locked";
-    case lift::Cause::PositionLost:
-      return "no valid car position";
-    case lift::Cause::InputsLost:
-      return "machine inputs missing or stale";
-    default:
-      return "not ready";
+    default:  // the machine's: the same words on every drive kind
+      return lift::shared_cause_text(cause);
   }
 }
 
@@ -108,6 +100,7 @@ std::span<const std::uint8_t> DcpController::frame_to_send(MonoTime now) noexcep
     }
   }
   last_input_ = build_input(now);
+  travel_.observe(last_input_);
   for (std::size_t i = 0; i < deferred; ++i) handle(deferred_[i], last_input_);
   // DCP 5.12.9: the next travel begins once the I9 for the last stop has reached the drive.
   travel_.hold_start(position_owed_ || (internal_.active &&
@@ -324,6 +317,11 @@ void DcpController::handle_travel(std::uint32_t tag, const TravelCommand& cmd) n
     reply(tag, ReplyCode::NotReady, abort_text(lift::Cause::LinkDown));
     return;
   }
+  // Before a running travel's target is extended too (DCP 9.1.1), as on every kind.
+  if (last_input_.inputs.button_mode()) {
+    reply(tag, ReplyCode::NotReady, lift::kButtonModeText);
+    return;
+  }
   const std::int64_t target_mm = lift_.floors().level_mm(cmd.floor);
   const dcp::Protocol protocol = *link_.protocol();
   const TravelKind running = travel_.active_kind();
@@ -523,8 +521,7 @@ void DcpController::handle_relevel(std::uint32_t tag) noexcept {
     // remaining distance, DCP 9.2.3); with neither there is nothing to relevel to.
     const lift::Inputs& shaft = last_input_.inputs;
     if (shaft.relevel_up == shaft.relevel_down) {
-      reply(tag, ReplyCode::NotReady,
-            "no position and no single relevelling signal (relevel_up / relevel_down)");
+      reply(tag, ReplyCode::NotReady, lift::kNoRelevelReference);
       return;
     }
     travel::TravelRequest request;
@@ -725,14 +722,11 @@ void DcpController::serve_calls() noexcept {
 
 void DcpController::update_faults(const travel::CycleInput& in, MonoTime now) noexcept {
   const bool link_up = link_.state() == dcp::LinkState::Up;
-  const bool started = start_grace_over(now);
   set_fault(FaultCode::LinkFault, link_.state() == dcp::LinkState::Fault, now);
   set_fault(FaultCode::DriveFault, link_up && in.status.general_fault, now);
   set_fault(FaultCode::AdvanceWarning, link_up && in.status.advance_warning, now);
-  set_fault(FaultCode::InputsLost, started && !in.inputs.valid, now);
-  set_fault(FaultCode::SafetyChain, in.inputs.valid && !in.inputs.safety_chain_closed, now);
-  set_fault(FaultCode::PositionLost,
-            started && link_.protocol() == dcp::Protocol::Dcp4 && !in.position_mm, now);
+  set_machine_faults(in.inputs, in.position_mm.has_value(), link_.protocol() == dcp::Protocol::Dcp4,
+                     now);
 }
 
 void DcpController::publish(MonoTime now) noexcept {

@@ -146,7 +146,7 @@ bool SimulatedLift::start() {
 void SimulatedLift::stop() {
   if (!started_) return;
   started_ = false;
-  log_events();
+  log_violations();
   drive_->stop();
   // What the drive saw, as the drive side of the link: a technician (and the process tests) can
   // tell from this line whether the master left the car to the drive's own link timeout.
@@ -167,7 +167,7 @@ lift::Inputs SimulatedLift::inputs(MonoTime now) {
   return board_.io().inputs(now);
 }
 
-void SimulatedLift::log_events() {
+void SimulatedLift::log_violations() {
   std::vector<std::string> lines;
   drive_->drain_event_lines(lines);
   for (const auto& line : lines) log::write(log::Level::debug, "sim", line);

@@ -41,7 +41,7 @@ class SimulatedLift {
   /// The simulated I/O board's inputs now (io thread).
   lift::Inputs inputs(MonoTime now);
   /// Logs what the simulated drive did since the last call (io thread).
-  void log_events();
+  void log_violations();
   /// Carries out a `sim` request at `now` (io thread); the result is state_json() after it, or
   /// `busy` for a drift while the car moves.
   api::Result apply(const api::SimRequest& request, MonoTime now);

@@ -219,7 +219,7 @@ void TravelController::maybe_auto_relevel(const CycleInput& in) noexcept {
     return;
   }
   GateProfile profile;
-  profile.door_bridge_allowed = true;
+  profile.door_bridge_allowed = config_.relevel_doors_open;
   profile.position_required = true;
   if (CommandGate::forbidding(in, profile, true) != lift::Cause::None) {
     relevel_blocked_until_ = in.now + kRelevelRetry;
@@ -237,7 +237,7 @@ void TravelController::relevel_by_shaft_signals(const CycleInput& in) noexcept {
   // asks for a direction (both at once contradict each other and move nothing).
   if (in.inputs.relevel_up == in.inputs.relevel_down) return;
   GateProfile profile;
-  profile.door_bridge_allowed = true;
+  profile.door_bridge_allowed = config_.relevel_doors_open;
   if (CommandGate::forbidding(in, profile, true) != lift::Cause::None) {
     relevel_blocked_until_ = in.now + kRelevelRetry;
     return;
@@ -298,6 +298,9 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
   }
 
   const TravelKind kind = active_kind();
+  // travel.relevel_with_doors "closed": no relevelling over the bridged door zone, whichever
+  // relevelling asks for it (VN' of DCP 11.2, VN without remaining distance of DCP 9.2.3).
+  if (!config_.relevel_doors_open) demand.profile.door_bridge_allowed = false;
   GateResult gated = gate_.apply(demand, in);
   if (gated.violation != lift::Cause::None) {
     if (kind == TravelKind::Dcp4Relevel || kind == TravelKind::Relevel) {

@@ -49,6 +49,9 @@ class TravelController {
   /// its target, or by the caller.
   void set_home_level(std::optional<std::int64_t> level_mm) noexcept { home_level_mm_ = level_mm; }
 
+  /// This cycle's input, before the commands that arrived for it are judged (start() reads it):
+  /// an inputs command queued just before a travel command counts for it.
+  void observe(const CycleInput& in) noexcept { last_ = in; }
   /// One 15 ms cycle.
   CycleOutput step(const CycleInput& in) noexcept;
   /// Takes the oldest event, if any.

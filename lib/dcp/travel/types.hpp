@@ -158,6 +158,9 @@ struct TravelConfig {
   std::uint32_t relevel_threshold_mm = defaults::kRelevelThresholdMm;  ///< starts auto relevelling
   std::uint32_t relevel_zone_mm = lift::kRelevelZoneMm;                ///< beyond this drift, none
   bool relevel_electric_stop = defaults::kRelevelElectricStop;         ///< DCP 9.2.3.2 / 9.2.3.1
+  /// Relevel with the doors open over the bridged door zone (travel.relevel_with_doors "open" or
+  /// "both"); false: only with the doors locked ("closed").
+  bool relevel_doors_open = true;
   Dcp3Reference dcp3_reference = Dcp3Reference::Position;
   /// DCP 3.5.3.7: number of travelling speeds of a DCP3 installation (1..7).
   int dcp3_speed_count = defaults::kDcp3SpeedCount;

@@ -345,12 +345,7 @@ api::StatusSnapshot Sch001Backend::status() {
 api::StatsSnapshot Sch001Backend::stats() {
   const sch001::ControllerSnapshot s = controller_.snapshot();
   const rt::CanRunnerCounters c = runner_.counters();
-  api::StatsSnapshot out;
-  out.drive_kind = drive::Kind::Sch001;
-  out.frames_sent = c.frames_sent;
-  out.cycles = s.steps;
-  out.dropped_events = controller_.dropped_events();
-  out.dropped_travel_samples = controller_.dropped_travel_samples();
+  api::StatsSnapshot out = neutral_stats(c.frames_sent, s.steps);
   nlohmann::json& d = out.details;
   // The card's frames by kind (card document 3b, 3f, 1.6) and the CAN endpoint's own counters.
   d["frames_received"] = c.frames_received;

@@ -1,6 +1,6 @@
 // The daemon's hydraulic lift (drive.kind "sch001"): the SCH001 controller on its CAN runner, the
 // API backend over it, and with --simulate the simulated card, hydraulic car and I/O board on the
-// other end of a socketpair. The DCP lift is lib/dcp/host/lift_app.*; daemon/drives.cpp picks one
+// other end of a socketpair. The DCP lift is lib/dcp/host/dcp_lift.*; lib/kinds/lifts.cpp picks one
 // by drive.kind.
 #pragma once
 

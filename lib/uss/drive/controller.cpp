@@ -107,36 +107,8 @@ DriveInput UssController::build_input(MonoTime now) const noexcept {
 }
 
 void UssController::step(MonoTime now) noexcept {
-  ++steps_;
   drain_master(now);
-  DriveInput in = build_input(now);
-  ControllerCommand command;
-  while (next_command(command)) {
-    handle(command, in);
-    in = build_input(now);  // an inputs command changes what follows
-  }
-  locate_car(in);
-  follow_inspection(in, lift::Cause::ModeChanged,
-                    [&](lift::Direction d) { (void)travel_.inspect(lift_.floors(), d, in); });
-  if (!shutting_down_) {
-    serve_calls(in);
-    maybe_relevel(in);
-  }
-  last_output_ = travel_.tick(lift_.floors(), in);
-  sample_learning(in.position_mm, in.inputs, now, travel_.direction(),
-                  [this](std::int64_t target_mm) { return travel_.end_learning_at(target_mm); });
-  drain_travel(now);
-  const bool was_busy = travel_.busy();
-  step_learning(
-      was_busy, [&] { return learn_refusal(in); },
-      [&](std::int64_t target_mm, lift::Direction direction) {
-        return start_learn_leg(target_mm, direction, in);
-      });
-  if (!was_busy && travel_.busy()) {  // the leg up after the approach: its telegram now
-    last_output_ = travel_.tick(lift_.floors(), in);
-    drain_travel(now);
-  }
-  update_faults(in, now);
+  const DriveInput in = step_lift(now, *this);
 
   // C 5.1: PZD1 STW, PZD2 the main setpoint HSW (normalised, C 5.2.2), further words 0.
   std::array<std::uint16_t, kMaxPzdWords> words{};
@@ -225,36 +197,30 @@ void UssController::drain_master(MonoTime now) noexcept {
 
 // ---- commands ----
 
-ReplyCode UssController::code_for(lift::Cause cause) noexcept {
-  switch (cause) {
-    case lift::Cause::LinkDown:
-    case lift::Cause::DriveFault:
-    case lift::Cause::DriveDidNotStart:
-    case lift::Cause::DriveDidNotStop:
-      return ReplyCode::Fault;
-    case lift::Cause::SpeedNotConfigured:
-      return ReplyCode::BadRequest;
-    default:
-      return lift::shared_cause_code(cause);
-  }
-}
+namespace {
 
-std::string_view UssController::text_for(lift::Cause cause) noexcept {
-  switch (cause) {
-    case lift::Cause::LinkDown:
-      return "the USS link to the drive is down (no current reply)";
-    case lift::Cause::DriveFault:
-      return "the drive reports a fault (ZSW bit 3) or missed a state in time: drive_reset "
-             "acknowledges it";
-    case lift::Cause::DriveNotReady:
-      return "the drive is not ready (not ready to switch on, or ZSW bit 9 = 0: local control)";
-    case lift::Cause::AdvanceWarning:
-      return "the drive reports a warning (ZSW bit 7)";
-    case lift::Cause::SpeedNotConfigured:
-      return "that speed has no setpoint in this installation (uss.speeds)";
-    default:
-      return lift::shared_cause_text(cause);
-  }
+/// The USS drive's own refusals (its status word, C 5.1; the installation's speeds); the
+/// machine's are every kind's.
+constexpr lift::CauseRefusal kDriveRefusals[] = {
+    {lift::Cause::LinkDown, ReplyCode::Fault,
+     "the USS link to the drive is down (no current reply)"},
+    {lift::Cause::DriveFault, ReplyCode::Fault,
+     "the drive reports a fault (ZSW bit 3) or missed a state in time: drive_reset "
+     "acknowledges it"},
+    {lift::Cause::DriveDidNotStart, ReplyCode::Fault,
+     "the drive did not start the motor in time after it was enabled"},
+    {lift::Cause::DriveDidNotStop, ReplyCode::Fault, "the drive did not report the stop in time"},
+    {lift::Cause::DriveNotReady, ReplyCode::NotReady,
+     "the drive is not ready (not ready to switch on, or ZSW bit 9 = 0: local control)"},
+    {lift::Cause::AdvanceWarning, ReplyCode::NotReady, "the drive reports a warning (ZSW bit 7)"},
+    {lift::Cause::SpeedNotConfigured, ReplyCode::BadRequest,
+     "that speed has no setpoint in this installation (uss.speeds)"},
+};
+
+}  // namespace
+
+lift::Refusal UssController::refusal(lift::Cause cause) noexcept {
+  return lift::refusal_for(kDriveRefusals, cause);
 }
 
 void UssController::handle(const ControllerCommand& command, DriveInput& in) noexcept {
@@ -266,36 +232,16 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
           const auto speed_refusal = [&]() -> std::optional<lift::Refusal> {
             if (speed_number(body.speed) == 0 || !travel_.speed_available(body.speed)) {
               return lift::Refusal{ReplyCode::BadRequest,
-                                   text_for(lift::Cause::SpeedNotConfigured)};
+                                   refusal(lift::Cause::SpeedNotConfigured).detail};
             }
             return std::nullopt;
           };
           (void)handle_travel(
               tag, body, in, speed_refusal,
               [&] { return travel_.start_travel(lift_.floors(), body.floor, body.speed, in); },
-              code_for, text_for);
+              refusal);
         } else if constexpr (std::is_same_v<T, RelevelCommand>) {
-          if (relevel_refused(tag)) return;
-          if (in.inputs.inspection) return reply(tag, ReplyCode::NotReady, "inspection is on");
-          std::size_t floor = travel_.current_floor();
-          lift::Direction direction = lift::Direction::None;
-          if (in.position_mm) {
-            const auto nearest = lift_.floors().nearest(*in.position_mm);
-            if (!nearest) return reply(tag, ReplyCode::NotReady, "no floor");
-            floor = *nearest;
-            if (std::llabs(*in.position_mm - lift_.floors().level_mm(floor)) <=
-                static_cast<std::int64_t>(config_.travel.level_tolerance_mm)) {
-              return reply(tag, ReplyCode::NotReady, "the car is level: nothing to relevel");
-            }
-          } else if (in.inputs.relevel_up != in.inputs.relevel_down) {
-            direction = in.inputs.relevel_up ? lift::Direction::Up : lift::Direction::Down;
-          } else {
-            return reply(tag, ReplyCode::NotReady,
-                         "no position and no relevelling signal: nothing to relevel");
-          }
-          const lift::Cause why = travel_.start_relevel(lift_.floors(), floor, direction, in);
-          if (why != lift::Cause::None) return reply(tag, code_for(why), text_for(why));
-          reply(tag, ReplyCode::Ok, {}, floor);
+          handle_relevel(tag, in, *this);
         } else if constexpr (std::is_same_v<T, DriveResetCommand>) {
           if (travel_.busy()) {
             return reply(tag, ReplyCode::Busy, "a travel is running: no drive reset during travel");
@@ -324,7 +270,7 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
         } else if constexpr (std::is_same_v<T, LearnCommand>) {
           handle_learn(
               tag, in.position_mm, config_.travel.level_tolerance_mm,
-              [&] { return learn_refusal(in); },
+              [&] { return learn_gate(in, *this); },
               [&](std::int64_t target_mm, lift::Direction direction) {
                 return start_learn_leg(target_mm, direction, in);
               });
@@ -335,16 +281,10 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
       command.body);
 }
 
-std::optional<lift::Answer> UssController::learn_refusal(const DriveInput& in) const noexcept {
-  if (in.inputs.inspection) return lift::Answer{ReplyCode::NotReady, "inspection is on"};
-  if (travel_.busy()) return lift::Answer{ReplyCode::Busy, "a travel is running"};
+std::optional<lift::Answer> UssController::drive_learn_refusal(const DriveInput&) const noexcept {
   if (!travel_.speed_available(SpeedName::V0)) {
-    return lift::Answer{ReplyCode::BadRequest, text_for(lift::Cause::SpeedNotConfigured)};
+    return lift::Answer{ReplyCode::BadRequest, refusal(lift::Cause::SpeedNotConfigured).detail};
   }
-  // Every gate of a travel: the link, the drive's status word (fault, local control, ready,
-  // warning), the safety chain, the doors, the inputs and the position (LiftTravel::forbidding).
-  const lift::Cause why = travel_.forbidding(TravelKind::Learn, in);
-  if (why != lift::Cause::None) return lift::Answer{code_for(why), text_for(why)};
   return std::nullopt;
 }
 
@@ -361,41 +301,39 @@ SpeedName UssController::fastest_speed() const noexcept {
   return SpeedName::V4;
 }
 
-// ---- travels, calls, faults ----
+// ---- what only the USS lift knows (ControllerCore::step_lift) ----
 
-void UssController::serve_calls(const DriveInput& in) noexcept {
-  const auto floor = next_call(in);
-  if (!floor) return;
+void UssController::inspect_run(lift::Direction direction, const DriveInput& in) noexcept {
+  (void)travel_.inspect(lift_.floors(), direction, in);
+}
+
+void UssController::start_call_travel(std::size_t floor, const DriveInput& in) noexcept {
   // The fastest speed the installation has, in the order DCP 3.5.3.7 adds them.
   const SpeedName speed = fastest_speed();
   if (travel_.speed_available(speed)) {
-    (void)travel_.start_travel(lift_.floors(), *floor, speed, in);  // waits while refused
+    (void)travel_.start_travel(lift_.floors(), floor, speed, in);
   }
 }
 
-void UssController::maybe_relevel(const DriveInput& in) noexcept {
-  if (!config_.auto_relevel || travel_.busy() || in.inputs.inspection || learning() ||
-      relevel_held()) {
-    return;
-  }
-  if (in.position_mm) {
-    const auto nearest = lift::floor_to_relevel(
-        lift_.floors(), *in.position_mm, config_.relevel_threshold_mm, config_.relevel_zone_mm);
-    if (!nearest) return;
-    // Only where it may start now; otherwise it waits (a refused relevel is no event).
-    if (travel_.forbidding(TravelKind::Relevel, in) == lift::Cause::None) {
-      (void)travel_.start_relevel(lift_.floors(), *nearest, lift::Direction::None, in);
-    }
-    return;
-  }
-  // Without a position the shaft's relevelling zones say it: exactly one of them asks.
-  if (in.inputs.relevel_up == in.inputs.relevel_down) return;
-  if (travel_.forbidding(TravelKind::Relevel, in) == lift::Cause::None) {
-    (void)travel_.start_relevel(lift_.floors(), travel_.current_floor(),
-                                in.inputs.relevel_up ? lift::Direction::Up : lift::Direction::Down,
-                                in);
-  }
+lift::Cause UssController::start_relevel_run(std::size_t floor, lift::Direction direction,
+                                             const DriveInput& in) noexcept {
+  return travel_.start_relevel(lift_.floors(), floor, direction, in);
 }
+
+void UssController::run_travel(const DriveInput& in) noexcept {
+  last_output_ = travel_.tick(lift_.floors(), in);
+}
+
+lift::RelevelPolicy UssController::relevel_policy() const noexcept {
+  lift::RelevelPolicy policy;
+  policy.automatic = config_.auto_relevel;
+  policy.threshold_mm = config_.relevel_threshold_mm;
+  policy.zone_mm = config_.relevel_zone_mm;
+  policy.level_tolerance_mm = config_.travel.level_tolerance_mm;
+  return policy;
+}
+
+// ---- faults ----
 
 void UssController::update_faults(const DriveInput& in, MonoTime now) noexcept {
   const bool started = start_grace_over(now);
@@ -411,10 +349,8 @@ void UssController::update_faults(const DriveInput& in, MonoTime now) noexcept {
                            travel_.profile().supervision() != Supervision::None),
             now);
   set_fault(FaultCode::AdvanceWarning, in.link_ok && (in.zsw & zsw::kWarning) != 0, now);
-  set_fault(FaultCode::InputsLost, started && !in.inputs.valid, now);
-  set_fault(FaultCode::SafetyChain, in.inputs.valid && !in.inputs.safety_chain_closed, now);
-  set_fault(FaultCode::PositionLost,
-            started && config_.travel.reference == Reference::Position && !in.position_mm, now);
+  set_machine_faults(in.inputs, in.position_mm.has_value(),
+                     config_.travel.reference == Reference::Position, now);
 }
 
 void UssController::publish(MonoTime now) noexcept {

@@ -236,18 +236,24 @@ class UssController final : public uss::UssHooks, public lift::ControllerCore<Us
   void handle(const ControllerCommand& command, DriveInput& in) noexcept;
   DriveInput build_input(MonoTime now) const noexcept;
   void update_faults(const DriveInput& in, MonoTime now) noexcept;
-  void serve_calls(const DriveInput& in) noexcept;
-  void maybe_relevel(const DriveInput& in) noexcept;
   /// The fastest travel speed with a setpoint, in the order DCP 3.5.3.7 adds them (V4 if none).
   SpeedName fastest_speed() const noexcept;
-  /// The learn command's and the next leg's gates beyond the shared ones (ControllerCore).
-  std::optional<lift::Answer> learn_refusal(const DriveInput& in) const noexcept;
+  // What only the USS lift knows, for ControllerCore::step_lift.
+  friend class lift::ControllerCore<UssCoreTypes>;
+  void inspect_run(lift::Direction direction, const DriveInput& in) noexcept;
+  void start_call_travel(std::size_t floor, const DriveInput& in) noexcept;
+  lift::Cause start_relevel_run(std::size_t floor, lift::Direction direction,
+                                const DriveInput& in) noexcept;
+  void run_travel(const DriveInput& in) noexcept;
+  /// The learning travel needs the crawl V0's setpoint.
+  std::optional<lift::Answer> drive_learn_refusal(const DriveInput& in) const noexcept;
+  lift::RelevelPolicy relevel_policy() const noexcept;
   /// Starts a learning leg (LiftTravel::start_learning, the approach at the fastest speed).
   bool start_learn_leg(std::int64_t target_mm, lift::Direction direction,
                        const DriveInput& in) noexcept;
   void publish(MonoTime now) noexcept;
-  static ReplyCode code_for(lift::Cause cause) noexcept;
-  static std::string_view text_for(lift::Cause cause) noexcept;
+  /// The answer to a refusal for `cause` (the drive's own, else every kind's).
+  static lift::Refusal refusal(lift::Cause cause) noexcept;
 
   UssControllerConfig config_;
   Master& master_;

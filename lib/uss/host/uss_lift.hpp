@@ -1,8 +1,8 @@
 // The daemon's USS lift (drive.kind "uss"): the USS master and the lift controller on the USS
 // runner's real-time thread, the API backend over them and, with --simulate, the simulated USS
 // slaves (the lift drive with its car, and every other configured slave) on the far end of a
-// pseudo-terminal. The DCP lift is lib/dcp/host/lift_app.*, the hydraulic one
-// lib/sch001/host/hydraulic_lift.*; daemon/drives.cpp picks one by drive.kind.
+// pseudo-terminal. The DCP lift is lib/dcp/host/dcp_lift.*, the hydraulic one
+// lib/sch001/host/hydraulic_lift.*; lib/kinds/lifts.cpp picks one by drive.kind.
 #pragma once
 
 #include <atomic>
@@ -152,6 +152,8 @@ class UssLift final : public ControllerLift<UssDrive> {
   ~UssLift() override;
 
  private:
+  /// The serial device's driver and settings, a USB adapter's latency timer.
+  void before_start() override;
   void journal_started() override;
   void handle_event(const uss::ControllerEvent& event) override;
   /// The count of drive state lines the throttle held back, once its interval ends.

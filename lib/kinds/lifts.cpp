@@ -1,4 +1,4 @@
-#include "daemon/drives.hpp"
+#include "kinds/lifts.hpp"
 
 #include <array>
 #include <cstddef>
@@ -8,7 +8,7 @@
 #include "api/commands.hpp"
 
 #include "dcp/host/commands.hpp"
-#include "dcp/host/lift_app.hpp"
+#include "dcp/host/dcp_lift.hpp"
 #include "dcp/host/sim_actions.hpp"
 #include "sch001/host/hydraulic_lift.hpp"
 #include "sch001/host/sim_actions.hpp"
@@ -16,7 +16,9 @@
 #include "uss/host/sim_actions.hpp"
 #include "uss/host/uss_lift.hpp"
 
-namespace liftd::daemon {
+namespace liftd::kinds {
+
+using namespace daemon;
 namespace {
 
 /// How one drive kind's lift is made, which API commands only it has and which `sim` actions its
@@ -37,7 +39,7 @@ std::unique_ptr<LiftRunner> make(Host& host, const config::Config& config, bool 
 
 /// Every drive kind, in the order of drive::Kind: the one place the daemon names a kind's lift.
 constexpr std::array kDriveKinds = {
-    DriveKindEntry{drive::Kind::Dcp, make<LiftApp>, add_dcp_commands, &kDcpSimActionTable},
+    DriveKindEntry{drive::Kind::Dcp, make<DcpLift>, add_dcp_commands, &kDcpSimActionTable},
     DriveKindEntry{drive::Kind::Sch001, make<HydraulicLift>, nullptr, &kSch001SimActionTable},
     DriveKindEntry{drive::Kind::Uss, make<UssLift>, add_uss_commands, &kUssSimActionTable},
 };
@@ -69,4 +71,4 @@ void add_drive_kind_commands(api::Dispatcher& dispatcher, api::Backend& backend)
   api::add_sim_command(dispatcher, backend, sim_actions);
 }
 
-}  // namespace liftd::daemon
+}  // namespace liftd::kinds

@@ -1,10 +1,11 @@
 // The registry of drive kinds: drive.kind -> the daemon's lift, each in its kind's folder (the DCP
-// lift lib/dcp/host/lift_app.*, the hydraulic SCH001 lift lib/sch001/host/hydraulic_lift.*, the
+// lift lib/dcp/host/dcp_lift.*, the hydraulic SCH001 lift lib/sch001/host/hydraulic_lift.*, the
 // USS lift lib/uss/host/uss_lift.*). Each builds its controller, its runner, its API backend and,
 // with --simulate, its simulated drive, and registers them with the daemon (lib/host/host.hpp).
 // A kind with API commands of its own adds them from its folder (lib/<kind>/host/commands.*), and
 // each kind names the `sim` actions its simulator takes (lib/<kind>/host/sim_actions.*).
-// drives.cpp is the only file of daemon/ that includes a kind's header.
+// With config_schema.cpp (each kind's configuration section) this folder is the one registry of
+// drive kinds: daemon/ includes no kind's header.
 #pragma once
 
 #include <memory>
@@ -15,7 +16,10 @@
 #include "config/config.hpp"
 #include "host/host.hpp"
 
-namespace liftd::daemon {
+namespace liftd::kinds {
+
+using daemon::Host;
+using daemon::LiftRunner;
 
 /// The lift for config.drive.kind. Throws std::invalid_argument / std::runtime_error with a
 /// clear message on a configuration the parts refuse or a kind this build cannot run.
@@ -26,4 +30,4 @@ std::unique_ptr<LiftRunner> make_lift(Host& host, const config::Config& config, 
 /// `not_offered` as on every lift; and `sim` with every kind's simulator actions.
 void add_drive_kind_commands(api::Dispatcher& dispatcher, api::Backend& backend);
 
-}  // namespace liftd::daemon
+}  // namespace liftd::kinds

@@ -1,0 +1,190 @@
+// The lift rules every drive kind keeps alike, run against `liftd --simulate` of each kind (the
+// table of e2e/drive_cases.hpp): the inspection and recall switches end a normal travel with one
+// cause and refuse the next with one text, `travel.relevel_with_doors` decides whether a sunk
+// car relevels with its doors open, and a link fault writes the flight recorder. Each of these
+// once differed between the kinds (the recall switch was read by the DCP lift only).
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "e2e/drive_cases.hpp"
+#include "e2e/harness.hpp"
+#include "e2e/witness.hpp"
+
+namespace liftd::e2e {
+namespace {
+
+/// The `error` object of a reply (empty when it has none: the request was accepted).
+json error_of(const json& reply) {
+  return reply.is_object() && reply.contains("error") && reply["error"].is_object()
+             ? reply["error"]
+             : json::object();
+}
+
+class RuleParity : public ::testing::TestWithParam<DriveCase> {
+ protected:
+  /// A lift of the case's kind with `extra` merged into its configuration last.
+  std::unique_ptr<Lift> make_lift(const std::string& what, const json& extra = json::object()) {
+    json config = GetParam().config;
+    config.merge_patch(extra);
+    auto lift = std::make_unique<Lift>(what + "-" + GetParam().name, 4, json::object(),
+                                       std::vector<std::string>{}, config);
+    EXPECT_EQ(lift->setup_error(), "") << lift->log();
+    return lift;
+  }
+  /// A travel to the case's far floor, started and well under way.
+  static void start_far_travel(Lift& lift) {
+    ASSERT_TRUE(lift.wait_drive_state("ready")) << lift.status().dump();
+    const json r = lift.call({{"cmd", "travel"}, {"floor", GetParam().far_floor}});
+    ASSERT_TRUE(r.value("ok", false)) << r.dump();
+    ASSERT_TRUE(lift.wait_travel("started").is_object()) << lift.log();
+    ASSERT_TRUE(lift.wait_moved(0, 300)) << lift.status().dump() << lift.log();
+  }
+  /// The simulated doors held open (the obstruction keeps them there), once they are.
+  static void hold_doors_open(Lift& lift) {
+    ASSERT_TRUE(lift.call({{"cmd", "sim"}, {"action", "obstruct_doors"}}).value("ok", false));
+    std::string doors;
+    for (int i = 0; i < 100 && doors != "open"; ++i) {
+      const json r = lift.call({{"cmd", "sim"}, {"action", "open_doors"}});
+      ASSERT_TRUE(r.value("ok", false)) << r.dump();
+      doors = r["result"].value("doors", "");
+      if (doors != "open") lift.api().drain(100ms);
+    }
+    ASSERT_EQ(doors, "open") << lift.log();
+  }
+  /// The car at floor 1, at rest, then sunk 25 mm below its level (beyond every kind's
+  /// relevelling threshold, inside its relevelling zone) with its doors held open and the door
+  /// zone bridged by the I/O board.
+  static void sink_at_floor_1_with_doors_open(Lift& lift, double& level) {
+    ASSERT_TRUE(lift.wait_drive_state("ready")) << lift.status().dump();
+    ASSERT_TRUE(lift.call({{"cmd", "travel"}, {"floor", 1}}).value("ok", false));
+    const json arrived = lift.wait_travel_end(40s);
+    ASSERT_TRUE(arrived.is_object()) << lift.log();
+    ASSERT_EQ(arrived["data"]["event"], "finished") << arrived.dump();
+    level = lift.position_mm();
+    lift.api().drain(500ms);  // at rest (the drive's hold time after the stop)
+    hold_doors_open(lift);
+    ASSERT_TRUE(lift.call({{"cmd", "inputs"}, {"zone_door", true}}).value("ok", false));
+    const json drift = lift.call({{"cmd", "sim"}, {"action", "drift"}, {"drift_mm", -25}});
+    ASSERT_TRUE(drift.value("ok", false)) << drift.dump();
+  }
+};
+
+// DCP 9.1.1: inspection or recall (test control) switched on ends a normal travel at once; no
+// normal travel starts while either is on (docs/api.md `travel`: not_ready "inspection or recall
+// is switched on"; `travel` events: cause `mode_changed`). The recall switch comes from the I/O
+// board (`inputs`), the inspection switch here from the API's software switch.
+TEST_P(RuleParity, InspectionOrRecallMidTravelEndsItAsModeChangedAndRefusesTheNext) {
+  struct Switch {
+    const char* name;
+    json on;
+    json off;
+  };
+  const Switch switches[] = {
+      {"recall", {{"cmd", "inputs"}, {"recall", true}}, {{"cmd", "inputs"}, {"recall", false}}},
+      {"inspection",
+       {{"cmd", "inspection"}, {"mode", "on"}},
+       {{"cmd", "inspection"}, {"mode", "off"}}},
+  };
+  for (const Switch& s : switches) {
+    SCOPED_TRACE(s.name);
+    judged_unless_stalled([&] {
+      const std::unique_ptr<Lift> lift = make_lift(std::string("mode-") + s.name);
+      ASSERT_EQ(lift->setup_error(), "");
+      start_far_travel(*lift);
+      const json on = lift->call(s.on);
+      ASSERT_TRUE(on.value("ok", false)) << on.dump();
+      const json ended = lift->wait_travel_end(20s);
+      ASSERT_TRUE(ended.is_object()) << lift->log();
+      EXPECT_EQ(ended["data"]["event"], "aborted") << ended.dump();
+      EXPECT_EQ(ended["data"]["cause"], "mode_changed") << ended.dump();
+      // Once the car is at rest (a DCP drive ramps down after the abort and reports S1 until
+      // it stands: `busy`), the refusal is the switch's.
+      json refused = lift->call({{"cmd", "travel"}, {"floor", 0}});
+      for (int i = 0; i < 50 && error_of(refused).value("code", "") == "busy"; ++i) {
+        lift->api().drain(200ms);
+        refused = lift->call({{"cmd", "travel"}, {"floor", 0}});
+      }
+      EXPECT_EQ(error_of(refused).value("code", ""), "not_ready") << refused.dump();
+      EXPECT_EQ(error_of(refused).value("message", ""), "inspection or recall is switched on")
+          << refused.dump();
+      // No call starts a travel either while the switch is on.
+      ASSERT_TRUE(
+          lift->call({{"cmd", "calls"}, {"action", "add"}, {"floor", 0}}).value("ok", false));
+      EXPECT_FALSE(lift->wait_travel("started", 2s).is_object()) << lift->log();
+      ASSERT_TRUE(
+          lift->call({{"cmd", "calls"}, {"action", "cancel"}, {"floor", 0}}).value("ok", false));
+      // Switched off, the car is in service again.
+      ASSERT_TRUE(lift->call(s.off).value("ok", false));
+      ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump() << lift->log();
+      const json accepted = lift->call({{"cmd", "travel"}, {"floor", 0}});
+      EXPECT_TRUE(accepted.value("ok", false)) << accepted.dump();
+      EXPECT_TRUE(lift->call({{"cmd", "stop"}}).value("ok", false));
+      EXPECT_TRUE(lift->wait_travel_end(40s).is_object()) << lift->log();
+    });
+  }
+}
+
+// `travel.relevel_with_doors`: a car that sank at a floor with its doors held open and the door
+// zone bridged relevels at once with "both" (the default: the bridge stands for locked doors),
+// and with "closed" only once its doors are locked again.
+TEST_P(RuleParity, RelevelWithDoorsDecidesWhetherASunkCarRelevelsWithItsDoorsOpen) {
+  for (const bool doors_open_allowed : {true, false}) {
+    const std::string mode = doors_open_allowed ? "both" : "closed";
+    SCOPED_TRACE(mode);
+    judged_unless_stalled([&] {
+      const std::unique_ptr<Lift> lift =
+          make_lift("relevel-" + mode, {{"travel", {{"relevel_with_doors", mode}}}});
+      ASSERT_EQ(lift->setup_error(), "");
+      double level = 0;
+      sink_at_floor_1_with_doors_open(*lift, level);
+      if (!doors_open_allowed) {
+        EXPECT_FALSE(lift->wait_travel("started", 3s).is_object())
+            << "relevelled with the doors open\n"
+            << lift->log();
+        ASSERT_TRUE(lift->call({{"cmd", "sim"}, {"action", "obstruct_doors"}, {"on", false}})
+                        .value("ok", false));
+        ASSERT_TRUE(lift->call({{"cmd", "sim"}, {"action", "close_doors"}}).value("ok", false));
+      }
+      const json started = lift->wait_travel("started", 15s);
+      ASSERT_TRUE(started.is_object()) << "no relevelling\n" << lift->log();
+      EXPECT_NE(started["data"]["kind"].get<std::string>().find("relevel"), std::string::npos)
+          << started.dump();
+      const json ended = lift->wait_travel_end(20s);
+      ASSERT_TRUE(ended.is_object()) << lift->log();
+      EXPECT_EQ(ended["data"]["event"], "finished") << ended.dump();
+      EXPECT_NEAR(lift->position_mm(), level, 10.0) << lift->status().dump();
+    });
+  }
+}
+
+// A link fault writes the flight recorder once, on every kind: the frames that led to it are
+// what a technician needs first (docs/operations.md "The flight recorder").
+TEST_P(RuleParity, ALinkFaultWritesTheFlightRecorder) {
+  judged_unless_stalled([&] {
+    const std::unique_ptr<Lift> lift = make_lift("link-fault-trace");
+    ASSERT_EQ(lift->setup_error(), "");
+    ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump();
+    lift->api().drain(500ms);  // frames to record
+    ASSERT_TRUE(lift->trace_files().empty());
+    const json broken = lift->call(GetParam().link_fault);
+    ASSERT_TRUE(broken.value("ok", false)) << broken.dump();
+    const json fault = lift->api().wait_event(
+        "fault", [](const json& d) { return d["code"] == "link_fault" && d["active"] == true; },
+        10s);
+    ASSERT_TRUE(fault.is_object()) << lift->log();
+    bool written = false;
+    for (int i = 0; i < 100 && !written; ++i) {
+      written = lift->log().find(" after link fault") != std::string::npos;
+      if (!written) lift->api().drain(50ms);
+    }
+    EXPECT_TRUE(written) << lift->log();
+    EXPECT_EQ(lift->trace_files().size(), 1U) << lift->log();
+  });
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryDriveKind, RuleParity, ::testing::ValuesIn(kDriveCases),
+                         drive_case_name);
+
+}  // namespace
+}  // namespace liftd::e2e
