@@ -29,6 +29,12 @@ enum class Rs485Mode : std::uint8_t {
   required,   ///< "required": refuse to start without it
   off,        ///< "off": never switch it on (an external transceiver handles direction)
 };
+/// Whether the drive's serial line gives our own frames back (drive.echo).
+enum class EchoMode : std::uint8_t {
+  automatic,  ///< "auto": find out at each port open, say so in the journal and `status`
+  on,         ///< "on": the line echoes; read back exactly the bytes sent before the reply
+  off,        ///< "off": the line does not echo
+};
 /// Where the car's absolute position comes from.
 enum class PositionSource : std::uint8_t { sim, api, can };
 /// With which door state relevelling is allowed.
@@ -46,6 +52,7 @@ struct DriveConfig {
   DriveKind kind = DriveKind::Dcp;         ///< drive.kind
   std::string device = "/dev/ttyS1";       ///< drive.device
   Rs485Mode rs485 = Rs485Mode::automatic;  ///< drive.rs485
+  EchoMode echo = EchoMode::automatic;     ///< drive.echo
 };
 
 /// `dcp.*`
@@ -301,6 +308,8 @@ std::vector<std::string> key_paths(const Schema& schema);
 std::string_view to_string(LogLevel value);
 /// The name of an enum value as written in the JSON file.
 std::string_view to_string(Rs485Mode value);
+/// The name of an enum value as written in the JSON file.
+std::string_view to_string(EchoMode value);
 /// The name of an enum value as written in the JSON file.
 std::string_view to_string(PositionSource value);
 /// The name of an enum value as written in the JSON file.

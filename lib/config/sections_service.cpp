@@ -11,6 +11,7 @@ using nlohmann::json;
 
 constexpr std::array<std::string_view, 5> kLogLevelNames{"trace", "debug", "info", "warn", "error"};
 constexpr std::array<std::string_view, 3> kRs485Names{"auto", "required", "off"};
+constexpr std::array<std::string_view, 3> kEchoNames{"auto", "on", "off"};
 
 // sockaddr_un::sun_path is 108 bytes on Linux, including the terminating NUL.
 constexpr std::int64_t kMaxSocketPathLength = 107;
@@ -49,6 +50,13 @@ std::vector<Key> drive_keys() {
                        "kernel RS485 mode: auto = use where supported and warn where not; "
                        "required = refuse to start without it; off = never",
                        &Config::drive, &DriveConfig::rs485));
+  t.push_back(enum_key("drive.echo", kEchoNames,
+                       "whether the serial line (DCP link, USS bus) gives our own bytes back, as "
+                       "transceivers with the receiver on while sending and most USB-RS485 "
+                       "adapters do: auto = find out at each port open (journal, status "
+                       "line_echo); on = read back exactly the bytes sent before the reply, a "
+                       "difference is a collision (a bad reply); off = no echo",
+                       &Config::drive, &DriveConfig::echo));
   return t;
 }
 
@@ -192,6 +200,10 @@ std::string_view to_string(LogLevel value) {
 
 std::string_view to_string(Rs485Mode value) {
   return enum_name(value, kRs485Names);
+}
+
+std::string_view to_string(EchoMode value) {
+  return enum_name(value, kEchoNames);
 }
 
 std::optional<LogLevel> parse_log_level(std::string_view name) {

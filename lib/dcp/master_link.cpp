@@ -254,6 +254,21 @@ void MasterLink::on_reply(std::span<const std::uint8_t, kFrameSize> bytes, MonoT
   if (state_ == LinkState::Up) handle_drive_data(*frame, now);
 }
 
+void MasterLink::on_bad_reply(MonoTime now) noexcept {
+  if (!awaiting_reply_) return;
+  awaiting_reply_ = false;
+  last_now_ = now;
+  last_exchange_good_ = false;
+  // Our frame was changed on the line, so the drive did not read it intact: it ignored it and
+  // answered with S7 and channel bytes 00 (DCP 6.2 a), if at all. As for an S7 reply (DCP
+  // 6.1 b): repeat our channel bytes. No B7: that reply carried nothing to consume, and asking
+  // for it again would only bring its S7 back.
+  ++counters_.bad_exchanges;
+  repeat_next_ = true;
+  last_reply_consumed_ = false;
+  count_error(now);
+}
+
 void MasterLink::on_no_reply(MonoTime now) noexcept {
   if (!awaiting_reply_) return;
   awaiting_reply_ = false;

@@ -145,6 +145,7 @@ struct LinkCounters {
   std::uint64_t frames_sent = 0;
   std::uint64_t good_replies = 0;
   std::uint64_t bad_checksum = 0;      ///< replies ignored for a bad checksum (DCP 6.1 a)
+  std::uint64_t bad_exchanges = 0;     ///< exchanges the line spoilt (an echo collision)
   std::uint64_t missing_replies = 0;   ///< replies missing, late or incomplete
   std::uint64_t s7_seen = 0;           ///< good replies with S7 (DCP 6.1 b)
   std::uint64_t b7_sent = 0;           ///< frames we sent with B7
@@ -196,6 +197,11 @@ class MasterLink {
   void on_reply(std::span<const std::uint8_t, kFrameSize> bytes, MonoTime now) noexcept;
   /// No complete reply to the last frame by the deadline (DCP 7.2: 13.625 ms).
   void on_no_reply(MonoTime now) noexcept;
+  /// The exchange is unusable though bytes came: our frame came back changed on an echoing
+  /// line (a collision), so the drive did not read it intact. Handled as an S7 reply (DCP
+  /// 6.1 b: our channel bytes are repeated; DCP 7.3 counts it as a message received
+  /// incorrectly), nothing of the reply is consumed.
+  void on_bad_reply(MonoTime now) noexcept;
   /// The serial device is gone: link fault at once.
   void on_port_lost(MonoTime now) noexcept;
 

@@ -237,9 +237,26 @@ void journal_port_event(const rt::CycleEvent& e) {
              e.kind == rt::CycleEventKind::PortLost         ? "port_lost"
              : e.kind == rt::CycleEventKind::PortOpenFailed ? "port_open_failed"
              : e.kind == rt::CycleEventKind::PortOpened     ? "port_opened"
+             : e.kind == rt::CycleEventKind::LineEcho       ? "line_echo"
                                                             : "thread_status",
              {}, rt::describe(e),
              bad ? std::optional(log::Catalogued::SerialPortLost) : std::nullopt);
+}
+
+io::EchoMode echo_mode(config::EchoMode mode) noexcept {
+  switch (mode) {
+    case config::EchoMode::on:
+      return io::EchoMode::On;
+    case config::EchoMode::off:
+      return io::EchoMode::Off;
+    case config::EchoMode::automatic:
+      break;
+  }
+  return io::EchoMode::Auto;
+}
+
+nlohmann::json line_echo_json(io::EchoMode mode, io::EchoState state) {
+  return {{"mode", std::string(io::to_string(mode))}, {"state", std::string(io::to_string(state))}};
 }
 
 api::ErrorCode to_api_error(lift::ReplyCode code) noexcept {

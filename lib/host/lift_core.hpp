@@ -253,6 +253,11 @@ bool accept_rt_thread(const config::Config& config, const rt::RtThreadStatus& st
 /// Journals an event of a serial runner: port opened, open failed, lost, thread status.
 void journal_port_event(const rt::CycleEvent& event);
 
+/// drive.echo for the runners (io/line_echo.hpp).
+io::EchoMode echo_mode(config::EchoMode mode) noexcept;
+/// status `line_echo`: {"mode": "auto", "state": "present"} (docs/api.md).
+nlohmann::json line_echo_json(io::EchoMode mode, io::EchoState state);
+
 /// status.rt from what the real-time thread got.
 api::RtInfo rt_info(const rt::RtThreadStatus& status, int priority);
 /// "up", "down" or nullopt for no direction (status travel.direction).

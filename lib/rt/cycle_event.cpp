@@ -27,6 +27,11 @@ std::string describe(const CycleEvent& event) {
       return "cycle overrun ended: " + std::to_string(event.count) +
              " cycle(s) skipped in the run, worst wake-up " +
              std::to_string(event.lateness.count() / 1000) + " us late";
+    case CycleEventKind::LineEcho:
+      return event.count != 0
+                 ? "the serial line echoes: each frame sent comes back before the reply and is "
+                   "read back and checked (drive.echo auto)"
+                 : "the serial line does not echo (drive.echo auto)";
   }
   return "unknown cycle event";
 }

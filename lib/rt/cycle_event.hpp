@@ -20,6 +20,7 @@ enum class CycleEventKind : std::uint8_t {
   PortLost,        ///< device lost (error_number = errno)
   SkipRunStarted,  ///< a run of skipped cycles began: `count` skipped, `lateness` of the wake
   SkipRunEnded,    ///< the run ended (a cycle was sent): `count` skipped in all, worst `lateness`
+  LineEcho,        ///< drive.echo auto found out whether the line echoes: `count` 1 yes, 0 no
 };
 
 /// One event. Plain data so it can cross the SPSC queue without allocation.

@@ -26,6 +26,7 @@ CycleRunner::CycleRunner(CycleConfig config, CycleEngine& engine)
       engine_(engine),
       input_check_(config_.input_check_interval.count() > 0 ? config_.input_check_interval
                                                             : io::character_time(config_.serial)),
+      echo_(config_.echo),
       recorder_(recorder_capacity(config_), config_.recorder_bytes),
       port_keeper_(PortKeeperConfig{config_.device_path,
                                     config_.serial,
@@ -76,6 +77,7 @@ CycleStats CycleRunner::stats() const {
   s.counters.port_opens = port_keeper_.port_opens();
   s.counters.send_failures = get(counters_.send_failures);
   s.counters.stray_bytes = get(counters_.stray_bytes);
+  s.counters.echo_collisions = get(counters_.echo_collisions);
   s.wake_lateness = wake_lateness_.copy();
   s.reply_latency = reply_latency_.copy();
   s.work_time = work_time_.copy();
@@ -166,7 +168,11 @@ void CycleRunner::notify() noexcept {
 
 void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
   io::SerialPort& port = port_keeper_.port();
-  if (port_keeper_.adopt_offered_port()) engine_.on_port_ready(wake);
+  if (port_keeper_.adopt_offered_port()) {
+    echo_.port_opened();  // another adapter may stand behind the name now
+    echo_state_.store(echo_.state(), std::memory_order_relaxed);
+    engine_.on_port_ready(wake);
+  }
   if (port.is_open()) {
     // Stray bytes (a reply after its deadline, noise) must not be taken for this frame's reply.
     // After a good reply none can be on their way: read away what the line discipline holds.
@@ -188,28 +194,36 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
           recorder_.record(sent_at, Direction::Tx, record_flag::kSent, frame);
           const MonoTime deadline =
               std::min(sent_at + config_.reply_deadline, planned + config_.period);
-          const std::size_t size = std::min(engine_.reply_size(), kMaxReply);
-          const std::span<std::uint8_t> reply(reply_.data(), size);
-          // Never read(2) or poll(2) an empty tty: both wait for the flip-buffer worker, a
-          // normal-priority kernel thread (docs/architecture.md, "What the cycle may wait
-          // for"). Look at what the line discipline holds every character time instead.
-          MonoTime complete_by{};
-          const io::IoResult got =
-              port.read_queued_until(reply, deadline, input_check_, &complete_by);
+          const Exchange x = read_reply(port, frame, deadline);
+          const io::IoResult& got = x.got;
+          const std::span<const std::uint8_t> reply = x.reply;
+          const MonoTime complete_by = x.complete_by;
           const MonoTime now = mono_now();
-          const auto partial = reply.first(got.bytes);
+          const auto partial = reply;
           // DCP 7.2/7.3: a reply not complete by the deadline is lost. If only a look after the
           // deadline found it complete (this thread was held up, or it came in the last
           // character time), nobody can tell when it completed: count it as missing, never as
           // a good reply.
-          const bool seen_late = got.status == io::IoStatus::Timeout && got.bytes == reply.size();
+          const bool seen_late = got.status == io::IoStatus::Timeout &&
+                                 reply.size() == std::min(engine_.reply_size(), kMaxReply);
           if (seen_late) bump(counters_.late_replies);
-          if (got.status == io::IoStatus::Ok && !seen_late) {
+          if (x.collision && got.status != io::IoStatus::DeviceLost) {
+            // The frame came back changed: another station drove the line while we sent, and
+            // the drive cannot have read our frame intact. A bad reply (DCP 6.1 a), whatever
+            // followed; its rest may still be on its way.
+            bump(counters_.echo_collisions);
+            bump(counters_.bad_replies);
+            stray_possible_ = true;
+            recorder_.record(now, Direction::Rx, record_flag::kReply | record_flag::kBad,
+                             std::span<const std::uint8_t>(reply_.data(), got.bytes));
+            engine_.on_bad_reply(now);
+          } else if (got.status == io::IoStatus::Ok && !seen_late) {
             // From the look that found it complete: a stall of this thread after it is not
             // the drive's latency (and would put an accepted reply past its deadline).
             reply_latency_.record(complete_by - sent_at);
             const bool good = engine_.on_reply(reply, now);
             bump(good ? counters_.good_replies : counters_.bad_replies);
+            if (good && echo_.good_reply_seen(x.echoed)) note_echo_decided(now);
             stray_possible_ = !good;
             recorder_.record(now, Direction::Rx,
                              good ? record_flag::kReply : record_flag::kReply | record_flag::kBad,
@@ -224,7 +238,7 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
             stray_possible_ = true;  // the reply (or its rest) may still be on its way
             bump(counters_.missing_replies);
             std::uint8_t flags = record_flag::kMissing;
-            if (got.bytes > 0 && !seen_late) {
+            if (!reply.empty() && !seen_late) {  // reply bytes, not just our frame's echo
               bump(counters_.partial_replies);
               flags |= record_flag::kPartial;
             }
@@ -244,6 +258,63 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
     }
   }
   engine_.after_cycle(mono_now());
+}
+
+CycleRunner::Exchange CycleRunner::read_reply(io::SerialPort& port,
+                                              std::span<const std::uint8_t> frame,
+                                              MonoTime deadline) noexcept {
+  // Never read(2) or poll(2) an empty tty: both wait for the flip-buffer worker, a
+  // normal-priority kernel thread (docs/architecture.md, "What the cycle may wait for"). Look
+  // at what the line discipline holds every character time instead.
+  Exchange x;
+  const std::size_t size = std::min(engine_.reply_size(), kMaxReply);
+  const std::size_t sent = std::min(frame.size(), kMaxReply);
+  if (!echo_.expected() && !echo_.undecided()) {
+    // No echo: the first byte read is the reply's.
+    const std::span<std::uint8_t> reply(reply_.data(), size);
+    x.got = port.read_queued_until(reply, deadline, input_check_, &x.complete_by);
+    x.reply = reply.first(x.got.bytes);
+    return x;
+  }
+  if (echo_.expected()) {
+    // The echo, then the reply, both by the deadline (it counts from our frame's start).
+    const std::span<std::uint8_t> all(reply_.data(), sent + size);
+    x.got = port.read_queued_until(all, deadline, input_check_, &x.complete_by);
+    const std::span<const std::uint8_t> read = all.first(x.got.bytes);
+    x.collision = io::check_echo(frame.first(sent), read) == io::EchoCheck::Collision;
+    x.echoed = true;
+    x.reply = x.got.bytes > sent ? read.subspan(sent) : std::span<const std::uint8_t>{};
+    return x;
+  }
+  // Auto, undecided: a reply's worth first. If it does not start as our frame's copy, it is
+  // the reply (no echo). If it does, it is the copy, or the start of it, and the reply follows
+  // (a copy alone is no reply: an echoing line with a silent drive gives just that).
+  const std::span<std::uint8_t> first(reply_.data(), size);
+  x.got = port.read_queued_until(first, deadline, input_check_, &x.complete_by);
+  const std::span<const std::uint8_t> read = first.first(x.got.bytes);
+  if (io::check_echo(frame.first(sent), read) == io::EchoCheck::Collision ||
+      x.got.status != io::IoStatus::Ok) {
+    x.reply = read;
+    return x;
+  }
+  const std::span<std::uint8_t> rest(reply_.data() + size, sent);
+  const io::IoResult more = port.read_queued_until(rest, deadline, input_check_, &x.complete_by);
+  x.got = io::IoResult{more.status, size + more.bytes, more.error_number};
+  x.echoed = true;
+  x.reply = std::span<const std::uint8_t>(reply_.data() + sent, x.got.bytes - sent);
+  return x;
+}
+
+void CycleRunner::note_echo_decided(MonoTime now) noexcept {
+  const io::EchoState state = echo_.state();
+  echo_state_.store(state, std::memory_order_relaxed);
+  CycleEvent e;
+  e.kind = CycleEventKind::LineEcho;
+  e.time = now;
+  e.count = state == io::EchoState::Present ? 1 : 0;
+  // Rare (once per port open): it shares the queue with the skip events; a full queue loses it
+  // (the state stays readable through echo_state()).
+  (void)cycle_events_.try_push(e);
 }
 
 void CycleRunner::lose_port(MonoTime now, int error_number) noexcept {

@@ -12,6 +12,7 @@
 
 #include "common/mono_time.hpp"
 #include "common/spsc_queue.hpp"
+#include "io/line_echo.hpp"
 #include "io/serial_port.hpp"
 #include "rt/cycle_event.hpp"
 #include "rt/flight_recorder.hpp"
@@ -36,6 +37,10 @@ class CycleEngine {
   virtual bool on_reply(std::span<const std::uint8_t> reply, MonoTime now) noexcept = 0;
   /// No complete reply by the deadline (late, short or missing).
   virtual void on_no_reply(MonoTime now) noexcept = 0;
+  /// The exchange is unusable although bytes came in time: the line read back a frame that
+  /// differs from the one sent (a collision on an echoing line, drive.echo). The drive cannot
+  /// have received our frame intact. Default: as a missing reply.
+  virtual void on_bad_reply(MonoTime now) noexcept { on_no_reply(now); }
   /// The device went away (or is not there); nothing is sent until it is back.
   virtual void on_port_lost(MonoTime now) noexcept = 0;
   /// The device is (back) open; the next cycle sends again. Start re-initialising here.
@@ -67,6 +72,11 @@ struct CycleConfig {
       std::chrono::milliseconds(100);  ///< first retry after a loss
   std::chrono::nanoseconds reopen_backoff_max =
       std::chrono::seconds(2);  ///< retry interval cap (doubling)
+  /// Whether the line gives our own frame back ahead of the reply (io/line_echo.hpp). With an
+  /// echo the reply follows the frame's copy: both must be complete by the reply deadline,
+  /// which counts from the start of our frame, so the copy (read while we send) takes nothing
+  /// from the drive's time (DCP 7.2).
+  io::EchoMode echo = io::EchoMode::Off;
   /// How much traffic the flight recorder keeps (default 30 s = 2000 cycles of 15 ms).
   std::chrono::nanoseconds recorder_span = std::chrono::seconds(30);
   /// Bytes the flight recorder keeps per frame: the link's longest frame (kDcpRecordBytes for
@@ -119,6 +129,9 @@ struct CycleCounters {
   std::uint64_t port_opens = 0;     ///< successful opens (first one included)
   std::uint64_t send_failures = 0;  ///< frames the port refused
   std::uint64_t stray_bytes = 0;    ///< bytes flushed before sending
+  /// Exchanges whose frame came back changed on an echoing line (a bus collision); each is
+  /// also one of the bad replies.
+  std::uint64_t echo_collisions = 0;
 };
 
 /// A copy of the cycle's statistics, taken on any thread.
@@ -165,14 +178,29 @@ class CycleRunner {
   bool port_ready() const noexcept { return port_keeper_.port_ready(); }
   /// The configuration in use.
   const CycleConfig& config() const noexcept { return config_; }
+  /// Any thread: what the cycle knows about the line's echo (config echo; Auto: found out at
+  /// each port open, reported once as a LineEcho event).
+  io::EchoState echo_state() const noexcept { return echo_state_.load(std::memory_order_relaxed); }
 
  private:
   static constexpr std::size_t kMaxReply = 256;  // USS A: a telegram is at most 256 bytes
+
+  // What one exchange's read brought (read_reply()).
+  struct Exchange {
+    io::IoResult got;                     // the read's status, bytes read in all (echo included)
+    std::span<const std::uint8_t> reply;  // the reply's bytes (complete or not)
+    MonoTime complete_by{};               // start of the look that completed the reply
+    bool collision = false;               // the echo came back changed
+    bool echoed = false;                  // the reply stood behind a faithful echo
+  };
   static constexpr std::size_t kEventSlots = 64;
   static constexpr std::size_t kSlotsKeptForLosses = 8;  // see push_skip_event()
 
   void cycle_loop() noexcept;
   void run_one_cycle(MonoTime wake, MonoTime planned) noexcept;
+  Exchange read_reply(io::SerialPort& port, std::span<const std::uint8_t> frame,
+                      MonoTime deadline) noexcept;
+  void note_echo_decided(MonoTime now) noexcept;
   void lose_port(MonoTime now, int error_number) noexcept;
   void note_skip(MonoTime now, std::chrono::nanoseconds lateness, std::uint64_t skipped) noexcept;
   void end_skip_run(MonoTime now) noexcept;
@@ -187,7 +215,8 @@ class CycleRunner {
   std::chrono::nanoseconds input_check_;  // config_.input_check_interval, resolved
 
   // Cycle thread state.
-  std::array<std::uint8_t, kMaxReply> reply_{};
+  std::array<std::uint8_t, 2 * kMaxReply> reply_{};  // the frame's echo, then the reply
+  io::EchoDetector echo_;
   bool stray_possible_ = false;  // the last reply was missing or bad: flush before sending
   // The current run of skipped cycles (between two sent cycles).
   bool in_skip_run_ = false;
@@ -205,8 +234,9 @@ class CycleRunner {
   struct Counters {
     std::atomic<std::uint64_t> cycles{0}, frames_sent{0}, good_replies{0}, bad_replies{0},
         missing_replies{0}, partial_replies{0}, late_sends{0}, overruns{0}, skipped_cycles{0},
-        late_replies{0}, send_failures{0}, stray_bytes{0};
+        late_replies{0}, send_failures{0}, stray_bytes{0}, echo_collisions{0};
   } counters_;
+  std::atomic<io::EchoState> echo_state_{io::EchoState::Unknown};
   // Lateness and work beyond a period are what matter most: 0..20 ms in 1 us bins (a period of
   // DCP 7.2 plus margin); anything beyond lands in the last bin and prints as "> 20000".
   Histogram<20000> wake_lateness_{std::chrono::microseconds(1)};

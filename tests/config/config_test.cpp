@@ -48,6 +48,7 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/drive/kind", "dcp"},
       {"/drive/device", "/dev/ttyS1"},
       {"/drive/rs485", "auto"},
+      {"/drive/echo", "auto"},
       {"/dcp/manufacturer", "LD"},  // DCP 5.12.2.3: a code no company holds in the table
       {"/dcp/language", "EN"},
       {"/dcp/data_info_type", "0"},

@@ -37,7 +37,17 @@ TEST(DcpStatus, UnknownsAreNullAndAStatusNeverSeenReadsZero) {
                        {"brake_open", false},
                        {"message_error", false}}},
                      {"extended", nullptr},
-                     {"handshake_problem", nullptr}}));
+                     {"handshake_problem", nullptr},
+                     {"line_echo", {{"mode", "off"}, {"state", "absent"}}}}));
+}
+
+TEST(DcpStatus, LineEchoSaysTheModeAndWhatTheLinkKnows) {
+  DcpStatusFacts facts;
+  facts.echo_mode = io::EchoMode::Auto;
+  facts.echo_state = io::EchoState::Unknown;
+  EXPECT_EQ(dcp_status_json(facts).at("line_echo"), (json{{"mode", "auto"}, {"state", "unknown"}}));
+  facts.echo_state = io::EchoState::Present;
+  EXPECT_EQ(dcp_status_json(facts).at("line_echo"), (json{{"mode", "auto"}, {"state", "present"}}));
 }
 
 TEST(DcpStatus, ModeExtendedAndHandshakeProblem) {

@@ -85,6 +85,47 @@ TEST(DcpMasterLink, S7RepeatsOurLastChannelBytes) {
   EXPECT_EQ(h.link.counters().s7_seen, 1U);
 }
 
+TEST(DcpMasterLink, EchoCollisionRepeatsOurChannelBytesWithoutB7) {
+  // Our frame came back changed on an echoing line: the drive read it changed too and ignored
+  // it (DCP 6.2 a). As for an S7 reply (DCP 6.1 b) our two channel bytes go again; no B7, whose
+  // repeated reply would only bring back the drive's S7.
+  Harness h;
+  h.bring_up();
+  ASSERT_EQ(h.link.submit(LoadRequest{25}, 1), SubmitResult::Accepted);
+  h.cycle();  // STX 1C
+  h.collide_masters = 1;
+  h.cycle();  // 'I' '8', collides
+  const FrameBytes lost = h.last();
+  EXPECT_EQ(lost[3], 'I');
+  h.cycle();
+  EXPECT_EQ(h.last()[3], lost[3]);
+  EXPECT_EQ(h.last()[4], lost[4]);
+  EXPECT_EQ(h.last()[0] & command_bit::kReplyChecksumError, 0);
+  ASSERT_GE(h.run_until([&] { return !h.completions.empty(); }), 0);
+  EXPECT_EQ(h.completions[0].result, RequestResult::Ok);
+  const auto tail = std::vector<std::uint8_t>(h.drive.stream.end() - 8, h.drive.stream.end());
+  EXPECT_EQ(tail, (std::vector<std::uint8_t>{0x02, 0x1C, 'I', '8', '0', '2', '5', 0x03}));
+  const LinkCounters c = h.link.counters();
+  EXPECT_EQ(c.bad_exchanges, 1U);
+  EXPECT_EQ(c.bad_checksum, 0U);
+  EXPECT_EQ(c.b7_sent, 0U);
+  EXPECT_EQ(c.missing_replies, 0U);
+}
+
+TEST(DcpMasterLink, EchoCollisionsCountTowardTheSupervision) {
+  // DCP 7.3: a frame the drive received incorrectly counts like a lost one.
+  Harness h;
+  h.bring_up();
+  h.collide_masters = 9;
+  h.run(9);
+  EXPECT_EQ(h.link.state(), LinkState::Up);
+  EXPECT_EQ(h.link.counters().error_run, 9U);
+  h.collide_masters = 1;
+  h.cycle();
+  EXPECT_EQ(h.link.state(), LinkState::Fault);
+  EXPECT_EQ(h.link.counters().bad_exchanges, 10U);
+}
+
 TEST(DcpMasterLink, IgnoresS7InAReplyWithBadChecksum) {
   // DCP 6 note: B7/S7 of a frame with a bad checksum must not be acted on.
   Harness h;

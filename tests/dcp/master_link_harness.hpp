@@ -28,6 +28,9 @@ struct Harness {
   FakeDrive drive;
   MonoTime now = 1000ms;
   int corrupt_masters = 0;  ///< corrupt the next N master frames on the wire
+  /// The next N master frames collide on an echoing line: corrupted on the wire for the drive,
+  /// and the master reads its echo back changed (on_bad_reply), whatever the drive answers.
+  int collide_masters = 0;
   std::vector<FrameBytes> sent;
   std::vector<Completion> completions;
   std::vector<LinkEvent> events;
@@ -41,8 +44,15 @@ struct Harness {
       --corrupt_masters;
       wire[5] ^= 0x01;
     }
+    const bool collided = collide_masters > 0;
+    if (collided) {
+      --collide_masters;
+      wire[1] ^= 0x10;
+    }
     const auto reply = drive.exchange(wire, now);
-    if (reply) {
+    if (collided) {
+      link.on_bad_reply(now + 2ms);  // the echo differed: read while sending (DCP 7.2)
+    } else if (reply) {
       link.on_reply(*reply, now + 5ms);  // DCP 7.2: reply well inside the cycle
     } else {
       link.on_no_reply(now + 14ms);

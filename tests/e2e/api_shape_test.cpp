@@ -41,11 +41,11 @@ void PrintTo(const ShapeCase& c, std::ostream* out) {
 const ShapeCase kCases[] = {
     {"dcp",
      json::object(),
-     {"mode", "status", "extended", "handshake_problem"},
-     {"replies_good", "checksum_errors", "missing_replies", "repeats", "link_losses", "b7_sent",
-      "channel_resets", "decode_errors", "request_timeouts", "longest_error_run", "late_sends",
-      "overruns", "skipped_cycles", "max_lateness_us", "lateness_p99_us", "reply_p99_us",
-      "max_work_us", "serial"}},
+     {"mode", "status", "extended", "handshake_problem", "line_echo"},
+     {"replies_good", "checksum_errors", "echo_collisions", "missing_replies", "repeats",
+      "link_losses", "b7_sent", "channel_resets", "decode_errors", "request_timeouts",
+      "longest_error_run", "late_sends", "overruns", "skipped_cycles", "max_lateness_us",
+      "lateness_p99_us", "reply_p99_us", "max_work_us", "serial"}},
     {"sch001",
      {{"drive", {{"kind", "sch001"}}},
       {"floors", kThreeFloors},
@@ -61,10 +61,10 @@ const ShapeCase kCases[] = {
       {"travel", {{"dcp3_decel_distance_mm", {{"V4", 700}, {"V3", 500}}}}},
       {"uss", {{"speeds", {{"V0", 10}, {"VN", 3}, {"VI", 30}, {"V3", 63}, {"V4", 100}}}}}},
      {"drive_address", "profile_state", "wish", "supervision", "control_word", "status_word",
-      "control_bits", "status_bits", "setpoint", "actual", "phase", "speed", "slaves"},
+      "control_bits", "status_bits", "setpoint", "actual", "phase", "speed", "slaves", "line_echo"},
      {"baud", "expected_cycle_time_us", "last_cycle_time_us", "cycle_time_p99_us", "replies_good",
       "replies_rejected", "port_losses", "max_lateness_us", "lateness_p99_us", "reply_p99_us",
-      "line_errors", "receive", "slaves", "serial"}},
+      "line_errors", "echo_collisions", "receive", "slaves", "serial"}},
 };
 
 class ApiShapeTest : public ::testing::TestWithParam<ShapeCase> {

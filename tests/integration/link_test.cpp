@@ -138,6 +138,121 @@ TEST(LiveLink, HandshakeThousandsOfCleanCyclesAndADcp4TravelLandsWithin2mm) {
       static_cast<unsigned long long>(c.skipped_cycles), mean_ms, near_period, sends.size() - 1);
 }
 
+// Issue #43: a line that echoes (the simulator stands for the transceiver and gives the master
+// every byte back before the drive's reply). With drive.echo on or auto the link must keep its
+// handshake and travel, twice, with no more missing or bad replies than a line without echo
+// (the bound the clean test above uses); three collisions (a byte of our frame changed on the
+// line) are three bad replies, counted, and the link goes on: no fault, the next travel lands.
+struct LiveEchoCase {
+  const char* name;
+  io::EchoMode mode;
+};
+
+class LiveLinkEcho : public ::testing::TestWithParam<LiveEchoCase> {};
+
+TEST_P(LiveLinkEcho, HandshakeTwoTravelsAndCollisionsOnAnEchoingLine) {
+  io::PtyPair pty = make_pty();
+  auto drive = serve(pty.master_fd(), drive_config(), true);
+  LiveMaster m(pty.slave_path(), control::testing::default_config(dcp::Protocol::Dcp4), {},
+               GetParam().mode);
+  m.position.attach(drive.get());
+  liftd::testing::ReferenceLink reference;
+  ASSERT_EQ(start_reference(reference), 0);
+  ASSERT_EQ(m.start(), 0);
+  ASSERT_TRUE(ready_within(m, reference, 5000ms)) << tail_of_trace(m.runner);
+  EXPECT_EQ(m.runner.echo_state(), io::EchoState::Present);
+
+  // A travel a link fault ended is run again only if the reference link saw the machine stall
+  // (eight periods in a row without an exchange: docs/architecture.md); never otherwise.
+  const auto stalled = [&] { return reference.longest_miss_run() >= 8; };
+  const auto travel_to = [&](std::size_t floor, double mm) {
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      const std::size_t finished = m.travel_events(travel::Event::Type::Finished);
+      const std::size_t aborted = m.travel_events(travel::Event::Type::Aborted);
+      ASSERT_TRUE(m.wait_until([&] { return m.ready() && m.idle(); }, 20000ms));
+      const CommandReply r = m.command(TravelCommand{floor, dcp::Speed::V4, std::nullopt, false});
+      ASSERT_EQ(r.code, ReplyCode::Ok) << r.detail;
+      ASSERT_TRUE(m.wait_until(
+          [&] {
+            return (m.travel_events(travel::Event::Type::Finished) > finished ||
+                    m.travel_events(travel::Event::Type::Aborted) > aborted) &&
+                   m.idle();
+          },
+          40000ms))
+          << tail_of_trace(m.runner);
+      if (m.travel_events(travel::Event::Type::Finished) > finished) break;
+      ASSERT_TRUE(stalled() && attempt == 0) << "travel aborted\n" << tail_of_trace(m.runner);
+    }
+    // The travel arrived: the car stands at the floor (within travel.level_tolerance_mm). How
+    // precisely it lands on a clean line is the clean test's (2 mm); here replies the loaded
+    // machine delays near the stop move it by a few mm, echo or not.
+    EXPECT_NEAR(drive->position_mm(), mm, 5.0);
+    EXPECT_EQ(m.controller.snapshot().floor, floor);
+  };
+  m.run_for(300ms);
+  travel_to(3, 9000.0);
+  travel_to(1, 3000.0);
+  const rt::CycleCounters clean = m.runner.stats().counters;
+
+  // Collisions at rest: each is a bad reply (DCP 7.3 counts it), none faults the link.
+  drive->collide(3);
+  ASSERT_TRUE(m.wait_until([&] { return drive->status().runner.collisions == 3; }, 10000ms));
+  m.run_for(500ms);
+  travel_to(2, 6000.0);
+  m.runner.stop();
+  m.pump();
+  drive->stop();
+  reference.stop();
+
+  const rt::CycleCounters c = m.runner.stats().counters;
+  const dcp::LinkCounters lc = m.controller.snapshot().link_counters;
+  if (!stalled()) {
+    EXPECT_EQ(m.travel_events(travel::Event::Type::Aborted), 0U);
+    EXPECT_EQ(lc.link_faults, 0U);
+    EXPECT_EQ(m.link_events_to(dcp::LinkState::Fault), 0U);
+  }
+  // Before the collisions: as on a line without echo, nothing bad, missing replies within the
+  // clean test's bound. A reply the machine held past its deadline can reach the master while
+  // its next frame goes out, ahead of that frame's echo: the drive drove the line while the
+  // master sent, a collision; never without such a missing reply.
+  EXPECT_LE(clean.missing_replies, clean.cycles / 100 + 2 * reference.missing())
+      << "missing " << clean.missing_replies << ", reference link " << reference.missing();
+  EXPECT_LE(clean.bad_replies, clean.missing_replies);
+  EXPECT_EQ(clean.bad_replies, clean.echo_collisions);
+  // The three collisions, each a bad reply; the drive read the changed frames as bad ones
+  // (DCP 6.2 a), and the link did not read its own frame as a reply anywhere (a checksum error
+  // or data word error would show it).
+  EXPECT_GE(c.echo_collisions - clean.echo_collisions, 3U);
+  EXPECT_LE(c.echo_collisions - clean.echo_collisions, 3U + c.missing_replies);
+  EXPECT_EQ(c.bad_replies, c.echo_collisions);
+  EXPECT_EQ(lc.bad_exchanges, c.echo_collisions);
+  EXPECT_EQ(lc.bad_checksum, 0U);
+  EXPECT_EQ(lc.data_word_errors, 0U);
+  EXPECT_GE(drive->status().sim.bad_frames, 3U);
+  std::size_t found = 0;
+  for (const auto& e : m.cycle_events) {
+    found += e.kind == rt::CycleEventKind::LineEcho && e.count == 1 ? 1U : 0U;
+  }
+  std::printf(
+      "[ info     ] %llu frames, %llu good, %llu missing (reference link %llu of %llu), %llu bad "
+      "of them %llu collisions (3 made)\n",
+      static_cast<unsigned long long>(c.frames_sent),
+      static_cast<unsigned long long>(c.good_replies),
+      static_cast<unsigned long long>(c.missing_replies),
+      static_cast<unsigned long long>(reference.missing()),
+      static_cast<unsigned long long>(reference.exchanges()),
+      static_cast<unsigned long long>(c.bad_replies),
+      static_cast<unsigned long long>(c.echo_collisions));
+  EXPECT_EQ(found, GetParam().mode == io::EchoMode::Auto ? 1U : 0U);
+}
+
+INSTANTIATE_TEST_SUITE_P(Modes, LiveLinkEcho,
+                         ::testing::Values(LiveEchoCase{"On", io::EchoMode::On},
+                                           LiveEchoCase{"Auto", io::EchoMode::Auto}),
+                         [](const ::testing::TestParamInfo<LiveEchoCase>& p) {
+                           return std::string(p.param.name);
+                         });
+
 // The master's pty (A) relays through the fault proxy to the simulator's pty (B).
 /// A master's exchange through ProxiedLink crosses two ptys, the reference link's one: each
 /// crossing is a flip-buffer delivery the machine can hold up.

@@ -57,10 +57,13 @@ inline io::PtyPair make_pty() {
 
 /// A simulator serving the master end of `pty` (through a duplicate of its descriptor, so the
 /// pair and the runner close independently).
+/// `echo`: the line gives the master its bytes back (RunnerOptions::echo).
 inline std::unique_ptr<dcp::sim::SerialDriveRunner> serve(int master_fd,
-                                                          const dcp::sim::DriveConfig& config) {
+                                                          const dcp::sim::DriveConfig& config,
+                                                          bool echo = false) {
   dcp::sim::RunnerOptions options;
   options.fd = ::dup(master_fd);
+  options.echo = echo;
   options.reconnect = false;
   // The drive stands for hardware that answers on time: real-time scheduling one step below
   // the master's cycle (cycle_config) where permitted, as in liftd --simulate.
@@ -99,9 +102,11 @@ class DeviceAlias {
 };
 
 /// Cycle settings for the tests: DCP 7.2 timing, real-time scheduling where permitted.
-inline rt::CycleConfig cycle_config(const std::string& device) {
+inline rt::CycleConfig cycle_config(const std::string& device,
+                                    io::EchoMode echo = io::EchoMode::Off) {
   rt::CycleConfig c;
   c.device_path = device;
+  c.echo = echo;
   // SCHED_FIFO where permitted (normal scheduling otherwise, as RtThread falls back): on a
   // loaded machine a normal thread sees replies after their DCP 7.2 deadline, which the cycle
   // rightly counts as missing.
@@ -117,9 +122,10 @@ struct LiveMaster {
   explicit LiveMaster(const std::string& device,
                       const control::ControllerConfig& config =
                           control::testing::default_config(dcp::Protocol::Dcp4),
-                      std::function<rt::CycleEngine&(control::DcpController&)> wrap = {})
+                      std::function<rt::CycleEngine&(control::DcpController&)> wrap = {},
+                      io::EchoMode echo = io::EchoMode::Off)
       : controller(config, position),
-        runner(cycle_config(device), wrap ? wrap(controller) : controller) {
+        runner(cycle_config(device, echo), wrap ? wrap(controller) : controller) {
     inputs.valid = inputs.safety_chain_closed = inputs.doors_closed = inputs.doors_locked = true;
   }
   ~LiveMaster() { runner.stop(); }

@@ -36,8 +36,8 @@ std::array<std::uint8_t, kEchoFrameSize> echo_reply(
   return reply;
 }
 
-FakeResponder::FakeResponder(int fd, std::chrono::microseconds reply_delay, int priority)
-    : fd_(fd), reply_delay_(reply_delay) {
+FakeResponder::FakeResponder(int fd, std::chrono::microseconds reply_delay, int priority, Line line)
+    : fd_(fd), reply_delay_(reply_delay), line_(line) {
   options_.priority = priority;
   options_.lock_memory = false;
   options_.stack_prefault_bytes = 0;
@@ -61,6 +61,7 @@ void FakeResponder::loop() noexcept {
   std::array<std::uint8_t, kEchoFrameSize> frame{};
   std::size_t got = 0;
   MonoTime last_byte{};
+  bool colliding = false;      // the frame on the line now collides
   constexpr int kPollMs = 20;  // how quickly stop() is noticed
   while (!stop_.load(std::memory_order_relaxed)) {
     pollfd pfd{fd_, POLLIN, 0};
@@ -75,12 +76,30 @@ void FakeResponder::loop() noexcept {
     const ssize_t n = ::read(fd_, chunk.data(), chunk.size());
     if (n <= 0) continue;
     const MonoTime now = mono_now();
+    if (line_.echo) {
+      // The master's bytes as the line carried them: a collision changes a frame's second
+      // byte for every receiver (the master's echo and this responder alike).
+      std::size_t at = got;
+      for (std::size_t i = 0; i < static_cast<std::size_t>(n); ++i, ++at) {
+        if (at % kEchoFrameSize == 0) colliding = false;
+        if (at % kEchoFrameSize == 1) {
+          std::uint32_t left = collide_.load();
+          while (left > 0 && !collide_.compare_exchange_weak(left, left - 1)) {
+          }
+          colliding = left > 0;
+          if (colliding) collisions_.fetch_add(1, std::memory_order_relaxed);
+        }
+        if (colliding && at % kEchoFrameSize == 1) chunk[i] ^= 0x10;
+      }
+      (void)!::write(fd_, chunk.data(), static_cast<std::size_t>(n));
+    }
     for (std::size_t i = 0; i < static_cast<std::size_t>(n); ++i) {
       if (got > 0 && now - last_byte > kInterByteGap) got = 0;  // stale partial frame
       frame[got++] = chunk[i];
       last_byte = now;
       if (got < kEchoFrameSize) continue;
       got = 0;
+      if (line_.silent) continue;
       sleep_until(now + reply_delay_);
       const auto reply = echo_reply(frame);
       if (::write(fd_, reply.data(), reply.size()) == static_cast<ssize_t>(reply.size())) {

@@ -139,6 +139,8 @@ void usage(std::FILE* out) {
       "  --frames N           exit after N master frames\n"
       "  --status S           print a status line every S seconds\n"
       "  --reconnect          reopen a lost device instead of exiting\n"
+      "  --echo               the line echoes: give the master each byte it sent back\n"
+      "                       before the reply (as an auto-direction USB adapter does)\n"
       "  --quiet              print only start, faults and the summary\n"
       "  --encoder ENDPOINT   also be the shaft's absolute encoder on CAN: unix:PATH\n"
       "                       (listen there, as liftd's can.interface unix:PATH) or an\n"
@@ -184,6 +186,8 @@ bool parse(int argc, char** argv, Options& o) {
       o.status_interval_s = std::strtod(v, nullptr);
     } else if (a == "--reconnect") {
       o.runner.reconnect = true;
+    } else if (a == "--echo") {
+      o.runner.echo = true;
     } else if (a == "--quiet") {
       o.runner.quiet = true;
     } else if (a == "--encoder" && (v = next())) {

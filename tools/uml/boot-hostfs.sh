@@ -9,7 +9,8 @@
 #
 #   --out DIR       where the guest writes guest.log (the command's stdout and stderr), rc
 #                   (its exit code) and console.log (the kernel's console); default: a new
-#                   folder under build/uml. Must not be under /tmp (a tmpfs in the guest).
+#                   folder under build/uml. It may lie under /tmp, /run or /dev/shm, as may the
+#                   caller's working directory: see "Inside the guest" below.
 #   --timeout S     the kernel is killed after S seconds (default 600)
 #   --mem SIZE      guest memory (default 1024M)
 #   --modules LIST  kernel modules to insmod in this order, as paths below the modules folder
@@ -20,7 +21,12 @@
 #
 # Exit codes: the command's own; 124 when the timeout killed the kernel; 125 when the kernel did
 # not run or the guest never wrote its exit code (the console log is printed then).
-# Inside the guest: proc, sysfs, devpts (a new pty instance), tmpfs on /run and /tmp.
+# Inside the guest: proc, sysfs, devpts (a new pty instance), tmpfs on /run and /tmp (and
+# /dev/shm), so that the tests' sockets, ptys' links and temporary files stay the guest's own.
+# Those tmpfs hide the host's folders of the same name; the caller's working directory (the
+# checkout, e.g. a clone in /tmp) and --out, where they lie below one of them, are mounted again
+# from the host over hostfs at the same path, so the guest sees the build tree and the host sees
+# what the guest writes.
 # Nothing runs as PID 1 but the generated init: it runs the command and halts.
 set -euo pipefail
 
@@ -52,7 +58,11 @@ if [ -z "$out" ]; then
 fi
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
-case $out in /tmp/* | /run/* | /dev/shm/*) echo "boot-hostfs: --out must not be under /tmp, /run or /dev/shm (tmpfs in the guest)" >&2; exit 2 ;; esac
+# Host folders the guest's tmpfs would hide: mounted again over hostfs (see above).
+hidden=()
+for dir in "$PWD" "$out"; do
+  case $dir/ in /tmp/* | /run/* | /dev/shm/*) hidden+=("$dir") ;; esac
+done
 rm -f "$out/rc" "$out/guest.log" "$out/console.log"
 
 # The guest's PID 1: a shell script on hostfs, written here with the caller's directory, the
@@ -64,6 +74,10 @@ init=$out/init.sh
   echo 'mount -t proc proc /proc; mount -t sysfs sysfs /sys'
   echo 'mount -t tmpfs tmpfs /run; mount -t tmpfs tmpfs /tmp'
   echo '[ -d /dev/shm ] && mount -t tmpfs tmpfs /dev/shm'
+  for dir in "${hidden[@]}"; do
+    q=$(printf %q "$dir")
+    echo "mkdir -p $q && mount -t hostfs -o $q hostfs $q || { echo 'boot-hostfs: cannot mount' $q 'from the host' >&2; exit 1; }"
+  done
   echo 'mkdir -p /dev/pts; mount -t devpts -o newinstance,ptmxmode=0666 devpts /dev/pts'
   echo 'mount --bind /dev/pts/ptmx /dev/ptmx 2>/dev/null'
   echo 'ip link set lo up 2>/dev/null'

@@ -228,6 +228,7 @@ class DcpController final : public rt::CycleEngine, public lift::ControllerCore<
   std::size_t reply_size() const noexcept override { return dcp::kFrameSize; }
   bool on_reply(std::span<const std::uint8_t> reply, MonoTime now) noexcept override;
   void on_no_reply(MonoTime now) noexcept override { link_.on_no_reply(now); }
+  void on_bad_reply(MonoTime now) noexcept override { link_.on_bad_reply(now); }
   void on_port_lost(MonoTime now) noexcept override { link_.on_port_lost(now); }
   void after_cycle(MonoTime now) noexcept override;
 

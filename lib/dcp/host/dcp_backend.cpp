@@ -65,7 +65,8 @@ DcpBackend::DcpBackend(const config::Config& config, const config::Schema& schem
 api::StatusSnapshot DcpBackend::status() {
   const control::ControllerSnapshot s = controller_.snapshot();
   api::StatusSnapshot out = neutral_status(s, to_api(s.link));
-  const DcpStatusFacts facts{s.protocol, s.status_byte, s.extended, s.handshake_problem};
+  const DcpStatusFacts facts{s.protocol,          s.status_byte,         s.extended,
+                             s.handshake_problem, runner_.config().echo, runner_.echo_state()};
   if (!(facts == dcp_facts_)) {  // built again only when it changed: status is asked often
     dcp_facts_ = facts;
     dcp_details_ = dcp_status_json(facts);
@@ -90,6 +91,7 @@ api::StatsSnapshot DcpBackend::stats() {
   // The link (DCP 6, 7) and the 15 ms cycle's timing (DCP 7.2): docs/api.md `stats`.
   d["replies_good"] = link.good_replies;
   d["checksum_errors"] = link.bad_checksum;
+  d["echo_collisions"] = cycle.counters.echo_collisions;
   d["missing_replies"] = link.missing_replies;
   d["repeats"] = link.s7_seen;
   d["link_losses"] = link.link_faults;

@@ -83,6 +83,7 @@ rt::CycleConfig cycle_config(const config::Config& c, const std::string& device)
   out.thread.lock_memory = c.rt.lock_memory;
   out.recorder_span = std::chrono::seconds(c.rt.flight_recorder_s);
   out.send_window = std::chrono::microseconds(c.rt.send_window_us);
+  out.echo = echo_mode(c.drive.echo);
   return out;
 }
 

@@ -1,5 +1,7 @@
 #include "dcp/host/dcp_status.hpp"
 
+#include "host/lift_core.hpp"
+
 #include <string>
 #include <utility>
 
@@ -61,6 +63,7 @@ nlohmann::json dcp_status_json(const DcpStatusFacts& facts) {
   j["handshake_problem"] = facts.handshake_problem.empty()
                                ? nlohmann::json(nullptr)
                                : nlohmann::json(std::string(facts.handshake_problem));
+  j["line_echo"] = line_echo_json(facts.echo_mode, facts.echo_state);
   return j;
 }
 

@@ -10,19 +10,23 @@
 
 #include "dcp/frame.hpp"
 #include "dcp/master_link.hpp"
+#include "io/line_echo.hpp"
 
 namespace liftd::daemon {
 
 /// The DCP facts `status` reports, as the cycle last published them.
 struct DcpStatusFacts {
-  std::optional<dcp::Protocol> mode;            ///< nullopt before the I0 reply (DCP 5.12.2)
-  std::optional<std::uint8_t> status_byte;      ///< S0..S7 of the last good reply (DCP 4.1)
-  std::optional<dcp::ExtendedStatus> extended;  ///< DCP 4.2.1.1; nullopt if never received
-  std::string_view handshake_problem;           ///< empty once the handshake is complete
+  std::optional<dcp::Protocol> mode;                 ///< nullopt before the I0 reply (DCP 5.12.2)
+  std::optional<std::uint8_t> status_byte;           ///< S0..S7 of the last good reply (DCP 4.1)
+  std::optional<dcp::ExtendedStatus> extended;       ///< DCP 4.2.1.1; nullopt if never received
+  std::string_view handshake_problem;                ///< empty once the handshake is complete
+  io::EchoMode echo_mode = io::EchoMode::Off;        ///< drive.echo
+  io::EchoState echo_state = io::EchoState::Absent;  ///< what the cycle knows of the echo
   bool operator==(const DcpStatusFacts&) const = default;
 };
 
-/// {"mode", "status", "extended", "handshake_problem"}: the `dcp` object of `status`.
+/// {"mode", "status", "extended", "handshake_problem", "line_echo"}: the `dcp` object of
+/// `status`.
 nlohmann::json dcp_status_json(const DcpStatusFacts& facts);
 /// The S0..S7 bits by name.
 nlohmann::json to_json(const dcp::Status& status);

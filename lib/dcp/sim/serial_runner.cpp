@@ -460,6 +460,25 @@ void SerialDriveRunner::run() noexcept {
       std::lock_guard lock(mutex_);
       ++counters_.resyncs;
     }
+    if (r.bytes > 0 && !lost) {
+      // The line as every receiver on it sees it: a collision changes a frame's second byte.
+      for (std::size_t i = 0; i < r.bytes; ++i) {
+        if ((have + i) % frame.size() != 1) continue;
+        std::uint32_t left = collide_.load();
+        while (left > 0 && !collide_.compare_exchange_weak(left, left - 1)) {
+        }
+        if (left == 0) continue;
+        buf[i] ^= 0x10;
+        std::lock_guard lock(mutex_);
+        ++counters_.collisions;
+      }
+      // The transceiver gives the master its own bytes back as they pass.
+      if (options_.echo &&
+          port_.write_frame(std::span(buf.data(), r.bytes)).status != io::IoStatus::Ok) {
+        std::lock_guard lock(mutex_);
+        ++counters_.write_failures;
+      }
+    }
     for (std::size_t i = 0; i < r.bytes; ++i) {
       frame[have++] = buf[i];
       last_byte = now;

@@ -52,6 +52,10 @@ struct RunnerOptions {
   std::chrono::milliseconds reconnect_interval{100};
   /// Events kept for drain_events() before the oldest are dropped.
   std::size_t event_capacity = 1024;
+  /// The line echoes: the simulator stands for the transceiver too, and writes every byte the
+  /// master sent back to the master as it arrives, before the drive's reply (an RS485
+  /// transceiver whose receiver stays on while it sends, an auto-direction USB adapter).
+  bool echo = false;
   /// SCHED_FIFO priority of the runner's thread (0 = normal scheduling). The simulated drive
   /// stands for hardware that answers within DCP 7.2 whatever else the machine runs; where
   /// real-time scheduling is refused the runner runs with normal scheduling (status says so).
@@ -87,6 +91,7 @@ struct RunnerCounters {
   std::uint64_t device_losses = 0;   ///< hang-ups / lost devices seen
   std::uint64_t reconnects = 0;      ///< successful reopenings after a loss
   std::uint64_t dropped_events = 0;  ///< events dropped because the queue was full
+  std::uint64_t collisions = 0;      ///< master frames collide() changed on the line
   bool realtime = false;             ///< the thread runs with SCHED_FIFO (options.priority)
 };
 
@@ -184,6 +189,10 @@ class SerialDriveRunner {
   void refuse_next_target();
   /// Injects a communication-channel fault (DCP 5) now.
   void inject_channel(ChannelFault fault);
+  /// The next `frames` master frames collide with another station's bits on the line: their
+  /// second byte changes for every receiver, the master's echo (options.echo) and the drive
+  /// alike, which then finds a bad checksum (DCP 6.2 a).
+  void collide(std::uint32_t frames) noexcept { collide_.fetch_add(frames); }
   /// Applies `fault` to each reply with `probability` (0..1).
   void set_fault_rate(ReplyFault fault, double probability);
   /// Clears every reply fault and rate.
@@ -213,6 +222,7 @@ class SerialDriveRunner {
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> running_{false};
   std::atomic<RunnerState> state_{RunnerState::Idle};
+  std::atomic<std::uint32_t> collide_{0};  // frames still to collide (collide())
 
   std::atomic<double> position_mm_{0.0};
   std::atomic<double> velocity_mps_{0.0};

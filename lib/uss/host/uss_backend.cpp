@@ -57,6 +57,7 @@ api::StatusSnapshot UssBackend::status() {
                       {"pkw_busy", sl.pkw_busy}});
   }
   d["slaves"] = std::move(slaves);
+  d["line_echo"] = line_echo_json(runner_.config().echo, runner_.echo_state());
   out.details = std::move(d);
   out.brake_open = s.brake_open;
   out.contactors_on = s.contactors_on;
@@ -105,6 +106,7 @@ api::StatsSnapshot UssBackend::stats() {
                  {"lateness_p99_us", r.wake_lateness.percentile_us(0.99)},
                  {"reply_p99_us", r.reply_time.percentile_us(0.99)},
                  {"line_errors", r.counters.line_errors},
+                 {"echo_collisions", r.counters.echo_collisions},
                  {"receive", std::move(rx)},
                  {"slaves", std::move(slaves)}};
   add_serial_device(out.details);

@@ -99,6 +99,7 @@ UssLift::UssLift(Host& daemon, const config::Config& config, bool simulate)
   rc.serial.rs485 = config.drive.rs485 == config::Rs485Mode::required ? io::Rs485Mode::Required
                     : config.drive.rs485 == config::Rs485Mode::off    ? io::Rs485Mode::Off
                                                                       : io::Rs485Mode::Auto;
+  rc.echo = echo_mode(config.drive.echo);
   rc.thread.priority = config.rt.priority;
   rc.thread.cpu = config.rt.cpu;
   rc.thread.lock_memory = config.rt.lock_memory;

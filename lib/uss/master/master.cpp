@@ -300,6 +300,13 @@ void Master::on_char(const RxChar& c, MonoTime at) noexcept {
   }
 }
 
+void Master::on_collision(MonoTime at) noexcept {
+  if (phase_ != Phase::Awaiting) return;
+  line_free_ = std::max(line_free_, at);
+  ++counters_.bad_replies;
+  fail_exchange(ExchangeOutcome::BadReply, at);
+}
+
 void Master::on_time(MonoTime now) noexcept {
   if (phase_ != Phase::Awaiting) return;
   if (rx_.receiving()) {

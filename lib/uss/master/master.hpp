@@ -255,6 +255,11 @@ class Master {
   MonoTime deadline() const noexcept;
   /// Time supervision: ends the exchange once now >= deadline().
   void on_time(MonoTime now) noexcept;
+  /// While awaiting a reply: the runner read our telegram back changed on an echoing line (a
+  /// collision), so the slave did not receive it intact and must not answer it (A 5.2.2). The
+  /// exchange ends as a bad one (counted in bad_replies, a failure of the slave as a rejected
+  /// reply is, A 5.2.1.1); the line counts as busy until `at`.
+  void on_collision(MonoTime at) noexcept;
   /// The port (re)opened or went away: an exchange in progress is dropped (its PKW poll is not
   /// counted, a mirror or special waiting for its reply fails), the line counts as quiet from
   /// `now`, so the next telegram keeps a full start pause, and every slave's process data from

@@ -55,10 +55,12 @@ UssRunner::UssRunner(UssRunnerConfig config, uss::Master& master, UssHooks& hook
       master_(master),
       hooks_(hooks),
       input_check_(io::character_time(config_.serial)),
+      echo_(config_.echo),
       recorder_(recorder_capacity(config_, master), config_.recorder_bytes),
       port_keeper_(rt::PortKeeperConfig{config_.device_path, config_.serial,
                                         config_.reopen_backoff_min, config_.reopen_backoff_max,
                                         add_line_counter_note}) {
+  echo_state_.store(echo_.state(), std::memory_order_relaxed);
   if (config_.serial.baud != master_.config().baud) {
     throw std::invalid_argument("uss runner: the line runs at " +
                                 std::to_string(config_.serial.baud) + " baud, the master at " +
@@ -100,6 +102,7 @@ UssRunnerStats UssRunner::stats() const {
   s.counters.stray_bytes = get(counters_.stray_bytes);
   s.counters.chars_received = get(counters_.chars_received);
   s.counters.line_errors = get(counters_.line_errors);
+  s.counters.echo_collisions = get(counters_.echo_collisions);
   s.cycle_time = cycle_time_.copy();
   s.wake_lateness = wake_lateness_.copy();
   s.reply_time = reply_time_.copy();
@@ -116,6 +119,8 @@ void UssRunner::notify() noexcept {
 void UssRunner::adopt_offered_port() noexcept {
   if (!port_keeper_.adopt_offered_port()) return;
   decoder_.reset();
+  echo_.port_opened();  // another adapter may stand behind the name now
+  echo_state_.store(echo_.state(), std::memory_order_relaxed);
   const MonoTime now = mono_now();
   // The line state is unknown: a full start pause before the first telegram (A 5.1.2).
   master_.reset_link(now);
@@ -196,6 +201,12 @@ void UssRunner::run_exchange(MonoTime wake) noexcept {
   }
   master_.on_sent(end);
   sent_end_ = end;
+  echo_sent_ = telegram;
+  echo_pos_ = 0;
+  held_ = 0;
+  echo_candidate_ = false;
+  echo_ambiguous_ = false;
+  echo_done_ = !echo_.expected() && !echo_.undecided();
   receive(sent_at);
 }
 
@@ -209,12 +220,80 @@ void UssRunner::feed(std::size_t raw_bytes, MonoTime now) noexcept {
   }
   for (std::size_t i = 0; i < count; ++i) {
     if (!master_.awaiting_reply()) break;  // the rest is stray, flushed before the next send
-    const uss::RxChar& c = chars_[i];
-    bump(counters_.chars_received);
-    if (c.error != uss::LineError::None) bump(counters_.line_errors);
-    if (rx_record_size_ < rx_record_.size()) rx_record_[rx_record_size_++] = c.byte;
-    master_.on_char(c, now);
+    if (!echo_done_ && take_echo(chars_[i], now)) continue;
+    to_master(chars_[i], now);
   }
+}
+
+void UssRunner::to_master(const uss::RxChar& c, MonoTime at) noexcept {
+  bump(counters_.chars_received);
+  if (c.error != uss::LineError::None) bump(counters_.line_errors);
+  if (rx_record_size_ < rx_record_.size()) rx_record_[rx_record_size_++] = c.byte;
+  master_.on_char(c, at);
+}
+
+bool UssRunner::take_echo(const uss::RxChar& c, MonoTime at) noexcept {
+  const bool same = c.error == uss::LineError::None && echo_pos_ < echo_sent_.size() &&
+                    c.byte == echo_sent_[echo_pos_];
+  if (echo_.expected()) {
+    if (!same) {
+      // Our telegram came back changed: another station drove the bus while we sent. The
+      // slave did not receive it intact (A 5.2.2); whatever follows is no reply to it.
+      echo_done_ = true;
+      bump(counters_.echo_collisions);
+      if (c.error != uss::LineError::None) bump(counters_.line_errors);
+      master_.on_collision(at);
+      return true;
+    }
+    echo_done_ = ++echo_pos_ == echo_sent_.size();
+    return true;
+  }
+  // Auto, still finding out: hold what matches the telegram so far.
+  if (same) {
+    held_at_[held_++] = at;
+    if (++echo_pos_ == echo_sent_.size()) {
+      echo_done_ = true;
+      echo_candidate_ = true;  // all of it came back: the echo, unless nothing follows
+    }
+    return true;
+  }
+  echo_done_ = true;  // no echo this time: what was held is the reply's start
+  release_held();
+  return false;
+}
+
+void UssRunner::release_held() noexcept {
+  const std::size_t n = held_;
+  held_ = 0;
+  echo_candidate_ = false;
+  for (std::size_t j = 0; j < n && master_.awaiting_reply(); ++j) {
+    to_master(uss::RxChar{echo_sent_[j], uss::LineError::None}, held_at_[j]);
+  }
+}
+
+void UssRunner::after_reply_window() noexcept {
+  // The master's deadline has come with characters held back. Part of the telegram is no
+  // echo (an echo comes back whole): the reply's start. A whole copy of a poll is the echo
+  // of a slave that is silent. A whole copy of a mirror telegram (A 5.3) is the echo or the
+  // mirror reply, and nobody can tell: when it came says nothing either (a USB adapter delivers
+  // the echo late, a simulated slave on a pty answers before our telegram would have left the
+  // wire). Taken as the reply, it decides nothing; an echoing bus whose slave is silent passes
+  // that one start mirror, and its polls then find the slave silent.
+  if (held_ == 0) return;
+  if (echo_candidate_ && master_.last_kind() != uss::TelegramKind::Mirror) return;
+  echo_ambiguous_ = echo_candidate_;
+  echo_done_ = true;
+  release_held();
+}
+
+void UssRunner::note_echo_decided(MonoTime now) noexcept {
+  const io::EchoState state = echo_.state();
+  echo_state_.store(state, std::memory_order_relaxed);
+  rt::CycleEvent e;
+  e.kind = rt::CycleEventKind::LineEcho;
+  e.time = now;
+  e.count = state == io::EchoState::Present ? 1 : 0;
+  (void)bus_events_.try_push(e);  // once per port open; a full queue loses it (echo_state())
 }
 
 void UssRunner::receive(MonoTime sent_at) noexcept {
@@ -235,6 +314,7 @@ void UssRunner::receive(MonoTime sent_at) noexcept {
     }
     if (got.bytes > 0) continue;
     if (now >= master_.deadline()) {
+      after_reply_window();
       master_.on_time(now);
       continue;
     }
@@ -250,6 +330,10 @@ void UssRunner::receive(MonoTime sent_at) noexcept {
     }
   }
   bump(counters_.exchanges);
+  if (master_.last_outcome() == uss::ExchangeOutcome::Reply && !echo_ambiguous_ &&
+      echo_.good_reply_seen(echo_candidate_)) {
+    note_echo_decided(now);
+  }
   stray_possible_ = master_.last_outcome() == uss::ExchangeOutcome::Timeout ||
                     master_.last_outcome() == uss::ExchangeOutcome::BadReply;
   const std::span<const std::uint8_t> reply(rx_record_.data(), rx_record_size_);

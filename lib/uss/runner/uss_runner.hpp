@@ -16,6 +16,7 @@
 
 #include "common/mono_time.hpp"
 #include "common/spsc_queue.hpp"
+#include "io/line_echo.hpp"
 #include "io/serial_port.hpp"
 #include "rt/cycle_runner.hpp"
 #include "rt/flight_recorder.hpp"
@@ -56,6 +57,10 @@ struct UssRunnerConfig {
   std::chrono::nanoseconds recorder_span = std::chrono::seconds(30);
   /// Bytes kept per record: the longest telegram (A 4.2: 256).
   std::size_t recorder_bytes = rt::kUssRecordBytes;
+  /// Whether the bus gives our own telegram back ahead of the reply (io/line_echo.hpp). The
+  /// copy arrives while we send, before the telegram's end that the reply delay counts from
+  /// (A 5.2.1.1), so it takes nothing from the slave's time.
+  io::EchoMode echo = io::EchoMode::Off;
 };
 
 /// Counters of the runner, copied out by stats().
@@ -72,6 +77,9 @@ struct UssRunnerCounters {
   std::uint64_t stray_bytes = 0;        ///< bytes flushed before sending
   std::uint64_t chars_received = 0;     ///< characters fed to the master
   std::uint64_t line_errors = 0;        ///< characters that arrived marked (parity/framing/break)
+  /// Telegrams that came back changed on an echoing bus (a collision); each is also one of the
+  /// bad replies.
+  std::uint64_t echo_collisions = 0;
 };
 
 /// A copy of the runner's statistics, taken on any thread.
@@ -122,6 +130,9 @@ class UssRunner {
   bool port_ready() const noexcept { return port_keeper_.port_ready(); }
   /// The configuration in use.
   const UssRunnerConfig& config() const noexcept { return config_; }
+  /// Any thread: what the bus knows about its line's echo (config echo; Auto: found out at
+  /// each port open, reported once as an rt::CycleEventKind::LineEcho event).
+  io::EchoState echo_state() const noexcept { return echo_state_.load(std::memory_order_relaxed); }
 
  private:
   static constexpr std::size_t kEventSlots = 64;
@@ -132,6 +143,11 @@ class UssRunner {
   void run_exchange(MonoTime wake) noexcept;
   void receive(MonoTime sent_at) noexcept;
   void feed(std::size_t raw_bytes, MonoTime now) noexcept;
+  void to_master(const uss::RxChar& c, MonoTime at) noexcept;
+  bool take_echo(const uss::RxChar& c, MonoTime at) noexcept;
+  void release_held() noexcept;
+  void after_reply_window() noexcept;
+  void note_echo_decided(MonoTime now) noexcept;
   void adopt_offered_port() noexcept;
   void lose_port(MonoTime now, int error_number) noexcept;
   void notify() noexcept;
@@ -152,6 +168,18 @@ class UssRunner {
   std::array<std::uint8_t, uss::kMaxTelegramBytes> rx_record_{};  // reply bytes for the recorder
   std::size_t rx_record_size_ = 0;
   MonoTime sent_end_{};
+  // The echo of the telegram being answered (echo on, or auto while finding out).
+  io::EchoDetector echo_;
+  std::span<const std::uint8_t> echo_sent_;  // the telegram sent (valid until the next one)
+  std::size_t echo_pos_ = 0;                 // characters of it read back so far
+  bool echo_done_ = false;                   // the echo is over (read back, or none this time)
+  // Auto, undecided: characters that match the telegram so far are held back from the master
+  // until they prove to be the echo (all of it came back) or not (one differs: they were the
+  // reply's, and go to the master with their own times).
+  std::array<MonoTime, uss::kMaxTelegramBytes> held_at_{};
+  std::size_t held_ = 0;         // characters held back now
+  bool echo_candidate_ = false;  // all of the telegram came back and is held as its echo
+  bool echo_ambiguous_ = false;  // a mirror telegram's copy alone: echo or the mirror reply
   bool stray_possible_ = false;  // the last reply timed out or was bad: flush before sending
   std::uint64_t last_cycles_ = 0;
   int notify_fd_ = -1;
@@ -161,8 +189,9 @@ class UssRunner {
   struct Counters {
     std::atomic<std::uint64_t> exchanges{0}, good_replies{0}, bad_replies{0}, reply_timeouts{0},
         no_reply_expected{0}, cycles{0}, send_failures{0}, stray_bytes{0}, chars_received{0},
-        line_errors{0};
+        line_errors{0}, echo_collisions{0};
   } counters_;
+  std::atomic<io::EchoState> echo_state_{io::EchoState::Unknown};
   rt::Histogram<20000> cycle_time_{std::chrono::microseconds(50)};    // 0..1 s
   rt::Histogram<20000> wake_lateness_{std::chrono::microseconds(1)};  // 0..20 ms
   rt::Histogram<10000> reply_time_{std::chrono::microseconds(10)};    // 0..100 ms

@@ -138,6 +138,27 @@ TEST(UssMasterPolling, AnUnusableReplyFlagsTheSlave) {
   }
 }
 
+TEST(UssMasterPolling, AnEchoCollisionEndsTheExchangeAsABadOneAndFlagsTheSlave) {
+  // The runner read our telegram back changed on an echoing bus: the slave did not receive it
+  // intact (A 5.2.2) and will not answer it. A bad exchange; the next telegram keeps a start
+  // pause after the collision.
+  Bus bus(one_slave());
+  bus.send();
+  bus.reply(idle_reply(5));
+  ASSERT_TRUE(bus.master.slave(5).responding);
+  bus.send();
+  ASSERT_TRUE(bus.master.awaiting_reply());
+  const MonoTime at = bus.t;
+  bus.master.on_collision(at);
+  EXPECT_FALSE(bus.master.awaiting_reply());
+  EXPECT_EQ(bus.master.last_outcome(), ExchangeOutcome::BadReply);
+  EXPECT_FALSE(bus.master.slave(5).responding);
+  EXPECT_EQ(bus.master.counters().bad_replies, 1U);
+  EXPECT_GE(bus.master.send_at(), at + bus.master.start_pause());
+  bus.master.on_collision(at);  // nothing awaited: no effect
+  EXPECT_EQ(bus.master.counters().bad_replies, 1U);
+}
+
 TEST(UssMasterPolling, WrongLengthForAFixedSlaveIsRejected) {
   // A 5.2: LGE must equal the fixed length of the slave (PKW 3 + PZD 2: LGE 12).
   Bus bus(one_slave());

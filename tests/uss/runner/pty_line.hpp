@@ -55,6 +55,16 @@ class PtyLine {
     stop_.store(true);
     thread_.join();
   }
+  /// The line echoes (an RS485 transceiver whose receiver stays on while it sends, an
+  /// auto-direction USB adapter): every byte the master sends comes back to it as it is sent,
+  /// before any reply. Set before start().
+  void set_echo(bool on) noexcept { echo_.store(on); }
+  /// The next `telegrams` telegrams collide with another station's bits: the first byte of
+  /// each (its STX) is changed on the line, for the master's echo and the slaves alike (one
+  /// line, one signal for every receiver on it).
+  void collide(std::uint32_t telegrams) noexcept { collide_.fetch_add(telegrams); }
+  /// Collisions made so far.
+  std::uint64_t collisions() const noexcept { return collisions_.load(); }
   /// Replies written.
   std::uint64_t replies() const noexcept { return replies_.load(); }
   /// Bytes received from the master.
@@ -116,6 +126,19 @@ class PtyLine {
       if (ppoll(&pfd, 1, &ts, nullptr) > 0 && (pfd.revents & POLLIN) != 0) {
         const ssize_t n = ::read(fd_, buf.data(), buf.size());
         now = mono_now();
+        // A master writes a telegram at once: a read after the line was quiet starts one.
+        if (n > 0 && now - last_due > 2 * tz_) {
+          std::uint32_t left = collide_.load();
+          while (left > 0 && !collide_.compare_exchange_weak(left, left - 1)) {
+          }
+          if (left > 0) {
+            buf[0] ^= 0x10;
+            collisions_.fetch_add(1);
+          }
+        }
+        if (n > 0 && echo_.load()) {
+          (void)!::write(fd_, buf.data(), static_cast<std::size_t>(n));
+        }
         for (ssize_t i = 0; i < n && count_ < pending_.size(); ++i) {
           // A UART completes one character per character time (A 6.1).
           last_due = std::max(now, last_due) + tz_;
@@ -141,6 +164,9 @@ class PtyLine {
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> replies_{0};
   std::atomic<std::uint64_t> received_{0};
+  std::atomic<bool> echo_{false};
+  std::atomic<std::uint32_t> collide_{0};
+  std::atomic<std::uint64_t> collisions_{0};
 };
 
 }  // namespace liftd::uss::testing

@@ -409,5 +409,187 @@ TEST(UssRunnerPty, PortLossIsReportedToHooksAndEvents) {
   EXPECT_GE(runner.stats().counters.port_losses, 1U);
 }
 
+// Issue #43: buses that echo. The spec-written slave simulator (drives 1 and 2, mirror at start)
+// behind a line that gives the master every byte back, or not; the master set to each
+// echo mode. Every case must keep both slaves answering, with no bad reply, and say what it
+// found out.
+struct UssEchoCase {
+  const char* name;
+  bool line_echoes;
+  io::EchoMode mode;
+  io::EchoState decided;
+  std::size_t line_echo_events;  // auto reports its finding once
+};
+
+class UssRunnerEcho : public ::testing::TestWithParam<UssEchoCase> {};
+
+struct EchoBus {
+  EchoBus() : bus(drives(), kBaud, mono_now()) {}
+  static std::vector<uss::sim::UssSlaveConfig> drives() {
+    std::vector<uss::sim::UssSlaveConfig> d(2);
+    d[0].address = 1;
+    d[1].address = 2;
+    return d;
+  }
+  static MasterConfig master_config() {
+    MasterConfig mc;
+    mc.baud = kBaud;
+    mc.slaves = {SlaveConfig{1, PkwLength::Four, 2}, SlaveConfig{2, PkwLength::Four, 2}};
+    mc.polling_list = {1, 2};
+    mc.reply_delay = 20ms;
+    return mc;
+  }
+  uss::sim::UssBusSim bus;
+};
+
+std::size_t line_echo_events(UssRunner& runner, std::uint64_t& last_count) {
+  std::size_t n = 0;
+  CycleEvent e;
+  while (runner.poll_event(e)) {
+    if (e.kind != CycleEventKind::LineEcho) continue;
+    ++n;
+    last_count = e.count;
+  }
+  return n;
+}
+
+TEST_P(UssRunnerEcho, KeepsEverySlaveAnsweringAndNeverTakesItsOwnTelegramForTheReply) {
+  const UssEchoCase& t = GetParam();
+  auto pty = io::PtyPair::create(uss_serial_settings(kBaud));
+  ASSERT_TRUE(pty.ok());
+  EchoBus b;
+  uss::testing::PtyLine<uss::sim::UssBusSim, uss::sim::UssReply> line(pty.value().master_fd(),
+                                                                      b.bus, kBaud);
+  line.set_echo(t.line_echoes);
+  Master master(EchoBus::master_config());
+  TestHooks hooks(master);
+  UssRunnerConfig config = runner_config(pty.value());
+  config.echo = t.mode;
+  UssRunner runner(config, master, hooks);
+  line.start(kLinePriority);
+  ASSERT_EQ(runner.start(), 0);
+  EXPECT_TRUE(hooks.wait_for([](TestHooks& h) {
+    return h.last_cycles_ >= 50 && h.mirrors_.size() >= 2 && h.states_[1].good >= 50 &&
+           h.states_[2].good >= 50;
+  }));
+  runner.stop();
+  line.stop();
+  hooks.with([](TestHooks& h) {
+    // Mirror at start (A 5.3): both send it back unchanged, read as such on either line.
+    for (const auto& m : h.mirrors_) EXPECT_TRUE(m.ok) << static_cast<int>(m.address);
+  });
+  const UssRunnerStats stats = runner.stats();
+  EXPECT_EQ(runner.echo_state(), t.decided);
+  // A reply the machine held past its deadline (a timeout) may reach the master only while its
+  // next telegram goes out, ahead of that telegram's echo: the slave drove the line while the
+  // master sent, a collision. Never on a line without echo, never without such a timeout.
+  EXPECT_LE(stats.counters.echo_collisions, stats.counters.reply_timeouts);
+  if (!t.line_echoes) {
+    EXPECT_EQ(stats.counters.echo_collisions, 0U);
+  }
+  // As in MasterAgainstSimulatedSlaves: a bad reply only after a reply the machine held up.
+  const std::uint64_t failed =
+      hooks.with([](TestHooks& h) { return h.states_[1].failures + h.states_[2].failures; });
+  EXPECT_LE(stats.counters.bad_replies, failed);
+  EXPECT_LE(stats.counters.reply_timeouts, failed);
+  std::uint64_t found = 99;
+  EXPECT_EQ(line_echo_events(runner, found), t.line_echo_events);
+  if (t.line_echo_events > 0) {
+    EXPECT_EQ(found, t.line_echoes ? 1U : 0U);
+  }
+  std::array<uss::sim::UssViolation, 16> violations{};
+  const std::size_t n = b.bus.take_violations(violations);
+  for (std::size_t i = 0; i < n; ++i) {
+    ADD_FAILURE() << "slave " << static_cast<int>(violations[i].address) << ": "
+                  << violations[i].rule;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Lines, UssRunnerEcho,
+    ::testing::Values(
+        UssEchoCase{"EchoingLineOn", true, io::EchoMode::On, io::EchoState::Present, 0},
+        UssEchoCase{"EchoingLineAuto", true, io::EchoMode::Auto, io::EchoState::Present, 1},
+        UssEchoCase{"QuietLineAuto", false, io::EchoMode::Auto, io::EchoState::Absent, 1},
+        UssEchoCase{"QuietLineOff", false, io::EchoMode::Off, io::EchoState::Absent, 0}),
+    [](const ::testing::TestParamInfo<UssEchoCase>& p) { return std::string(p.param.name); });
+
+TEST(UssRunnerPty, EchoOfASilentBusIsNoReply) {
+  // Nobody answers for address 1 behind an echoing line: every telegram comes back as it was
+  // sent, and none of them may pass for the slave's reply, in auto as in on (issue #43).
+  for (const io::EchoMode mode : {io::EchoMode::Auto, io::EchoMode::On}) {
+    SCOPED_TRACE(std::string(io::to_string(mode)));
+    auto pty = io::PtyPair::create(uss_serial_settings(kBaud));
+    ASSERT_TRUE(pty.ok());
+    std::vector<uss::sim::UssSlaveConfig> other(1);
+    other[0].address = 5;  // on the bus, never polled
+    uss::sim::UssBusSim bus(other, kBaud, mono_now());
+    uss::testing::PtyLine<uss::sim::UssBusSim, uss::sim::UssReply> line(pty.value().master_fd(),
+                                                                        bus, kBaud);
+    line.set_echo(true);
+    MasterConfig mc;
+    mc.baud = kBaud;
+    mc.slaves = {SlaveConfig{1, PkwLength::Four, 2}};
+    mc.polling_list = {1};
+    mc.reply_delay = 5ms;
+    Master master(mc);
+    TestHooks hooks(master);
+    UssRunnerConfig config = runner_config(pty.value());
+    config.echo = mode;
+    UssRunner runner(config, master, hooks);
+    line.start(kLinePriority);
+    ASSERT_EQ(runner.start(), 0);
+    EXPECT_TRUE(hooks.wait_for([](TestHooks& h) { return h.exchanges_ >= 40; }));
+    runner.stop();
+    line.stop();
+    const UssRunnerStats stats = runner.stats();
+    // The start mirror (A 5.3) comes back as sent. In on that is the echo. In auto it is the
+    // echo or the mirror reply, nobody can tell, and it is taken as the reply: at most that one
+    // good reply, which decides nothing.
+    const std::uint64_t mirror_taken = mode == io::EchoMode::Auto ? 1U : 0U;
+    EXPECT_LE(stats.counters.good_replies, mirror_taken);
+    EXPECT_EQ(stats.counters.bad_replies, 0U);
+    EXPECT_EQ(stats.counters.echo_collisions, 0U);
+    EXPECT_EQ(stats.counters.reply_timeouts + stats.counters.good_replies,
+              stats.counters.exchanges);
+    hooks.with([](TestHooks& h) { EXPECT_LE(h.states_[1].good, 1U); });
+    EXPECT_EQ(runner.echo_state(),
+              mode == io::EchoMode::On ? io::EchoState::Present : io::EchoState::Unknown);
+  }
+}
+
+TEST(UssRunnerPty, EchoCollisionIsCountedAsABadReplyAndTheBusGoesOn) {
+  for (const io::EchoMode mode : {io::EchoMode::On, io::EchoMode::Auto}) {
+    SCOPED_TRACE(std::string(io::to_string(mode)));
+    auto pty = io::PtyPair::create(uss_serial_settings(kBaud));
+    ASSERT_TRUE(pty.ok());
+    EchoBus b;
+    uss::testing::PtyLine<uss::sim::UssBusSim, uss::sim::UssReply> line(pty.value().master_fd(),
+                                                                        b.bus, kBaud);
+    line.set_echo(true);
+    Master master(EchoBus::master_config());
+    TestHooks hooks(master);
+    UssRunnerConfig config = runner_config(pty.value());
+    config.echo = mode;
+    UssRunner runner(config, master, hooks);
+    line.start(kLinePriority);
+    ASSERT_EQ(runner.start(), 0);
+    // Auto has decided by then (its first good reply).
+    ASSERT_TRUE(hooks.wait_for([](TestHooks& h) { return h.states_[1].good >= 10; }));
+    line.collide(3);
+    ASSERT_TRUE(hooks.wait_for([&line](TestHooks&) { return line.collisions() == 3; }));
+    const std::uint64_t good = hooks.with([](TestHooks& h) { return h.states_[1].good; });
+    EXPECT_TRUE(hooks.wait_for([good](TestHooks& h) {
+      return h.states_[1].good >= good + 20 && h.states_[2].good >= good + 20;
+    }));
+    runner.stop();
+    line.stop();
+    const UssRunnerStats stats = runner.stats();
+    EXPECT_EQ(stats.counters.echo_collisions, 3U);
+    EXPECT_GE(stats.counters.bad_replies, 3U);
+    EXPECT_EQ(runner.echo_state(), io::EchoState::Present);
+  }
+}
+
 }  // namespace
 }  // namespace liftd::rt
