@@ -566,22 +566,41 @@ struct EchoCase {
   std::size_t line_echo_events;  // LineEcho events: auto reports its finding once
 };
 
+/// A cycle in echo mode `mode` on a pty whose other end answers after 1.5 ms on `line`
+/// (echoing, colliding or not).
+struct EchoRig {
+  EchoRig(FakeResponder::Line line, io::EchoMode mode)
+      : pty(make_pty()),
+        responder(pty.master_fd(), std::chrono::microseconds(1500), kTestPriority, line),
+        runner(echo_config(pty.slave_path(), mode), engine) {}
+  static CycleConfig echo_config(const std::string& device, io::EchoMode mode) {
+    CycleConfig config = test_config(device);
+    config.echo = mode;
+    return config;
+  }
+  /// Both ends running.
+  bool start() { return responder.start() == 0 && runner.start() == 0; }
+  void stop() {
+    runner.stop();
+    responder.stop();
+  }
+
+  io::PtyPair pty;
+  FakeResponder responder;
+  EchoEngine engine;
+  CycleRunner runner;
+};
+
 class RtCycleEcho : public ::testing::TestWithParam<EchoCase> {};
 
 TEST_P(RtCycleEcho, KeepsTheLinkAndNeverTakesItsOwnFrameForTheReply) {
   const EchoCase& t = GetParam();
-  io::PtyPair pty = make_pty();
-  FakeResponder responder(pty.master_fd(), std::chrono::microseconds(1500), kTestPriority,
-                          FakeResponder::Line{t.line_echoes, false});
-  ASSERT_EQ(responder.start(), 0);
-  EchoEngine engine;
-  CycleConfig config = test_config(pty.slave_path());
-  config.echo = t.mode;
-  CycleRunner runner(config, engine);
-  ASSERT_EQ(runner.start(), 0);
+  EchoRig rig(FakeResponder::Line{t.line_echoes, false}, t.mode);
+  ASSERT_TRUE(rig.start());
+  EchoEngine& engine = rig.engine;
+  CycleRunner& runner = rig.runner;
   ASSERT_TRUE(wait_for([&] { return engine.good_.load() >= 200; }, milliseconds(20000)));
-  runner.stop();
-  responder.stop();
+  rig.stop();
   const CycleCounters c = runner.stats().counters;
   EXPECT_EQ(runner.echo_state(), t.decided);
   EXPECT_EQ(engine.corrupt_.load(), 0U);
@@ -617,19 +636,13 @@ TEST(RtCycle, EchoOfASilentDriveIsNoReplyAndDecidesNothing) {
   // back as it was sent; none of them may pass for the drive's reply, in auto as in on.
   for (const io::EchoMode mode : {io::EchoMode::Auto, io::EchoMode::On}) {
     SCOPED_TRACE(std::string(io::to_string(mode)));
-    io::PtyPair pty = make_pty();
-    FakeResponder responder(pty.master_fd(), std::chrono::microseconds(1500), kTestPriority,
-                            FakeResponder::Line{true, true});
-    ASSERT_EQ(responder.start(), 0);
-    EchoEngine engine;
-    CycleConfig config = test_config(pty.slave_path());
-    config.echo = mode;
-    CycleRunner runner(config, engine);
-    ASSERT_EQ(runner.start(), 0);
+    EchoRig rig(FakeResponder::Line{true, true}, mode);
+    ASSERT_TRUE(rig.start());
+    EchoEngine& engine = rig.engine;
+    CycleRunner& runner = rig.runner;
     ASSERT_TRUE(
         wait_for([&] { return runner.stats().counters.frames_sent >= 100; }, milliseconds(20000)));
-    runner.stop();
-    responder.stop();
+    rig.stop();
     const CycleCounters c = runner.stats().counters;
     EXPECT_EQ(c.good_replies, 0U);
     EXPECT_EQ(engine.good_.load() + engine.bad_.load(), 0U);
@@ -648,15 +661,11 @@ TEST(RtCycle, EchoCollisionIsCountedAsABadReplyAndTheLinkGoesOn) {
   // are good again.
   for (const io::EchoMode mode : {io::EchoMode::On, io::EchoMode::Auto}) {
     SCOPED_TRACE(std::string(io::to_string(mode)));
-    io::PtyPair pty = make_pty();
-    FakeResponder responder(pty.master_fd(), std::chrono::microseconds(1500), kTestPriority,
-                            FakeResponder::Line{true, false});
-    ASSERT_EQ(responder.start(), 0);
-    EchoEngine engine;
-    CycleConfig config = test_config(pty.slave_path());
-    config.echo = mode;
-    CycleRunner runner(config, engine);
-    ASSERT_EQ(runner.start(), 0);
+    EchoRig rig(FakeResponder::Line{true, false}, mode);
+    ASSERT_TRUE(rig.start());
+    EchoEngine& engine = rig.engine;
+    CycleRunner& runner = rig.runner;
+    FakeResponder& responder = rig.responder;
     // Auto has decided by then (its first good reply).
     ASSERT_TRUE(wait_for([&] { return engine.good_.load() >= 20; }, milliseconds(20000)));
     responder.collide(3);
@@ -664,8 +673,7 @@ TEST(RtCycle, EchoCollisionIsCountedAsABadReplyAndTheLinkGoesOn) {
     const std::uint64_t good_after = engine.good_.load();
     ASSERT_TRUE(
         wait_for([&] { return engine.good_.load() >= good_after + 20; }, milliseconds(20000)));
-    runner.stop();
-    responder.stop();
+    rig.stop();
     const CycleCounters c = runner.stats().counters;
     EXPECT_EQ(c.echo_collisions, 3U);
     EXPECT_GE(c.bad_replies, 3U);
