@@ -2,7 +2,8 @@
 // by 20-60 mm learns the simulated shaft's true levels within 2 mm on DCP3 and DCP4 and `liftctl
 // learn --apply` writes them; `stop` mid-learning ends it with nothing learned, on the hydraulic
 // and USS lifts too. On every kind (parity_test.cpp, LearnParity): learned within 2 mm, a travel
-// with the learned table lands on the true level, a shaft with a missing zone is refused.
+// with the learned table lands on the true level, a shaft with a missing zone is refused. A try
+// that a stalled machine ended (the witness of witness.hpp saw it) runs again.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -18,6 +19,7 @@
 
 #include "daemon/process.hpp"
 #include "e2e/harness.hpp"
+#include "e2e/witness.hpp"
 
 namespace {
 
@@ -91,7 +93,7 @@ void expect_learned(int dcp) {
 
 // liftctl learn --apply on the daemon's own file, then a daemon started from the new file lands
 // a travel on the shaft's true level.
-TEST(Learn, Dcp4LiftctlAppliesTheLearnedLevelsAndATravelLandsThere) {
+void expect_liftctl_applies_the_learned_levels() {
   json written;  // the daemon's file after --apply (the Lift's directory goes with it)
   {
     Lift lift("learn-apply", 4, json::object(), {}, config(4, kTrue));
@@ -133,11 +135,15 @@ TEST(Learn, Dcp4LiftctlAppliesTheLearnedLevelsAndATravelLandsThere) {
   EXPECT_NEAR(lift.position_mm(), static_cast<double>(kTrue[1]), 5.0);
 }
 
-TEST(Learn, Dcp3LearnsTheShaftsLevelsWithinTwoMillimetres) {
-  expect_learned(3);
+TEST(Learn, Dcp4LiftctlAppliesTheLearnedLevelsAndATravelLandsThere) {
+  liftd::e2e::judged_unless_stalled(expect_liftctl_applies_the_learned_levels);
 }
 
-TEST(Learn, StopMidLearningEndsItWithNothingLearned) {
+TEST(Learn, Dcp3LearnsTheShaftsLevelsWithinTwoMillimetres) {
+  liftd::e2e::judged_unless_stalled([] { expect_learned(3); });
+}
+
+void expect_dcp_stop_learns_nothing() {
   Lift lift("learn-stop", 4, json::object(), {}, config(4, kTrue));
   ASSERT_EQ(lift.setup_error(), "");
   auto learning = std::async(std::launch::async, [&lift] {
@@ -168,6 +174,10 @@ TEST(Learn, StopMidLearningEndsItWithNothingLearned) {
             nullptr);
   const json cfg = lift.call({{"cmd", "config"}});
   EXPECT_EQ(cfg["result"]["config"]["floors"], floors(kConfigured));
+}
+
+TEST(Learn, StopMidLearningEndsItWithNothingLearned) {
+  liftd::e2e::judged_unless_stalled(expect_dcp_stop_learns_nothing);
 }
 
 // The hydraulic and USS lifts on three floors 400 mm apart, with brisk learning speeds (the slow
@@ -229,11 +239,11 @@ void expect_stop_learns_nothing(const std::string& kind) {
 }
 
 TEST(Learn, Sch001StopMidLearningEndsItWithNothingLearned) {
-  expect_stop_learns_nothing("sch001");
+  liftd::e2e::judged_unless_stalled([] { expect_stop_learns_nothing("sch001"); });
 }
 
 TEST(Learn, UssStopMidLearningEndsItWithNothingLearned) {
-  expect_stop_learns_nothing("uss");
+  liftd::e2e::judged_unless_stalled([] { expect_stop_learns_nothing("uss"); });
 }
 
 }  // namespace
