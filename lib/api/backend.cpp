@@ -1,5 +1,6 @@
 #include "api/backend.hpp"
 
+#include <chrono>
 #include <cstdio>
 #include <ctime>
 #include <memory>
@@ -119,6 +120,59 @@ std::string format_utc(std::chrono::system_clock::time_point time) {
   return buf;
 }
 
+std::optional<std::int64_t> parse_utc_ms(std::string_view text) {
+  // YYYY-MM-DD, then optionally THH:MM:SS, .mmm and Z (a time needs its Z: UTC only).
+  const auto digits = [&](std::size_t at, std::size_t n) -> std::optional<int> {
+    if (at + n > text.size()) return std::nullopt;
+    int value = 0;
+    for (std::size_t i = at; i < at + n; ++i) {
+      if (text[i] < '0' || text[i] > '9') return std::nullopt;
+      value = value * 10 + (text[i] - '0');
+    }
+    return value;
+  };
+  const auto year = digits(0, 4);
+  const auto month = digits(5, 2);
+  const auto day = digits(8, 2);
+  if (!year || !month || !day || text.size() < 10 || text[4] != '-' || text[7] != '-') {
+    return std::nullopt;
+  }
+  int hour = 0;
+  int minute = 0;
+  int second = 0;
+  int ms = 0;
+  if (text.size() > 10) {
+    const auto h = digits(11, 2);
+    const auto m = digits(14, 2);
+    const auto sec = digits(17, 2);
+    if (text[10] != 'T' || !h || !m || !sec || text[13] != ':' || text[16] != ':') {
+      return std::nullopt;
+    }
+    std::size_t at = 19;
+    if (at < text.size() && text[at] == '.') {
+      const auto frac = digits(at + 1, 3);
+      if (!frac) return std::nullopt;
+      ms = *frac;
+      at += 4;
+    }
+    if (at + 1 != text.size() || text[at] != 'Z') return std::nullopt;
+    hour = *h;
+    minute = *m;
+    second = *sec;
+  }
+  if (*month < 1 || *month > 12 || *day < 1 || hour > 23 || minute > 59 || second > 59) {
+    return std::nullopt;
+  }
+  using namespace std::chrono;
+  const year_month_day date{std::chrono::year(*year),
+                            std::chrono::month(static_cast<unsigned>(*month)),
+                            std::chrono::day(static_cast<unsigned>(*day))};
+  if (!date.ok()) return std::nullopt;  // 2026-02-30
+  const auto at =
+      sys_days(date) + hours(hour) + minutes(minute) + seconds(second) + milliseconds(ms);
+  return duration_cast<milliseconds>(at.time_since_epoch()).count();
+}
+
 // Objects are built key by key: the initializer-list form of nlohmann::json copies every value
 // once more and costs about twice the time, and status is the request a dispatcher sends most
 // (api-bench).
@@ -157,6 +211,7 @@ nlohmann::json to_json(const StatusSnapshot& s) {
   rt["priority"] = s.rt.priority;
   rt["memory_locked"] = s.rt.memory_locked;
   j[kind] = *s.details;
+  if (!s.record->empty()) j["record"] = *s.record;
   return j;
 }
 
@@ -197,6 +252,25 @@ Result Backend::save_trace() {
 
 Result Backend::travels(std::size_t) {
   return Result::fail(ErrorCode::NotReady, "this daemon records no travels");
+}
+
+namespace {
+Result no_record() {
+  return Result::fail(ErrorCode::NotOffered, "this daemon keeps no record of the lift");
+}
+}  // namespace
+
+Result Backend::counters() {
+  return no_record();
+}
+Result Backend::reset_counters(const std::vector<std::string>&, const std::string&) {
+  return no_record();
+}
+Result Backend::history(const HistoryArgs&) {
+  return no_record();
+}
+Result Backend::trend(const TrendArgs&) {
+  return no_record();
 }
 
 void Backend::travel(const TravelArgs&, Responder done) {

@@ -73,6 +73,24 @@ class SharedJson {
   std::shared_ptr<nlohmann::json> value_;
 };
 
+/// `history`: which travels of the lift's record, newest first.
+struct HistoryArgs {
+  std::optional<std::int64_t> from_unix_ms;  ///< started at or after (`from`)
+  std::optional<std::int64_t> to_unix_ms;    ///< started before (`to`)
+  std::optional<int> floor;                  ///< from or to this floor
+  std::optional<std::string> outcome;        ///< "arrived" or "aborted"
+  std::optional<std::string> cause;          ///< the end's cause ("arrived", "link_down", ...)
+  std::size_t limit = 100;                   ///< travels returned at most
+  bool curves = false;                       ///< with each travel's curve where kept
+};
+
+/// `trend`: floor-to-floor time and stopping error per floor and day.
+struct TrendArgs {
+  std::optional<std::int64_t> from_unix_ms;  ///< days from (`from`)
+  std::optional<std::int64_t> to_unix_ms;    ///< days before (`to`)
+  std::optional<int> floor;                  ///< one floor only
+};
+
 /// Everything `status` reports, filled by the backend. The drive-neutral fields every drive kind
 /// fills alike; what only one kind has goes into `details`, reported under the kind's name.
 struct StatusSnapshot {
@@ -92,6 +110,8 @@ struct StatusSnapshot {
   std::optional<std::int64_t> last_travel_slip_mm;  ///< travel.last_slip_mm (I9 extended reply)
   std::vector<FaultInfo> faults;                    ///< active faults, oldest first
   RtInfo rt{};                                      ///< rt
+  /// record: whether the lift's record is kept ({"state", "path", "reason"}); null: none
+  SharedJson record;
   bool operator==(const StatusSnapshot&) const = default;
 };
 
@@ -221,6 +241,16 @@ class Backend {
   /// default, for a backend without travels, refuses: `not_offered`.
   virtual void learn(Responder done);
 
+  // ---- the lift's record (lib/record); a backend without one refuses: `not_offered` ----
+  /// Lifetime counters and the stopping error per floor (`counters`).
+  virtual Result counters();
+  /// Sets the counters `names` back to zero (`counters_reset`) and records who did it.
+  virtual Result reset_counters(const std::vector<std::string>& names, const std::string& who);
+  /// The travels of the record that match `args`, newest first (`history`).
+  virtual Result history(const HistoryArgs& args);
+  /// Floor-to-floor time and stopping error per floor and day (`trend`).
+  virtual Result trend(const TrendArgs& args);
+
   // ---- the simulated lift (liftd --simulate only) ----
   /// Fault injection and door/safety-chain handling on the simulated lift. The result is the
   /// simulated lift's state after it. The default refuses: `not_ready` "only with liftd
@@ -238,5 +268,8 @@ nlohmann::json to_json(const TraceEntry& entry);
 nlohmann::json to_json(const Inputs& inputs);
 /// "2026-11-22T03:00:00.123Z"
 std::string format_utc(std::chrono::system_clock::time_point time);
+/// Milliseconds since the Unix epoch of a UTC time as a request gives it: "2026-11-22" (its
+/// midnight), "2026-11-22T03:00:00Z" or "2026-11-22T03:00:00.123Z"; nullopt for anything else.
+std::optional<std::int64_t> parse_utc_ms(std::string_view text);
 
 }  // namespace liftd::api

@@ -185,6 +185,7 @@ void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
   add_drive_reset_command(dispatcher, b);
   add_inputs_command(dispatcher, b);
   add_travel_commands(dispatcher, *b);
+  add_record_commands(dispatcher, *b);
 }
 
 TravelArgs travel_args(const nlohmann::json& request) {

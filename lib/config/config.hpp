@@ -94,6 +94,16 @@ struct ApiConfig {
   int state_rate_hz = 10;                       ///< api.state_rate_hz (position/speed events)
 };
 
+/// `record.*`: the lift's record on the board's storage (lib/record).
+struct RecordConfig {
+  bool enabled = true;  ///< record.enabled
+  /// record.path; empty: `$STATE_DIRECTORY/record.db` (the unit's StateDirectory), with
+  /// --simulate the runtime directory's record.db, else /var/lib/liftd/record.db
+  std::string path;
+  int max_travels = 1000000;  ///< record.max_travels: the oldest go first beyond it
+  int curves_kept = 100;      ///< record.curves_kept: the newest travels that keep their curve
+};
+
 /// `inputs.*`
 struct InputsConfig {
   int timeout_ms = defaults::kInputsTimeoutMs;  ///< inputs.timeout_ms
@@ -229,6 +239,7 @@ struct Config {
   RtConfig rt;                                   ///< rt.*
   ApiConfig api;                                 ///< api.*
   InputsConfig inputs;                           ///< inputs.*
+  RecordConfig record;                           ///< record.*
   std::vector<Floor> floors = default_floors();  ///< floors
   PositionConfig position;                       ///< position.*
   TravelConfig travel;                           ///< travel.*

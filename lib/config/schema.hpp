@@ -101,6 +101,7 @@ std::vector<Key> drive_keys();   ///< drive.*
 std::vector<Key> rt_keys();      ///< rt.*
 std::vector<Key> api_keys();     ///< api.*
 std::vector<Key> inputs_keys();  ///< inputs.*
+std::vector<Key> record_keys();  ///< record.*
 /// floors, with the names and levels `rules` allows.
 std::vector<Key> floors_keys(const FloorRules& rules);
 std::vector<Key> position_keys();  ///< position.*

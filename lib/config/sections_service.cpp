@@ -146,6 +146,31 @@ std::vector<Key> inputs_keys() {
                   &InputsConfig::timeout_ms)};
 }
 
+std::vector<Key> record_keys() {
+  std::vector<Key> t;
+  t.push_back(bool_key("record.enabled",
+                       "keep the lift's record (lifetime counters, every travel) on the board's "
+                       "storage; false = counters from zero at each start, no history",
+                       &Config::record, &RecordConfig::enabled));
+  t.push_back(string_key(
+      "record.path", 0, 4096, "empty or an absolute path",
+      [](const std::string& text) {
+        return text.empty() ? std::string() : absolute_path_rule(text);
+      },
+      "the record's SQLite file; empty = record.db in the unit's StateDirectory "
+      "(/var/lib/liftd), with --simulate in the runtime directory, else /var/lib/liftd/record.db",
+      &Config::record, &RecordConfig::path));
+  // Issue #42's benchmark holds a million travels; ten million is about 2 GB of rows.
+  t.push_back(int_key("record.max_travels", 1000, 10000000,
+                      "travels the record keeps; beyond it the oldest go first", &Config::record,
+                      &RecordConfig::max_travels));
+  t.push_back(int_key("record.curves_kept", 0, 10000,
+                      "of the travels kept, the newest this many keep their curve (position, "
+                      "speed, the drive's bits: tens of kB each)",
+                      &Config::record, &RecordConfig::curves_kept));
+  return t;
+}
+
 // The simulated shaft's levels: at most as many as floors may be configured, each within the
 // range of a floor's level (I9's six digits, DCP 5.12.9), strictly increasing.
 void apply_shaft_levels(const json& value, const std::string& where, Config& cfg,

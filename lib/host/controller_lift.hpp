@@ -39,6 +39,7 @@
 #include "host/learn_report.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
+#include "host/record_feed.hpp"
 #include "host/serial_device_report.hpp"
 #include "host/trace_files.hpp"
 #include "host/travel_log.hpp"
@@ -70,8 +71,11 @@ class ControllerBackend : public api::Backend {
                          static_cast<std::size_t>(config.rt.trace_files_kept),
                          std::string(Drive::kName), std::move(decoder)),
         travel_log_(Drive::travel_bit_names(), floor_levels_mm(config)),
+        record_(config, sim != nullptr, mono_now()),
         mono_at_start_(mono_now()),
-        wall_at_start_(std::chrono::system_clock::now()) {}
+        wall_at_start_(std::chrono::system_clock::now()) {
+    travel_log_.set_completion_listener([this](const RecordedTravel& t) { keep_travel(t); });
+  }
 
   drive::Kind drive_kind() const override { return Drive::kKind; }
   nlohmann::json config() override { return config::to_json(config_, schema_); }
@@ -145,6 +149,17 @@ class ControllerBackend : public api::Backend {
     travel_log_.end(at, travel_end_cause(t.type == Type::Aborted, lift::to_string(t.cause)));
   }
 
+  /// A fault the controller raised, for the lift's record.
+  void record_fault(lift::FaultCode code, MonoTime at) { record_.fault_raised(code, at); }
+
+  api::Result counters() override { return record_.counters(); }
+  api::Result reset_counters(const std::vector<std::string>& names,
+                             const std::string& who) override {
+    return record_.reset(names, who);
+  }
+  api::Result history(const api::HistoryArgs& args) override { return record_.history(args); }
+  api::Result trend(const api::TrendArgs& args) override { return record_.trend(args); }
+
   /// The serial device of a drive link on a serial line (serial_device_report.hpp), for `stats`.
   void set_serial_device(io::SerialDeviceInfo info) { serial_device_ = std::move(info); }
 
@@ -159,6 +174,8 @@ class ControllerBackend : public api::Backend {
     while (controller_.poll_reply(r)) pending_.answer(r);
     travel_log_.drain(controller_);  // before the events: a travel's end finds its samples
     expire_unanswered(now);
+    record_.inputs(inputs_.current(), now);
+    record_.tick(now);
   }
   /// A sample of the simulated machine's inputs (--simulate), sent on with the API's shaft
   /// signals (MachineInputs).
@@ -212,6 +229,7 @@ class ControllerBackend : public api::Backend {
     if (s.target_floor) out.target_floor = static_cast<int>(*s.target_floor);
     for (std::size_t i = 0; i < s.call_count; ++i) out.calls.push_back(s.calls[i]);
     out.rt = rt_info(runner_.thread_status(), config_.rt.priority);
+    out.record = record_.status();
     return out;
   }
 
@@ -242,8 +260,24 @@ class ControllerBackend : public api::Backend {
   FlightRecorderFiles flight_recorder_;
   TravelLog travel_log_;  ///< the last travels and their curves (`travels`)
   std::optional<io::SerialDeviceInfo> serial_device_;  ///< set before the link's thread starts
+  RecordFeed record_;  ///< the lift's record on the board's storage (`counters`, `history`)
 
  private:
+  /// A travel the log completed, to the lift's record (with its curve where the record keeps
+  /// curves). The floors are told within the relevelling threshold: a car farther off its level
+  /// stands between floors.
+  void keep_travel(const RecordedTravel& t) {
+    const auto unix_ms = [this](MonoTime at) {
+      return std::chrono::duration_cast<std::chrono::milliseconds>(wall_time(at).time_since_epoch())
+          .count();
+    };
+    record_.travel(record_travel(t, floor_levels_mm(config_), config_.travel.relevel_threshold_mm,
+                                 unix_ms(t.start), unix_ms(t.end),
+                                 record_.wants_curves() ? travel_log_.curve_columns(t)
+                                                        : nlohmann::json(nullptr)),
+                   mono_now());
+  }
+
   void send_inputs(const lift::Inputs& inputs) {
     (void)controller_.post(typename Drive::Command{0, typename Drive::InputsCommand{inputs}});
   }
@@ -359,6 +393,7 @@ class ControllerLift : public LiftRunner {
                      event.kind == Kind::FaultRaised);
         // The frames that led to a link fault are what a technician needs first: the recorder
         // goes to a file at once, on every kind (docs/operations.md "The flight recorder").
+        if (event.kind == Kind::FaultRaised) backend_->record_fault(event.fault, event.at);
         if (event.kind == Kind::FaultRaised && event.fault == lift::FaultCode::LinkFault) {
           (void)backend_->write_flight_recorder("link fault");
         }

@@ -65,6 +65,7 @@ void TravelLog::add(const lift::TravelSample& sample) {
   if (sample.last) {
     t.ended = true;
     in_run_ = false;
+    if (t.cause) complete(t);
   }
 }
 
@@ -86,6 +87,7 @@ void TravelLog::end(MonoTime at, std::string_view cause) {
   for (auto it = travels_.rbegin(); it != travels_.rend(); ++it) {
     if (it->cause || it->start > at) continue;
     it->cause = std::string(cause);
+    if (it->ended) complete(*it);
     return;
   }
   pending_end_ = std::make_pair(at, std::string(cause));
@@ -100,6 +102,35 @@ nlohmann::json TravelLog::sample_json(const RecordedTravel& t, const lift::Trave
   j["command"] = bit_list(s.command_bits, names_.command);
   j["status"] = bit_list(s.status_bits, names_.status);
   return j;
+}
+
+nlohmann::json TravelLog::curve_columns(const RecordedTravel& t) const {
+  nlohmann::json t_ms = nlohmann::json::array();
+  nlohmann::json position = nlohmann::json::array();
+  nlohmann::json speed = nlohmann::json::array();
+  nlohmann::json remaining = nlohmann::json::array();
+  nlohmann::json command = nlohmann::json::array();
+  nlohmann::json status = nlohmann::json::array();
+  for (const lift::TravelSample& s : t.samples) {
+    t_ms.push_back(to_ms(s.at - t.start));
+    position.push_back(s.position_known ? nlohmann::json(s.position_mm) : nlohmann::json(nullptr));
+    speed.push_back(s.speed_known ? nlohmann::json(s.speed_mm_s) : nlohmann::json(nullptr));
+    remaining.push_back(s.remaining_known ? nlohmann::json(s.remaining_mm)
+                                          : nlohmann::json(nullptr));
+    command.push_back(s.command_bits);
+    status.push_back(s.status_bits);
+  }
+  nlohmann::json out = nlohmann::json::object();
+  out["stride"] = t.stride;
+  out["command_bits"] = names_.command;
+  out["status_bits"] = names_.status;
+  out["t_ms"] = std::move(t_ms);
+  out["position_mm"] = std::move(position);
+  out["speed_mm_s"] = std::move(speed);
+  out["remaining_mm"] = std::move(remaining);
+  out["command"] = std::move(command);
+  out["status"] = std::move(status);
+  return out;
 }
 
 nlohmann::json TravelLog::to_json(

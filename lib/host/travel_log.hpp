@@ -74,8 +74,21 @@ class TravelLog {
 
   const std::deque<RecordedTravel>& travels() const noexcept { return travels_; }
 
+  /// Called once for each travel when both its last sample and its end's cause are in (the
+  /// lift's record keeps it).
+  void set_completion_listener(std::function<void(const RecordedTravel&)> listener) {
+    on_complete_ = std::move(listener);
+  }
+  /// One travel's curve, compact: one array per column ({"t_ms":[..],"position_mm":[..],
+  /// "speed_mm_s":[..],"remaining_mm":[..],"command":[..],"status":[..]}, unknown values null,
+  /// the bits as integers with the names in "command_bits"/"status_bits").
+  nlohmann::json curve_columns(const RecordedTravel& t) const;
+
  private:
   void append(RecordedTravel& t, const lift::TravelSample& sample);
+  void complete(const RecordedTravel& t) const {
+    if (on_complete_) on_complete_(t);
+  }
   nlohmann::json sample_json(const RecordedTravel& t, const lift::TravelSample& s) const;
 
   TravelBitNames names_;
@@ -87,6 +100,7 @@ class TravelLog {
   /// An end told before the run's first sample arrived.
   std::optional<std::pair<MonoTime, std::string>> pending_end_;
   std::uint64_t dropped_ = 0;
+  std::function<void(const RecordedTravel&)> on_complete_;
 };
 
 /// The floors' levels (config `floors`), for the target's level.

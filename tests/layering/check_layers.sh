@@ -24,7 +24,7 @@ declare -A allowed=(
   [api]="common drive log"
   # What every kind's lift shares on the daemon's io thread, below the kinds' own lifts
   # (lib/<kind>/host).
-  [host]="common drive io log service can lift sim rt config api"
+  [host]="common drive io log service can lift sim rt config api record"
   [dcp]="common io log can drive lift sim rt config api host"
   [sch001]="common io log can drive lift sim rt config api host"
   [uss]="common io log can drive lift sim rt config api host"

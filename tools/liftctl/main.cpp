@@ -21,6 +21,7 @@
 #include "format.hpp"
 #include "learn_apply.hpp"
 #include "plot.hpp"
+#include "record_view.hpp"
 
 namespace {
 
@@ -45,6 +46,14 @@ void usage(std::FILE* out) {
       "  trace [COUNT]          newest DCP frames (default 100)\n"
       "  plot [--last N] [--svg FILE]\n"
       "                         the last N travels' curves (default 5): a chart, or an SVG file\n"
+      "  counters [reset NAME...]\n"
+      "                         the lift's lifetime counters and stopping errors (kept across\n"
+      "                         restarts); reset sets the named ones to zero (control access)\n"
+      "  history [--from T] [--to T] [--floor N] [--outcome arrived|aborted] [--cause C]\n"
+      "          [--limit N]    the travels of the lift's record, newest first (T: UTC,\n"
+      "                         2026-11-01 or 2026-11-01T08:00:00Z)\n"
+      "  plot --trend [--from T] [--to T] [--floor N] [--svg FILE]\n"
+      "                         stopping error and floor-to-floor time per floor and day\n"
       "  display                the drive's remote display\n"
       "  key N                  press keypad button N (1..5) on the drive\n"
       "  reset                  ask the drive for a fault reset\n"
@@ -353,12 +362,38 @@ Request request_trace(const Args& args) {
   return request;
 }
 
-/// plot asks for `travels`; run_plot prints or writes what comes back.
+/// plot asks for `travels` (with --trend: `trend`); run_plot prints or writes what comes back.
 Request request_plot(const Args& args) {
   std::string error;
+  if (liftctl::wants_trend(args)) {
+    const auto trend = liftctl::trend_request(args, error);
+    if (!trend) return bad_usage(error.c_str());
+    return trend->request;
+  }
   const auto options = liftctl::parse_plot_args(args, error);
   if (!options) return bad_usage(error.c_str());
   return json{{"cmd", "travels"}, {"last", options->last}};
+}
+
+Request request_counters(const Args& args) {
+  std::string error;
+  auto request = liftctl::counters_request(args, error);
+  if (!request) return bad_usage(error.c_str());
+  return request;
+}
+
+Request request_history(const Args& args) {
+  std::string error;
+  auto request = liftctl::history_request(args, error);
+  if (!request) return bad_usage(error.c_str());
+  return request;
+}
+
+std::string print_counters(const json&, const json& result) {
+  return liftctl::format_counters(result);
+}
+std::string print_history(const json&, const json& result) {
+  return liftctl::format_history(result);
 }
 
 Request request_key(const Args& args) {
@@ -567,6 +602,8 @@ constexpr Subcommand kSubcommands[] = {
     {"stats", request_plain, print_stats},
     {"trace", request_trace, print_trace},
     {"plot", request_plot, nullptr},
+    {"counters", request_counters, print_counters},
+    {"history", request_history, print_history},
     {"display", request_plain, print_display},
     {"key", request_key, print_generic},
     {"reset", request_reset, print_generic},
@@ -642,24 +679,33 @@ int run_request(Connection& conn, const Subcommand& subcommand, const json& requ
 /// plot: the chart on stdout, or the SVG document into --svg FILE.
 int run_plot(Connection& conn, const Args& args, const json& request, bool raw_json) {
   std::string error;
-  const auto options = liftctl::parse_plot_args(args, error);
+  const bool trend = liftctl::wants_trend(args);
+  std::optional<std::string> svg_path;
+  if (trend) {
+    svg_path = liftctl::trend_request(args, error)->svg_path;
+  } else {
+    svg_path = liftctl::parse_plot_args(args, error)->svg_path;
+  }
   json result;
   if (const auto done = fetch_result(conn, request, raw_json, result)) return *done;
-  if (!options->svg_path) {
-    std::fputs(liftctl::format_plot(result).c_str(), stdout);
+  if (!svg_path) {
+    std::fputs((trend ? liftctl::format_trend(result) : liftctl::format_plot(result)).c_str(),
+               stdout);
     return kExitOk;
   }
-  std::FILE* file = std::fopen(options->svg_path->c_str(), "w");
-  const std::string svg = liftctl::render_svg(result);
-  if (file == nullptr || std::fwrite(svg.data(), 1, svg.size(), file) != svg.size() ||
-      std::fclose(file) != 0) {
-    std::fprintf(stderr, "liftctl: cannot write %s: %s\n", options->svg_path->c_str(),
-                 std::strerror(errno));
+  std::FILE* file = std::fopen(svg_path->c_str(), "w");
+  const std::string svg = trend ? liftctl::render_trend_svg(result) : liftctl::render_svg(result);
+  bool written = file != nullptr && std::fwrite(svg.data(), 1, svg.size(), file) == svg.size();
+  if (file != nullptr && std::fclose(file) != 0) written = false;
+  if (!written) {
+    std::fprintf(stderr, "liftctl: cannot write %s: %s\n", svg_path->c_str(), std::strerror(errno));
     return kExitFailed;
   }
-  const std::size_t count = result.value("travels", json::array()).size();
-  std::printf("%zu travel%s written to %s\n", count, count == 1 ? "" : "s",
-              options->svg_path->c_str());
+  const std::size_t count = result.value(trend ? "days" : "travels", json::array()).size();
+  std::printf(
+      "%zu %s written to %s\n", count,
+      trend ? (count == 1 ? "floor-day" : "floor-days") : (count == 1 ? "travel" : "travels"),
+      svg_path->c_str());
   return kExitOk;
 }
 

@@ -137,6 +137,8 @@ check "user liftd and groups liftd, liftd-control, liftd-io exist" \
 check "/etc/liftd is 0750 root:liftd" test "$(stat -c '%a %U:%G' /etc/liftd)" = "750 root:liftd"
 check "liftd.socket and liftd.service enabled and active" \
   bash -c 'systemctl is-enabled -q liftd.socket liftd.service && systemctl is-active -q liftd.socket liftd.service'
+check "/var/lib/liftd (the lift's record) is 0750 liftd:liftd" \
+  test "$(stat -c '%a %U:%G' /var/lib/liftd)" = "750 liftd:liftd"
 check "the catalog is loaded (journalctl --list-catalog)" bash -c 'journalctl --list-catalog | grep -q 91c498ffaa7944c9a9ac4f8ca304a670'
 
 # ---- the shaft encoder, as commissioning sets it up
@@ -166,6 +168,14 @@ first_travel() {
   level_note
 }
 attempt "a travel" first_travel
+# The lift's record: the travels counted, kept in the StateDirectory.
+travels_counted() {
+  liftctl --json counters 2>/dev/null | python3 -c 'import json, sys; print(json.load(sys.stdin)["counters"].get("travels", 0))'
+}
+record_on() { [ "$(field record.state)" = '"on"' ] && [ "$(field record.path)" = '"/var/lib/liftd/record.db"' ]; }
+check "the lift's record is on in /var/lib/liftd/record.db" record_on || note "record: $(field record)"
+counted_before=$(travels_counted)
+check "the record counted the travel ($counted_before travels)" test "${counted_before:-0}" -ge 1
 
 # ---- users and groups: each role from a real login user
 section "users and groups: each role from a real login user"
@@ -353,6 +363,9 @@ touch /run/stage/sim.stop
 wait $ioboard
 (cd /root && apt install -y ./liftd_*.deb >/dev/null 2>&1)
 check "apt install again: liftd runs" wait_for 20 systemctl is-active -q liftd
+counted_after=$(travels_counted)
+check "removing and installing the package kept the record ($counted_after >= $counted_before travels)" \
+  test "${counted_after:-0}" -ge "${counted_before:-1}"
 python3 - <<'PY'
 import errno, os
 # root may open the port liftd holds (TIOCEXCL does not stop CAP_SYS_ADMIN); nothing reads the
@@ -374,6 +387,11 @@ took=$((SECONDS - start))
 check "systemctl stop with a stalled serial line ends liftd cleanly ($took s)" \
   test "$(prop liftd ExecMainStatus) $(prop liftd Result)" = "0 success"
 check "... without waiting for the line (under 15 s of the tty's 30 s closing wait)" test $took -lt 15
+
+# ---- purge
+section "purge"
+check "apt purge liftd" bash -c 'apt purge -y liftd >/dev/null 2>&1'
+check "purge removed the lift's record (/var/lib/liftd)" test ! -e /var/lib/liftd
 
 note "guest checks took $((SECONDS - t0)) s"
 # For a failed run: the whole journal, next to the results.
