@@ -12,7 +12,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config
-  libasio-dev libspdlog-dev nlohmann-json3-dev libsystemd-dev systemd
+  libasio-dev libspdlog-dev nlohmann-json3-dev libsystemd-dev libsqlite3-dev systemd
   googletest libgtest-dev libgmock-dev libbenchmark-dev
   clang-16 libclang-rt-16-dev clang-format
   python3 python3-jsonschema

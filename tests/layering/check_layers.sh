@@ -14,6 +14,8 @@ declare -A allowed=(
   [io]="common"
   [log]="common"
   [service]="common log"
+  # The lift's record (SQLite on the board's storage): the daemon's io thread feeds it.
+  [record]="common log"
   [can]="common io"
   [lift]="common drive"
   # The machine inputs every kind's simulated lift shares; each kind's simulator lives in the

@@ -1,0 +1,845 @@
+#include "record/store.hpp"
+
+#include <sqlite3.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <limits>
+#include <cstring>
+#include <utility>
+
+#include "record/time_text.hpp"
+
+namespace liftd::record {
+
+namespace {
+
+// Version 1 of the record. Curves live in their own table so dropping an old curve frees its
+// pages without rewriting the travel row. The daily tables are the trend's aggregates, updated
+// in each travel's transaction so a trend never scans the travels.
+constexpr const char* kSchema = R"sql(
+CREATE TABLE meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL) WITHOUT ROWID;
+CREATE TABLE counters(name TEXT PRIMARY KEY, value INTEGER NOT NULL) WITHOUT ROWID;
+CREATE TABLE floors(floor INTEGER PRIMARY KEY, arrivals INTEGER NOT NULL,
+  errors INTEGER NOT NULL, error_sum_mm INTEGER NOT NULL, worst_mm INTEGER,
+  histogram BLOB NOT NULL);
+CREATE TABLE resets(id INTEGER PRIMARY KEY, at_unix_ms INTEGER NOT NULL, who TEXT NOT NULL,
+  names TEXT NOT NULL);
+CREATE TABLE travels(id INTEGER PRIMARY KEY, start_unix_ms INTEGER NOT NULL,
+  end_unix_ms INTEGER NOT NULL, start_mono_ms INTEGER NOT NULL, end_mono_ms INTEGER NOT NULL,
+  from_floor INTEGER, to_floor INTEGER, end_floor INTEGER, kind TEXT NOT NULL,
+  arrived INTEGER NOT NULL, cause TEXT NOT NULL, duration_ms INTEGER NOT NULL,
+  top_speed_mm_s INTEGER, stop_error_mm INTEGER, relevel_followed INTEGER NOT NULL);
+CREATE INDEX travels_by_start ON travels(start_unix_ms);
+CREATE INDEX travels_by_from ON travels(from_floor, start_unix_ms);
+CREATE INDEX travels_by_to ON travels(to_floor, start_unix_ms);
+CREATE TABLE curves(travel_id INTEGER PRIMARY KEY, curve TEXT NOT NULL);
+CREATE TABLE day_floor(day INTEGER NOT NULL, floor INTEGER NOT NULL, arrivals INTEGER NOT NULL,
+  errors INTEGER NOT NULL, error_sum_mm INTEGER NOT NULL, worst_mm INTEGER,
+  travels INTEGER NOT NULL, travel_ms INTEGER NOT NULL, PRIMARY KEY(day, floor)) WITHOUT ROWID;
+CREATE TABLE day_pair(day INTEGER NOT NULL, from_floor INTEGER NOT NULL,
+  to_floor INTEGER NOT NULL, travels INTEGER NOT NULL, travel_ms INTEGER NOT NULL,
+  PRIMARY KEY(day, from_floor, to_floor)) WITHOUT ROWID;
+)sql";
+
+constexpr std::size_t kHistogramBytes = StopErrorStats::kBuckets * 8;
+
+StoreFailure failure_of(int code) {
+  switch (code & 0xff) {
+    case SQLITE_CANTOPEN:
+      return StoreFailure::cannot_open;
+    case SQLITE_READONLY:
+    case SQLITE_PERM:
+    case SQLITE_AUTH:
+      return StoreFailure::read_only;
+    case SQLITE_FULL:
+      return StoreFailure::full;
+    case SQLITE_IOERR:
+      return StoreFailure::io;
+    case SQLITE_CORRUPT:
+    case SQLITE_NOTADB:
+      return StoreFailure::corrupt;
+    case SQLITE_BUSY:
+    case SQLITE_LOCKED:
+      return StoreFailure::busy;
+    default:
+      return StoreFailure::other;
+  }
+}
+
+// Binding helpers: SQLite copies text with SQLITE_TRANSIENT only when the text does not outlive
+// the step; every text bound here lives until the statement is reset, so it is bound static.
+int bind(sqlite3_stmt* s, int index, std::int64_t value) {
+  return sqlite3_bind_int64(s, index, value);
+}
+int bind(sqlite3_stmt* s, int index, std::optional<std::int64_t> value) {
+  return value ? sqlite3_bind_int64(s, index, *value) : sqlite3_bind_null(s, index);
+}
+int bind(sqlite3_stmt* s, int index, std::optional<int> value) {
+  return value ? sqlite3_bind_int64(s, index, *value) : sqlite3_bind_null(s, index);
+}
+int bind(sqlite3_stmt* s, int index, std::string_view text) {
+  return sqlite3_bind_text64(s, index, text.data(), text.size(), SQLITE_STATIC, SQLITE_UTF8);
+}
+int bind_blob(sqlite3_stmt* s, int index, const void* data, std::size_t size) {
+  return sqlite3_bind_blob64(s, index, data, size, SQLITE_STATIC);
+}
+
+std::optional<std::int64_t> column_optional(sqlite3_stmt* s, int column) {
+  if (sqlite3_column_type(s, column) == SQLITE_NULL) return std::nullopt;
+  return sqlite3_column_int64(s, column);
+}
+nlohmann::json column_json(sqlite3_stmt* s, int column) {
+  if (sqlite3_column_type(s, column) == SQLITE_NULL) return nullptr;
+  return sqlite3_column_int64(s, column);
+}
+std::string column_text(sqlite3_stmt* s, int column) {
+  const unsigned char* text = sqlite3_column_text(s, column);
+  const int size = sqlite3_column_bytes(s, column);
+  return text ? std::string(reinterpret_cast<const char*>(text), static_cast<std::size_t>(size))
+              : std::string();
+}
+
+/// Resets a statement when the scope ends, whatever happened, so it holds no read lock.
+class ResetOnExit {
+ public:
+  explicit ResetOnExit(sqlite3_stmt* s) : s_(s) {}
+  ~ResetOnExit() {
+    sqlite3_reset(s_);
+    sqlite3_clear_bindings(s_);
+  }
+  ResetOnExit(const ResetOnExit&) = delete;
+  ResetOnExit& operator=(const ResetOnExit&) = delete;
+
+ private:
+  sqlite3_stmt* s_;
+};
+
+/// Runs a statement that returns no rows.
+int run(sqlite3_stmt* s) {
+  const int rc = sqlite3_step(s);
+  sqlite3_reset(s);
+  sqlite3_clear_bindings(s);
+  return rc == SQLITE_DONE || rc == SQLITE_ROW ? SQLITE_OK : rc;
+}
+
+double rounded(double value) {
+  return std::round(value * 100.0) / 100.0;
+}
+
+std::string encode_histogram(const StopErrorStats::Buckets& buckets) {
+  std::string bytes(kHistogramBytes, '\0');
+  for (std::size_t i = 0; i < buckets.size(); ++i) {
+    auto v = static_cast<std::uint64_t>(buckets[i]);
+    for (std::size_t b = 0; b < 8; ++b) bytes[i * 8 + b] = static_cast<char>((v >> (8 * b)) & 0xff);
+  }
+  return bytes;
+}
+
+StopErrorStats::Buckets decode_histogram(const unsigned char* bytes) {
+  StopErrorStats::Buckets buckets{};
+  for (std::size_t i = 0; i < buckets.size(); ++i) {
+    std::uint64_t v = 0;
+    for (std::size_t b = 0; b < 8; ++b) v |= std::uint64_t{bytes[i * 8 + b]} << (8 * b);
+    buckets[i] = static_cast<std::int64_t>(v);
+  }
+  return buckets;
+}
+
+/// Runs one query of a single integer (PRAGMA user_version and the like).
+int query_int(sqlite3* db, const char* sql, std::int64_t& value) {
+  sqlite3_stmt* s = nullptr;
+  int rc = sqlite3_prepare_v2(db, sql, -1, &s, nullptr);
+  if (rc != SQLITE_OK) return rc;
+  rc = sqlite3_step(s);
+  if (rc == SQLITE_ROW) {
+    value = sqlite3_column_int64(s, 0);
+    rc = SQLITE_OK;
+  }
+  sqlite3_finalize(s);
+  return rc;
+}
+
+int query_text(sqlite3* db, const char* sql, std::string& value) {
+  sqlite3_stmt* s = nullptr;
+  int rc = sqlite3_prepare_v2(db, sql, -1, &s, nullptr);
+  if (rc != SQLITE_OK) return rc;
+  rc = sqlite3_step(s);
+  if (rc == SQLITE_ROW) {
+    value = column_text(s, 0);
+    rc = SQLITE_OK;
+  }
+  sqlite3_finalize(s);
+  return rc;
+}
+
+// History filters, one bit each: a statement is prepared for each combination asked, so each
+// has a plan that uses the indexes its filters allow.
+constexpr unsigned kFrom = 1, kTo = 2, kFloor = 4, kOutcome = 8, kCause = 16, kCurves = 32;
+
+std::string history_sql(unsigned filters) {
+  std::string sql =
+      "SELECT t.id, t.start_unix_ms, t.end_unix_ms, t.start_mono_ms, t.end_mono_ms, "
+      "t.from_floor, t.to_floor, t.end_floor, t.kind, t.arrived, t.cause, t.duration_ms, "
+      "t.top_speed_mm_s, t.stop_error_mm, t.relevel_followed";
+  sql += (filters & kCurves) ? ", c.curve FROM travels t LEFT JOIN curves c ON c.travel_id = t.id"
+                             : " FROM travels t";
+  sql += " WHERE 1";
+  if (filters & kFrom) sql += " AND t.start_unix_ms >= ?1";
+  if (filters & kTo) sql += " AND t.start_unix_ms < ?2";
+  if (filters & kFloor) sql += " AND (t.from_floor = ?3 OR t.to_floor = ?3)";
+  if (filters & kOutcome) sql += " AND t.arrived = ?4";
+  if (filters & kCause) sql += " AND t.cause = ?5";
+  sql += " ORDER BY t.start_unix_ms DESC, t.id DESC LIMIT ?6";
+  return sql;
+}
+
+}  // namespace
+
+Statement::~Statement() {
+  sqlite3_finalize(statement_);
+}
+
+Statement::Statement(Statement&& other) noexcept
+    : statement_(std::exchange(other.statement_, nullptr)) {}
+
+Statement& Statement::operator=(Statement&& other) noexcept {
+  if (this != &other) {
+    sqlite3_finalize(statement_);
+    statement_ = std::exchange(other.statement_, nullptr);
+  }
+  return *this;
+}
+
+Store::Store(sqlite3* db, std::string path, const StoreOptions& options)
+    : db_(db), path_(std::move(path)), options_(options) {
+  // A curve outlives no travel: keep at most as many curves as travels.
+  options_.curves_kept = static_cast<std::size_t>(
+      std::min<std::int64_t>(static_cast<std::int64_t>(options_.curves_kept),
+                             std::max<std::int64_t>(options_.max_travels, 0)));
+}
+
+Store::~Store() {
+  // sqlite3_close_v2 waits for the statements (members, finalized after this body) and closes
+  // the connection with the last of them.
+  sqlite3_close_v2(db_);
+}
+
+StoreError Store::error_of(int code, std::string_view doing) const {
+  StoreError error;
+  error.failure = failure_of(code);
+  error.sqlite_code = code;
+  error.system_errno = (code & 0xff) == SQLITE_IOERR || (code & 0xff) == SQLITE_CANTOPEN ||
+                               (code & 0xff) == SQLITE_FULL
+                           ? sqlite3_system_errno(db_)
+                           : 0;
+  error.doing = std::string(doing);
+  error.detail = sqlite3_errstr(code);
+  const char* message = db_ ? sqlite3_errmsg(db_) : nullptr;
+  if (message && error.detail != message) error.detail += std::string(": ") + message;
+  return error;
+}
+
+void Store::skip_checkpoint_on_close() {
+  sqlite3_db_config(db_, SQLITE_DBCONFIG_NO_CKPT_ON_CLOSE, 1, nullptr);
+}
+
+std::unique_ptr<Store> Store::open(const std::string& path, const StoreOptions& options,
+                                   std::int64_t now_unix_ms, StoreError& error) {
+  sqlite3* db = nullptr;
+  const int flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX;
+  const int rc = sqlite3_open_v2(path.c_str(), &db, flags, nullptr);
+  // The store owns the connection from here, even a failed one (sqlite3_close_v2 frees both).
+  std::unique_ptr<Store> store(new Store(db, path, options));
+  if (rc != SQLITE_OK) {
+    error = store->error_of(rc, "opening the file");
+    return nullptr;
+  }
+  sqlite3_extended_result_codes(db, 1);
+  if (sqlite3_db_readonly(db, "main") == 1) {
+    error = store->error_of(SQLITE_READONLY, "opening the file");
+    error.detail = "the file can only be opened for reading";
+    return nullptr;
+  }
+
+  // Nothing is written before the version and the file are checked, so a newer record stays
+  // untouched and a damaged one is moved aside as it was found.
+  std::int64_t version = 0;
+  if (int code = query_int(db, "PRAGMA user_version", version); code != SQLITE_OK) {
+    error = store->error_of(code, "reading the schema version");
+    if (error.failure == StoreFailure::corrupt || error.failure == StoreFailure::other) {
+      store->skip_checkpoint_on_close();
+    }
+    return nullptr;
+  }
+  if (version > kSchemaVersion) {
+    error = StoreError{StoreFailure::newer_schema, 0, 0, "reading the schema version",
+                       "schema version " + std::to_string(version) + ", this liftd knows " +
+                           std::to_string(kSchemaVersion) + " and older"};
+    return nullptr;
+  }
+  std::string check;
+  if (int code = query_text(db, "PRAGMA quick_check", check); code != SQLITE_OK) {
+    error = store->error_of(code, "checking the file (PRAGMA quick_check)");
+    if (error.failure == StoreFailure::corrupt) store->skip_checkpoint_on_close();
+    return nullptr;
+  }
+  if (check != "ok") {
+    store->skip_checkpoint_on_close();
+    error = StoreError{StoreFailure::corrupt, SQLITE_CORRUPT, 0,
+                       "checking the file (PRAGMA quick_check)", check};
+    return nullptr;
+  }
+  std::int64_t tables = 0;
+  if (int code = query_int(db, "SELECT count(*) FROM sqlite_schema", tables); code != SQLITE_OK) {
+    error = store->error_of(code, "reading the schema");
+    return nullptr;
+  }
+  if (version == 0 && tables != 0) {
+    error = StoreError{StoreFailure::foreign, 0, 0, "reading the schema",
+                       "the file is an SQLite database with " + std::to_string(tables) +
+                           " tables but no liftd schema version: not a liftd record"};
+    return nullptr;
+  }
+
+  // WAL: a travel's transaction appends its pages to the log and nothing else, and readers never
+  // block the writer. synchronous=NORMAL syncs the log only at checkpoints, not at each commit:
+  // after a power loss the last committed transactions may be lost, but the file is never
+  // corrupt, and the flash is not written twice per travel.
+  std::string mode;
+  if (int code = query_text(db, "PRAGMA journal_mode=WAL", mode); code != SQLITE_OK) {
+    error = store->error_of(code, "switching to WAL mode");
+    return nullptr;
+  }
+  if (mode != "wal") {
+    error = StoreError{StoreFailure::other, 0, 0, "switching to WAL mode",
+                       "the file stays in journal mode \"" + mode + "\""};
+    return nullptr;
+  }
+  std::string pragmas =
+      "PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=OFF; PRAGMA journal_size_limit=4194304;";
+  if (options.max_pages > 0) {
+    pragmas += "PRAGMA max_page_count=" + std::to_string(options.max_pages) + ";";
+  }
+  if (int code = sqlite3_exec(db, pragmas.c_str(), nullptr, nullptr, nullptr); code != SQLITE_OK) {
+    error = store->error_of(code, "setting the connection's pragmas");
+    return nullptr;
+  }
+  // The io thread must not stall on another process's lock (an sqlite3 shell on the board, say)
+  // for longer than a cycle of its own work.
+  sqlite3_busy_timeout(db, 100);
+
+  if (version == 0) {
+    const std::string create =
+        "BEGIN IMMEDIATE;" + std::string(kSchema) +
+        "INSERT INTO meta(key, value) VALUES('since_unix_ms', " + std::to_string(now_unix_ms) +
+        "); PRAGMA user_version=" + std::to_string(kSchemaVersion) + "; COMMIT;";
+    if (int code = sqlite3_exec(db, create.c_str(), nullptr, nullptr, nullptr); code != SQLITE_OK) {
+      error = store->error_of(code, "creating the record's tables");
+      sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+      return nullptr;
+    }
+  }
+  if (!store->prepare_all(error)) return nullptr;
+
+  std::int64_t since = now_unix_ms;
+  if (int code = query_int(db, "SELECT value FROM meta WHERE key = 'since_unix_ms'", since);
+      code != SQLITE_OK) {
+    error = store->error_of(code, "reading when the record began");
+    return nullptr;
+  }
+  store->since_unix_ms_ = since;
+
+  // The newest travel (for the relevel mark) and the id range kept (ids only grow, and only the
+  // oldest go, so the range is the count).
+  sqlite3_stmt* s = nullptr;
+  int code = sqlite3_prepare_v2(
+      db,
+      "SELECT (SELECT min(id) FROM travels), id, coalesce(end_floor, to_floor) FROM travels "
+      "ORDER BY id DESC LIMIT 1",
+      -1, &s, nullptr);
+  if (code == SQLITE_OK) {
+    code = sqlite3_step(s);
+    if (code == SQLITE_ROW) {
+      store->first_id_ = sqlite3_column_int64(s, 0);
+      store->last_id_ = sqlite3_column_int64(s, 1);
+      const auto floor = column_optional(s, 2);
+      if (floor) store->last_floor_ = static_cast<int>(*floor);
+      code = SQLITE_OK;
+    } else if (code == SQLITE_DONE) {
+      code = SQLITE_OK;
+    }
+  }
+  sqlite3_finalize(s);
+  if (code != SQLITE_OK) {
+    error = store->error_of(code, "reading the newest travel");
+    return nullptr;
+  }
+  return store;
+}
+
+bool Store::prepare(Statement& statement, std::string_view sql, StoreError& error) {
+  sqlite3_stmt* s = nullptr;
+  const int code = sqlite3_prepare_v3(db_, sql.data(), static_cast<int>(sql.size()),
+                                      SQLITE_PREPARE_PERSISTENT, &s, nullptr);
+  if (code != SQLITE_OK) {
+    error = error_of(code, "preparing the record's statements");
+    // A version-1 record without a version-1 table was altered by hand: not ours to repair.
+    if (error.failure == StoreFailure::other) error.failure = StoreFailure::foreign;
+    return false;
+  }
+  statement = Statement(s);
+  return true;
+}
+
+bool Store::prepare_all(StoreError& error) {
+  return prepare(begin_, "BEGIN IMMEDIATE", error) && prepare(commit_, "COMMIT", error) &&
+         prepare(rollback_, "ROLLBACK", error) &&
+         prepare(insert_travel_,
+                 "INSERT INTO travels(start_unix_ms, end_unix_ms, start_mono_ms, end_mono_ms, "
+                 "from_floor, to_floor, end_floor, kind, arrived, cause, duration_ms, "
+                 "top_speed_mm_s, stop_error_mm, relevel_followed) "
+                 "VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, 0)",
+                 error) &&
+         prepare(insert_curve_, "INSERT INTO curves(travel_id, curve) VALUES(?1, ?2)", error) &&
+         prepare(prune_travels_, "DELETE FROM travels WHERE id <= ?1", error) &&
+         prepare(prune_curves_, "DELETE FROM curves WHERE travel_id <= ?1", error) &&
+         prepare(mark_relevel_, "UPDATE travels SET relevel_followed = 1 WHERE id = ?1", error) &&
+         prepare(upsert_day_floor_,
+                 "INSERT INTO day_floor(day, floor, arrivals, errors, error_sum_mm, worst_mm, "
+                 "travels, travel_ms) VALUES(?1, ?2, 1, ?3, ?4, ?5, ?6, ?7) "
+                 "ON CONFLICT(day, floor) DO UPDATE SET arrivals = arrivals + 1, "
+                 "errors = errors + excluded.errors, "
+                 "error_sum_mm = error_sum_mm + excluded.error_sum_mm, "
+                 "worst_mm = CASE WHEN excluded.worst_mm IS NOT NULL AND (worst_mm IS NULL OR "
+                 "abs(excluded.worst_mm) > abs(worst_mm)) THEN excluded.worst_mm "
+                 "ELSE worst_mm END, "
+                 "travels = travels + excluded.travels, travel_ms = travel_ms + excluded.travel_ms",
+                 error) &&
+         prepare(upsert_day_pair_,
+                 "INSERT INTO day_pair(day, from_floor, to_floor, travels, travel_ms) "
+                 "VALUES(?1, ?2, ?3, 1, ?4) ON CONFLICT(day, from_floor, to_floor) DO UPDATE SET "
+                 "travels = travels + 1, travel_ms = travel_ms + excluded.travel_ms",
+                 error) &&
+         prepare(upsert_counter_,
+                 "INSERT INTO counters(name, value) VALUES(?1, ?2) "
+                 "ON CONFLICT(name) DO UPDATE SET value = excluded.value",
+                 error) &&
+         prepare(upsert_floor_,
+                 "INSERT OR REPLACE INTO floors(floor, arrivals, errors, error_sum_mm, worst_mm, "
+                 "histogram) VALUES(?1, ?2, ?3, ?4, ?5, ?6)",
+                 error) &&
+         prepare(insert_reset_, "INSERT INTO resets(at_unix_ms, who, names) VALUES(?1, ?2, ?3)",
+                 error) &&
+         prepare(trend_days_,
+                 "SELECT day, floor, arrivals, errors, error_sum_mm, worst_mm, travels, travel_ms "
+                 "FROM day_floor WHERE day >= ?1 AND day < ?2 ORDER BY day, floor",
+                 error) &&
+         prepare(trend_days_floor_,
+                 "SELECT day, floor, arrivals, errors, error_sum_mm, worst_mm, travels, travel_ms "
+                 "FROM day_floor WHERE day >= ?1 AND day < ?2 AND floor = ?3 ORDER BY day, floor",
+                 error) &&
+         prepare(trend_pairs_,
+                 "SELECT day, from_floor, to_floor, travels, travel_ms FROM day_pair "
+                 "WHERE day >= ?1 AND day < ?2 ORDER BY day, from_floor, to_floor",
+                 error) &&
+         prepare(trend_pairs_floor_,
+                 "SELECT day, from_floor, to_floor, travels, travel_ms FROM day_pair "
+                 "WHERE day >= ?1 AND day < ?2 AND (from_floor = ?3 OR to_floor = ?3) "
+                 "ORDER BY day, from_floor, to_floor",
+                 error);
+}
+
+std::int64_t Store::travel_count() const noexcept {
+  return last_id_ >= first_id_ ? last_id_ - first_id_ + 1 : 0;
+}
+
+bool Store::load(Counters& counters, StoreError& error) {
+  sqlite3_stmt* s = nullptr;
+  auto fail = [&](int code, std::string_view doing) {
+    error = error_of(code, doing);
+    sqlite3_finalize(s);
+    return false;
+  };
+  int code = sqlite3_prepare_v2(db_, "SELECT name, value FROM counters", -1, &s, nullptr);
+  if (code != SQLITE_OK) return fail(code, "reading the counters");
+  while ((code = sqlite3_step(s)) == SQLITE_ROW) {
+    counters.restore_value(column_text(s, 0), sqlite3_column_int64(s, 1));
+  }
+  if (code != SQLITE_DONE) return fail(code, "reading the counters");
+  sqlite3_finalize(s);
+  s = nullptr;
+
+  code = sqlite3_prepare_v2(
+      db_, "SELECT floor, arrivals, errors, error_sum_mm, worst_mm, histogram FROM floors", -1, &s,
+      nullptr);
+  if (code != SQLITE_OK) return fail(code, "reading the floors' counters");
+  while ((code = sqlite3_step(s)) == SQLITE_ROW) {
+    const std::int64_t floor = sqlite3_column_int64(s, 0);
+    const auto* bytes = static_cast<const unsigned char*>(sqlite3_column_blob(s, 5));
+    const auto size = static_cast<std::size_t>(sqlite3_column_bytes(s, 5));
+    FloorCounters kept;
+    kept.arrivals = sqlite3_column_int64(s, 1);
+    if (size != kHistogramBytes || bytes == nullptr ||
+        !kept.stop_error.restore(sqlite3_column_int64(s, 2), sqlite3_column_int64(s, 3),
+                                 column_optional(s, 4), decode_histogram(bytes))) {
+      error = StoreError{StoreFailure::foreign, 0, 0, "reading the floors' counters",
+                         "the row of floor " + std::to_string(floor) +
+                             " has a stopping-error histogram that does not fit its count (" +
+                             std::to_string(size) + " bytes, " + std::to_string(kHistogramBytes) +
+                             " expected)"};
+      sqlite3_finalize(s);
+      return false;
+    }
+    counters.restore_floor(static_cast<int>(floor), kept);
+  }
+  if (code != SQLITE_DONE) return fail(code, "reading the floors' counters");
+  sqlite3_finalize(s);
+  s = nullptr;
+
+  code = sqlite3_prepare_v2(db_, "SELECT id, at_unix_ms, who, names FROM resets ORDER BY id", -1,
+                            &s, nullptr);
+  if (code != SQLITE_OK) return fail(code, "reading the resets");
+  while ((code = sqlite3_step(s)) == SQLITE_ROW) {
+    ResetEntry entry{sqlite3_column_int64(s, 1), column_text(s, 2), {}};
+    const nlohmann::json names = nlohmann::json::parse(column_text(s, 3), nullptr, false);
+    if (!names.is_array() ||
+        !std::all_of(names.begin(), names.end(), [](const auto& n) { return n.is_string(); })) {
+      error = StoreError{StoreFailure::foreign, 0, 0, "reading the resets",
+                         "reset " + std::to_string(sqlite3_column_int64(s, 0)) +
+                             ": names is not a JSON array of texts"};
+      sqlite3_finalize(s);
+      return false;
+    }
+    for (const auto& n : names) entry.names.push_back(n.get<std::string>());
+    counters.restore_reset(std::move(entry));
+  }
+  if (code != SQLITE_DONE) return fail(code, "reading the resets");
+  sqlite3_finalize(s);
+  return true;
+}
+
+bool Store::begin(std::string_view doing, StoreError& error) {
+  if (const int code = run(begin_.get()); code != SQLITE_OK) {
+    error = error_of(code, doing);
+    return false;
+  }
+  return true;
+}
+
+bool Store::commit(std::string_view doing, StoreError& error) {
+  if (const int code = run(commit_.get()); code != SQLITE_OK) {
+    error = error_of(code, doing);
+    rollback();
+    return false;
+  }
+  return true;
+}
+
+void Store::rollback() {
+  if (!sqlite3_get_autocommit(db_)) run(rollback_.get());
+}
+
+bool Store::write_changed_counters(Counters& counters, StoreError& error) {
+  sqlite3_stmt* s = upsert_counter_.get();
+  for (const std::string& name : counters.changed_names()) {
+    bind(s, 1, name);
+    bind(s, 2, counters.value(name));
+    if (const int code = run(s); code != SQLITE_OK) {
+      error = error_of(code, "writing the counters");
+      return false;
+    }
+  }
+  s = upsert_floor_.get();
+  for (int floor : counters.changed_floors()) {
+    const FloorCounters& kept = counters.floors().at(floor);
+    const std::string histogram = encode_histogram(kept.stop_error.buckets());
+    bind(s, 1, std::int64_t{floor});
+    bind(s, 2, kept.arrivals);
+    bind(s, 3, kept.stop_error.count());
+    bind(s, 4, kept.stop_error.sum_mm());
+    bind(s, 5, kept.stop_error.worst_mm());
+    bind_blob(s, 6, histogram.data(), histogram.size());
+    if (const int code = run(s); code != SQLITE_OK) {
+      error = error_of(code, "writing the floors' counters");
+      return false;
+    }
+  }
+  return true;
+}
+
+bool Store::insert_travel(Travel& t, StoreError& error) {
+  auto fail = [&](int code) {
+    error = error_of(code, "writing a travel");
+    return false;
+  };
+  sqlite3_stmt* s = insert_travel_.get();
+  bind(s, 1, t.start_unix_ms);
+  bind(s, 2, t.end_unix_ms);
+  bind(s, 3, t.start_mono_ms);
+  bind(s, 4, t.end_mono_ms);
+  bind(s, 5, t.from_floor);
+  bind(s, 6, t.to_floor);
+  bind(s, 7, t.end_floor);
+  bind(s, 8, std::string_view(t.kind));
+  bind(s, 9, std::int64_t{t.arrived ? 1 : 0});
+  bind(s, 10, std::string_view(t.cause));
+  bind(s, 11, t.duration_ms);
+  bind(s, 12, t.top_speed_mm_s ? std::optional<std::int64_t>(*t.top_speed_mm_s) : std::nullopt);
+  bind(s, 13, t.stop_error_mm);
+  if (const int code = run(s); code != SQLITE_OK) return fail(code);
+  t.id = sqlite3_last_insert_rowid(db_);
+  t.relevel_followed = false;
+
+  // A relevel right after a travel to the same floor says that travel's stop needed a
+  // correction: the mark goes on that travel's row in the relevel's transaction.
+  const std::optional<int> floor = t.end_floor ? t.end_floor : t.to_floor;
+  if (counter_name_part(t.kind) == "relevel" && last_id_ > 0 && floor && last_floor_ == floor) {
+    bind(mark_relevel_.get(), 1, last_id_);
+    if (const int code = run(mark_relevel_.get()); code != SQLITE_OK) return fail(code);
+  }
+
+  if (options_.curves_kept > 0 && !t.curve_json.empty()) {
+    bind(insert_curve_.get(), 1, t.id);
+    bind(insert_curve_.get(), 2, std::string_view(t.curve_json));
+    if (const int code = run(insert_curve_.get()); code != SQLITE_OK) return fail(code);
+  }
+  // Only the newest curves_kept travels keep a curve and only the newest max_travels travels
+  // stay (issue #42); ids only grow, so "older" is "a smaller id".
+  const auto curves_kept = static_cast<std::int64_t>(options_.curves_kept);
+  if (t.id - curves_kept >= 1) {
+    bind(prune_curves_.get(), 1, t.id - curves_kept);
+    if (const int code = run(prune_curves_.get()); code != SQLITE_OK) return fail(code);
+  }
+  if (options_.max_travels > 0 && t.id - options_.max_travels >= first_id_) {
+    bind(prune_travels_.get(), 1, t.id - options_.max_travels);
+    if (const int code = run(prune_travels_.get()); code != SQLITE_OK) return fail(code);
+  }
+
+  // The trend's daily aggregates: arrivals and stopping error at the floor where the car
+  // stopped, and the floor-to-floor time of ordinary travels between two floors.
+  if (t.arrived && t.end_floor) {
+    const std::int64_t day = utc_day(t.start_unix_ms);
+    const bool floor_to_floor =
+        counter_name_part(t.kind) == "travel" && t.from_floor && *t.from_floor != *t.end_floor;
+    s = upsert_day_floor_.get();
+    bind(s, 1, day);
+    bind(s, 2, std::int64_t{*t.end_floor});
+    bind(s, 3, std::int64_t{t.stop_error_mm ? 1 : 0});
+    bind(s, 4, t.stop_error_mm.value_or(0));
+    bind(s, 5, t.stop_error_mm);
+    bind(s, 6, std::int64_t{floor_to_floor ? 1 : 0});
+    bind(s, 7, floor_to_floor ? t.duration_ms : 0);
+    if (const int code = run(s); code != SQLITE_OK) return fail(code);
+    if (floor_to_floor) {
+      s = upsert_day_pair_.get();
+      bind(s, 1, day);
+      bind(s, 2, std::int64_t{*t.from_floor});
+      bind(s, 3, std::int64_t{*t.end_floor});
+      bind(s, 4, t.duration_ms);
+      if (const int code = run(s); code != SQLITE_OK) return fail(code);
+    }
+  }
+  return true;
+}
+
+bool Store::write_travels(std::span<Travel> travels, Counters& counters, StoreError& error) {
+  if (!begin("writing a travel", error)) return false;
+  // What the transaction changes in memory, put back if it does not commit.
+  const std::int64_t first_id = first_id_, last_id = last_id_;
+  const std::optional<int> last_floor = last_floor_;
+  auto undo = [&] {
+    rollback();
+    first_id_ = first_id;
+    last_id_ = last_id;
+    last_floor_ = last_floor;
+    for (Travel& t : travels) t.id = 0;
+    return false;
+  };
+  for (Travel& t : travels) {
+    if (!insert_travel(t, error)) return undo();
+    if (last_id_ == 0) first_id_ = t.id;
+    last_id_ = t.id;
+    last_floor_ = t.end_floor ? t.end_floor : t.to_floor;
+    if (options_.max_travels > 0) first_id_ = std::max(first_id_, t.id - options_.max_travels + 1);
+  }
+  if (!write_changed_counters(counters, error)) return undo();
+  if (!commit("writing a travel", error)) return undo();
+  counters.mark_written();
+  return true;
+}
+
+bool Store::write_counters(Counters& counters, StoreError& error) {
+  if (!counters.changed()) return true;
+  if (!begin("writing the counters", error)) return false;
+  if (!write_changed_counters(counters, error)) {
+    rollback();
+    return false;
+  }
+  if (!commit("writing the counters", error)) return false;
+  counters.mark_written();
+  return true;
+}
+
+bool Store::write_reset(const ResetEntry& reset, Counters& counters, StoreError& error) {
+  if (!begin("writing a reset", error)) return false;
+  const std::string names = nlohmann::json(reset.names).dump();
+  sqlite3_stmt* s = insert_reset_.get();
+  bind(s, 1, reset.at_unix_ms);
+  bind(s, 2, std::string_view(reset.who));
+  bind(s, 3, std::string_view(names));
+  if (const int code = run(s); code != SQLITE_OK) {
+    error = error_of(code, "writing a reset");
+    rollback();
+    return false;
+  }
+  if (!write_changed_counters(counters, error)) {
+    rollback();
+    return false;
+  }
+  if (!commit("writing a reset", error)) return false;
+  counters.mark_written();
+  return true;
+}
+
+bool Store::history(const HistoryQuery& query, nlohmann::json& answer, StoreError& error) {
+  const unsigned filters = (query.from_unix_ms ? kFrom : 0U) | (query.to_unix_ms ? kTo : 0U) |
+                           (query.floor ? kFloor : 0U) | (query.outcome ? kOutcome : 0U) |
+                           (query.cause ? kCause : 0U) | (query.curves ? kCurves : 0U);
+  Statement& statement = history_[filters];
+  if (!statement.get() && !prepare(statement, history_sql(filters), error)) {
+    history_.erase(filters);
+    return false;
+  }
+  sqlite3_stmt* s = statement.get();
+  ResetOnExit reset_on_exit(s);
+  const std::size_t limit = std::min(query.limit, kMaxHistoryLimit);
+  if (query.from_unix_ms) bind(s, 1, *query.from_unix_ms);
+  if (query.to_unix_ms) bind(s, 2, *query.to_unix_ms);
+  if (query.floor) bind(s, 3, std::int64_t{*query.floor});
+  if (query.outcome) bind(s, 4, std::int64_t{*query.outcome == "arrived" ? 1 : 0});
+  if (query.cause) bind(s, 5, std::string_view(*query.cause));
+  // One row more than asked tells whether the answer is cut.
+  bind(s, 6, static_cast<std::int64_t>(limit) + 1);
+
+  nlohmann::json travels = nlohmann::json::array();
+  bool truncated = false;
+  int code;
+  while ((code = sqlite3_step(s)) == SQLITE_ROW) {
+    if (travels.size() == limit) {
+      truncated = true;
+      break;
+    }
+    nlohmann::json t = nlohmann::json::object();
+    t["id"] = sqlite3_column_int64(s, 0);
+    t["start"] = format_utc_ms(sqlite3_column_int64(s, 1));
+    t["end"] = format_utc_ms(sqlite3_column_int64(s, 2));
+    t["start_mono_ms"] = sqlite3_column_int64(s, 3);
+    t["end_mono_ms"] = sqlite3_column_int64(s, 4);
+    t["from_floor"] = column_json(s, 5);
+    t["to_floor"] = column_json(s, 6);
+    t["end_floor"] = column_json(s, 7);
+    t["kind"] = column_text(s, 8);
+    t["outcome"] = sqlite3_column_int64(s, 9) != 0 ? "arrived" : "aborted";
+    t["cause"] = column_text(s, 10);
+    t["duration_ms"] = sqlite3_column_int64(s, 11);
+    t["top_speed_mm_s"] = column_json(s, 12);
+    t["stop_error_mm"] = column_json(s, 13);
+    t["relevel_followed"] = sqlite3_column_int64(s, 14) != 0;
+    if (query.curves && sqlite3_column_type(s, 15) != SQLITE_NULL) {
+      nlohmann::json curve = nlohmann::json::parse(column_text(s, 15), nullptr, false);
+      if (curve.is_discarded()) {
+        t["curve"] = nullptr;
+        t["curve_error"] = "the kept curve is not valid JSON";
+      } else {
+        t["curve"] = std::move(curve);
+      }
+    }
+    travels.push_back(std::move(t));
+  }
+  if (code != SQLITE_ROW && code != SQLITE_DONE) {
+    error = error_of(code, "reading the history");
+    return false;
+  }
+  answer = nlohmann::json::object();
+  answer["count"] = travels.size();
+  answer["truncated"] = truncated;
+  answer["travels"] = std::move(travels);
+  return true;
+}
+
+bool Store::trend(const TrendQuery& query, nlohmann::json& answer, StoreError& error) {
+  // Every UTC day the range [from, to) touches.
+  const std::int64_t first_day =
+      query.from_unix_ms ? utc_day(*query.from_unix_ms) : std::numeric_limits<std::int64_t>::min();
+  const std::int64_t end_day = query.to_unix_ms ? utc_day(*query.to_unix_ms - 1) + 1
+                                                : std::numeric_limits<std::int64_t>::max();
+  nlohmann::json days = nlohmann::json::array();
+  sqlite3_stmt* s = (query.floor ? trend_days_floor_ : trend_days_).get();
+  {
+    ResetOnExit reset_on_exit(s);
+    bind(s, 1, first_day);
+    bind(s, 2, end_day);
+    if (query.floor) bind(s, 3, std::int64_t{*query.floor});
+    int code;
+    while ((code = sqlite3_step(s)) == SQLITE_ROW) {
+      const std::int64_t errors = sqlite3_column_int64(s, 3);
+      const std::int64_t travels = sqlite3_column_int64(s, 6);
+      nlohmann::json stop_error = nlohmann::json::object();
+      stop_error["count"] = errors;
+      stop_error["mean"] =
+          errors > 0 ? nlohmann::json(rounded(static_cast<double>(sqlite3_column_int64(s, 4)) /
+                                              static_cast<double>(errors)))
+                     : nlohmann::json(nullptr);
+      stop_error["worst"] = column_json(s, 5);
+      nlohmann::json travel_ms = nlohmann::json::object();
+      travel_ms["count"] = travels;
+      travel_ms["mean"] =
+          travels > 0 ? nlohmann::json(rounded(static_cast<double>(sqlite3_column_int64(s, 7)) /
+                                               static_cast<double>(travels)))
+                      : nlohmann::json(nullptr);
+      nlohmann::json day = nlohmann::json::object();
+      day["day"] = format_day(sqlite3_column_int64(s, 0));
+      day["floor"] = sqlite3_column_int64(s, 1);
+      day["arrivals"] = sqlite3_column_int64(s, 2);
+      day["stop_error_mm"] = std::move(stop_error);
+      day["travel_ms"] = std::move(travel_ms);
+      days.push_back(std::move(day));
+    }
+    if (code != SQLITE_DONE) {
+      error = error_of(code, "reading the trend");
+      return false;
+    }
+  }
+  nlohmann::json pairs = nlohmann::json::array();
+  s = (query.floor ? trend_pairs_floor_ : trend_pairs_).get();
+  {
+    ResetOnExit reset_on_exit(s);
+    bind(s, 1, first_day);
+    bind(s, 2, end_day);
+    if (query.floor) bind(s, 3, std::int64_t{*query.floor});
+    int code;
+    while ((code = sqlite3_step(s)) == SQLITE_ROW) {
+      const std::int64_t travels = sqlite3_column_int64(s, 3);
+      nlohmann::json pair = nlohmann::json::object();
+      pair["day"] = format_day(sqlite3_column_int64(s, 0));
+      pair["from"] = sqlite3_column_int64(s, 1);
+      pair["to"] = sqlite3_column_int64(s, 2);
+      pair["count"] = travels;
+      pair["mean_ms"] = rounded(static_cast<double>(sqlite3_column_int64(s, 4)) /
+                                static_cast<double>(std::max<std::int64_t>(travels, 1)));
+      pairs.push_back(std::move(pair));
+    }
+    if (code != SQLITE_DONE) {
+      error = error_of(code, "reading the trend");
+      return false;
+    }
+  }
+  answer = nlohmann::json::object();
+  answer["days"] = std::move(days);
+  answer["pairs"] = std::move(pairs);
+  return true;
+}
+
+}  // namespace liftd::record
