@@ -323,13 +323,13 @@ ResetResult LiftRecord::reset(const std::vector<std::string>& names, std::string
   try {
     s.last_unix_ms = now_unix_ms;
     if (auto refused = s.counters.check_reset(names)) return {false, *refused};
+    // A reset that cannot be kept would come undone at the next start: refuse it.
+    if (!s.store) return {false, "nothing is reset, the lift's record is off: " + s.reason};
     s.counters.apply_reset(names, who, now_unix_ms);
-    if (s.store) {
-      StoreError error;
-      if (!s.store->write_reset(s.counters.resets().back(), s.counters, error)) {
-        s.fail(error, now_unix_ms);
-        return {false, "the reset is done in memory but not kept: " + s.reason};
-      }
+    StoreError error;
+    if (!s.store->write_reset(s.counters.resets().back(), s.counters, error)) {
+      s.fail(error, now_unix_ms);
+      return {false, "the reset is not kept, the lift's record is off: " + s.reason};
     }
     return {true, ""};
   } catch (...) {

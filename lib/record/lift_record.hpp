@@ -36,17 +36,17 @@ struct Travel {
   std::int64_t id = 0;  ///< the record's own id (0 before it is written)
   std::int64_t start_unix_ms = 0, end_unix_ms = 0;  ///< wall clock, ms since the Unix epoch (UTC)
   std::int64_t start_mono_ms = 0, end_mono_ms = 0;  ///< CLOCK_MONOTONIC ms
-  std::optional<int> from_floor;                    ///< the floor the car stood at when it started
-  std::optional<int> to_floor;                      ///< the travel's target floor
-  std::optional<int> end_floor;  ///< the floor whose level the car stood at after it
+  std::optional<int> from_floor{};                  ///< the floor the car stood at when it started
+  std::optional<int> to_floor{};                    ///< the travel's target floor
+  std::optional<int> end_floor{};  ///< the floor whose level the car stood at after it
   /// Run kind as the API names it: "travel", "relevel", "inspection", "learn", ... (any short
   /// text).
   std::string kind;
   bool arrived = false;  ///< finished (true) or aborted (false)
   std::string cause;     ///< "arrived" or the abort cause's API name ("link_down", ...)
   std::int64_t duration_ms = 0;
-  std::optional<std::int32_t> top_speed_mm_s;  ///< largest |speed| sampled
-  std::optional<std::int64_t> stop_error_mm;   ///< end position - target level (signed)
+  std::optional<std::int32_t> top_speed_mm_s{};  ///< largest |speed| sampled
+  std::optional<std::int64_t> stop_error_mm{};   ///< end position - target level (signed)
   bool relevel_followed = false;  ///< the record sets it itself: a relevel at its floor came next
   std::string curve_json;         ///< the travel's curve as a JSON text (may be empty)
 };
@@ -60,10 +60,10 @@ struct InputsSample {
 };
 
 struct HistoryQuery {
-  std::optional<std::int64_t> from_unix_ms, to_unix_ms;  ///< start time range, [from, to)
-  std::optional<int> floor;                              ///< from_floor or to_floor equals it
-  std::optional<std::string> outcome;                    ///< "arrived" or "aborted"
-  std::optional<std::string> cause;
+  std::optional<std::int64_t> from_unix_ms{}, to_unix_ms{};  ///< start time range, [from, to)
+  std::optional<int> floor{};                                ///< from_floor or to_floor equals it
+  std::optional<std::string> outcome{};                      ///< "arrived" or "aborted"
+  std::optional<std::string> cause{};
   std::size_t limit = 100;  ///< newest first; at most kMaxHistoryLimit
   bool curves = false;      ///< include curve (parsed JSON) where kept
 };
@@ -72,8 +72,8 @@ struct HistoryQuery {
 inline constexpr std::size_t kMaxHistoryLimit = 10'000;
 
 struct TrendQuery {
-  std::optional<std::int64_t> from_unix_ms, to_unix_ms;  ///< every UTC day the range touches
-  std::optional<int> floor;
+  std::optional<std::int64_t> from_unix_ms{}, to_unix_ms{};  ///< every UTC day the range touches
+  std::optional<int> floor{};
 };
 
 struct ResetResult {

@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
-#include <limits>
 #include <cstring>
+#include <limits>
 #include <utility>
 
 #include "record/time_text.hpp"
@@ -68,18 +68,19 @@ StoreFailure failure_of(int code) {
   }
 }
 
-// Binding helpers: SQLite copies text with SQLITE_TRANSIENT only when the text does not outlive
-// the step; every text bound here lives until the statement is reset, so it is bound static.
-int bind(sqlite3_stmt* s, int index, std::int64_t value) {
+// Binding helpers (not named bind: with a std::string argument, ADL would find std::bind): SQLite
+// copies text with SQLITE_TRANSIENT only when the text does not outlive the step; every text bound
+// here lives until the statement is reset, so it is bound static.
+int bind_param(sqlite3_stmt* s, int index, std::int64_t value) {
   return sqlite3_bind_int64(s, index, value);
 }
-int bind(sqlite3_stmt* s, int index, std::optional<std::int64_t> value) {
+int bind_param(sqlite3_stmt* s, int index, std::optional<std::int64_t> value) {
   return value ? sqlite3_bind_int64(s, index, *value) : sqlite3_bind_null(s, index);
 }
-int bind(sqlite3_stmt* s, int index, std::optional<int> value) {
+int bind_param(sqlite3_stmt* s, int index, std::optional<int> value) {
   return value ? sqlite3_bind_int64(s, index, *value) : sqlite3_bind_null(s, index);
 }
-int bind(sqlite3_stmt* s, int index, std::string_view text) {
+int bind_param(sqlite3_stmt* s, int index, std::string_view text) {
   return sqlite3_bind_text64(s, index, text.data(), text.size(), SQLITE_STATIC, SQLITE_UTF8);
 }
 int bind_blob(sqlite3_stmt* s, int index, const void* data, std::size_t size) {
@@ -191,7 +192,9 @@ std::string history_sql(unsigned filters) {
   if (filters & kFloor) sql += " AND (t.from_floor = ?3 OR t.to_floor = ?3)";
   if (filters & kOutcome) sql += " AND t.arrived = ?4";
   if (filters & kCause) sql += " AND t.cause = ?5";
-  sql += " ORDER BY t.start_unix_ms DESC, t.id DESC LIMIT ?6";
+  // Newest first in the order the travels were recorded: a board without a clock of its own may
+  // start in 1970 until NTP sets the time, so the wall clock is no order.
+  sql += " ORDER BY t.id DESC LIMIT ?6";
   return sql;
 }
 
@@ -544,8 +547,8 @@ void Store::rollback() {
 bool Store::write_changed_counters(Counters& counters, StoreError& error) {
   sqlite3_stmt* s = upsert_counter_.get();
   for (const std::string& name : counters.changed_names()) {
-    bind(s, 1, name);
-    bind(s, 2, counters.value(name));
+    bind_param(s, 1, name);
+    bind_param(s, 2, counters.value(name));
     if (const int code = run(s); code != SQLITE_OK) {
       error = error_of(code, "writing the counters");
       return false;
@@ -555,11 +558,11 @@ bool Store::write_changed_counters(Counters& counters, StoreError& error) {
   for (int floor : counters.changed_floors()) {
     const FloorCounters& kept = counters.floors().at(floor);
     const std::string histogram = encode_histogram(kept.stop_error.buckets());
-    bind(s, 1, std::int64_t{floor});
-    bind(s, 2, kept.arrivals);
-    bind(s, 3, kept.stop_error.count());
-    bind(s, 4, kept.stop_error.sum_mm());
-    bind(s, 5, kept.stop_error.worst_mm());
+    bind_param(s, 1, std::int64_t{floor});
+    bind_param(s, 2, kept.arrivals);
+    bind_param(s, 3, kept.stop_error.count());
+    bind_param(s, 4, kept.stop_error.sum_mm());
+    bind_param(s, 5, kept.stop_error.worst_mm());
     bind_blob(s, 6, histogram.data(), histogram.size());
     if (const int code = run(s); code != SQLITE_OK) {
       error = error_of(code, "writing the floors' counters");
@@ -575,19 +578,20 @@ bool Store::insert_travel(Travel& t, StoreError& error) {
     return false;
   };
   sqlite3_stmt* s = insert_travel_.get();
-  bind(s, 1, t.start_unix_ms);
-  bind(s, 2, t.end_unix_ms);
-  bind(s, 3, t.start_mono_ms);
-  bind(s, 4, t.end_mono_ms);
-  bind(s, 5, t.from_floor);
-  bind(s, 6, t.to_floor);
-  bind(s, 7, t.end_floor);
-  bind(s, 8, std::string_view(t.kind));
-  bind(s, 9, std::int64_t{t.arrived ? 1 : 0});
-  bind(s, 10, std::string_view(t.cause));
-  bind(s, 11, t.duration_ms);
-  bind(s, 12, t.top_speed_mm_s ? std::optional<std::int64_t>(*t.top_speed_mm_s) : std::nullopt);
-  bind(s, 13, t.stop_error_mm);
+  bind_param(s, 1, t.start_unix_ms);
+  bind_param(s, 2, t.end_unix_ms);
+  bind_param(s, 3, t.start_mono_ms);
+  bind_param(s, 4, t.end_mono_ms);
+  bind_param(s, 5, t.from_floor);
+  bind_param(s, 6, t.to_floor);
+  bind_param(s, 7, t.end_floor);
+  bind_param(s, 8, std::string_view(t.kind));
+  bind_param(s, 9, std::int64_t{t.arrived ? 1 : 0});
+  bind_param(s, 10, std::string_view(t.cause));
+  bind_param(s, 11, t.duration_ms);
+  bind_param(s, 12,
+             t.top_speed_mm_s ? std::optional<std::int64_t>(*t.top_speed_mm_s) : std::nullopt);
+  bind_param(s, 13, t.stop_error_mm);
   if (const int code = run(s); code != SQLITE_OK) return fail(code);
   t.id = sqlite3_last_insert_rowid(db_);
   t.relevel_followed = false;
@@ -596,24 +600,24 @@ bool Store::insert_travel(Travel& t, StoreError& error) {
   // correction: the mark goes on that travel's row in the relevel's transaction.
   const std::optional<int> floor = t.end_floor ? t.end_floor : t.to_floor;
   if (counter_name_part(t.kind) == "relevel" && last_id_ > 0 && floor && last_floor_ == floor) {
-    bind(mark_relevel_.get(), 1, last_id_);
+    bind_param(mark_relevel_.get(), 1, last_id_);
     if (const int code = run(mark_relevel_.get()); code != SQLITE_OK) return fail(code);
   }
 
   if (options_.curves_kept > 0 && !t.curve_json.empty()) {
-    bind(insert_curve_.get(), 1, t.id);
-    bind(insert_curve_.get(), 2, std::string_view(t.curve_json));
+    bind_param(insert_curve_.get(), 1, t.id);
+    bind_param(insert_curve_.get(), 2, std::string_view(t.curve_json));
     if (const int code = run(insert_curve_.get()); code != SQLITE_OK) return fail(code);
   }
   // Only the newest curves_kept travels keep a curve and only the newest max_travels travels
   // stay (issue #42); ids only grow, so "older" is "a smaller id".
   const auto curves_kept = static_cast<std::int64_t>(options_.curves_kept);
   if (t.id - curves_kept >= 1) {
-    bind(prune_curves_.get(), 1, t.id - curves_kept);
+    bind_param(prune_curves_.get(), 1, t.id - curves_kept);
     if (const int code = run(prune_curves_.get()); code != SQLITE_OK) return fail(code);
   }
   if (options_.max_travels > 0 && t.id - options_.max_travels >= first_id_) {
-    bind(prune_travels_.get(), 1, t.id - options_.max_travels);
+    bind_param(prune_travels_.get(), 1, t.id - options_.max_travels);
     if (const int code = run(prune_travels_.get()); code != SQLITE_OK) return fail(code);
   }
 
@@ -624,20 +628,20 @@ bool Store::insert_travel(Travel& t, StoreError& error) {
     const bool floor_to_floor =
         counter_name_part(t.kind) == "travel" && t.from_floor && *t.from_floor != *t.end_floor;
     s = upsert_day_floor_.get();
-    bind(s, 1, day);
-    bind(s, 2, std::int64_t{*t.end_floor});
-    bind(s, 3, std::int64_t{t.stop_error_mm ? 1 : 0});
-    bind(s, 4, t.stop_error_mm.value_or(0));
-    bind(s, 5, t.stop_error_mm);
-    bind(s, 6, std::int64_t{floor_to_floor ? 1 : 0});
-    bind(s, 7, floor_to_floor ? t.duration_ms : 0);
+    bind_param(s, 1, day);
+    bind_param(s, 2, std::int64_t{*t.end_floor});
+    bind_param(s, 3, std::int64_t{t.stop_error_mm ? 1 : 0});
+    bind_param(s, 4, t.stop_error_mm.value_or(0));
+    bind_param(s, 5, t.stop_error_mm);
+    bind_param(s, 6, std::int64_t{floor_to_floor ? 1 : 0});
+    bind_param(s, 7, floor_to_floor ? t.duration_ms : 0);
     if (const int code = run(s); code != SQLITE_OK) return fail(code);
     if (floor_to_floor) {
       s = upsert_day_pair_.get();
-      bind(s, 1, day);
-      bind(s, 2, std::int64_t{*t.from_floor});
-      bind(s, 3, std::int64_t{*t.end_floor});
-      bind(s, 4, t.duration_ms);
+      bind_param(s, 1, day);
+      bind_param(s, 2, std::int64_t{*t.from_floor});
+      bind_param(s, 3, std::int64_t{*t.end_floor});
+      bind_param(s, 4, t.duration_ms);
       if (const int code = run(s); code != SQLITE_OK) return fail(code);
     }
   }
@@ -686,9 +690,9 @@ bool Store::write_reset(const ResetEntry& reset, Counters& counters, StoreError&
   if (!begin("writing a reset", error)) return false;
   const std::string names = nlohmann::json(reset.names).dump();
   sqlite3_stmt* s = insert_reset_.get();
-  bind(s, 1, reset.at_unix_ms);
-  bind(s, 2, std::string_view(reset.who));
-  bind(s, 3, std::string_view(names));
+  bind_param(s, 1, reset.at_unix_ms);
+  bind_param(s, 2, std::string_view(reset.who));
+  bind_param(s, 3, std::string_view(names));
   if (const int code = run(s); code != SQLITE_OK) {
     error = error_of(code, "writing a reset");
     rollback();
@@ -715,13 +719,13 @@ bool Store::history(const HistoryQuery& query, nlohmann::json& answer, StoreErro
   sqlite3_stmt* s = statement.get();
   ResetOnExit reset_on_exit(s);
   const std::size_t limit = std::min(query.limit, kMaxHistoryLimit);
-  if (query.from_unix_ms) bind(s, 1, *query.from_unix_ms);
-  if (query.to_unix_ms) bind(s, 2, *query.to_unix_ms);
-  if (query.floor) bind(s, 3, std::int64_t{*query.floor});
-  if (query.outcome) bind(s, 4, std::int64_t{*query.outcome == "arrived" ? 1 : 0});
-  if (query.cause) bind(s, 5, std::string_view(*query.cause));
+  if (query.from_unix_ms) bind_param(s, 1, *query.from_unix_ms);
+  if (query.to_unix_ms) bind_param(s, 2, *query.to_unix_ms);
+  if (query.floor) bind_param(s, 3, std::int64_t{*query.floor});
+  if (query.outcome) bind_param(s, 4, std::int64_t{*query.outcome == "arrived" ? 1 : 0});
+  if (query.cause) bind_param(s, 5, std::string_view(*query.cause));
   // One row more than asked tells whether the answer is cut.
-  bind(s, 6, static_cast<std::int64_t>(limit) + 1);
+  bind_param(s, 6, static_cast<std::int64_t>(limit) + 1);
 
   nlohmann::json travels = nlohmann::json::array();
   bool truncated = false;
@@ -779,9 +783,9 @@ bool Store::trend(const TrendQuery& query, nlohmann::json& answer, StoreError& e
   sqlite3_stmt* s = (query.floor ? trend_days_floor_ : trend_days_).get();
   {
     ResetOnExit reset_on_exit(s);
-    bind(s, 1, first_day);
-    bind(s, 2, end_day);
-    if (query.floor) bind(s, 3, std::int64_t{*query.floor});
+    bind_param(s, 1, first_day);
+    bind_param(s, 2, end_day);
+    if (query.floor) bind_param(s, 3, std::int64_t{*query.floor});
     int code;
     while ((code = sqlite3_step(s)) == SQLITE_ROW) {
       const std::int64_t errors = sqlite3_column_int64(s, 3);
@@ -816,9 +820,9 @@ bool Store::trend(const TrendQuery& query, nlohmann::json& answer, StoreError& e
   s = (query.floor ? trend_pairs_floor_ : trend_pairs_).get();
   {
     ResetOnExit reset_on_exit(s);
-    bind(s, 1, first_day);
-    bind(s, 2, end_day);
-    if (query.floor) bind(s, 3, std::int64_t{*query.floor});
+    bind_param(s, 1, first_day);
+    bind_param(s, 2, end_day);
+    if (query.floor) bind_param(s, 3, std::int64_t{*query.floor});
     int code;
     while ((code = sqlite3_step(s)) == SQLITE_ROW) {
       const std::int64_t travels = sqlite3_column_int64(s, 3);
