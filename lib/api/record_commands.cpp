@@ -89,7 +89,8 @@ void add_record_commands(Dispatcher& dispatcher, Backend& backend) {
                       done(Result::fail(ErrorCode::BadRequest,
                                         "field \"names\": " + list.dump().substr(0, 60) +
                                             " is not allowed; allowed: an array of 1..256 "
-                                            "counter names"));
+                                            "counter names",
+                                        "names"));
                       return;
                     }
                     for (const auto& n : list) chosen.push_back(n.get<std::string>());
