@@ -127,6 +127,26 @@ struct LiftRecord::State {
     turn_off(std::move(why), log::Level::error, std::move(fields));
   }
 
+  /// A query failed: a failure of the file turns the record off as a write's would; anything
+  /// else (another process's lock, say) is that query's error alone.
+  nlohmann::json query_failed(const StoreError& error, nlohmann::json answer) {
+    switch (error.failure) {
+      case StoreFailure::cannot_open:
+      case StoreFailure::read_only:
+      case StoreFailure::full:
+      case StoreFailure::io:
+      case StoreFailure::corrupt:
+        fail(error, last_unix_ms);
+        answer["record"] = "off";
+        answer["error"] = reason;
+        break;
+      default:
+        answer["error"] = what_sqlite_said(error);
+        break;
+    }
+    return answer;
+  }
+
   /// An exception from inside (out of memory, say): off, never past the public API.
   void fail_inside(const char* doing) {
     std::string what = "unknown exception";
@@ -371,10 +391,7 @@ nlohmann::json LiftRecord::history_json(const HistoryQuery& query) const {
     nlohmann::json answer;
     StoreError error;
     if (!state_->store->history(query, answer, error)) {
-      state_->fail(error, state_->last_unix_ms);
-      nlohmann::json off = empty_history("off");
-      off["error"] = state_->reason;
-      return off;
+      return state_->query_failed(error, empty_history("on"));
     }
     answer["record"] = "on";
     return answer;
@@ -391,10 +408,7 @@ nlohmann::json LiftRecord::trend_json(const TrendQuery& query) const {
     nlohmann::json answer;
     StoreError error;
     if (!state_->store->trend(query, answer, error)) {
-      state_->fail(error, state_->last_unix_ms);
-      nlohmann::json off = empty_trend("off");
-      off["error"] = state_->reason;
-      return off;
+      return state_->query_failed(error, empty_trend("on"));
     }
     answer["record"] = "on";
     return answer;
