@@ -79,7 +79,7 @@ struct LiftRecord::State {
         break;
       case StoreFailure::full:
         why = "the storage holding " + path + " is full (" + said +
-              (options.max_pages > 0 ? ", or the record reached its max_pages" : "") +
+              (options.max_bytes > 0 ? ", or the record reached its max_bytes" : "") +
               "): free space there; the record stays off until liftd starts again";
         break;
       case StoreFailure::io:
@@ -188,7 +188,7 @@ LiftRecord::LiftRecord(Options options, std::int64_t now_mono_ms, std::int64_t n
       return;
     }
     const StoreOptions store_options{s.options.max_travels, s.options.curves_kept,
-                                     s.options.max_pages};
+                                     s.options.max_bytes};
     StoreError error;
     s.store = Store::open(s.options.path, store_options, now_unix_ms, error);
     if (!s.store) {

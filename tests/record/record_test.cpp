@@ -36,6 +36,7 @@ TEST(Record, starts_on_with_an_empty_record) {
   Peek peek(dir.file("record.db"));
   EXPECT_EQ(peek.text("PRAGMA journal_mode"), "wal");
   EXPECT_EQ(peek.number("PRAGMA user_version"), 1);
+  EXPECT_EQ(peek.number("PRAGMA page_size"), 1024);
 }
 
 TEST(Record, counters_floors_and_resets_survive_a_restart) {
