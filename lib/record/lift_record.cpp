@@ -221,6 +221,7 @@ bool LiftRecord::on() const noexcept {
 }
 
 nlohmann::json LiftRecord::status_json() const {
+  if (!state_) return nlohmann::json::object();
   try {
     nlohmann::json status = nlohmann::json::object();
     status["state"] = on() ? "on" : "off";
@@ -297,6 +298,7 @@ void LiftRecord::tick(std::int64_t now_mono_ms, std::int64_t now_unix_ms) {
 }
 
 nlohmann::json LiftRecord::counters_json() const {
+  if (!state_) return nlohmann::json::object();
   try {
     const Counters& c = state_->counters;
     nlohmann::json counters = nlohmann::json::object();
@@ -380,6 +382,7 @@ nlohmann::json empty_trend(std::string_view record) {
 }  // namespace
 
 nlohmann::json LiftRecord::history_json(const HistoryQuery& query) const {
+  if (!state_) return empty_history("off");
   try {
     if (query.outcome && *query.outcome != "arrived" && *query.outcome != "aborted") {
       nlohmann::json answer = empty_history(on() ? "on" : "off");
@@ -403,6 +406,7 @@ nlohmann::json LiftRecord::history_json(const HistoryQuery& query) const {
 }
 
 nlohmann::json LiftRecord::trend_json(const TrendQuery& query) const {
+  if (!state_) return empty_trend("off");
   try {
     if (!on()) return empty_trend("off");
     nlohmann::json answer;

@@ -191,6 +191,17 @@ TEST(Record, only_the_newest_travels_and_curves_are_kept) {
   EXPECT_EQ(peek.number("SELECT min(travel_id) FROM curves"), 7);
 }
 
+TEST(Record, a_kept_curve_that_is_no_json_is_named_as_such) {
+  TempDir dir;
+  LiftRecord record(options_at(dir.file("record.db")), kMono0, kDay0);
+  Travel t = arrived_travel(0, 1, 0, 3000);
+  t.curve_json = "{\"samples\":[";  // cut short
+  record.travel(std::move(t), kMono0, kDay0);
+  const json travel = record.history_json({.curves = true})["travels"][0];
+  EXPECT_EQ(travel["curve"], nullptr);
+  EXPECT_EQ(travel["curve_error"], "the kept curve is not valid JSON");
+}
+
 TEST(Record, a_relevel_at_the_same_floor_marks_the_travel_before_it) {
   TempDir dir;
   LiftRecord record(options_at(dir.file("record.db")), kMono0, kDay0);
