@@ -20,8 +20,8 @@
 namespace liftd::record {
 
 struct Options {
-  std::string
-      path;  ///< the database file; empty: the record is off, reason "record.path is not set"
+  /// The database file; empty: the record is off, reason "record.path is not set".
+  std::string path;
   std::int64_t max_travels = 1'000'000;  ///< travels kept; the oldest go first (0: no limit)
   std::size_t curves_kept = 100;         ///< the newest travels that keep their curve
   /// Changed counters without a travel written at most this often.
@@ -110,9 +110,10 @@ class LiftRecord {
   /// names: counter names, prefixes ending in ".*" ("faults.*"), "floors" or "all".
   ResetResult reset(const std::vector<std::string>& names, std::string_view who,
                     std::int64_t now_unix_ms);
-  /// {"travels":[...],"count":N,"truncated":bool} (+"record":"off", +"error" for a bad query)
+  /// {"record":"on"|"off","travels":[...],"count":N,"truncated":bool} (+"error" for a bad
+  /// query or a failed read)
   nlohmann::json history_json(const HistoryQuery& query) const;
-  /// {"days":[...],"pairs":[...]} (+"record":"off", +"error")
+  /// {"record":"on"|"off","days":[...],"pairs":[...]} (+"error" for a failed read)
   nlohmann::json trend_json(const TrendQuery& query) const;
 
  private:
