@@ -79,7 +79,7 @@ struct LiftRecord::State {
         break;
       case StoreFailure::full:
         why = "the storage holding " + path + " is full (" + said +
-              (options.max_pages > 0 ? ", or the record reached its max_pages" : "") +
+              (options.max_bytes > 0 ? ", or the record reached its max_bytes" : "") +
               "): free space there; the record stays off until liftd starts again";
         break;
       case StoreFailure::io:
@@ -127,6 +127,26 @@ struct LiftRecord::State {
     turn_off(std::move(why), log::Level::error, std::move(fields));
   }
 
+  /// A query failed: a failure of the file turns the record off as a write's would; anything
+  /// else (another process's lock, say) is that query's error alone.
+  nlohmann::json query_failed(const StoreError& error, nlohmann::json answer) {
+    switch (error.failure) {
+      case StoreFailure::cannot_open:
+      case StoreFailure::read_only:
+      case StoreFailure::full:
+      case StoreFailure::io:
+      case StoreFailure::corrupt:
+        fail(error, last_unix_ms);
+        answer["record"] = "off";
+        answer["error"] = reason;
+        break;
+      default:
+        answer["error"] = what_sqlite_said(error);
+        break;
+    }
+    return answer;
+  }
+
   /// An exception from inside (out of memory, say): off, never past the public API.
   void fail_inside(const char* doing) {
     std::string what = "unknown exception";
@@ -168,7 +188,7 @@ LiftRecord::LiftRecord(Options options, std::int64_t now_mono_ms, std::int64_t n
       return;
     }
     const StoreOptions store_options{s.options.max_travels, s.options.curves_kept,
-                                     s.options.max_pages};
+                                     s.options.max_bytes};
     StoreError error;
     s.store = Store::open(s.options.path, store_options, now_unix_ms, error);
     if (!s.store) {
@@ -201,6 +221,7 @@ bool LiftRecord::on() const noexcept {
 }
 
 nlohmann::json LiftRecord::status_json() const {
+  if (!state_) return nlohmann::json::object();
   try {
     nlohmann::json status = nlohmann::json::object();
     status["state"] = on() ? "on" : "off";
@@ -277,6 +298,7 @@ void LiftRecord::tick(std::int64_t now_mono_ms, std::int64_t now_unix_ms) {
 }
 
 nlohmann::json LiftRecord::counters_json() const {
+  if (!state_) return nlohmann::json::object();
   try {
     const Counters& c = state_->counters;
     nlohmann::json counters = nlohmann::json::object();
@@ -360,6 +382,7 @@ nlohmann::json empty_trend(std::string_view record) {
 }  // namespace
 
 nlohmann::json LiftRecord::history_json(const HistoryQuery& query) const {
+  if (!state_) return empty_history("off");
   try {
     if (query.outcome && *query.outcome != "arrived" && *query.outcome != "aborted") {
       nlohmann::json answer = empty_history(on() ? "on" : "off");
@@ -371,10 +394,7 @@ nlohmann::json LiftRecord::history_json(const HistoryQuery& query) const {
     nlohmann::json answer;
     StoreError error;
     if (!state_->store->history(query, answer, error)) {
-      state_->fail(error, state_->last_unix_ms);
-      nlohmann::json off = empty_history("off");
-      off["error"] = state_->reason;
-      return off;
+      return state_->query_failed(error, empty_history("on"));
     }
     answer["record"] = "on";
     return answer;
@@ -386,15 +406,13 @@ nlohmann::json LiftRecord::history_json(const HistoryQuery& query) const {
 }
 
 nlohmann::json LiftRecord::trend_json(const TrendQuery& query) const {
+  if (!state_) return empty_trend("off");
   try {
     if (!on()) return empty_trend("off");
     nlohmann::json answer;
     StoreError error;
     if (!state_->store->trend(query, answer, error)) {
-      state_->fail(error, state_->last_unix_ms);
-      nlohmann::json off = empty_trend("off");
-      off["error"] = state_->reason;
-      return off;
+      return state_->query_failed(error, empty_trend("on"));
     }
     answer["record"] = "on";
     return answer;

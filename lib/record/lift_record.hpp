@@ -20,15 +20,15 @@
 namespace liftd::record {
 
 struct Options {
-  std::string
-      path;  ///< the database file; empty: the record is off, reason "record.path is not set"
-  std::int64_t max_travels = 1'000'000;  ///< travels kept; the oldest go first
+  /// The database file; empty: the record is off, reason "record.path is not set".
+  std::string path;
+  std::int64_t max_travels = 1'000'000;  ///< travels kept; the oldest go first (0: no limit)
   std::size_t curves_kept = 100;         ///< the newest travels that keep their curve
   /// Changed counters without a travel written at most this often.
   std::int64_t counters_interval_ms = 60'000;
-  /// Largest size of the database file in pages of 4096 bytes (SQLite's max_page_count); 0: no
+  /// Largest size of the database file in bytes (SQLite's max_page_count, in whole pages); 0: no
   /// bound besides the storage's. A record that reaches it turns off as on a full disk.
-  std::int64_t max_pages = 0;
+  std::int64_t max_bytes = 0;
 };
 
 /// One travel as the record keeps it (the host builds it from its travel log).
@@ -81,6 +81,7 @@ struct ResetResult {
   std::string error;
 };
 
+/// One thread only (the daemon's io thread): nothing in it is locked.
 class LiftRecord {
  public:
   /// Opens or creates the record at options.path. Never throws. A failure (directory missing or
@@ -109,9 +110,10 @@ class LiftRecord {
   /// names: counter names, prefixes ending in ".*" ("faults.*"), "floors" or "all".
   ResetResult reset(const std::vector<std::string>& names, std::string_view who,
                     std::int64_t now_unix_ms);
-  /// {"travels":[...],"count":N,"truncated":bool} (+"record":"off", +"error" for a bad query)
+  /// {"record":"on"|"off","travels":[...],"count":N,"truncated":bool} (+"error" for a bad
+  /// query or a failed read)
   nlohmann::json history_json(const HistoryQuery& query) const;
-  /// {"days":[...],"pairs":[...]} (+"record":"off", +"error")
+  /// {"record":"on"|"off","days":[...],"pairs":[...]} (+"error" for a failed read)
   nlohmann::json trend_json(const TrendQuery& query) const;
 
  private:

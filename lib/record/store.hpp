@@ -27,7 +27,7 @@ inline constexpr int kSchemaVersion = 1;
 enum class StoreFailure {
   cannot_open,   ///< the file cannot be opened or created (directory missing, not a directory)
   read_only,     ///< the file or its directory cannot be written
-  full,          ///< the disk (or the record's max_pages) is full
+  full,          ///< the disk (or the record's max_bytes) is full
   io,            ///< the storage failed a read or write
   corrupt,       ///< the file is damaged or not a database: it is moved aside
   newer_schema,  ///< written by a newer liftd: left untouched
@@ -47,7 +47,7 @@ struct StoreError {
 struct StoreOptions {
   std::int64_t max_travels = 1'000'000;
   std::size_t curves_kept = 100;
-  std::int64_t max_pages = 0;
+  std::int64_t max_bytes = 0;
 };
 
 /// A prepared statement, finalized when it goes.

@@ -279,7 +279,7 @@ TEST(RecordFailure, a_full_record_turns_off_once_and_keeps_what_it_had) {
   TempDir dir;
   const std::string path = dir.file("record.db");
   Options options = options_at(path);
-  options.max_pages = 40;
+  options.max_bytes = 40 * 1024;
   CapturedStderr journal(dir.file("stderr.txt"));
   std::string reason;
   int written = 0;
@@ -299,7 +299,7 @@ TEST(RecordFailure, a_full_record_turns_off_once_and_keeps_what_it_had) {
   const std::string lines = journal.text();
   EXPECT_EQ(reason, "the storage holding " + path +
                         " is full (writing a travel: database or disk is full, or the record "
-                        "reached its max_pages): free space there; the record stays off until "
+                        "reached its max_bytes): free space there; the record stays off until "
                         "liftd starts again");
   EXPECT_EQ(occurrences(lines, "the lift's record is off"), 1U) << lines;
   EXPECT_GT(written, 0);

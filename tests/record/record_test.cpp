@@ -36,6 +36,7 @@ TEST(Record, starts_on_with_an_empty_record) {
   Peek peek(dir.file("record.db"));
   EXPECT_EQ(peek.text("PRAGMA journal_mode"), "wal");
   EXPECT_EQ(peek.number("PRAGMA user_version"), 1);
+  EXPECT_EQ(peek.number("PRAGMA page_size"), 1024);
 }
 
 TEST(Record, counters_floors_and_resets_survive_a_restart) {
@@ -190,17 +191,29 @@ TEST(Record, only_the_newest_travels_and_curves_are_kept) {
   EXPECT_EQ(peek.number("SELECT min(travel_id) FROM curves"), 7);
 }
 
+TEST(Record, a_kept_curve_that_is_no_json_is_named_as_such) {
+  TempDir dir;
+  LiftRecord record(options_at(dir.file("record.db")), kMono0, kDay0);
+  Travel t = arrived_travel(0, 1, 0, 3000);
+  t.curve_json = "{\"samples\":[";  // cut short
+  record.travel(std::move(t), kMono0, kDay0);
+  const json travel = record.history_json({.curves = true})["travels"][0];
+  EXPECT_EQ(travel["curve"], nullptr);
+  EXPECT_EQ(travel["curve_error"], "the kept curve is not valid JSON");
+}
+
 TEST(Record, a_relevel_at_the_same_floor_marks_the_travel_before_it) {
   TempDir dir;
   LiftRecord record(options_at(dir.file("record.db")), kMono0, kDay0);
-  Travel relevel = arrived_travel(3, 3, 10'000, 700, 1);
-  relevel.kind = "relevel";
+  const auto relevel_at = [](int floor, std::int64_t start_ms) {
+    Travel t = arrived_travel(floor, floor, start_ms, 700, 1);
+    t.kind = "relevel";
+    return t;
+  };
   record.travel(arrived_travel(0, 3, 0, 5000, 9), kMono0, kDay0);       // id 1: relevel follows
-  record.travel(relevel, kMono0, kDay0);                                // id 2
+  record.travel(relevel_at(3, 10'000), kMono0, kDay0);                  // id 2
   record.travel(arrived_travel(3, 1, 20'000, 5000, 9), kMono0, kDay0);  // id 3: none follows
-  Travel elsewhere = relevel;
-  elsewhere.from_floor = elsewhere.to_floor = elsewhere.end_floor = 2;
-  record.travel(elsewhere, kMono0, kDay0);  // id 4: a relevel at another floor marks nothing
+  record.travel(relevel_at(2, 30'000), kMono0, kDay0);  // id 4: at another floor, marks nothing
   std::vector<bool> marks;
   const json history = record.history_json({});
   for (const json& t : history["travels"]) {
@@ -209,15 +222,18 @@ TEST(Record, a_relevel_at_the_same_floor_marks_the_travel_before_it) {
   EXPECT_EQ(marks, (std::vector<bool>{false, false, false, true}));
   // The mark is kept: a restart finds it, and the relevel after a restart still finds its travel.
   LiftRecord again(options_at(dir.file("record.db")), kMono0, kDay0);
-  Travel at_two = relevel;
-  at_two.from_floor = at_two.to_floor = at_two.end_floor = 2;
-  again.travel(at_two, kMono0, kDay0);  // id 5, after id 4 at floor 2
+  again.travel(relevel_at(2, 40'000), kMono0, kDay0);  // id 5, after id 4 at floor 2
   marks.clear();
   const json history_again = again.history_json({});
   for (const json& t : history_again["travels"]) {
     marks.push_back(t["relevel_followed"].get<bool>());
   }
   EXPECT_EQ(marks, (std::vector<bool>{false, true, false, false, true}));
+  // A travel from a floor to itself is listed once for that floor.
+  std::vector<std::int64_t> at_two;
+  const json history_two = again.history_json({.floor = 2});
+  for (const json& t : history_two["travels"]) at_two.push_back(t["id"].get<std::int64_t>());
+  EXPECT_EQ(at_two, (std::vector<std::int64_t>{5, 4}));
 }
 
 TEST(Record, trend_aggregates_per_day_and_floor_and_per_pair) {
