@@ -123,6 +123,7 @@ class ControllerBackend : public api::Backend {
     (void)post_command<typename Drive::Command>(
         controller_, pending_, typename Drive::LearnCommand{}, std::move(done),
         longest + Drive::kReplyGrace, Drive::kThread, [this](const typename Drive::CommandReply&) {
+          record_.learning_travel(mono_now());
           nlohmann::json result = learn_result_json(config_, controller_.learn_record());
           if (learn_listener_) learn_listener_(result);
           return api::Result::ok(std::move(result));

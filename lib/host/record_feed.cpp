@@ -30,7 +30,10 @@ record::Options record_options(const config::Config& config, bool simulated) {
   record::Options options;
   options.max_travels = config.record.max_travels;
   options.curves_kept = static_cast<std::size_t>(config.record.curves_kept);
-  if (!config.record.enabled) return options;
+  if (!config.record.enabled) {
+    options.off_reason = "record.enabled is false";
+    return options;
+  }
   if (!config.record.path.empty()) {
     options.path = config.record.path;
   } else if (const char* dir = std::getenv("STATE_DIRECTORY"); dir != nullptr && *dir != '\0') {
@@ -93,20 +96,14 @@ record::Travel record_travel(const RecordedTravel& t, const std::vector<std::int
 }
 
 RecordFeed::RecordFeed(const config::Config& config, bool simulated, MonoTime now)
-    : enabled_(config.record.enabled),
-      curves_kept_(static_cast<std::size_t>(config.record.curves_kept)) {
+    : curves_kept_(static_cast<std::size_t>(config.record.curves_kept)) {
   record_ = std::make_unique<record::LiftRecord>(record_options(config, simulated), ms_of(now),
                                                  unix_ms_now());
   refresh_status();
 }
 
 void RecordFeed::refresh_status() {
-  nlohmann::json s = record_->status_json();
-  if (!enabled_) {
-    s["state"] = "off";
-    s["reason"] = "record.enabled is false";
-  }
-  status_ = std::move(s);
+  status_ = record_->status_json();
   was_on_ = record_->on();
 }
 
@@ -118,6 +115,10 @@ void RecordFeed::travel(const record::Travel& travel, MonoTime now) {
 void RecordFeed::fault_raised(lift::FaultCode code, MonoTime now) {
   record_->fault_raised(lift::fault_code_name(code), ms_of(now));
   if (code == lift::FaultCode::LinkFault) record_->link_lost(ms_of(now));
+}
+
+void RecordFeed::learning_travel(MonoTime now) {
+  record_->learning_travel(ms_of(now));
 }
 
 void RecordFeed::inputs(const std::optional<lift::Inputs>& inputs, MonoTime now) {

@@ -45,6 +45,8 @@ class RecordFeed {
   void travel(const record::Travel& travel, MonoTime now);
   /// A fault raised (a link fault also counts as a link loss).
   void fault_raised(lift::FaultCode code, MonoTime now);
+  /// A learning travel ran through the shaft (its legs are travels of their own).
+  void learning_travel(MonoTime now);
   /// The machine inputs the cycle sees now (nullopt: none yet).
   void inputs(const std::optional<lift::Inputs>& inputs, MonoTime now);
   /// Every poll of the io thread: operating time, and the counters written once a minute.
@@ -63,7 +65,6 @@ class RecordFeed {
   void refresh_status();
 
   std::unique_ptr<record::LiftRecord> record_;
-  bool enabled_;
   std::size_t curves_kept_;
   api::SharedJson status_;
   bool was_on_ = false;

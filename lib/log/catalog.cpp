@@ -38,6 +38,7 @@ constexpr std::array kCatalog = {
     CatalogEntry{Catalogued::CanOwnIdInUse, "can_own_id_in_use",
                  "2f12340309554c1dbc6ad2ed1abc8d9c"},
     CatalogEntry{Catalogued::UssSlaveFault, "uss_slave_fault", "dce538ec71c248bebd75a1de4dcdb397"},
+    CatalogEntry{Catalogued::RecordOff, "record_off", "ba707342f0964343abf3310a4b757142"},
 };
 
 constexpr bool indexed_by_key() {

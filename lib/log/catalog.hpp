@@ -34,6 +34,7 @@ enum class Catalogued : std::uint8_t {
   CardFault,                   ///< the SCH001 card reports a fault or went silent
   CanOwnIdInUse,               ///< another CAN node sends on liftd's identifier
   UssSlaveFault,               ///< a USS slave does not send or reports a fault
+  RecordOff,                   ///< the lift's record cannot be kept (storage, file)
   kCount,
 };
 

@@ -108,8 +108,7 @@ void Counters::count_travel(const Travel& t) {
   add("travels." + kind + (t.arrived ? ".arrived" : ".aborted"), 1);
   add("motor_starts", 1);
   if (t.duration_ms > 0) add("running_ms", t.duration_ms);
-  if (kind == "relevel") add("relevels", 1);
-  if (kind == "learn") add("learning_travels", 1);
+  if (is_relevel(t.kind)) add("relevels", 1);
   if (!t.arrived) add("aborts." + counter_name_part(t.cause), 1);
   if (t.arrived && t.end_floor) {
     FloorCounters& floor = floors_[*t.end_floor];
@@ -121,6 +120,19 @@ void Counters::count_travel(const Travel& t) {
 
 void Counters::count_fault(std::string_view code) {
   add("faults." + counter_name_part(code), 1);
+}
+
+bool is_relevel(std::string_view kind) {
+  return kind.substr(0, 7) == "relevel";
+}
+
+bool is_floor_to_floor(const Travel& t) {
+  return t.arrived && t.from_floor && t.end_floor && *t.from_floor != *t.end_floor &&
+         t.to_floor == t.end_floor && !is_relevel(t.kind);
+}
+
+void Counters::count_learning_travel() {
+  add("learning_travels", 1);
 }
 
 void Counters::count_link_loss() {

@@ -63,6 +63,12 @@ struct ResetEntry {
 /// A text as one part of a dotted counter name: lower case, anything but a-z 0-9 _ turned to _
 /// (so a kind or cause can never add a dot), "unknown" when empty.
 std::string counter_name_part(std::string_view text);
+/// A relevelling run, whatever the drive kind calls it ("relevel", DCP4's "relevel_distance").
+bool is_relevel(std::string_view kind);
+/// A travel from one floor to another that arrived at its target: what floor-to-floor times
+/// are made of (not a relevelling, an inspection run or a learning leg, which have no other
+/// floor as their target).
+bool is_floor_to_floor(const Travel& t);
 
 /// The counters that exist from the start (with 0); the others appear with their first event.
 const std::vector<std::string>& fixed_counter_names();
@@ -78,6 +84,8 @@ class Counters {
   void count_travel(const Travel& t);
   void count_fault(std::string_view code);
   void count_link_loss();
+  /// A learning travel ended (all its legs: one learning travel).
+  void count_learning_travel();
   /// One look at the inputs: door cycles and safety-chain openings from the edges since the
   /// last look, inspection_ms and recall_ms for the time since the last look the switch was on.
   void count_inputs(const InputsSample& sample, std::int64_t now_mono_ms);

@@ -58,7 +58,11 @@ struct LiftRecord::State {
     reason = std::move(why);
     fields.insert(fields.begin(), log::Field{"path", options.path});
     fields.push_back(log::Field{"reason", reason});
-    log::event(level, kComponent, "record_off", fields, "the lift's record is off: " + reason);
+    // A record that failed is catalogued (journalctl -x says what to check); one switched off by
+    // the configuration is not.
+    log::event(
+        level, kComponent, "record_off", fields, "the lift's record is off: " + reason,
+        level >= log::Level::warn ? std::optional(log::Catalogued::RecordOff) : std::nullopt);
   }
 
   /// The record fails: off with a reason and one journal line; a corrupt file is moved aside.
@@ -184,7 +188,8 @@ LiftRecord::LiftRecord(Options options, std::int64_t now_mono_ms, std::int64_t n
     s.last_counters_write_mono_ms = now_mono_ms;
     s.counters.start_operating(now_mono_ms);
     if (s.options.path.empty()) {
-      s.turn_off("record.path is not set", log::Level::info, {});
+      s.turn_off(s.options.off_reason.empty() ? "record.path is not set" : s.options.off_reason,
+                 log::Level::info, {});
       return;
     }
     const StoreOptions store_options{s.options.max_travels, s.options.curves_kept,
@@ -268,6 +273,15 @@ void LiftRecord::link_lost(std::int64_t /*now_mono_ms*/) {
     state_->counters.count_link_loss();
   } catch (...) {
     state_->fail_inside("counting a link loss");
+  }
+}
+
+void LiftRecord::learning_travel(std::int64_t /*now_mono_ms*/) {
+  if (!state_) return;
+  try {
+    state_->counters.count_learning_travel();
+  } catch (...) {
+    state_->fail_inside("counting a learning travel");
   }
 }
 

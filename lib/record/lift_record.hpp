@@ -22,6 +22,9 @@ namespace liftd::record {
 struct Options {
   /// The database file; empty: the record is off, reason "record.path is not set".
   std::string path;
+  /// With no path: why the record is not kept, for status and the journal (empty: "record.path
+  /// is not set").
+  std::string off_reason;
   std::int64_t max_travels = 1'000'000;  ///< travels kept; the oldest go first (0: no limit)
   std::size_t curves_kept = 100;         ///< the newest travels that keep their curve
   /// Changed counters without a travel written at most this often.
@@ -101,6 +104,8 @@ class LiftRecord {
   void travel(Travel t, std::int64_t now_mono_ms, std::int64_t now_unix_ms);
   void fault_raised(std::string_view code, std::int64_t now_mono_ms);
   void link_lost(std::int64_t now_mono_ms);
+  /// A learning travel ended (its legs are travels of their own).
+  void learning_travel(std::int64_t now_mono_ms);
   void inputs(const InputsSample& sample, std::int64_t now_mono_ms);
   /// Operating time; writes counters that changed since the last write at most once per
   /// counters_interval_ms (a travel's transaction writes them too).

@@ -668,7 +668,7 @@ bool Store::insert_travel(Travel& t, StoreError& error) {
   // A relevel right after a travel to the same floor says that travel's stop needed a
   // correction: the mark goes on that travel's row in the relevel's transaction.
   const std::optional<int> floor = t.end_floor ? t.end_floor : t.to_floor;
-  if (counter_name_part(t.kind) == "relevel" && last_id_ > 0 && floor && last_floor_ == floor) {
+  if (is_relevel(t.kind) && last_id_ > 0 && floor && last_floor_ == floor) {
     bind_param(mark_relevel_.get(), 1, last_id_);
     if (const int code = run(mark_relevel_.get()); code != SQLITE_OK) return fail(code);
   }
@@ -694,8 +694,7 @@ bool Store::insert_travel(Travel& t, StoreError& error) {
   // stopped, and the floor-to-floor time of ordinary travels between two floors.
   if (t.arrived && t.end_floor) {
     const std::int64_t day = utc_day(t.start_unix_ms);
-    const bool floor_to_floor =
-        counter_name_part(t.kind) == "travel" && t.from_floor && *t.from_floor != *t.end_floor;
+    const bool floor_to_floor = is_floor_to_floor(t);
     s = upsert_day_floor_.get();
     bind_param(s, 1, day);
     bind_param(s, 2, std::int64_t{*t.end_floor});

@@ -80,7 +80,8 @@ class ApiShapeTest : public ::testing::TestWithParam<ShapeCase> {
 TEST_P(ApiShapeTest, StatusHasTheNeutralKeysAndTheKindsObject) {
   const std::string kind = GetParam().kind;
   const json s = lift_->status();
-  EXPECT_EQ(keys_of(s), (Keys{"drive", "link", "car", "travel", "faults", "rt", kind})) << s.dump();
+  EXPECT_EQ(keys_of(s), (Keys{"drive", "link", "car", "travel", "faults", "rt", "record", kind}))
+      << s.dump();
   EXPECT_EQ(s["drive"]["kind"], kind);
   EXPECT_EQ(keys_of(s["drive"]), (Keys{"kind", "state"})) << "DCP's mode, status and extended "
                                                              "are under dcp only: "
@@ -91,6 +92,7 @@ TEST_P(ApiShapeTest, StatusHasTheNeutralKeysAndTheKindsObject) {
   EXPECT_EQ(keys_of(s["travel"]),
             (Keys{"state", "direction", "target_floor", "calls", "last_slip_mm"}));
   EXPECT_EQ(keys_of(s["rt"]), (Keys{"realtime", "policy", "priority", "memory_locked"}));
+  EXPECT_EQ(keys_of(s["record"]), (Keys{"state", "path", "reason", "travels"})) << s.dump();
   EXPECT_EQ(keys_of(s[kind]), GetParam().status_keys) << s.dump();
 }
 

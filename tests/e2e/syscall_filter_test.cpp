@@ -4,6 +4,7 @@
 // not, and stops cleanly on SIGTERM. A call outside the list kills it with SIGSYS, as under
 // systemd. This machine has no systemd as PID 1, so the unit itself cannot start here.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -83,6 +84,12 @@ TEST(SyscallFilter, LiftdRunsATravelAndStopsUnderTheUnitsAllowList) {
   EXPECT_EQ(names.count("sched_setscheduler"), 1u) << "the cycle thread needs SCHED_FIFO";
   EXPECT_EQ(names.count("reboot"), 0u) << "@privileged must stay denied";
 
+  // SQLite (the lift's record) gives a journal or WAL file its database's owner with fchown(2),
+  // which @privileged denies, but only when it runs as root (its unix VFS checks geteuid()).
+  // The unit runs liftd as user liftd, so it never makes that call; this test runs as root.
+  std::set<std::string> filter = names;
+  if (::geteuid() == 0) filter.insert("fchown");
+
   std::map<std::string, unsigned> numbers;
   std::ifstream table(SYSCALL_NUMBERS);
   std::string name;
@@ -92,7 +99,7 @@ TEST(SyscallFilter, LiftdRunsATravelAndStopsUnderTheUnitsAllowList) {
       std::filesystem::temp_directory_path() / ("liftd-seccomp-" + std::to_string(::getpid()));
   {
     std::ofstream list(list_path);
-    for (const auto& n : names) {
+    for (const auto& n : filter) {
       // Names of other architectures (e.g. arm_fadvise64_64) have no number here.
       if (const auto it = numbers.find(n); it != numbers.end()) list << it->second << "\n";
     }

@@ -319,6 +319,7 @@ TEST(Catalog, EveryKeyHasItsNameAndId) {
       {Catalogued::CardFault, "card_fault", "747a03af540d46ba85f3190021b6809f"},
       {Catalogued::CanOwnIdInUse, "can_own_id_in_use", "2f12340309554c1dbc6ad2ed1abc8d9c"},
       {Catalogued::UssSlaveFault, "uss_slave_fault", "dce538ec71c248bebd75a1de4dcdb397"},
+      {Catalogued::RecordOff, "record_off", "ba707342f0964343abf3310a4b757142"},
   };
   ASSERT_EQ(rows.size(), static_cast<std::size_t>(Catalogued::kCount))
       << "a key without a row here";

@@ -57,13 +57,19 @@ TEST(RecordCounters, each_travel_moves_exactly_its_counters) {
         {"motor_starts", 1},
         {"running_ms", 800},
         {"relevels", 1}}},
-      {"aborted learning travel, cause in odd letters",
+      {"DCP4's relevelling on remaining distance is a relevelling too",
+       {with_kind(arrived_travel(2, 2, 0, 800, 1), "relevel_distance")},
+       {{"travels", 1},
+        {"travels.relevel_distance.arrived", 1},
+        {"motor_starts", 1},
+        {"running_ms", 800},
+        {"relevels", 1}}},
+      {"aborted learning leg, cause in odd letters: a leg is no learning travel",
        {with_kind(aborted_travel(0, 5, 0, "Stop Requested!"), "learn")},
        {{"travels", 1},
         {"travels.learn.aborted", 1},
         {"motor_starts", 1},
         {"running_ms", 1500},
-        {"learning_travels", 1},
         {"aborts.stop_requested_", 1}}},
       {"empty kind and cause",
        {with_kind(aborted_travel(0, 1, 0, ""), "")},
@@ -123,6 +129,40 @@ TEST(RecordCounters, faults_and_link_losses) {
   counters.count_link_loss();
   EXPECT_EQ(counters.values(),
             expect({{"faults.drive_fault", 2}, {"faults.position_lost", 1}, {"link_losses", 1}}));
+}
+
+TEST(RecordCounters, a_learning_travel_counts_once_whatever_its_legs) {
+  Counters counters;
+  counters.count_travel(with_kind(arrived_travel(0, 0, 0, 3000), "learn"));
+  counters.count_travel(with_kind(arrived_travel(0, 0, 3000, 9000), "learn"));
+  counters.count_learning_travel();
+  EXPECT_EQ(counters.values().at("learning_travels"), 1);
+  EXPECT_EQ(counters.values().at("travels"), 2);
+}
+
+TEST(RecordCounters, floor_to_floor_is_an_arrival_at_another_floors_target) {
+  struct Case {
+    const char* what;
+    Travel travel;
+    bool expected;
+  };
+  Travel unknown_start = arrived_travel(0, 2, 0, 4000);
+  unknown_start.from_floor.reset();
+  Travel no_target = arrived_travel(0, 2, 0, 4000);
+  no_target.to_floor.reset();  // an inspection run or a learning leg ending near a level
+  Travel short_of_target = arrived_travel(0, 2, 0, 4000);
+  short_of_target.end_floor = 1;
+  const std::vector<Case> cases = {
+      {"from 0 to 2, stood at 2", arrived_travel(0, 2, 0, 4000), true},
+      {"aborted", aborted_travel(0, 2, 0, "link_down"), false},
+      {"a relevelling at one floor", with_kind(arrived_travel(2, 2, 0, 800), "relevel"), false},
+      {"a DCP4 relevelling that crossed to the next floor's window",
+       with_kind(arrived_travel(1, 2, 0, 800), "relevel_distance"), false},
+      {"no floor at the start", unknown_start, false},
+      {"no target", no_target, false},
+      {"stood at another floor than its target", short_of_target, false},
+  };
+  for (const Case& c : cases) EXPECT_EQ(is_floor_to_floor(c.travel), c.expected) << c.what;
 }
 
 struct EdgeCase {
