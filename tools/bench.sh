@@ -12,10 +12,11 @@ cd "$(dirname "$0")/.."
 bin=build/bin
 cycles=${LIFTD_BENCH_CYCLES:-2000}
 logs=$(mktemp -d /tmp/liftd-bench-XXXXXX)
-if [ ! -x "$bin/cycle-bench" ] || [ ! -x "$bin/liftd" ] || [ ! -x "$bin/uss-bench" ]; then
+if [ ! -x "$bin/cycle-bench" ] || [ ! -x "$bin/liftd" ] || [ ! -x "$bin/uss-bench" ] ||
+  [ ! -x "$bin/record-bench" ]; then
   cmake --preset default >/dev/null
   cmake --build --preset default --target liftd cycle-bench api-load-bench api-bench \
-    event-bench travel-bench uss-bench
+    event-bench travel-bench uss-bench record-bench
 fi
 
 run() {  # run NAME COMMAND...: output to $logs/NAME.txt, a line on progress
@@ -47,6 +48,10 @@ if [ "$(id -u)" = 0 ] && [ "$board_cpu" -ge 1 ]; then
 fi
 run event "$bin/event-bench" --travels 4
 run travel "$bin/travel-bench"
+# The lift's record: a million travels, the queries against the issue's bounds, the bytes a
+# travel writes. (api-load-bench's lift keeps its record too: each travel of its windows is a
+# write transaction on the io thread beside the measured cycle.)
+run record "$bin/record-bench"
 # Its exit status says whether a rate missed 10 %: the table shows that, the run goes on.
 "$bin/uss-bench" --cycles 300 >"$logs/uss.txt" 2>&1 || true
 
@@ -137,6 +142,13 @@ printf '%-50s %12s   %s\n' "API status p99 (us), 8 clients, liftd --simulate" "$
 printf '%-50s %12s   %s\n' "  liftd / bare epoll line server ($base8 req/s)" "$api_ratio" "(the machine's ceiling)"
 printf '%-50s %12s   %s\n' "drive reply -> watcher event, cycles p50 / max" "$ev_p50 / $ev_max" "<= 1 / <= 2"
 printf '%-50s %12s   %s\n' "travel request -> taken by the cycle, cycles p50 / max" "$cmd_p50 / $cmd_max" "(measured; the next frame acts)"
+rec_history=$(sed -n 's/^history: *\([0-9.]*\) ms median.*/\1/p' "$logs/record.txt")
+rec_trend=$(sed -n 's/^trend: *\([0-9.]*\) ms median.*/\1/p' "$logs/record.txt")
+rec_bytes=$(sed -n 's/^writes: *\([0-9.]*\) MB written.*/\1/p' "$logs/record.txt")
+rec_bare=$(sed -n 's/^ *\([0-9.]*\) MB written() per 1000 travels without a curve.*/\1/p' "$logs/record.txt")
+printf '%-50s %12s   %s\n' "record of 1e6 travels: history, one floor a month, ms" "$rec_history" "< 50"
+printf '%-50s %12s   %s\n' "record of 1e6 travels: trend of a month, ms" "$rec_trend" "< 200"
+printf '%-50s %12s   %s\n' "record: MB written per 1000 travels, curve / none" "$rec_bytes / $rec_bare" "(docs/operations.md)"
 for baud in 38400 187500; do
   raw=$(uss_line "$baud" "^mean .* of expected" 2)
   net=$(uss_line "$baud" "^platform share" 22)

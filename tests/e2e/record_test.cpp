@@ -122,6 +122,18 @@ TEST_P(RecordParity, ATravelIsCountedKeptAndFoundAgainAfterARestart) {
       EXPECT_LE(std::llabs(t["stop_error_mm"].get<std::int64_t>()), 20) << t.dump();
       EXPECT_GT(t["top_speed_mm_s"].get<std::int64_t>(), 100) << t.dump();
       EXPECT_GT(t["duration_ms"].get<std::int64_t>(), 1000) << t.dump();
+      // The day's trend: the arrival at floor 1 with its stopping error, and the floor-to-floor
+      // time from 0 to 1 (the travel's duration: it is the only one).
+      const json trend = lift.call({{"cmd", "trend"}, {"floor", 1}});
+      ASSERT_TRUE(trend.value("ok", false)) << trend.dump();
+      ASSERT_EQ(trend["result"]["days"].size(), 1U) << trend.dump();
+      const json& day = trend["result"]["days"][0];
+      EXPECT_EQ(day["arrivals"], 1) << day.dump();
+      EXPECT_EQ(day["travel_ms"]["count"], 1) << day.dump();
+      EXPECT_EQ(day["travel_ms"]["mean"].get<double>(), t["duration_ms"].get<double>());
+      ASSERT_EQ(trend["result"]["pairs"].size(), 1U) << trend.dump();
+      EXPECT_EQ(trend["result"]["pairs"][0]["from"], 0);
+      EXPECT_EQ(trend["result"]["pairs"][0]["to"], 1);
       // The same travel from the other side of the filters.
       const json none = lift.call({{"cmd", "history"}, {"outcome", "aborted"}});
       EXPECT_TRUE(none["result"]["travels"].empty()) << none.dump();

@@ -79,20 +79,34 @@ std::int64_t proc_io(const std::string& key) {
   return -1;
 }
 
-/// The curve of a 10 s travel as the travel log writes it: 700 samples, about 60 bytes each.
+/// The curve of a 10 s DCP4 travel as the travel log keeps it for the record
+/// (TravelLog::curve_columns): 700 samples of 15 ms in columns, about 24 bytes a sample (a real
+/// 9.6 s travel of the simulated lift: 628 samples, 15 kB).
 std::string typical_curve(std::mt19937& random) {
   std::uniform_int_distribution<int> jitter(-3, 3);
-  std::string curve = R"({"stride":1,"samples":[)";
-  for (int i = 0; i < 700; ++i) {
-    const int t_ms = i * 15;  // DCP cycles
-    const int position = 3000 + i * 9 + jitter(random);
-    const int speed = std::min({i * 20, 1000, (700 - i) * 20});
-    if (i > 0) curve += ',';
-    curve += R"({"t_ms":)" + std::to_string(t_ms) + R"(,"position_mm":)" +
-             std::to_string(position) + R"(,"speed_mm_s":)" + std::to_string(speed) +
-             R"(,"remaining_mm":)" + std::to_string(9300 - i * 9) + "}";
+  constexpr int kSamples = 700;
+  std::string t_ms;
+  std::string position;
+  std::string speed;
+  std::string remaining;
+  std::string command;
+  std::string status;
+  for (int i = 0; i < kSamples; ++i) {
+    const char* sep = i > 0 ? "," : "";
+    t_ms += sep + std::to_string(i * 15);  // DCP cycles
+    position += sep + std::to_string(3000 + i * 9 + jitter(random));
+    speed += sep + std::to_string(std::min({i * 20, 1000, (kSamples - i) * 20}));
+    remaining += sep + std::to_string(9300 - i * 9);
+    command += sep + std::to_string(i < 10 || i > kSamples - 10 ? 0 : 5);
+    status += sep + std::to_string(i < 10 || i > kSamples - 10 ? 17 : 99);
   }
-  return curve + "]}";
+  return R"({"stride":1,"command_bits":["B0_enable","B1_travel","B2_stop","B3_speed","B4_down",)"
+         R"("B5_change","B6_desired","B7_reply_error"],"status_bits":["S0_ready",)"
+         R"("S1_travel_active","S2_advance_warning","S3_general_fault","S4_below_levelling",)"
+         R"("S5_accepted","S6_brake_open","S7_message_error"],"t_ms":[)" +
+         t_ms + R"(],"position_mm":[)" + position + R"(],"speed_mm_s":[)" + speed +
+         R"(],"remaining_mm":[)" + remaining + R"(],"command":[)" + command + R"(],"status":[)" +
+         status + "]}";
 }
 
 /// A travel of the filled year: mostly ordinary travels that arrive, some relevels, some aborts.
