@@ -145,6 +145,7 @@ int Daemon::run() {
 void Daemon::request_stop(std::string_view reason, int code) {
   if (stopping_) return;
   stopping_ = true;
+  stop_reason_ = std::string(reason);
   exit_code_ = code;
   notifier_.stopping("stopping: " + std::string(reason));
   log::event(log::Level::info, "daemon", "stopping", {{"reason", std::string(reason)}},

@@ -90,6 +90,7 @@ class Daemon final : public Host {
   void add_drive_commands(api::Dispatcher& dispatcher, api::Backend& backend) override;
   /// Every drive kind's configuration schema (lib/kinds).
   const config::Schema& config_schema() const override;
+  std::string_view stop_reason() const override { return stop_reason_; }
 
   /// Re-reads the configuration (RELOADING=1 ... READY=1): applies what can change while the
   /// drive link runs, names in the journal each changed key that needs a restart and keeps its
@@ -125,6 +126,7 @@ class Daemon final : public Host {
   std::function<void()> dump_;
   bool keep_log_level_ = false;
   bool stopping_ = false;
+  std::string stop_reason_;  ///< request_stop()'s reason
   int exit_code_ = exit_code::kOk;
 };
 

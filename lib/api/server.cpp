@@ -91,6 +91,7 @@ void Session::start() {
                           {"api", kApiVersion},
                           {"access", peer_.access.to_json()},
                           {"max_line_bytes", server_->config_.max_line_bytes}};
+  if (!server_->config_.car.is_null()) hello["car"] = server_->config_.car;
   enqueue(std::make_shared<const std::string>(event_line("hello", hello)), false);
   read_more();
   arm_timer();
@@ -158,6 +159,13 @@ void Server::Impl::publish(std::string_view event, const nlohmann::json& data) {
   for (const auto& session : watchers) session->enqueue(line, true);
 }
 
+void Server::Impl::announce(std::string_view event, const nlohmann::json& data) {
+  ++counters_.events;
+  const auto line = std::make_shared<const std::string>(event_line(event, data));
+  const auto everyone = std::vector<std::shared_ptr<Session>>(sessions_.begin(), sessions_.end());
+  for (const auto& session : everyone) session->enqueue(line, true);
+}
+
 ServerCounters Server::Impl::counters() const {
   return counters_;
 }
@@ -185,6 +193,9 @@ Dispatcher& Server::dispatcher() {
 }
 void Server::publish(std::string_view event, const nlohmann::json& data) {
   impl_->publish(event, data);
+}
+void Server::announce(std::string_view event, const nlohmann::json& data) {
+  impl_->announce(event, data);
 }
 ServerCounters Server::counters() const {
   return impl_->counters();

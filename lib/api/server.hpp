@@ -53,6 +53,8 @@ struct ServerConfig {
   std::chrono::milliseconds idle_timeout{0};
   /// A request line must be complete this long after its first byte arrived.
   std::chrono::milliseconds partial_line_timeout{std::chrono::seconds(5)};
+  /// `hello`'s `car`: who this lift is ({"name", "drive_kind", "floors"}); null: not told.
+  nlohmann::json car = nullptr;
 };
 
 /// Severity of a server log line.
@@ -103,6 +105,9 @@ class Server {
   Dispatcher& dispatcher();
   /// Sends {"event":name,"data":data} to every watching client.
   void publish(std::string_view event, const nlohmann::json& data);
+  /// Sends {"event":name,"data":data} to every client, watching or not (the `stopping` event:
+  /// the last line a connection gets before liftd closes it).
+  void announce(std::string_view event, const nlohmann::json& data);
   /// Current counters.
   ServerCounters counters() const;
 

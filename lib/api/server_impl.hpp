@@ -53,6 +53,7 @@ class Server::Impl : public std::enable_shared_from_this<Server::Impl> {
   void stop();
   void reconfigure(const ServerConfig& next);
   void publish(std::string_view event, const nlohmann::json& data);
+  void announce(std::string_view event, const nlohmann::json& data);
   ServerCounters counters() const;
   void accept_next();
   void on_accept(const asio::error_code& ec, Socket socket);

@@ -92,6 +92,7 @@ struct ApiConfig {
   int stalled_reader_timeout_s = 30;            ///< api.stalled_reader_timeout_s
   int idle_timeout_s = 0;                       ///< api.idle_timeout_s, 0 = none
   int state_rate_hz = 10;                       ///< api.state_rate_hz (position/speed events)
+  std::string car_name;                         ///< api.car_name, `hello`'s car.name
 };
 
 /// `record.*`: the lift's record on the board's storage (lib/record).

@@ -137,6 +137,12 @@ std::vector<Key> api_keys() {
                       "most this often; discrete changes (drive status, link, travel, faults, "
                       "calls) go out from the cycle that saw them",
                       &Config::api, &ApiConfig::state_rate_hz));
+  // The display's 20 characters (DCP 5.7), enough for a name a person reads on a panel.
+  t.push_back(string_key("api.car_name", 0, 20, "0..20 characters, no control character",
+                         control_rule,
+                         "the car's name in a group (\"A\", \"Lift 2\"), told in the API's "
+                         "hello with the drive kind and the floors; empty: none",
+                         &Config::api, &ApiConfig::car_name));
   return t;
 }
 

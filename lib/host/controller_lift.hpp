@@ -223,8 +223,11 @@ class ControllerBackend : public api::Backend {
         drive::state_of(out.link == api::LinkState::Up, s.travel_kind != TravelKind::None,
                         !out.faults.empty(), s.drive_allows_travel);
     out.position_mm = s.position_mm;
-    if (s.floor) out.floor = static_cast<int>(*s.floor);
-    if (s.travel_kind == TravelKind::None && s.floor) out.next_possible_stop = out.floor;
+    // docs/api.md: car.floor only while the car stands at a level, not while a travel passes one.
+    if (s.travel_kind == TravelKind::None && s.floor) {
+      out.floor = static_cast<int>(*s.floor);
+      out.next_possible_stop = out.floor;
+    }
     out.travel_state = std::string(to_string(s.travel_kind));
     out.travel_direction = direction_name(s.direction);
     if (s.target_floor) out.target_floor = static_cast<int>(*s.target_floor);
@@ -475,6 +478,10 @@ class ControllerLift : public LiftRunner {
     const typename Drive::Snapshot s = controller_->snapshot();
     bool moving = s.travel_kind != Drive::TravelKind::None;
     if constexpr (requires { Drive::car_moving(s); }) moving = Drive::car_moving(s);
+    // Every client, watching or not, hears that liftd is going and why: the last line before
+    // the connection closes (docs/api.md `stopping`).
+    server_->announce("stopping",
+                      {{"reason", std::string(daemon_.stop_reason())}, {"car_moving", moving}});
     wind_down_.start(std::move(done), moving, s.target_floor, mono_now());
   }
 

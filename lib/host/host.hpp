@@ -55,6 +55,8 @@ class Host {
   /// The schema of the configuration file (every drive kind's keys): the `config` command's
   /// dump.
   virtual const config::Schema& config_schema() const = 0;
+  /// Why the process is stopping ("SIGTERM", ...), once it is; empty before.
+  virtual std::string_view stop_reason() const = 0;
 };
 
 /// A running lift of any drive kind, as main() holds it.

@@ -92,6 +92,14 @@ api::ServerConfig api_server_config(const config::Config& c) {
   server.socket_path = c.api.socket;
   server.socket_group = c.api.socket_group;
   server.listen_fd = take_listen_fd(c.api.socket);
+  // hello's car: a dispatcher of a group tells its cars apart by it and learns their floors
+  // without a `config` request.
+  nlohmann::json floors = nlohmann::json::array();
+  for (const auto& f : c.floors) floors.push_back({{"name", f.name}, {"level_mm", f.level_mm}});
+  server.car = {
+      {"name", c.api.car_name.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.api.car_name)},
+      {"drive_kind", std::string(drive::to_string(c.drive.kind))},
+      {"floors", std::move(floors)}};
   return server;
 }
 

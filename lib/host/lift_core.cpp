@@ -146,7 +146,7 @@ void report_fault(api::Server& server, lift::FaultCode code, std::string_view te
 }
 
 void report_travel(api::Server& server, std::string_view type, std::string_view kind,
-                   lift::Cause cause, bool aborted, std::int64_t target_mm,
+                   lift::Cause cause, bool aborted, std::optional<std::int64_t> target_mm,
                    std::optional<std::int64_t> position_mm) {
   const std::string_view cause_name =
       cause == lift::Cause::None ? std::string_view{} : lift::to_string(cause);
@@ -167,7 +167,7 @@ void report_travel(api::Server& server, std::string_view type, std::string_view 
       {{"event", std::string(type)},
        {"kind", std::string(kind)},
        {"cause", cause_name.empty() ? nlohmann::json(nullptr) : nlohmann::json(cause_name)},
-       {"target_mm", target_mm},
+       {"target_mm", target_mm ? nlohmann::json(*target_mm) : nlohmann::json(nullptr)},
        {"position_mm", position_mm ? nlohmann::json(*position_mm) : nlohmann::json(nullptr)}});
 }
 

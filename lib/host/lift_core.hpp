@@ -281,7 +281,7 @@ void report_fault(api::Server& server, lift::FaultCode code, std::string_view te
 /// Journals and publishes a travel event of any drive kind with the API name of its `cause`
 /// (lift::to_string; null when None, and the journal names it only for an aborted travel).
 void report_travel(api::Server& server, std::string_view type, std::string_view kind,
-                   lift::Cause cause, bool aborted, std::int64_t target_mm,
+                   lift::Cause cause, bool aborted, std::optional<std::int64_t> target_mm,
                    std::optional<std::int64_t> position_mm);
 /// report_travel() for a controller's travel event (`type` Started/Finished/Aborted, `kind`,
 /// `cause`, `floor`; to_string() of the kind found beside its type). A DCP travel event carries
@@ -292,15 +292,25 @@ void report_travel(api::Server& server, const TravelEvent& t, Controller& contro
   using Type = decltype(t.type);
   const bool aborted = t.type == Type::Aborted;
   if constexpr (requires { t.target_mm; }) {
-    report_travel(server, to_string(t.type), to_string(t.kind), t.cause, aborted, t.target_mm,
+    // A DCP run without a destination (inspection, recall; a drive fault while standing) carries
+    // none (docs/api.md `travel`).
+    using Kind = decltype(t.kind);
+    const bool has_target =
+        t.kind != Kind::None && t.kind != Kind::Inspection && t.kind != Kind::Recall;
+    report_travel(server, to_string(t.type), to_string(t.kind), t.cause, aborted,
+                  has_target ? std::optional<std::int64_t>(t.target_mm) : std::nullopt,
                   t.position_mm);
   } else {
     const char* type = t.type == Type::Started    ? "started"
                        : t.type == Type::Finished ? "finished"
                                                   : "aborted";
+    // The run's own target however it ends (an aborted travel named the floor it left).
     const auto floors = controller.floors_mm();
-    report_travel(server, type, to_string(t.kind), t.cause, aborted,
-                  t.floor < floors.size() ? floors[t.floor] : 0, controller.snapshot().position_mm);
+    const std::optional<std::int64_t> target_mm =
+        t.target && *t.target < floors.size() ? std::optional<std::int64_t>(floors[*t.target])
+                                              : std::nullopt;
+    report_travel(server, type, to_string(t.kind), t.cause, aborted, target_mm,
+                  controller.snapshot().position_mm);
   }
 }
 /// Journals and publishes a served call.

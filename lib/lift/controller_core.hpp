@@ -326,7 +326,8 @@ class ControllerCore {
     if (in.inputs.button_mode()) return refuse(tag, ReplyCode::NotReady, kButtonModeText);
     if (travel_.busy()) return refuse(tag, ReplyCode::Busy, "a travel is running");
     if (at_level(in, body.floor)) {
-      return refuse(tag, ReplyCode::NotReady, "the car is already at that level");
+      // docs/api.md `travel`: a request that cannot apply to the lift as it stands, as on DCP.
+      return refuse(tag, ReplyCode::BadRequest, "the car is already at that level");
     }
     const Cause why = start();
     if (why != Cause::None) {

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 
 #include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
@@ -23,6 +24,9 @@ struct BasicTravelEvent {
   std::size_t floor = 0;  ///< target (started) or where it ended (finished)
   Cause cause = Cause::None;
   MonoTime at{};
+  /// The run's target floor on every event of a travel or relevelling, however it ends; none
+  /// for a run without one (inspection, a learning leg).
+  std::optional<std::size_t> target{};
 };
 
 /// A travel's events until the controller polls them; a full queue drops and counts.

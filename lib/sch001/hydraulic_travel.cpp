@@ -95,7 +95,10 @@ lift::Cause HydraulicTravel::begin_run(TravelKind kind, std::int64_t target_mm,
   motor_on_at_ = in.now;
   phase_ = up ? Phase::MotorStart : (kind == TravelKind::Relevel ? Phase::Slow : Phase::Fast);
   const std::size_t floor = kind == TravelKind::Learn ? current_floor_ : target_;
-  push({TravelEvent::Type::Started, kind_, direction_, floor, lift::Cause::None, in.now});
+  TravelEvent started{TravelEvent::Type::Started, kind_, direction_, floor,
+                      lift::Cause::None,          in.now};
+  if (kind == TravelKind::Travel || kind == TravelKind::Relevel) started.target = target_;
+  push(started);
   return lift::Cause::None;
 }
 
@@ -299,7 +302,9 @@ void HydraulicTravel::end(TravelEvent::Type type, lift::Cause cause, MonoTime no
                                     (kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel)
                                 ? target_
                                 : current_floor_;
-  push({type, kind_, direction_, floor, cause, now});
+  TravelEvent event{type, kind_, direction_, floor, cause, now};
+  if (kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel) event.target = target_;
+  push(event);
   kind_ = TravelKind::None;
   phase_ = Phase::Idle;
   direction_ = lift::Direction::None;

@@ -35,6 +35,14 @@ TEST(ApiDocs, EveryCommandHasASection) {
   }
 }
 
+// The client section tells a client author which version to expect: the one the daemon says.
+TEST(ApiDocs, TheClientSectionNamesTheApiVersionTheDaemonSpeaks) {
+  const std::string docs = read_docs();
+  EXPECT_NE(docs.find("check `api` is `" + std::to_string(kApiVersion) + "`"), std::string::npos);
+  EXPECT_NE(docs.find("# liftd JSON API reference (API version " + std::to_string(kApiVersion)),
+            std::string::npos);
+}
+
 TEST(ApiDocs, EveryErrorCodeIsListed) {
   // Every value to_string() names (it answers "internal" past the last one), so a code added at
   // the end of the enum cannot slip past this test.
@@ -189,8 +197,9 @@ void expect_table_rows(const std::vector<std::string>& names, const char* what) 
 
 // Every event the daemon publishes: the server's greeting, the watch start, the lifts.
 const std::vector<std::string> kEvents = {
-    "hello", "state",       "display",           "link",   "travel",      "drive_error",
-    "fault", "call_served", "parameter_changed", "missed", "watch_ended", "learn"};
+    "hello",   "state",       "display",           "link",   "travel",      "drive_error",
+    "fault",   "call_served", "parameter_changed", "missed", "watch_ended", "learn",
+    "stopping"};
 
 TEST(ApiDocs, EventListMatchesWhatTheDaemonPublishes) {
   std::set<std::string> published;
@@ -203,6 +212,8 @@ TEST(ApiDocs, EventListMatchesWhatTheDaemonPublishes) {
     }
   }
   published.merge(matches(read_source("lib/api/server.cpp"), R"re(event_line\("([a-z_]+)")re"));
+  published.merge(
+      matches(read_source("lib/host/controller_lift.hpp"), R"re(announce\(\s*"([a-z_]+)")re"));
   published.merge(matches(read_source("lib/api/commands.cpp"), R"re(event_line\("([a-z_]+)")re"));
   EXPECT_EQ(published, as_set(kEvents)) << "update kEvents, docs/api.md section 4 and the schema";
 }

@@ -75,6 +75,7 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/api/stalled_reader_timeout_s", 30},
       {"/api/idle_timeout_s", 0},
       {"/api/state_rate_hz", 10},
+      {"/api/car_name", ""},
       {"/inputs/timeout_ms", 500},
       {"/record/enabled", true},
       {"/record/path", ""},

@@ -77,6 +77,30 @@ class ApiShapeTest : public ::testing::TestWithParam<ShapeCase> {
   std::unique_ptr<Lift> lift_;
 };
 
+// A dispatcher of a group learns who the car is from the greeting alone (issue #44).
+TEST_P(ApiShapeTest, HelloNamesTheCarItsDriveKindAndItsFloors) {
+  json config = GetParam().config;
+  config["api"] = {{"car_name", "B"}};
+  Lift named(std::string("api-shape-hello-") + GetParam().kind, 4, json::object(), {}, config);
+  ASSERT_EQ(named.setup_error(), "") << named.log();
+  Client client(named.socket());
+  ASSERT_TRUE(client.call({{"cmd", "version"}}).value("ok", false));
+  ASSERT_FALSE(client.events().empty());
+  const json& hello = client.events().front();
+  ASSERT_EQ(hello["event"], "hello") << hello.dump();
+  const json& car = hello["data"]["car"];
+  EXPECT_EQ(car["name"], "B") << hello.dump();
+  EXPECT_EQ(car["drive_kind"], GetParam().kind);
+  const json floors = config.contains("floors")
+                          ? config["floors"]
+                          : named.call({{"cmd", "config"}})["result"]["config"]["floors"];
+  EXPECT_EQ(car["floors"], floors) << hello.dump();
+  // Without a name the car is still told, its name null.
+  Client unnamed(lift_->socket());
+  ASSERT_TRUE(unnamed.call({{"cmd", "version"}}).value("ok", false));
+  EXPECT_TRUE(unnamed.events().front()["data"]["car"]["name"].is_null());
+}
+
 TEST_P(ApiShapeTest, StatusHasTheNeutralKeysAndTheKindsObject) {
   const std::string kind = GetParam().kind;
   const json s = lift_->status();

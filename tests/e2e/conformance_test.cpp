@@ -151,11 +151,19 @@ INSTANTIATE_TEST_SUITE_P(Faults, ChannelFaultMidTravel,
 TEST(ServiceStop, SigtermDuringATravelLandsTheCarThenExits) {
   judged_unless_stalled([&] {
     START_LIFT(lift, 4);
+    Client bystander(lift.socket());  // connected, not watching
+    ASSERT_TRUE(is_ok(bystander.call({{"cmd", "version"}})));
     ASSERT_TRUE(is_ok(lift.call({{"cmd", "travel"}, {"floor", 5}})));
     ASSERT_TRUE(lift.wait_moved(0, 1500)) << lift.log();
     const auto code = lift.stop_daemon(SIGTERM, 25s);
     ASSERT_TRUE(code.has_value()) << "liftd still runs 25 s after SIGTERM\n" << lift.log();
     EXPECT_EQ(*code, 0) << lift.log();
+    // Every client heard why liftd went, as its last line (docs/api.md `stopping`).
+    bystander.drain(500ms);
+    ASSERT_FALSE(bystander.events().empty());
+    const json last = bystander.events().back();
+    EXPECT_EQ(last["event"], "stopping") << last.dump();
+    EXPECT_EQ(last["data"], (json{{"reason", "SIGTERM"}, {"car_moving", true}})) << last.dump();
     const std::string log = lift.log();
     EXPECT_NE(log.find("bringing the car to rest"), std::string::npos) << log;
     EXPECT_NE(log.find("car at rest at floor"), std::string::npos) << log;

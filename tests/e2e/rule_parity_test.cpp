@@ -183,6 +183,60 @@ TEST_P(RuleParity, ALinkFaultWritesTheFlightRecorder) {
   });
 }
 
+// docs/api.md `status`: car.floor is the floor the car stands at, null while a travel runs, on
+// every kind (issue #44: it was set while the car passed a level at speed).
+TEST_P(RuleParity, TheCarsFloorIsNullWhileATravelRuns) {
+  judged_unless_stalled([this] {
+    const auto lift = make_lift("floor-null");
+    ASSERT_NO_FATAL_FAILURE(start_far_travel(*lift));
+    const json end = lift->wait_travel_end(60s);
+    ASSERT_TRUE(end.is_object()) << lift->log();
+    int running = 0;
+    for (const json& e : lift->api().events()) {
+      if (e["event"] != "state" || e["data"]["travel"]["state"] == "idle") continue;
+      ++running;
+      EXPECT_TRUE(e["data"]["car"]["floor"].is_null()) << e.dump();
+    }
+    EXPECT_GT(running, 3) << "state events while the travel ran";
+    ASSERT_TRUE(lift->wait_drive_state("ready"));
+    const json at_rest = lift->status();
+    EXPECT_EQ(at_rest["car"]["floor"], GetParam().far_floor) << at_rest.dump();
+  });
+}
+
+// A travel that a fault ends names the floor it was going to, as its start did (issue #44: SCH001
+// and USS named the floor the car had left), on every kind.
+TEST_P(RuleParity, AnAbortedTravelNamesItsOwnTarget) {
+  judged_unless_stalled([this] {
+    const auto lift = make_lift("aborted-target");
+    const json floors = lift->call({{"cmd", "config"}})["result"]["config"]["floors"];
+    const json target = floors[static_cast<std::size_t>(GetParam().far_floor)]["level_mm"];
+    ASSERT_NO_FATAL_FAILURE(start_far_travel(*lift));
+    ASSERT_TRUE(lift->call(GetParam().link_fault).value("ok", false));
+    const json end = lift->wait_travel_end(30s);
+    ASSERT_TRUE(end.is_object()) << lift->log();
+    EXPECT_EQ(end["data"]["event"], "aborted") << end.dump();
+    EXPECT_EQ(end["data"]["target_mm"], target) << end.dump();
+    for (const json& e : lift->api().events()) {
+      if (e["event"] == "travel" && e["data"]["event"] == "started") {
+        EXPECT_EQ(e["data"]["target_mm"], target) << e.dump();
+      }
+    }
+  });
+}
+
+// A travel to the floor the car stands at is the same refusal on every kind (issue #44: it was
+// bad_request on DCP and not_ready on SCH001 and USS): docs/api.md `travel`, bad_request.
+TEST_P(RuleParity, ATravelToTheFloorTheCarStandsAtIsABadRequest) {
+  judged_unless_stalled([this] {
+    const auto lift = make_lift("at-level");
+    ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump();
+    const json r = lift->call({{"cmd", "travel"}, {"floor", 0}});
+    EXPECT_EQ(error_of(r)["code"], "bad_request") << r.dump();
+    EXPECT_EQ(error_of(r)["message"], "the car is already at that level") << r.dump();
+  });
+}
+
 INSTANTIATE_TEST_SUITE_P(EveryDriveKind, RuleParity, ::testing::ValuesIn(kDriveCases),
                          drive_case_name);
 

@@ -224,7 +224,7 @@ TEST_F(ControllerCoreTest, TravelCommandGatesInOrder) {
   EXPECT_EQ(speed.code, ReplyCode::BadRequest);
   EXPECT_EQ(speed.detail, "no V1");
   const CommandReply here = command(3, StubTravelCommand{0, StubSpeed::V4});
-  EXPECT_EQ(here.code, ReplyCode::NotReady);
+  EXPECT_EQ(here.code, ReplyCode::BadRequest);  // docs/api.md `travel`, as DCP answers it
   EXPECT_EQ(here.detail, "the car is already at that level");
   controller.refuse_starts(Cause::SafetyChainOpen);
   const CommandReply refused = command(4, StubTravelCommand{2, StubSpeed::V4});

@@ -27,6 +27,14 @@ TravelKind TravelController::active_kind() const noexcept {
   return TravelKind::None;
 }
 
+std::int64_t TravelController::active_target_mm() const noexcept {
+  if (dcp4_.active()) return dcp4_.target_mm();
+  if (dcp3_.active()) return dcp3_.target_mm();
+  if (relevel_.active()) return relevel_.target_mm();
+  if (pending_) return pending_->target_mm;
+  return 0;
+}
+
 Direction TravelController::direction() const noexcept {
   if (dcp4_.active()) return dcp4_.direction();
   if (dcp3_.active()) return dcp3_.direction();
@@ -192,9 +200,10 @@ void TravelController::shut_down(bool force) noexcept {
   home_level_mm_.reset();  // no automatic relevelling from now on
   if (force && (dcp4_.active() || dcp3_.active() || relevel_.active() || inspection_.active())) {
     const TravelKind kind = active_kind();
+    const std::int64_t target_mm = active_target_mm();
     abort_all_immediately();
     StepContext ctx{config_, last_, events_};
-    ctx.emit(Event::Type::Aborted, kind, lift::Cause::ShuttingDown, 0);
+    ctx.emit(Event::Type::Aborted, kind, lift::Cause::ShuttingDown, target_mm);
   }
 }
 
@@ -256,18 +265,19 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
   if (fault != fault_seen_) {  // DCP 9.1.6: report S3 edges
     fault_seen_ = fault;
     ctx.emit(fault ? Event::Type::DriveFault : Event::Type::DriveFaultCleared, active_kind(),
-             fault ? lift::Cause::DriveFault : lift::Cause::None, 0);
+             fault ? lift::Cause::DriveFault : lift::Cause::None, active_target_mm());
     // DCP 9.1.6: S3 resets B0 and ends the travel at once, whatever its machine is waiting for.
     // Without this a machine that sees S6/S1 drop in the same reply ends "normally" off the
     // level, and the event would blame the position instead of the drive.
     if (fault && (pending_ || dcp4_.active() || dcp3_.active() || relevel_.active())) {
       const TravelKind kind = active_kind();
+      const std::int64_t target_mm = active_target_mm();
       pending_.reset();
       dcp4_.abort_immediate();
       dcp3_.abort_immediate();
       relevel_.abort_immediate();
       if (kind != TravelKind::None) {
-        ctx.emit(Event::Type::Aborted, kind, lift::Cause::DriveFault, 0);
+        ctx.emit(Event::Type::Aborted, kind, lift::Cause::DriveFault, target_mm);
       }
     }
   }
@@ -276,11 +286,14 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
   if ((in.inputs.inspection || in.inputs.recall) &&
       (dcp4_.active() || dcp3_.active() || relevel_.active() || pending_)) {
     const TravelKind kind = active_kind();
+    const std::int64_t target_mm = active_target_mm();
     pending_.reset();
     dcp4_.abort_immediate();
     dcp3_.abort_immediate();
     relevel_.abort_immediate();
-    if (kind != TravelKind::None) ctx.emit(Event::Type::Aborted, kind, lift::Cause::ModeChanged, 0);
+    if (kind != TravelKind::None) {
+      ctx.emit(Event::Type::Aborted, kind, lift::Cause::ModeChanged, target_mm);
+    }
   }
   begin_pending(in);
   maybe_auto_relevel(in);
@@ -306,8 +319,9 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
     if (kind == TravelKind::Dcp4Relevel || kind == TravelKind::Relevel) {
       relevel_blocked_until_ = in.now + kRelevelRetry;
     }
+    const std::int64_t target_mm = active_target_mm();
     abort_all_immediately();
-    ctx.emit(Event::Type::Aborted, kind, gated.violation, 0);
+    ctx.emit(Event::Type::Aborted, kind, gated.violation, target_mm);
   }
   gated.output.channel_request = ctx.channel_request;
   return gated.output;

@@ -61,6 +61,9 @@ class TravelController {
 
   /// Kind of the running travel (None when idle).
   TravelKind active_kind() const noexcept;
+  /// The destination of the run in progress (or the pending one), for its events; 0 for a run
+  /// without one (inspection).
+  std::int64_t active_target_mm() const noexcept;
   /// Direction of the running travel (None when idle).
   Direction direction() const noexcept;
   /// Deceleration distance known now (data bytes, or I7's Sv during a DCP4 travel).

@@ -37,6 +37,9 @@ class RelevelTravel {
   /// Direction, constant for the whole travel.
   Direction direction() const noexcept { return direction_; }
 
+  /// The level it relevels to (with a valid position).
+  std::int64_t target_mm() const noexcept { return target_mm_; }
+
  private:
   void enter(State state, MonoTime now) noexcept;
   Demand demand(std::uint8_t message, std::uint16_t data_word) const noexcept;

@@ -430,7 +430,9 @@ void LiftTravel::push(TravelEvent::Type type, lift::Cause cause, MonoTime now) n
   const std::size_t floor = type == TravelEvent::Type::Started && to_floor ? target_
                             : landed                                       ? target_
                                                                            : current_floor_;
-  events_.push({type, kind_, direction_, floor, cause, now});
+  TravelEvent event{type, kind_, direction_, floor, cause, now};
+  if (to_floor) event.target = target_;
+  events_.push(event);
 }
 
 // ---- one step ----
