@@ -198,6 +198,7 @@ nlohmann::json to_json(const StatusSnapshot& s) {
   car["next_possible_stop"] = or_null(s.next_possible_stop);
   car["brake_open"] = s.brake_open;
   car["contactors_on"] = s.contactors_on;
+  car["doors"] = or_null(s.doors);
   nlohmann::json& travel = j["travel"];
   travel["state"] = s.travel_state;
   travel["direction"] = or_null(s.travel_direction);
@@ -205,6 +206,10 @@ nlohmann::json to_json(const StatusSnapshot& s) {
   travel["calls"] = s.calls;
   travel["last_slip_mm"] = or_null(s.last_travel_slip_mm);
   j["faults"] = std::move(faults);
+  nlohmann::json& service = j["service"];
+  service["in_service"] = s.out_of_service.empty();
+  service["reason"] =
+      s.out_of_service.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.out_of_service);
   nlohmann::json& rt = j["rt"];
   rt["realtime"] = s.rt.realtime;
   rt["policy"] = s.rt.policy;

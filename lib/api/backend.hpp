@@ -103,7 +103,12 @@ struct StatusSnapshot {
   std::optional<int> next_possible_stop;  ///< car.next_possible_stop: nearest floor it can stop at
   bool brake_open = false;                ///< car.brake_open: brake output (follows S6)
   bool contactors_on = false;             ///< car.contactors_on: motor contactor output
-  std::string travel_state = "idle";      ///< travel.state, snake_case
+  /// car.doors from the machine inputs: "locked", "closed", "open", "reopening"; null: no inputs
+  std::optional<std::string> doors;
+  /// service.reason: why the car takes no call now ("stopping", "fault", "inspection", "recall",
+  /// "learning", "not_ready"); empty: in service
+  std::string out_of_service;
+  std::string travel_state = "idle";                ///< travel.state, snake_case
   std::optional<std::string> travel_direction;      ///< travel.direction: "up", "down" or null
   std::optional<int> target_floor;                  ///< travel.target_floor or null
   std::vector<int> calls;                           ///< travel.calls: queued destinations, in order

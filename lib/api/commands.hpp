@@ -35,8 +35,8 @@ void add_travel_commands(Dispatcher& dispatcher, Backend& backend);
 /// `learn`: the learning travel (added by add_travel_commands).
 void add_learn_command(Dispatcher& dispatcher, Backend& backend);
 
-/// Adds the lift's record commands (counters, counters_reset, history, trend); add_builtin_commands()
-/// calls it.
+/// Adds the lift's record commands (counters, counters_reset, history, trend);
+/// add_builtin_commands() calls it.
 void add_record_commands(Dispatcher& dispatcher, Backend& backend);
 
 /// Most replies one `sim` reply_fault request affects (about 2.5 minutes of 15 ms cycles).

@@ -234,6 +234,9 @@ class ControllerBackend : public api::Backend {
     for (std::size_t i = 0; i < s.call_count; ++i) out.calls.push_back(s.calls[i]);
     out.rt = rt_info(runner_.thread_status(), config_.rt.priority);
     out.record = record_.status();
+    out.doors = door_state(s.inputs);
+    out.out_of_service =
+        out_of_service(s.shutting_down, !out.faults.empty(), s.inputs, s.learning, out.drive_state);
     return out;
   }
 

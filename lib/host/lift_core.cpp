@@ -171,6 +171,27 @@ void report_travel(api::Server& server, std::string_view type, std::string_view 
        {"position_mm", position_mm ? nlohmann::json(*position_mm) : nlohmann::json(nullptr)}});
 }
 
+std::optional<std::string> door_state(const lift::Inputs& inputs) {
+  if (!inputs.valid) return std::nullopt;
+  if (inputs.door_reversal) return "reopening";
+  if (inputs.doors_locked) return "locked";
+  if (inputs.doors_closed) return "closed";
+  return "open";
+}
+
+std::string out_of_service(bool stopping, bool faulted, const lift::Inputs& inputs, bool learning,
+                           drive::State drive_state) {
+  if (stopping) return "stopping";
+  if (faulted) return "fault";
+  if (inputs.inspection) return "inspection";
+  if (inputs.recall) return "recall";
+  if (learning) return "learning";
+  if (drive_state == drive::State::Offline || drive_state == drive::State::NotReady) {
+    return "not_ready";
+  }
+  return {};
+}
+
 void report_call_served(api::Server& server, std::size_t floor) {
   log::event(log::Level::info, "travel", "call_served", {{"floor", std::to_string(floor)}},
              "call served: floor " + std::to_string(floor));

@@ -276,6 +276,15 @@ std::vector<api::FaultInfo> active_faults(const std::array<bool, N>& active,
   }
   return out;
 }
+/// status car.doors from the machine inputs the controller sees: "reopening" (a reversal),
+/// "locked", "closed" or "open"; none without valid inputs.
+std::optional<std::string> door_state(const lift::Inputs& inputs);
+/// status service.reason: the first of stopping, a fault, inspection, recall, a learning travel
+/// and a drive that lets no travel start; empty when the car is in service (docs/api.md
+/// `status`, the same on every drive kind).
+std::string out_of_service(bool stopping, bool faulted, const lift::Inputs& inputs, bool learning,
+                           drive::State drive_state);
+
 /// Journals and publishes a fault that became active or ended.
 void report_fault(api::Server& server, lift::FaultCode code, std::string_view text, bool active);
 /// Journals and publishes a travel event of any drive kind with the API name of its `cause`

@@ -677,6 +677,7 @@ class ControllerCore {
     s.faults = faults_.active_all();
     s.fault_since = faults_.since_all();
     s.shutting_down = shutting_down_;
+    s.learning = learning();
   }
 
   typename Types::Travel travel_;

@@ -140,6 +140,7 @@ struct ControllerSnapshot {
   std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults{};
   std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
   bool shutting_down = false;
+  bool learning = false;  ///< a learning travel runs (status service.reason)
   bool quiesced = false;  ///< shutting down, no travel, no signal in the last answer
   /// The card lets a travel start now (HydraulicTravel::drive_forbidding(): status drive.state).
   bool drive_allows_travel = false;

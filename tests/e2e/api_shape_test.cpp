@@ -104,15 +104,17 @@ TEST_P(ApiShapeTest, HelloNamesTheCarItsDriveKindAndItsFloors) {
 TEST_P(ApiShapeTest, StatusHasTheNeutralKeysAndTheKindsObject) {
   const std::string kind = GetParam().kind;
   const json s = lift_->status();
-  EXPECT_EQ(keys_of(s), (Keys{"drive", "link", "car", "travel", "faults", "rt", "record", kind}))
+  EXPECT_EQ(keys_of(s),
+            (Keys{"drive", "link", "car", "travel", "faults", "service", "rt", "record", kind}))
       << s.dump();
   EXPECT_EQ(s["drive"]["kind"], kind);
   EXPECT_EQ(keys_of(s["drive"]), (Keys{"kind", "state"})) << "DCP's mode, status and extended "
                                                              "are under dcp only: "
                                                           << s.dump();
   EXPECT_EQ(keys_of(s["link"]), (Keys{"state"})) << "handshake_problem is under dcp only";
-  EXPECT_EQ(keys_of(s["car"]),
-            (Keys{"position_mm", "floor", "next_possible_stop", "brake_open", "contactors_on"}));
+  EXPECT_EQ(keys_of(s["car"]), (Keys{"position_mm", "floor", "next_possible_stop", "brake_open",
+                                     "contactors_on", "doors"}));
+  EXPECT_EQ(keys_of(s["service"]), (Keys{"in_service", "reason"})) << s.dump();
   EXPECT_EQ(keys_of(s["travel"]),
             (Keys{"state", "direction", "target_floor", "calls", "last_slip_mm"}));
   EXPECT_EQ(keys_of(s["rt"]), (Keys{"realtime", "policy", "priority", "memory_locked"}));

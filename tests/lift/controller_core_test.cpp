@@ -104,6 +104,7 @@ struct StubSnapshot {
   std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults{};
   std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
   bool shutting_down = false;
+  bool learning = false;
   bool drive_allows_travel = false;
 };
 

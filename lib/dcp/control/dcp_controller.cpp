@@ -769,6 +769,7 @@ void DcpController::publish(MonoTime now) noexcept {
   s.last_travel_slip_mm = slip_mm_;
   s.handshake_problem = link_.handshake_problem();
   s.shutting_down = shutting_down_;
+  s.learning = learning();
   s.quiesced = shutting_down_ && travel_.active_kind() == TravelKind::None &&
                !last_input_.status.travel_active &&
                frames_at_rest_ >= static_cast<std::uint32_t>(config_.link.fault_after_bad_frames);

@@ -194,6 +194,7 @@ struct ControllerSnapshot {
   std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults{};
   std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
   bool shutting_down = false;
+  bool learning = false;  ///< a learning travel runs (status service.reason)
   bool quiesced = false;  ///< shutting down, no run, OFF1 (or OFF2) sent, brake and contactors off
   /// The drive lets a travel start now (LiftTravel::drive_forbidding(): status drive.state).
   bool drive_allows_travel = false;
