@@ -11,20 +11,9 @@ namespace liftd::api {
 namespace {
 
 /// An optional time argument: "YYYY-MM-DD" or "YYYY-MM-DDTHH:MM:SS[.mmm]Z" (UTC).
-ArgSpec time_arg(std::string name, std::string description) {
-  ArgSpec spec;
-  spec.name = std::move(name);
-  spec.type = ArgType::String;
-  spec.description = std::move(description) + ": \"YYYY-MM-DD\" or \"YYYY-MM-DDTHH:MM:SSZ\" (UTC)";
-  return spec;
-}
-
-ArgSpec text_arg(std::string name, std::string description) {
-  ArgSpec spec;
-  spec.name = std::move(name);
-  spec.type = ArgType::String;
-  spec.description = std::move(description);
-  return spec;
+ArgSpec time_arg(std::string name, const std::string& description) {
+  return text_arg(std::move(name),
+                  description + ": \"YYYY-MM-DD\" or \"YYYY-MM-DDTHH:MM:SSZ\" (UTC)");
 }
 
 /// The time argument `name` of a validated request in ms since the epoch; a bad_request naming
@@ -52,6 +41,14 @@ std::optional<Error> read_range(const nlohmann::json& request, std::optional<std
   if (from && to && *from >= *to) {
     return Error{ErrorCode::BadRequest, "field \"from\" must be before \"to\"", "from"};
   }
+  return std::nullopt;
+}
+
+/// What `history` and `trend` share: `from`, `to` and `floor` into `args`; a bad time refuses.
+template <typename Args>
+std::optional<Error> read_days_and_floor(const nlohmann::json& request, Args& args) {
+  if (auto e = read_range(request, args.from_unix_ms, args.to_unix_ms)) return e;
+  if (request.contains("floor")) args.floor = request.at("floor").get<int>();
   return std::nullopt;
 }
 
@@ -112,11 +109,10 @@ void add_record_commands(Dispatcher& dispatcher, Backend& backend) {
        "the travels of the lift's record, newest first",
        [b](const Call& call, Responder done) {
          HistoryArgs args;
-         if (auto e = read_range(call.request, args.from_unix_ms, args.to_unix_ms)) {
+         if (auto e = read_days_and_floor(call.request, args)) {
            done(Result::fail(e->code, e->message, e->field));
            return;
          }
-         if (call.request.contains("floor")) args.floor = call.request.at("floor").get<int>();
          if (call.request.contains("outcome")) {
            args.outcome = call.request.at("outcome").get<std::string>();
          }
@@ -136,12 +132,9 @@ void add_record_commands(Dispatcher& dispatcher, Backend& backend) {
                   "floor-to-floor time and stopping error per floor and day",
                   [b](const Call& call, Responder done) {
                     TrendArgs args;
-                    if (auto e = read_range(call.request, args.from_unix_ms, args.to_unix_ms)) {
+                    if (auto e = read_days_and_floor(call.request, args)) {
                       done(Result::fail(e->code, e->message, e->field));
                       return;
-                    }
-                    if (call.request.contains("floor")) {
-                      args.floor = call.request.at("floor").get<int>();
                     }
                     done(b->trend(args));
                   },

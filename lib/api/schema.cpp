@@ -53,6 +53,14 @@ ArgSpec flag_arg(std::string name, std::string description) {
   return spec;
 }
 
+ArgSpec text_arg(std::string name, std::string description) {
+  ArgSpec spec;
+  spec.name = std::move(name);
+  spec.type = ArgType::String;
+  spec.description = std::move(description);
+  return spec;
+}
+
 ArgSpec int_arg(std::string name, bool required, std::int64_t min, std::int64_t max,
                 std::string description) {
   ArgSpec spec;

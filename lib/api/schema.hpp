@@ -44,6 +44,8 @@ ArgSpec flag_arg(std::string name, std::string description);
 /// An integer argument within [min, max].
 ArgSpec int_arg(std::string name, bool required, std::int64_t min, std::int64_t max,
                 std::string description);
+/// An optional free-text string argument (the command checks its form and says what is allowed).
+ArgSpec text_arg(std::string name, std::string description);
 /// A string argument that must be one of `choices`.
 ArgSpec choice_arg(std::string name, bool required, std::vector<std::string> choices,
                    std::string description);

@@ -173,31 +173,28 @@ StopErrorStats::Buckets decode_histogram(const unsigned char* bytes) {
   return buckets;
 }
 
-/// Runs one query of a single integer (PRAGMA user_version and the like).
-int query_int(sqlite3* db, const char* sql, std::int64_t& value) {
+/// Runs one query of a single value (PRAGMA user_version and the like): `read(statement)` takes
+/// column 0 of its row.
+template <typename Read>
+int query_one(sqlite3* db, const char* sql, Read read) {
   sqlite3_stmt* s = nullptr;
   int rc = sqlite3_prepare_v2(db, sql, -1, &s, nullptr);
   if (rc != SQLITE_OK) return rc;
   rc = sqlite3_step(s);
   if (rc == SQLITE_ROW) {
-    value = sqlite3_column_int64(s, 0);
+    read(s);
     rc = SQLITE_OK;
   }
   sqlite3_finalize(s);
   return rc;
 }
 
+int query_int(sqlite3* db, const char* sql, std::int64_t& value) {
+  return query_one(db, sql, [&](sqlite3_stmt* s) { value = sqlite3_column_int64(s, 0); });
+}
+
 int query_text(sqlite3* db, const char* sql, std::string& value) {
-  sqlite3_stmt* s = nullptr;
-  int rc = sqlite3_prepare_v2(db, sql, -1, &s, nullptr);
-  if (rc != SQLITE_OK) return rc;
-  rc = sqlite3_step(s);
-  if (rc == SQLITE_ROW) {
-    value = column_text(s, 0);
-    rc = SQLITE_OK;
-  }
-  sqlite3_finalize(s);
-  return rc;
+  return query_one(db, sql, [&](sqlite3_stmt* s) { value = column_text(s, 0); });
 }
 
 // History filters, one bit each: a statement is prepared for each combination asked, so each
@@ -744,37 +741,37 @@ bool Store::write_travels(std::span<Travel> travels, Counters& counters, StoreEr
   return true;
 }
 
-bool Store::write_counters(Counters& counters, StoreError& error) {
-  if (!counters.changed()) return true;
-  if (!begin("writing the counters", error)) return false;
-  if (!write_changed_counters(counters, error)) {
+template <typename Body>
+bool Store::write_with_counters(std::string_view doing, Counters& counters, StoreError& error,
+                                Body body) {
+  if (!begin(doing, error)) return false;
+  if (!body() || !write_changed_counters(counters, error)) {
     rollback();
     return false;
   }
-  if (!commit("writing the counters", error)) return false;
+  if (!commit(doing, error)) return false;
   counters.mark_written();
   return true;
 }
 
+bool Store::write_counters(Counters& counters, StoreError& error) {
+  if (!counters.changed()) return true;
+  return write_with_counters("writing the counters", counters, error, [] { return true; });
+}
+
 bool Store::write_reset(const ResetEntry& reset, Counters& counters, StoreError& error) {
-  if (!begin("writing a reset", error)) return false;
   const std::string names = nlohmann::json(reset.names).dump();
-  sqlite3_stmt* s = insert_reset_.get();
-  bind_param(s, 1, reset.at_unix_ms);
-  bind_param(s, 2, std::string_view(reset.who));
-  bind_param(s, 3, std::string_view(names));
-  if (const int code = run(s); code != SQLITE_OK) {
-    error = error_of(code, "writing a reset");
-    rollback();
-    return false;
-  }
-  if (!write_changed_counters(counters, error)) {
-    rollback();
-    return false;
-  }
-  if (!commit("writing a reset", error)) return false;
-  counters.mark_written();
-  return true;
+  return write_with_counters("writing a reset", counters, error, [&] {
+    sqlite3_stmt* s = insert_reset_.get();
+    bind_param(s, 1, reset.at_unix_ms);
+    bind_param(s, 2, std::string_view(reset.who));
+    bind_param(s, 3, std::string_view(names));
+    if (const int code = run(s); code != SQLITE_OK) {
+      error = error_of(code, "writing a reset");
+      return false;
+    }
+    return true;
+  });
 }
 
 bool Store::history(const HistoryQuery& query, nlohmann::json& answer, StoreError& error) {

@@ -113,6 +113,11 @@ class Store {
   bool begin(std::string_view doing, StoreError& error);
   bool commit(std::string_view doing, StoreError& error);
   void rollback();
+  /// One write transaction: `body()` (false: it failed and set `error`), then the counters that
+  /// changed; rolled back on any failure, the counters marked written on success.
+  template <typename Body>
+  bool write_with_counters(std::string_view doing, Counters& counters, StoreError& error,
+                           Body body);
   StoreError error_of(int code, std::string_view doing) const;
 
   sqlite3* db_;

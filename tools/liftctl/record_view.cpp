@@ -213,21 +213,21 @@ std::string render_trend_svg(const json& result) {
     for (const auto& [day, row] : days) day_set.insert(day);
   }
   const std::vector<std::string> days(day_set.begin(), day_set.end());
-  constexpr double kWidth = 900;
-  constexpr double kPanel = 260;
-  constexpr double kLeft = 70;
-  constexpr double kRight = 150;
-  constexpr double kTop = 40;
-  static const char* const kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd",
-                                         "#ff7f0e", "#17becf", "#8c564b", "#e377c2"};
+  constexpr double kTrendWidth = 900;
+  constexpr double kTrendPanel = 260;
+  constexpr double kTrendLeft = 70;
+  constexpr double kTrendRight = 150;
+  constexpr double kTrendTop = 40;
+  static const char* const kTrendColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd",
+                                              "#ff7f0e", "#17becf", "#8c564b", "#e377c2"};
   std::string svg = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"900\" height=\"" +
-                    std::to_string(static_cast<int>(2 * kPanel + 3 * kTop)) + "\">\n";
+                    std::to_string(static_cast<int>(2 * kTrendPanel + 3 * kTrendTop)) + "\">\n";
   svg += "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
   const auto x_of = [&](std::size_t i) {
-    const double span = kWidth - kLeft - kRight;
-    return kLeft + (days.size() > 1
-                        ? span * static_cast<double>(i) / static_cast<double>(days.size() - 1)
-                        : span / 2);
+    const double span = kTrendWidth - kTrendLeft - kTrendRight;
+    return kTrendLeft + (days.size() > 1
+                             ? span * static_cast<double>(i) / static_cast<double>(days.size() - 1)
+                             : span / 2);
   };
   struct Panel {
     const char* object;
@@ -237,7 +237,7 @@ std::string render_trend_svg(const json& result) {
   const Panel panels[] = {{"stop_error_mm", "mean stopping error per day (mm)", 1.0},
                           {"travel_ms", "mean floor-to-floor time per day (s)", 0.001}};
   for (std::size_t p = 0; p < 2; ++p) {
-    const double top = kTop + static_cast<double>(p) * (kPanel + kTop);
+    const double top = kTrendTop + static_cast<double>(p) * (kTrendPanel + kTrendTop);
     double lo = 0;
     double hi = 0;
     bool any = false;
@@ -252,21 +252,23 @@ std::string render_trend_svg(const json& result) {
       }
     }
     if (hi - lo < 1e-9) hi = lo + 1;
-    const auto y_of = [&](double v) { return top + kPanel - (v - lo) / (hi - lo) * kPanel; };
+    const auto y_of = [&](double v) {
+      return top + kTrendPanel - (v - lo) / (hi - lo) * kTrendPanel;
+    };
     char buf[400];
     std::snprintf(
         buf, sizeof buf,
         "<text x=\"%.0f\" y=\"%.0f\" font-family=\"sans-serif\" font-size=\"14\">%s</text>\n"
         "<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"black\"/>\n"
         "<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"black\"/>\n",
-        kLeft, top - 10, panels[p].title, kLeft, top, kLeft, top + kPanel, kLeft, top + kPanel,
-        kWidth - kRight, top + kPanel);
+        kTrendLeft, top - 10, panels[p].title, kTrendLeft, top, kTrendLeft, top + kTrendPanel,
+        kTrendLeft, top + kTrendPanel, kTrendWidth - kTrendRight, top + kTrendPanel);
     svg += buf;
     for (const double v : {lo, (lo + hi) / 2, hi}) {
       std::snprintf(buf, sizeof buf,
                     "<text x=\"%.0f\" y=\"%.1f\" font-family=\"sans-serif\" font-size=\"11\" "
                     "text-anchor=\"end\">%.1f</text>\n",
-                    kLeft - 6, y_of(v) + 4, v);
+                    kTrendLeft - 6, y_of(v) + 4, v);
       svg += buf;
     }
     if (!days.empty()) {
@@ -274,7 +276,7 @@ std::string render_trend_svg(const json& result) {
         std::snprintf(buf, sizeof buf,
                       "<text x=\"%.1f\" y=\"%.0f\" font-family=\"sans-serif\" font-size=\"11\" "
                       "text-anchor=\"middle\">%s</text>\n",
-                      x_of(i), top + kPanel + 16, days[i].c_str());
+                      x_of(i), top + kTrendPanel + 16, days[i].c_str());
         svg += buf;
       }
     }
@@ -289,14 +291,14 @@ std::string render_trend_svg(const json& result) {
         std::snprintf(buf, sizeof buf, "%.1f,%.1f ", x_of(i), y_of(*v * panels[p].scale));
         points += buf;
       }
-      const char* c = kColours[colour++ % std::size(kColours)];
+      const char* c = kTrendColours[colour++ % std::size(kTrendColours)];
       svg += "<polyline fill=\"none\" stroke-width=\"2\" stroke=\"" + std::string(c) +
              "\" points=\"" + points + "\"/>\n";
       std::snprintf(buf, sizeof buf,
                     "<text x=\"%.0f\" y=\"%.0f\" font-family=\"sans-serif\" font-size=\"12\" "
                     "fill=\"%s\">floor %ld</text>\n",
-                    kWidth - kRight + 10, top + 16 + 16 * static_cast<double>(colour - 1), c,
-                    floor);
+                    kTrendWidth - kTrendRight + 10, top + 16 + 16 * static_cast<double>(colour - 1),
+                    c, floor);
       svg += buf;
     }
   }
