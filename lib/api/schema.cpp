@@ -43,22 +43,23 @@ bool fits(const ArgSpec& spec, const nlohmann::json& value) {
   return false;
 }
 
-}  // namespace
-
-ArgSpec flag_arg(std::string name, std::string description) {
+/// An optional argument of `type` with no range or choices.
+ArgSpec optional_arg(std::string name, ArgType type, std::string description) {
   ArgSpec spec;
   spec.name = std::move(name);
-  spec.type = ArgType::Bool;
+  spec.type = type;
   spec.description = std::move(description);
   return spec;
 }
 
+}  // namespace
+
+ArgSpec flag_arg(std::string name, std::string description) {
+  return optional_arg(std::move(name), ArgType::Bool, std::move(description));
+}
+
 ArgSpec text_arg(std::string name, std::string description) {
-  ArgSpec spec;
-  spec.name = std::move(name);
-  spec.type = ArgType::String;
-  spec.description = std::move(description);
-  return spec;
+  return optional_arg(std::move(name), ArgType::String, std::move(description));
 }
 
 ArgSpec int_arg(std::string name, bool required, std::int64_t min, std::int64_t max,

@@ -301,13 +301,9 @@ void report_travel(api::Server& server, const TravelEvent& t, Controller& contro
   using Type = decltype(t.type);
   const bool aborted = t.type == Type::Aborted;
   if constexpr (requires { t.target_mm; }) {
-    // A DCP run without a destination (inspection, recall; a drive fault while standing) carries
-    // none (docs/api.md `travel`).
-    using Kind = decltype(t.kind);
-    const bool has_target =
-        t.kind != Kind::None && t.kind != Kind::Inspection && t.kind != Kind::Recall;
+    // A run without a destination carries none (docs/api.md `travel`).
     report_travel(server, to_string(t.type), to_string(t.kind), t.cause, aborted,
-                  has_target ? std::optional<std::int64_t>(t.target_mm) : std::nullopt,
+                  t.has_target() ? std::optional<std::int64_t>(t.target_mm) : std::nullopt,
                   t.position_mm);
   } else {
     const char* type = t.type == Type::Started    ? "started"

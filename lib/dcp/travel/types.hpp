@@ -104,6 +104,11 @@ struct Event {
   MonoTime at{};
   std::int64_t target_mm = 0;               ///< destination level, where it applies
   std::optional<std::int64_t> position_mm;  ///< position at the event
+  /// target_mm applies: a run with a destination (not inspection or recall, not a drive fault
+  /// while standing).
+  bool has_target() const noexcept {
+    return kind != TravelKind::None && kind != TravelKind::Inspection && kind != TravelKind::Recall;
+  }
   bool operator==(const Event&) const = default;
 };
 
