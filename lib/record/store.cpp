@@ -847,67 +847,58 @@ bool Store::trend(const TrendQuery& query, nlohmann::json& answer, StoreError& e
       query.from_unix_ms ? utc_day(*query.from_unix_ms) : std::numeric_limits<std::int64_t>::min();
   const std::int64_t end_day = query.to_unix_ms ? utc_day(*query.to_unix_ms - 1) + 1
                                                 : std::numeric_limits<std::int64_t>::max();
+  // One trend statement over the days (and the floor, where asked): `row(s)` for each row.
+  const auto each_row = [&](Statement& all, Statement& one_floor, auto row) {
+    sqlite3_stmt* s = (query.floor ? one_floor : all).get();
+    ResetOnExit reset_on_exit(s);
+    bind_param(s, 1, first_day);
+    bind_param(s, 2, end_day);
+    if (query.floor) bind_param(s, 3, std::int64_t{*query.floor});
+    int code;
+    while ((code = sqlite3_step(s)) == SQLITE_ROW) row(s);
+    if (code == SQLITE_DONE) return true;
+    error = error_of(code, "reading the trend");
+    return false;
+  };
   nlohmann::json days = nlohmann::json::array();
-  sqlite3_stmt* s = (query.floor ? trend_days_floor_ : trend_days_).get();
-  {
-    ResetOnExit reset_on_exit(s);
-    bind_param(s, 1, first_day);
-    bind_param(s, 2, end_day);
-    if (query.floor) bind_param(s, 3, std::int64_t{*query.floor});
-    int code;
-    while ((code = sqlite3_step(s)) == SQLITE_ROW) {
-      const std::int64_t errors = sqlite3_column_int64(s, 3);
-      const std::int64_t travels = sqlite3_column_int64(s, 6);
-      nlohmann::json stop_error = nlohmann::json::object();
-      stop_error["count"] = errors;
-      stop_error["mean"] =
-          errors > 0 ? nlohmann::json(rounded(static_cast<double>(sqlite3_column_int64(s, 4)) /
-                                              static_cast<double>(errors)))
-                     : nlohmann::json(nullptr);
-      stop_error["worst"] = column_json(s, 5);
-      nlohmann::json travel_ms = nlohmann::json::object();
-      travel_ms["count"] = travels;
-      travel_ms["mean"] =
-          travels > 0 ? nlohmann::json(rounded(static_cast<double>(sqlite3_column_int64(s, 7)) /
-                                               static_cast<double>(travels)))
-                      : nlohmann::json(nullptr);
-      nlohmann::json day = nlohmann::json::object();
-      day["day"] = format_day(sqlite3_column_int64(s, 0));
-      day["floor"] = sqlite3_column_int64(s, 1);
-      day["arrivals"] = sqlite3_column_int64(s, 2);
-      day["stop_error_mm"] = std::move(stop_error);
-      day["travel_ms"] = std::move(travel_ms);
-      days.push_back(std::move(day));
-    }
-    if (code != SQLITE_DONE) {
-      error = error_of(code, "reading the trend");
-      return false;
-    }
-  }
+  const bool days_read = each_row(trend_days_, trend_days_floor_, [&](sqlite3_stmt* s) {
+    const std::int64_t errors = sqlite3_column_int64(s, 3);
+    const std::int64_t travels = sqlite3_column_int64(s, 6);
+    nlohmann::json stop_error = nlohmann::json::object();
+    stop_error["count"] = errors;
+    stop_error["mean"] =
+        errors > 0 ? nlohmann::json(rounded(static_cast<double>(sqlite3_column_int64(s, 4)) /
+                                            static_cast<double>(errors)))
+                   : nlohmann::json(nullptr);
+    stop_error["worst"] = column_json(s, 5);
+    nlohmann::json travel_ms = nlohmann::json::object();
+    travel_ms["count"] = travels;
+    travel_ms["mean"] =
+        travels > 0 ? nlohmann::json(rounded(static_cast<double>(sqlite3_column_int64(s, 7)) /
+                                             static_cast<double>(travels)))
+                    : nlohmann::json(nullptr);
+    nlohmann::json day = nlohmann::json::object();
+    day["day"] = format_day(sqlite3_column_int64(s, 0));
+    day["floor"] = sqlite3_column_int64(s, 1);
+    day["arrivals"] = sqlite3_column_int64(s, 2);
+    day["stop_error_mm"] = std::move(stop_error);
+    day["travel_ms"] = std::move(travel_ms);
+    days.push_back(std::move(day));
+  });
+  if (!days_read) return false;
   nlohmann::json pairs = nlohmann::json::array();
-  s = (query.floor ? trend_pairs_floor_ : trend_pairs_).get();
-  {
-    ResetOnExit reset_on_exit(s);
-    bind_param(s, 1, first_day);
-    bind_param(s, 2, end_day);
-    if (query.floor) bind_param(s, 3, std::int64_t{*query.floor});
-    int code;
-    while ((code = sqlite3_step(s)) == SQLITE_ROW) {
-      const std::int64_t travels = sqlite3_column_int64(s, 3);
-      nlohmann::json pair = nlohmann::json::object();
-      pair["day"] = format_day(sqlite3_column_int64(s, 0));
-      pair["from"] = sqlite3_column_int64(s, 1);
-      pair["to"] = sqlite3_column_int64(s, 2);
-      pair["count"] = travels;
-      pair["mean_ms"] = rounded(static_cast<double>(sqlite3_column_int64(s, 4)) /
-                                static_cast<double>(std::max<std::int64_t>(travels, 1)));
-      pairs.push_back(std::move(pair));
-    }
-    if (code != SQLITE_DONE) {
-      error = error_of(code, "reading the trend");
-      return false;
-    }
-  }
+  const bool pairs_read = each_row(trend_pairs_, trend_pairs_floor_, [&](sqlite3_stmt* s) {
+    const std::int64_t travels = sqlite3_column_int64(s, 3);
+    nlohmann::json pair = nlohmann::json::object();
+    pair["day"] = format_day(sqlite3_column_int64(s, 0));
+    pair["from"] = sqlite3_column_int64(s, 1);
+    pair["to"] = sqlite3_column_int64(s, 2);
+    pair["count"] = travels;
+    pair["mean_ms"] = rounded(static_cast<double>(sqlite3_column_int64(s, 4)) /
+                              static_cast<double>(std::max<std::int64_t>(travels, 1)));
+    pairs.push_back(std::move(pair));
+  });
+  if (!pairs_read) return false;
   answer = nlohmann::json::object();
   answer["days"] = std::move(days);
   answer["pairs"] = std::move(pairs);

@@ -188,7 +188,7 @@ struct ControllerSnapshot {
   /// Why the handshake has not completed (empty when it has, DCP 5.12.2).
   std::string_view handshake_problem;
   bool shutting_down = false;  ///< ShutdownCommand received
-  bool learning = false;  ///< a learning travel runs (status service.reason)
+  bool learning = false;       ///< a learning travel runs (status service.reason)
   /// Shutting down and at rest: no travel, S1 = 0, and at least one DCP 7.3 supervision window
   /// of frames without B0/B1/B2 has gone out.
   bool quiesced = false;
