@@ -526,6 +526,7 @@ int main(int argc, char** argv) {
   int board_cpu = -1;
   bool idle_poll = true;
   int api_limit = -1;  // -1: the configuration's default
+  bool record = true;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--seconds") == 0 && i + 1 < argc) {
       phase = std::chrono::seconds(std::max(1, std::atoi(argv[++i])));
@@ -537,10 +538,12 @@ int main(int argc, char** argv) {
       api_limit = std::max(0, std::atoi(argv[++i]));
     } else if (std::strcmp(argv[i], "--no-idle-poll") == 0) {
       idle_poll = false;
+    } else if (std::strcmp(argv[i], "--no-record") == 0) {
+      record = false;
     } else {
       std::fprintf(stderr,
                    "usage: api-load-bench [--seconds N] [--no-uss] [--api-limit R]\n"
-                   "                      [--board CPU [--no-idle-poll]]\n"
+                   "                      [--board CPU [--no-idle-poll]] [--no-record]\n"
                    "  N seconds per window (default 20): quiet, then 1, 8 and 32 clients\n"
                    "  --no-uss     without the USS bus beside the DCP cycle\n"
                    "  --api-limit R  api.max_requests_per_s (default: the configuration's\n"
@@ -549,7 +552,9 @@ int main(int argc, char** argv) {
                    "               real-time threads and the unbound workqueue on CPU (0..31),\n"
                    "               every other thread off it, a SCHED_IDLE spin keeping CPU\n"
                    "               from halting; root, two CPUs or more\n"
-                   "  --no-idle-poll  --board without the spin\n");
+                   "  --no-idle-poll  --board without the spin\n"
+                   "  --no-record  the lift keeps no record (record.enabled false): its\n"
+                   "               travels' commits off the io thread, to compare\n");
       return 2;
     }
   }
@@ -596,6 +601,7 @@ int main(int argc, char** argv) {
   cfg.rt.lock_memory = true;  // as the service runs
   cfg.rt.cpu = board_cpu;
   if (api_limit >= 0) cfg.api.max_requests_per_s = api_limit;
+  cfg.record.enabled = record;
   // 32 load clients plus the dispatcher and the `stats` look of each window.
   cfg.api.max_clients = 40;
   liftd::daemon::Daemon daemon(cfg, liftd::service::Notifier::from_environment(), std::nullopt);
