@@ -43,6 +43,8 @@ liftd is starting against a simulated lift. In another terminal, try:
   build/bin/liftctl --socket $socket key 1 && build/bin/liftctl --socket $socket display   (DCP only)
   build/bin/liftctl --socket $socket raw '{"cmd":"sim","action":"sink"}'   (hydraulic: the car sinks, liftd relevels)
   build/bin/liftctl --socket $socket uss-read 52        (USS: a parameter of the drive)
+  build/bin/liftctl --socket $socket counters           (the lift's record: $runtime/record.db,
+  build/bin/liftctl --socket $socket history            kept from one demo to the next)
 
 Ctrl-C stops liftd.
 
