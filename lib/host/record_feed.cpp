@@ -142,6 +142,9 @@ api::Result RecordFeed::counters() const {
 
 api::Result RecordFeed::reset(const std::vector<std::string>& names, const std::string& who) {
   const record::ResetResult r = record_->reset(names, who, unix_ms_now());
+  // A record that is off refuses every reset (it could not be kept): the lift's state, not the
+  // request, is what is wrong then.
+  if (!r.ok && !record_->on()) return api::Result::fail(api::ErrorCode::NotReady, r.error);
   if (!r.ok) return api::Result::fail(api::ErrorCode::BadRequest, r.error, "names");
   return api::Result::ok(record_->counters_json());
 }

@@ -182,6 +182,10 @@ TEST_P(RecordParity, ARecordThatCannotBeWrittenIsOffAndTheLiftGoesOn) {
     const json history = lift.call({{"cmd", "history"}});
     ASSERT_TRUE(history.value("ok", false)) << history.dump();
     EXPECT_TRUE(history["result"]["travels"].empty()) << history.dump();
+    // A reset could not be kept: refused as the lift's state, nothing reset.
+    const json reset = lift.call({{"cmd", "counters_reset"}, {"names", {"all"}}});
+    EXPECT_EQ(reset["error"]["code"], "not_ready") << reset.dump();
+    EXPECT_EQ(counters_once(lift, 1)["counters"]["travels"], 1);
   });
 }
 
