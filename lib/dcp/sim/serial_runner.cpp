@@ -472,18 +472,27 @@ void SerialDriveRunner::run() noexcept {
         std::lock_guard lock(mutex_);
         ++counters_.collisions;
       }
-      // The transceiver gives the master its own bytes back as they pass.
-      if (options_.echo &&
-          port_.write_frame(std::span(buf.data(), r.bytes)).status != io::IoStatus::Ok) {
+    }
+    // The transceiver gives the master its own bytes back as they pass, so on the line a
+    // frame's copy always stands before the reply to it, and the next frame's copy after that
+    // reply. A look that found two frames (this thread was held up) gives each copy back just
+    // before its reply, never both copies ahead of both replies.
+    std::size_t echoed = 0;
+    const auto echo_through = [&](std::size_t end_of) {
+      if (!options_.echo || lost || end_of <= echoed) return;
+      if (port_.write_frame(std::span(buf.data() + echoed, end_of - echoed)).status !=
+          io::IoStatus::Ok) {
         std::lock_guard lock(mutex_);
         ++counters_.write_failures;
       }
-    }
+      echoed = end_of;
+    };
     for (std::size_t i = 0; i < r.bytes; ++i) {
       frame[have++] = buf[i];
       last_byte = now;
       if (have < frame.size()) continue;
       have = 0;
+      echo_through(i + 1);
       Reply reply;
       {
         std::lock_guard lock(mutex_);
@@ -499,6 +508,7 @@ void SerialDriveRunner::run() noexcept {
         }
       }
     }
+    echo_through(r.bytes);  // a partial frame's bytes pass the transceiver too
     {
       std::lock_guard lock(mutex_);
       const MonoTime t = mono_now();
