@@ -277,6 +277,9 @@ Result Backend::history(const HistoryArgs&) {
 Result Backend::trend(const TrendArgs&) {
   return no_record();
 }
+Result Backend::eta(const EtaArgs&) {
+  return Result::fail(ErrorCode::NotOffered, "no arrival times: this backend has no travels");
+}
 
 void Backend::travel(const TravelArgs&, Responder done) {
   no_travel(done);

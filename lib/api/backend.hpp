@@ -91,6 +91,12 @@ struct TrendArgs {
   std::optional<int> floor;                  ///< one floor only
 };
 
+/// `eta`: the arrival times, and optionally a floor added to the calls queue.
+struct EtaArgs {
+  std::optional<int> floor;             ///< a floor to add (`floor`)
+  std::optional<std::size_t> position;  ///< where in the calls queue (`position`); none: the end
+};
+
 /// Everything `status` reports, filled by the backend. The drive-neutral fields every drive kind
 /// fills alike; what only one kind has goes into `details`, reported under the kind's name.
 struct StatusSnapshot {
@@ -255,6 +261,11 @@ class Backend {
   virtual Result history(const HistoryArgs& args);
   /// Floor-to-floor time and stopping error per floor and day (`trend`).
   virtual Result trend(const TrendArgs& args);
+
+  // ---- for a group dispatcher ----
+  /// When the car could stand at each floor's level, and what adding `args.floor` would cost the
+  /// queued stops (`eta`, docs/api.md "Arrival times"). The default: `not_offered`.
+  virtual Result eta(const EtaArgs& args);
 
   // ---- the simulated lift (liftd --simulate only) ----
   /// Fault injection and door/safety-chain handling on the simulated lift. The result is the

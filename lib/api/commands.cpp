@@ -116,6 +116,26 @@ void add_state_commands(Dispatcher& dispatcher, Backend* b,
                     done(b->travels(static_cast<std::size_t>(last)));
                   },
                   kEveryDriveKind});
+
+  dispatcher.add(
+      {"eta",
+       Access::Read,
+       {int_arg("floor", false, 0, kMaxFloorIndex,
+                "a floor to add to the calls queue: its arrival time and how much later each "
+                "queued stop would be"),
+        int_arg("position", false, 0, kMaxFloorIndex,
+                "where in the calls queue `floor` would go (0: first; default: at the end)")},
+       "arrival times: when the car could stand at each floor, from its state and its measured "
+       "travels",
+       [b](const Call& call, Responder done) {
+         EtaArgs args;
+         if (call.request.contains("floor")) args.floor = call.request.at("floor").get<int>();
+         if (call.request.contains("position")) {
+           args.position = call.request.at("position").get<std::size_t>();
+         }
+         done(b->eta(args));
+       },
+       kEveryDriveKind});
 }
 
 /// The commands that read the daemon's configuration and version.

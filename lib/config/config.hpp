@@ -105,6 +105,14 @@ struct RecordConfig {
   int curves_kept = 100;      ///< record.curves_kept: the newest travels that keep their curve
 };
 
+/// `eta.*`: the profile the arrival times (`eta`) use until the car measured travels of its own.
+struct EtaConfig {
+  int speed_mm_s = 1000;         ///< eta.speed_mm_s: rated speed
+  int acceleration_mm_s2 = 600;  ///< eta.acceleration_mm_s2: acceleration and deceleration
+  int start_ms = 2000;           ///< eta.start_ms: a travel's time beyond its motion
+  int stop_ms = 1000;            ///< eta.stop_ms: arrival at a queued stop to the next start
+};
+
 /// `inputs.*`
 struct InputsConfig {
   int timeout_ms = defaults::kInputsTimeoutMs;  ///< inputs.timeout_ms
@@ -241,6 +249,7 @@ struct Config {
   ApiConfig api;                                 ///< api.*
   InputsConfig inputs;                           ///< inputs.*
   RecordConfig record;                           ///< record.*
+  EtaConfig eta;                                 ///< eta.*
   std::vector<Floor> floors = default_floors();  ///< floors
   PositionConfig position;                       ///< position.*
   TravelConfig travel;                           ///< travel.*

@@ -102,6 +102,7 @@ std::vector<Key> rt_keys();      ///< rt.*
 std::vector<Key> api_keys();     ///< api.*
 std::vector<Key> inputs_keys();  ///< inputs.*
 std::vector<Key> record_keys();  ///< record.*
+std::vector<Key> eta_keys();     ///< eta.*
 /// floors, with the names and levels `rules` allows.
 std::vector<Key> floors_keys(const FloorRules& rules);
 std::vector<Key> position_keys();  ///< position.*

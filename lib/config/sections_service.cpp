@@ -177,6 +177,27 @@ std::vector<Key> record_keys() {
   return t;
 }
 
+// Until the car measured travels of its own, `eta` (docs/api.md "Arrival times") uses these.
+std::vector<Key> eta_keys() {
+  std::vector<Key> t;
+  t.push_back(int_key("eta.speed_mm_s", 50, 20000,
+                      "the rated speed the arrival times assume until the car measured its own",
+                      &Config::eta, &EtaConfig::speed_mm_s));
+  t.push_back(int_key("eta.acceleration_mm_s2", 50, 5000,
+                      "the acceleration (and deceleration) the arrival times assume until the car "
+                      "measured its own",
+                      &Config::eta, &EtaConfig::acceleration_mm_s2));
+  t.push_back(int_key("eta.start_ms", 0, 60000,
+                      "a travel's time beyond its motion (start, levelling, stop) until the car "
+                      "measured its own",
+                      &Config::eta, &EtaConfig::start_ms));
+  t.push_back(int_key("eta.stop_ms", 0, 300000,
+                      "how long the car stands at a queued stop before it travels on, until it "
+                      "measured that itself",
+                      &Config::eta, &EtaConfig::stop_ms));
+  return t;
+}
+
 // The simulated shaft's levels: at most as many as floors may be configured, each within the
 // range of a floor's level (I9's six digits, DCP 5.12.9), strictly increasing.
 void apply_shaft_levels(const json& value, const std::string& where, Config& cfg,

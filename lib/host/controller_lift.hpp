@@ -18,6 +18,7 @@
 //   car_moving(snapshot).
 #pragma once
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <functional>
@@ -35,6 +36,7 @@
 #include "common/position_source.hpp"
 #include "config/config.hpp"
 #include "drive/drive.hpp"
+#include "host/eta.hpp"
 #include "host/host.hpp"
 #include "host/learn_report.hpp"
 #include "host/lift_common.hpp"
@@ -72,6 +74,7 @@ class ControllerBackend : public api::Backend {
                          std::string(Drive::kName), std::move(decoder)),
         travel_log_(Drive::travel_bit_names(), floor_levels_mm(config)),
         record_(config, sim != nullptr, mono_now()),
+        eta_times_(floor_levels_mm(config), eta_defaults(config)),
         mono_at_start_(mono_now()),
         wall_at_start_(std::chrono::system_clock::now()) {
     travel_log_.set_completion_listener([this](const RecordedTravel& t) { keep_travel(t); });
@@ -160,6 +163,39 @@ class ControllerBackend : public api::Backend {
   }
   api::Result history(const api::HistoryArgs& args) override { return record_.history(args); }
   api::Result trend(const api::TrendArgs& args) override { return record_.trend(args); }
+
+  /// `eta`: from the car's status (every kind's, so out of service means the same) and the
+  /// travels the log measured (docs/api.md "Arrival times").
+  api::Result eta(const api::EtaArgs& args) override {
+    const auto floors = static_cast<int>(config_.floors.size());
+    if (args.floor && *args.floor >= floors) {
+      return api::Result::fail(api::ErrorCode::BadRequest,
+                               "field \"floor\": " + std::to_string(*args.floor) +
+                                   " is no floor; allowed: 0.." + std::to_string(floors - 1));
+    }
+    const api::StatusSnapshot s = status();
+    if (args.position && *args.position > s.calls.size()) {
+      return api::Result::fail(api::ErrorCode::BadRequest,
+                               "field \"position\": " + std::to_string(*args.position) +
+                                   " is beyond the calls queue; allowed: 0.." +
+                                   std::to_string(s.calls.size()));
+    }
+    EtaCar car;
+    car.in_service = s.out_of_service.empty();
+    car.reason = s.out_of_service;
+    car.position_mm = s.position_mm;
+    car.floor = s.floor;
+    car.target = s.target_floor;
+    car.calls = s.calls;
+    const auto& log = travel_log_.travels();
+    if (s.target_floor && !log.empty() && !log.back().ended && !log.back().samples.empty()) {
+      const RecordedTravel& running = log.back();
+      car.travelling = true;
+      car.elapsed_s = std::chrono::duration<double>(mono_now() - running.start).count();
+      car.origin = travel_origin(running);
+    }
+    return api::Result::ok(estimate_eta(eta_times_, car, {args.floor, args.position}));
+  }
 
   /// The serial device of a drive link on a serial line (serial_device_report.hpp), for `stats`.
   void set_serial_device(io::SerialDeviceInfo info) { serial_device_ = std::move(info); }
@@ -274,6 +310,7 @@ class ControllerBackend : public api::Backend {
   /// curves). The floors are told within the relevelling threshold: a car farther off its level
   /// stands between floors.
   void keep_travel(const RecordedTravel& t) {
+    learn_travel_time(t);
     const auto unix_ms = [this](MonoTime at) {
       return std::chrono::duration_cast<std::chrono::milliseconds>(wall_time(at).time_since_epoch())
           .count();
@@ -285,10 +322,74 @@ class ControllerBackend : public api::Backend {
                    mono_now());
   }
 
+  static EtaDefaults eta_defaults(const config::Config& c) {
+    return {static_cast<double>(c.eta.speed_mm_s), static_cast<double>(c.eta.acceleration_mm_s2),
+            c.eta.start_ms / 1000.0, c.eta.stop_ms / 1000.0};
+  }
+  /// The floor a travel started at (within the relevelling threshold), if any.
+  std::optional<int> travel_origin(const RecordedTravel& t) const {
+    if (t.samples.empty() || !t.samples.front().position_known) return std::nullopt;
+    return floor_near(floor_levels_mm(config_), t.samples.front().position_mm,
+                      config_.travel.relevel_threshold_mm);
+  }
+  /// A completed travel to `eta`'s times: a floor-to-floor travel of the lift's own (not a
+  /// relevelling, an inspection or recall run, nor a learning travel's leg) that stood at its
+  /// target; and the time the car stood at a queued stop before it (arrival to this start).
+  void learn_travel_time(const RecordedTravel& t) {
+    const bool queued_before = stop_from_.has_value();
+    const MonoTime stood_from = stop_from_.value_or(MonoTime{});
+    stop_from_.reset();
+    if (t.cause != std::optional<std::string>("arrived") || !t.target_floor) return;
+    const auto snapshot = controller_.snapshot();
+    if (snapshot.learning || !eta_floor_to_floor(t.kind)) return;
+    if (queued_before && t.start > stood_from && t.start - stood_from < std::chrono::seconds(60)) {
+      eta_times_.stop(std::chrono::duration<double>(t.start - stood_from).count());
+    }
+    // A stop follows when the car has another call queued at its arrival.
+    if (snapshot.call_count > 0) stop_from_ = t.end;
+    const auto from = travel_origin(t);
+    if (!from || t.samples.empty() || !t.samples.back().position_known) return;
+    const std::int64_t level = floor_levels_mm(config_).at(*t.target_floor);
+    if (std::llabs(t.samples.back().position_mm - level) > config_.travel.relevel_threshold_mm) {
+      return;
+    }
+    MeasuredTravel m;
+    m.from = *from;
+    m.to = static_cast<int>(*t.target_floor);
+    m.duration_s = std::chrono::duration<double>(t.end - t.start).count();
+    // The speed is the position's change over a few cycles, noisy by a few per cent: the top
+    // speed is the fastest tenth's slowest, not the single fastest sample.
+    std::vector<double> speeds;
+    for (const auto& sample : t.samples) {
+      if (sample.speed_known && sample.speed_mm_s != 0) {
+        speeds.push_back(std::abs(static_cast<double>(sample.speed_mm_s)));
+      }
+    }
+    if (!speeds.empty()) {
+      const auto tenth = speeds.begin() + static_cast<std::ptrdiff_t>(speeds.size() / 10);
+      std::nth_element(speeds.begin(), tenth, speeds.end(), std::greater<>());
+      m.top_speed_mm_s = *tenth;
+    }
+    std::optional<MonoTime> moving_from;
+    for (const auto& sample : t.samples) {
+      if (!sample.speed_known) continue;
+      const double v = std::abs(static_cast<double>(sample.speed_mm_s));
+      if (!moving_from && v > 0.0) moving_from = sample.at;
+      if (moving_from && m.top_speed_mm_s > 0.0 && v >= 0.9 * m.top_speed_mm_s) {
+        m.acceleration_time_s = std::chrono::duration<double>(sample.at - *moving_from).count();
+        break;
+      }
+    }
+    eta_times_.travel(m);
+  }
+
   void send_inputs(const lift::Inputs& inputs) {
     (void)controller_.post(typename Drive::Command{0, typename Drive::InputsCommand{inputs}});
   }
 
+  TravelTimes eta_times_;  ///< `eta`'s measured travel and stop times
+  /// The arrival of the last travel, when another call was queued then: the stop's start.
+  std::optional<MonoTime> stop_from_;
   MonoTime mono_at_start_{};
   std::chrono::system_clock::time_point wall_at_start_{};
   std::function<void(const nlohmann::json&)> learn_listener_;

@@ -16,6 +16,7 @@ const config::Schema& config_schema() {
     s.add(config::api_keys());
     s.add(config::inputs_keys());
     s.add(config::record_keys());
+    s.add(config::eta_keys());
     // Floor names and levels follow the DCP display (appendix A) and I9 (DCP 5.12.9) for every
     // kind, so a building's floors stay valid when its drive changes.
     s.add(config::floors_keys(dcp::floor_rules()));

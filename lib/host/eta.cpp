@@ -1,0 +1,259 @@
+#include "host/eta.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <utility>
+
+namespace liftd::daemon {
+namespace {
+
+/// Seconds as `eta` gives them: whole milliseconds (the io thread's times are no finer).
+double seconds(double s) {
+  return std::round(std::max(0.0, s) * 1000.0) / 1000.0;
+}
+
+}  // namespace
+
+bool eta_floor_to_floor(std::string_view kind) noexcept {
+  for (std::string_view other :
+       {"relevel", "relevel_distance", "inspection", "recall", "learn", "crawl", "fast_start"}) {
+    if (kind == other) return false;
+  }
+  return true;
+}
+
+double TravelTimes::Window::median() const {
+  const std::size_t n = std::min(count, kKept);
+  std::array<double, kKept> sorted = values;
+  std::sort(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(n));
+  return n % 2 == 1 ? sorted[n / 2] : (sorted[n / 2 - 1] + sorted[n / 2]) / 2.0;
+}
+
+TravelTimes::TravelTimes(std::vector<std::int64_t> levels_mm, EtaDefaults defaults)
+    : levels_mm_(std::move(levels_mm)),
+      defaults_(defaults),
+      pairs_(levels_mm_.size() * levels_mm_.size()) {}
+
+void TravelTimes::travel(const MeasuredTravel& t) {
+  const auto n = static_cast<int>(levels_mm_.size());
+  if (t.from < 0 || t.to < 0 || t.from >= n || t.to >= n || t.from == t.to) return;
+  if (!(t.duration_s > 0.0)) return;
+  pairs_[static_cast<std::size_t>(t.from * n + t.to)].add(t.duration_s);
+  // The profile for the pairs never travelled: the rated speed is the fastest a travel reached
+  // (a short one may never reach it, so its top speed says nothing of the rated one); the
+  // acceleration from a travel that did; the overhead (start, levelling, stop) as what is left
+  // of each travel's time beyond the motion the profile gives it.
+  const double distance = std::abs(static_cast<double>(level_mm(t.to) - level_mm(t.from)));
+  if (t.top_speed_mm_s > 0.0 && (top_speed_.empty() || t.top_speed_mm_s >= 0.9 * speed_mm_s())) {
+    top_speed_.add(t.top_speed_mm_s);
+    if (t.acceleration_time_s && *t.acceleration_time_s > 0.0) {
+      acceleration_.add(0.9 * t.top_speed_mm_s / *t.acceleration_time_s);
+    }
+  }
+  overhead_.add(t.duration_s - motion_s(distance, speed_mm_s(), acceleration_mm_s2()));
+}
+
+void TravelTimes::stop(double s) {
+  if (s >= 0.0) stop_.add(s);
+}
+
+double TravelTimes::speed_mm_s() const {
+  return top_speed_.empty() ? defaults_.speed_mm_s : top_speed_.median();
+}
+double TravelTimes::acceleration_mm_s2() const {
+  return acceleration_.empty() ? defaults_.acceleration_mm_s2 : acceleration_.median();
+}
+double TravelTimes::overhead_s() const {
+  return overhead_.empty() ? defaults_.overhead_s : std::max(0.0, overhead_.median());
+}
+double TravelTimes::stop_s() const {
+  return stop_.empty() ? defaults_.stop_s : stop_.median();
+}
+
+double TravelTimes::motion_s(double distance_mm, double speed, double acceleration) {
+  if (distance_mm <= 0.0 || speed <= 0.0 || acceleration <= 0.0) return 0.0;
+  // A trapezoid: accelerate to the speed, travel, decelerate alike; a travel too short to reach
+  // the speed is a triangle.
+  const double ramp_mm = speed * speed / acceleration;  // both ramps together
+  if (distance_mm >= ramp_mm) return distance_mm / speed + speed / acceleration;
+  return 2.0 * std::sqrt(distance_mm / acceleration);
+}
+
+double TravelTimes::profile_s(double distance_mm) const {
+  return overhead_s() + motion_s(distance_mm, speed_mm_s(), acceleration_mm_s2());
+}
+
+bool TravelTimes::learned(int from, int to) const {
+  const auto n = static_cast<int>(levels_mm_.size());
+  if (from < 0 || to < 0 || from >= n || to >= n) return false;
+  return !pairs_[static_cast<std::size_t>(from * n + to)].empty();
+}
+
+double TravelTimes::leg_s(int from, int to, bool* learned_out) const {
+  if (from == to) {
+    if (learned_out) *learned_out = true;
+    return 0.0;
+  }
+  const bool known = learned(from, to);
+  if (learned_out) *learned_out = known;
+  if (known) {
+    return pairs_[static_cast<std::size_t>(from * static_cast<int>(levels_mm_.size()) + to)]
+        .median();
+  }
+  return profile_s(std::abs(static_cast<double>(level_mm(to) - level_mm(from))));
+}
+
+nlohmann::json TravelTimes::basis_json() const {
+  std::size_t pairs = 0;
+  for (const Window& w : pairs_) pairs += w.empty() ? 0U : 1U;
+  return {{"speed_mm_s", std::round(speed_mm_s())},
+          {"acceleration_mm_s2", std::round(acceleration_mm_s2())},
+          {"overhead_s", seconds(overhead_s())},
+          {"stop_s", seconds(stop_s())},
+          {"travels_measured", overhead_.count},
+          {"pairs_learned", pairs},
+          {"stops_measured", stop_.count}};
+}
+
+namespace {
+
+struct Stop {
+  int floor = 0;
+  double s = 0.0;
+  bool learned = true;
+};
+
+/// Where the car starts its plan from: the floor it travels to now (with the time it arrives)
+/// or the floor it stands at.
+struct Start {
+  int floor = 0;
+  double s = 0.0;
+  bool learned = true;
+  bool arrives = false;  ///< a running travel ends at `floor`: the car stops there first
+};
+
+int nearest_floor(const TravelTimes& times, std::int64_t position_mm) {
+  int best = 0;
+  for (int f = 1; f < static_cast<int>(times.floor_count()); ++f) {
+    if (std::llabs(times.level_mm(f) - position_mm) <
+        std::llabs(times.level_mm(best) - position_mm))
+      best = f;
+  }
+  return best;
+}
+
+Start start_of(const TravelTimes& times, const EtaCar& car) {
+  Start s;
+  if (car.travelling && car.target) {
+    s.floor = *car.target;
+    s.arrives = true;
+    double whole = 0.0;
+    if (car.origin) {
+      whole = times.leg_s(*car.origin, *car.target, &s.learned);
+    } else {
+      // Started between floors (a relevelling, a travel after a stop between floors): the
+      // profile from where it was then is unknown; take the distance left now.
+      s.learned = false;
+      const std::int64_t from = car.position_mm.value_or(times.level_mm(*car.target));
+      whole = times.profile_s(std::abs(static_cast<double>(times.level_mm(*car.target) - from))) +
+              car.elapsed_s;
+    }
+    s.s = std::max(0.0, whole - car.elapsed_s);
+    return s;
+  }
+  if (car.floor) {
+    s.floor = *car.floor;
+  } else if (car.position_mm) {
+    s.floor = nearest_floor(times, *car.position_mm);
+    s.learned = false;
+  }
+  return s;
+}
+
+/// The time of each stop of `plan` (floors in order) after `start`.
+std::vector<Stop> schedule(const TravelTimes& times, const Start& start,
+                           const std::vector<int>& plan) {
+  std::vector<Stop> out;
+  int at = start.floor;
+  double t = start.s;
+  bool learned = start.learned;
+  bool stopped = start.arrives;  // the car stands at `at` before it travels on
+  for (int floor : plan) {
+    if (floor == at && !stopped) {
+      out.push_back({floor, t, learned});
+      continue;
+    }
+    bool leg_learned = true;
+    if (stopped) t += times.stop_s();
+    t += times.leg_s(at, floor, &leg_learned);
+    learned = learned && leg_learned;
+    out.push_back({floor, t, learned});
+    at = floor;
+    stopped = true;
+  }
+  return out;
+}
+
+nlohmann::json stop_json(const Stop& s) {
+  return {{"floor", s.floor}, {"s", seconds(s.s)}, {"learned", s.learned}};
+}
+
+}  // namespace
+
+nlohmann::json estimate_eta(const TravelTimes& times, const EtaCar& car,
+                            const EtaQuestion& question) {
+  nlohmann::json out = nlohmann::json::object();
+  out["in_service"] = car.in_service;
+  out["reason"] = car.in_service ? nlohmann::json(nullptr) : nlohmann::json(car.reason);
+  out["basis"] = times.basis_json();
+  if (!car.in_service || times.floor_count() == 0 || (!car.floor && !car.position_mm)) {
+    // A car out of service reaches no floor a dispatcher could count on.
+    out["stops"] = nlohmann::json::array();
+    out["floors"] = nullptr;
+    if (question.floor) out["with"] = nullptr;
+    return out;
+  }
+  const Start start = start_of(times, car);
+  const std::vector<Stop> stops = schedule(times, start, car.calls);
+
+  nlohmann::json stops_json = nlohmann::json::array();
+  if (start.arrives) stops_json.push_back(stop_json({start.floor, start.s, start.learned}));
+  for (const Stop& s : stops) stops_json.push_back(stop_json(s));
+  out["stops"] = std::move(stops_json);
+
+  // Every floor: its first stop in the plan, else one more stop at the plan's end.
+  const Start end =
+      stops.empty() ? start : Start{stops.back().floor, stops.back().s, stops.back().learned, true};
+  nlohmann::json floors = nlohmann::json::array();
+  for (int f = 0; f < static_cast<int>(times.floor_count()); ++f) {
+    std::optional<Stop> first;
+    if (start.arrives && start.floor == f) first = Stop{f, start.s, start.learned};
+    for (const Stop& s : stops) {
+      if (!first && s.floor == f) first = s;
+    }
+    if (!first) first = schedule(times, end, {f}).front();
+    floors.push_back(stop_json(*first));
+  }
+  out["floors"] = std::move(floors);
+
+  if (question.floor) {
+    const std::size_t at = std::min(question.position.value_or(car.calls.size()), car.calls.size());
+    std::vector<int> plan = car.calls;
+    plan.insert(plan.begin() + static_cast<std::ptrdiff_t>(at), *question.floor);
+    const std::vector<Stop> with = schedule(times, start, plan);
+    nlohmann::json delays = nlohmann::json::array();
+    for (std::size_t i = 0; i < stops.size(); ++i) {
+      const Stop& later = with[i < at ? i : i + 1];
+      delays.push_back({{"floor", stops[i].floor}, {"s", seconds(later.s - stops[i].s)}});
+    }
+    out["with"] = {{"floor", *question.floor},
+                   {"position", at},
+                   {"s", seconds(with[at].s)},
+                   {"learned", with[at].learned},
+                   {"delays", std::move(delays)}};
+  }
+  return out;
+}
+
+}  // namespace liftd::daemon

@@ -1,0 +1,119 @@
+// Arrival times for a group dispatcher (`eta`, docs/api.md "Arrival times"): when could the car
+// stand at each floor's level, and how much later would its queued stops be if a floor were
+// added. Every drive kind alike, on the io thread only: the times come from the travels the car
+// made (the travel log's completed travels) and, for a pair of floors it never travelled
+// between, from a motion profile fitted to those travels or, before the first one, configured
+// (`eta.*`). Sans-I/O: the caller gives the time and the car's state.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace liftd::daemon {
+
+/// The profile used before the car made a travel of its own (`eta.*`).
+struct EtaDefaults {
+  double speed_mm_s = 1000.0;         ///< eta.speed_mm_s: rated speed
+  double acceleration_mm_s2 = 600.0;  ///< eta.acceleration_mm_s2: as the deceleration
+  double overhead_s = 2.0;            ///< eta.start_ms: a travel's time beyond its motion
+  double stop_s = 1.0;                ///< eta.stop_ms: arrival to the next travel's start
+};
+
+/// The car now, as the io thread sees it.
+struct EtaCar {
+  bool in_service = true;
+  std::string reason;                       ///< service.reason while out of service
+  std::optional<std::int64_t> position_mm;  ///< none: unknown
+  std::optional<int> floor;                 ///< at rest at this floor's level
+  bool travelling = false;                  ///< a run is under way
+  std::optional<int> target;                ///< the running travel's target floor
+  std::optional<int> origin;  ///< the floor the running travel started at (none: between)
+  double elapsed_s = 0.0;     ///< since the running travel started
+  std::vector<int> calls;     ///< the calls queue, in order (the target not included)
+};
+
+/// One measured travel between two floors (a finished travel of the lift's own kind).
+struct MeasuredTravel {
+  int from = 0;
+  int to = 0;
+  double duration_s = 0.0;  ///< first sample of the run to its end (the car at the level)
+  double top_speed_mm_s = 0.0;
+  /// Start of motion to 90 % of the top speed (none: the curve did not tell).
+  std::optional<double> acceleration_time_s;
+};
+
+/// The travel times the car learned, per ordered pair of floors, and the profile fitted to
+/// them for the pairs it never travelled between.
+class TravelTimes {
+ public:
+  /// Measurements kept per pair and for the profile's fit: the newest ones, their median used.
+  static constexpr std::size_t kKept = 9;
+
+  TravelTimes(std::vector<std::int64_t> levels_mm, EtaDefaults defaults);
+
+  /// A finished travel between two floors. Ignored if a floor is out of range or they are one.
+  void travel(const MeasuredTravel& t);
+  /// The time a car stood at a queued stop: its arrival to the next travel's start.
+  void stop(double seconds);
+
+  /// Seconds from a travel's start at `from` to the car at `to`'s level; `learned` tells whether
+  /// this pair was measured.
+  double leg_s(int from, int to, bool* learned = nullptr) const;
+  /// Seconds the car stands at a queued stop before it travels on.
+  double stop_s() const;
+  /// The profile's time for a travel of `distance_mm`, overhead included.
+  double profile_s(double distance_mm) const;
+  /// Whether the pair `from`, `to` was measured.
+  bool learned(int from, int to) const;
+
+  std::size_t floor_count() const noexcept { return levels_mm_.size(); }
+  std::int64_t level_mm(int floor) const { return levels_mm_.at(static_cast<std::size_t>(floor)); }
+  /// `basis` of the answer: the profile in use and how many measurements it rests on.
+  nlohmann::json basis_json() const;
+
+ private:
+  /// The newest kKept values and their median.
+  struct Window {
+    std::array<double, kKept> values{};
+    std::size_t count = 0;  ///< values taken in all
+    void add(double v) noexcept { values[count++ % kKept] = v; }
+    bool empty() const noexcept { return count == 0; }
+    double median() const;
+  };
+  double speed_mm_s() const;
+  double acceleration_mm_s2() const;
+  double overhead_s() const;
+  static double motion_s(double distance_mm, double speed, double acceleration);
+
+  std::vector<std::int64_t> levels_mm_;
+  EtaDefaults defaults_;
+  std::vector<Window> pairs_;  ///< [from * floors + to]
+  Window top_speed_;
+  Window acceleration_;
+  Window overhead_;
+  Window stop_;
+};
+
+/// Whether a travel of this kind (its API name) is one a call runs from floor to floor: not a
+/// relevelling, an inspection or recall run, a learning travel or DCP3's crawl.
+bool eta_floor_to_floor(std::string_view kind) noexcept;
+
+/// `eta`'s question: the car's state, and optionally a floor to add at queue position
+/// `position` (0 = before the first queued call; none: at the end).
+struct EtaQuestion {
+  std::optional<int> floor;
+  std::optional<std::size_t> position;
+};
+
+/// The answer as `eta`'s result (docs/api.md "Arrival times").
+nlohmann::json estimate_eta(const TravelTimes& times, const EtaCar& car,
+                            const EtaQuestion& question);
+
+}  // namespace liftd::daemon

@@ -1,0 +1,174 @@
+// `eta` (docs/api.md "Arrival times"): the profile before any travel, what one measured travel
+// teaches, the stops queued before a floor, a running travel, a floor added to the queue, and
+// a car out of service. Times are worked out by hand from the trapezoid profile.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "host/eta.hpp"
+
+namespace liftd::daemon {
+namespace {
+
+// Six floors 3 m apart; 1 m/s, 0.5 m/s^2, 2 s overhead, 3 s at a stop.
+TravelTimes six_floors() {
+  return TravelTimes({0, 3000, 6000, 9000, 12000, 15000}, EtaDefaults{1000.0, 500.0, 2.0, 3.0});
+}
+
+double floor_s(const nlohmann::json& answer, int floor) {
+  return answer.at("floors").at(static_cast<std::size_t>(floor)).at("s").get<double>();
+}
+
+EtaCar at_rest(int floor) {
+  EtaCar car;
+  car.floor = floor;
+  car.position_mm = floor * 3000;
+  return car;
+}
+
+TEST(EtaProfile, TrapezoidAndTriangleFromTheConfiguredProfile) {
+  const TravelTimes t = six_floors();
+  struct Case {
+    double distance_mm;
+    double seconds;
+  };
+  // Ramps together: v^2/a = 2000 mm, taking v/a = 2 s. 3000 mm: 3 s + 2 s; 1000 mm (a
+  // triangle): 2 sqrt(1000/500) = 2.828 s; each plus the 2 s overhead.
+  for (const Case c : {Case{3000.0, 7.0}, Case{15000.0, 19.0}, Case{2000.0, 6.0},
+                       Case{1000.0, 2.0 + 2.0 * std::sqrt(2.0)}, Case{0.0, 2.0}}) {
+    EXPECT_NEAR(t.profile_s(c.distance_mm), c.seconds, 1e-9) << c.distance_mm;
+  }
+}
+
+TEST(Eta, AtRestEveryFloorIsOneTravelAway) {
+  const nlohmann::json a = estimate_eta(six_floors(), at_rest(2), {});
+  EXPECT_TRUE(a.at("in_service").get<bool>());
+  EXPECT_TRUE(a.at("stops").empty());
+  const std::vector<double> want = {10.0, 7.0, 0.0, 7.0, 10.0, 13.0};
+  for (int f = 0; f < 6; ++f) EXPECT_NEAR(floor_s(a, f), want[static_cast<std::size_t>(f)], 1e-3);
+  EXPECT_TRUE(a.at("floors").at(2).at("learned").get<bool>());
+  EXPECT_FALSE(a.at("floors").at(3).at("learned").get<bool>());
+}
+
+TEST(Eta, AMeasuredPairIsTakenAsMeasuredAndTheProfileFittedToIt) {
+  TravelTimes t = six_floors();
+  // 0 -> 3 (9000 mm) in 12.5 s at 1.5 m/s, 90 % of it 2 s after the start of motion.
+  t.travel({0, 3, 12.5, 1500.0, 2.0});
+  EXPECT_NEAR(t.leg_s(0, 3), 12.5, 1e-9);
+  EXPECT_TRUE(t.learned(0, 3));
+  EXPECT_FALSE(t.learned(3, 0));  // each direction is its own pair
+  // Fitted: a = 0.9 * 1500 / 2 = 675; motion of 9000 mm = 6 s + 1500/675 s; the overhead is
+  // the rest of the 12.5 s.
+  const double motion = 9000.0 / 1500.0 + 1500.0 / 675.0;
+  EXPECT_NEAR(t.profile_s(9000.0), 12.5, 1e-9);
+  EXPECT_NEAR(t.profile_s(6000.0), 12.5 - motion + 6000.0 / 1500.0 + 1500.0 / 675.0, 1e-9);
+  // The median of the newest measurements, not the last one.
+  t.travel({0, 3, 12.0, 1500.0, 2.0});
+  t.travel({0, 3, 19.0, 1500.0, 2.0});  // one slow start does not move it far
+  EXPECT_NEAR(t.leg_s(0, 3), 12.5, 1e-9);
+  // Nonsense is not learned.
+  t.travel({0, 0, 5.0, 1000.0, 1.0});
+  t.travel({0, 9, 5.0, 1000.0, 1.0});
+  t.travel({1, 2, -1.0, 1000.0, 1.0});
+  EXPECT_FALSE(t.learned(0, 0));
+  EXPECT_FALSE(t.learned(1, 2));
+}
+
+TEST(Eta, QueuedStopsComeFirstEachWithItsStopTime) {
+  EtaCar car = at_rest(0);
+  car.calls = {3, 1};
+  const nlohmann::json a = estimate_eta(six_floors(), car, {});
+  // 0 -> 3: 9 + 2 + 2 = 13 s; stop 3 s; 3 -> 1 (6000 mm): 6 + 2 + 2 = 10 s.
+  ASSERT_EQ(a.at("stops").size(), 2U);
+  EXPECT_EQ(a.at("stops").at(0).at("floor"), 3);
+  EXPECT_NEAR(a.at("stops").at(0).at("s").get<double>(), 13.0, 1e-3);
+  EXPECT_NEAR(a.at("stops").at(1).at("s").get<double>(), 26.0, 1e-3);
+  EXPECT_NEAR(floor_s(a, 3), 13.0, 1e-3);  // a queued floor: its stop
+  EXPECT_NEAR(floor_s(a, 1), 26.0, 1e-3);
+  // Not queued: after the last stop, its stop time, then the travel there (1 -> 5: 12000 mm).
+  EXPECT_NEAR(floor_s(a, 5), 26.0 + 3.0 + 16.0, 1e-3);
+  EXPECT_NEAR(floor_s(a, 0), 26.0 + 3.0 + 7.0, 1e-3);  // back to where it stands now
+}
+
+TEST(Eta, ARunningTravelCountsFromItsStart) {
+  TravelTimes t = six_floors();
+  t.travel({1, 4, 14.0, 1000.0, 1.8});
+  EtaCar car;
+  car.position_mm = 5000;
+  car.travelling = true;
+  car.origin = 1;
+  car.target = 4;
+  car.elapsed_s = 5.5;
+  car.calls = {2};
+  const nlohmann::json a = estimate_eta(t, car, {});
+  ASSERT_EQ(a.at("stops").size(), 2U);
+  EXPECT_NEAR(a.at("stops").at(0).at("s").get<double>(), 8.5, 1e-3);
+  EXPECT_TRUE(a.at("stops").at(0).at("learned").get<bool>());
+  EXPECT_NEAR(floor_s(a, 4), 8.5, 1e-3);
+  // Then the stop at 4 and 4 -> 2, which the profile gives.
+  EXPECT_NEAR(floor_s(a, 2), 8.5 + 3.0 + t.leg_s(4, 2), 1e-3);
+  EXPECT_FALSE(a.at("stops").at(1).at("learned").get<bool>());
+  // Late: a travel that takes longer than it did is due now, never in the past.
+  car.elapsed_s = 20.0;
+  EXPECT_NEAR(floor_s(estimate_eta(t, car, {}), 4), 0.0, 1e-9);
+}
+
+TEST(Eta, AFloorAddedSaysWhatItCostsEachLaterStop) {
+  EtaCar car = at_rest(0);
+  car.calls = {3, 5};
+  const TravelTimes t = six_floors();
+  // At the end: nobody waits longer.
+  nlohmann::json a = estimate_eta(t, car, {1, std::nullopt});
+  EXPECT_EQ(a.at("with").at("position"), 2);
+  EXPECT_NEAR(a.at("with").at("s").get<double>(), floor_s(a, 1), 1e-3);
+  for (const auto& d : a.at("with").at("delays")) EXPECT_EQ(d.at("s").get<double>(), 0.0);
+  // First: 0 -> 1 (7 s), stop, 1 -> 3 (10 s) instead of 0 -> 3 (13 s): 3 and 5 are 7 s later.
+  a = estimate_eta(t, car, {1, 0});
+  EXPECT_NEAR(a.at("with").at("s").get<double>(), 7.0, 1e-3);
+  ASSERT_EQ(a.at("with").at("delays").size(), 2U);
+  EXPECT_EQ(a.at("with").at("delays").at(0).at("floor"), 3);
+  EXPECT_NEAR(a.at("with").at("delays").at(0).at("s").get<double>(), 7.0, 1e-3);
+  EXPECT_NEAR(a.at("with").at("delays").at(1).at("s").get<double>(), 7.0, 1e-3);
+  // Between: a floor on the way (4, between 3 and 5) costs 5 only the stop and the extra start.
+  a = estimate_eta(t, car, {4, 1});
+  EXPECT_NEAR(a.at("with").at("delays").at(0).at("s").get<double>(), 0.0, 1e-3);
+  EXPECT_NEAR(a.at("with").at("delays").at(1).at("s").get<double>(),
+              t.leg_s(3, 4) + 3.0 + t.leg_s(4, 5) - t.leg_s(3, 5), 1e-3);
+}
+
+TEST(Eta, ACarOutOfServiceGivesNoTimes) {
+  EtaCar car = at_rest(1);
+  car.in_service = false;
+  car.reason = "inspection";
+  const nlohmann::json a = estimate_eta(six_floors(), car, {2, std::nullopt});
+  EXPECT_FALSE(a.at("in_service").get<bool>());
+  EXPECT_EQ(a.at("reason"), "inspection");
+  EXPECT_TRUE(a.at("floors").is_null());
+  EXPECT_TRUE(a.at("with").is_null());
+  // Nor does a car whose position nobody knows.
+  EtaCar lost;
+  EXPECT_TRUE(estimate_eta(six_floors(), lost, {}).at("floors").is_null());
+}
+
+TEST(Eta, TheStopTimeIsTheMeasuredMedian) {
+  TravelTimes t = six_floors();
+  EXPECT_DOUBLE_EQ(t.stop_s(), 3.0);
+  t.stop(1.0);
+  t.stop(1.4);
+  t.stop(9.0);
+  EXPECT_DOUBLE_EQ(t.stop_s(), 1.4);
+}
+
+TEST(EtaKinds, OnlyFloorToFloorTravelsAreLearned) {
+  for (const char* kind : {"distance", "speed", "hydraulic"}) {
+    EXPECT_TRUE(eta_floor_to_floor(kind)) << kind;
+  }
+  for (const char* kind :
+       {"relevel", "relevel_distance", "inspection", "recall", "learn", "crawl"}) {
+    EXPECT_FALSE(eta_floor_to_floor(kind)) << kind;
+  }
+}
+
+}  // namespace
+}  // namespace liftd::daemon
