@@ -187,12 +187,21 @@ class ControllerBackend : public api::Backend {
     car.floor = s.floor;
     car.target = s.target_floor;
     car.calls = s.calls;
-    const auto& log = travel_log_.travels();
-    if (s.target_floor && !log.empty() && !log.back().ended && !log.back().samples.empty()) {
-      const RecordedTravel& running = log.back();
+    if (s.target_floor) {
+      // A travel taken whose run the log has not seen start yet counts from now.
       car.travelling = true;
-      car.elapsed_s = std::chrono::duration<double>(mono_now() - running.start).count();
-      car.origin = travel_origin(running);
+      const auto& log = travel_log_.travels();
+      if (!log.empty() && !log.back().ended && !log.back().samples.empty()) {
+        car.elapsed_s = std::chrono::duration<double>(mono_now() - log.back().start).count();
+        car.origin = travel_origin(log.back());
+      } else if (s.position_mm) {
+        car.origin = floor_near(floor_levels_mm(config_), *s.position_mm,
+                                config_.travel.relevel_threshold_mm);
+      }
+      // The queue's first call stays queued until served: it is the running travel's target.
+      if (!car.calls.empty() && car.calls.front() == *s.target_floor) {
+        car.calls.erase(car.calls.begin());
+      }
     }
     return api::Result::ok(estimate_eta(eta_times_, car, {args.floor, args.position}));
   }

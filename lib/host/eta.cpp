@@ -44,28 +44,34 @@ void TravelTimes::travel(const MeasuredTravel& t) {
   // (a short one may never reach it, so its top speed says nothing of the rated one); the
   // acceleration from a travel that did; the overhead (start, levelling, stop) as what is left
   // of each travel's time beyond the motion the profile gives it.
+  const bool up = level_mm(t.to) > level_mm(t.from);
+  const std::size_t d = up ? 1 : 0;
   const double distance = std::abs(static_cast<double>(level_mm(t.to) - level_mm(t.from)));
-  if (t.top_speed_mm_s > 0.0 && (top_speed_.empty() || t.top_speed_mm_s >= 0.9 * speed_mm_s())) {
-    top_speed_.add(t.top_speed_mm_s);
+  if (t.top_speed_mm_s > 0.0 &&
+      (top_speed_[d].empty() || t.top_speed_mm_s >= 0.9 * speed_mm_s(up))) {
+    top_speed_[d].add(t.top_speed_mm_s);
     if (t.acceleration_time_s && *t.acceleration_time_s > 0.0) {
-      acceleration_.add(0.9 * t.top_speed_mm_s / *t.acceleration_time_s);
+      acceleration_[d].add(0.9 * t.top_speed_mm_s / *t.acceleration_time_s);
     }
   }
-  overhead_.add(t.duration_s - motion_s(distance, speed_mm_s(), acceleration_mm_s2()));
+  overhead_[d].add(t.duration_s - motion_s(distance, speed_mm_s(up), acceleration_mm_s2(up)));
 }
 
 void TravelTimes::stop(double s) {
   if (s >= 0.0) stop_.add(s);
 }
 
-double TravelTimes::speed_mm_s() const {
-  return top_speed_.empty() ? defaults_.speed_mm_s : top_speed_.median();
+double TravelTimes::speed_mm_s(bool up) const {
+  const Window& w = of(top_speed_, up);
+  return w.empty() ? defaults_.speed_mm_s : w.median();
 }
-double TravelTimes::acceleration_mm_s2() const {
-  return acceleration_.empty() ? defaults_.acceleration_mm_s2 : acceleration_.median();
+double TravelTimes::acceleration_mm_s2(bool up) const {
+  const Window& w = of(acceleration_, up);
+  return w.empty() ? defaults_.acceleration_mm_s2 : w.median();
 }
-double TravelTimes::overhead_s() const {
-  return overhead_.empty() ? defaults_.overhead_s : std::max(0.0, overhead_.median());
+double TravelTimes::overhead_s(bool up) const {
+  const Window& w = of(overhead_, up);
+  return w.empty() ? defaults_.overhead_s : std::max(0.0, w.median());
 }
 double TravelTimes::stop_s() const {
   return stop_.empty() ? defaults_.stop_s : stop_.median();
@@ -80,8 +86,8 @@ double TravelTimes::motion_s(double distance_mm, double speed, double accelerati
   return 2.0 * std::sqrt(distance_mm / acceleration);
 }
 
-double TravelTimes::profile_s(double distance_mm) const {
-  return overhead_s() + motion_s(distance_mm, speed_mm_s(), acceleration_mm_s2());
+double TravelTimes::profile_s(double distance_mm, bool up) const {
+  return overhead_s(up) + motion_s(distance_mm, speed_mm_s(up), acceleration_mm_s2(up));
 }
 
 bool TravelTimes::learned(int from, int to) const {
@@ -101,17 +107,22 @@ double TravelTimes::leg_s(int from, int to, bool* learned_out) const {
     return pairs_[static_cast<std::size_t>(from * static_cast<int>(levels_mm_.size()) + to)]
         .median();
   }
-  return profile_s(std::abs(static_cast<double>(level_mm(to) - level_mm(from))));
+  return profile_s(std::abs(static_cast<double>(level_mm(to) - level_mm(from))),
+                   level_mm(to) > level_mm(from));
 }
 
 nlohmann::json TravelTimes::basis_json() const {
   std::size_t pairs = 0;
   for (const Window& w : pairs_) pairs += w.empty() ? 0U : 1U;
-  return {{"speed_mm_s", std::round(speed_mm_s())},
-          {"acceleration_mm_s2", std::round(acceleration_mm_s2())},
-          {"overhead_s", seconds(overhead_s())},
+  const auto direction = [this](bool up) {
+    return nlohmann::json{{"speed_mm_s", std::round(speed_mm_s(up))},
+                          {"acceleration_mm_s2", std::round(acceleration_mm_s2(up))},
+                          {"overhead_s", seconds(overhead_s(up))},
+                          {"travels_measured", overhead_[up ? 1 : 0].count}};
+  };
+  return {{"up", direction(true)},
+          {"down", direction(false)},
           {"stop_s", seconds(stop_s())},
-          {"travels_measured", overhead_.count},
           {"pairs_learned", pairs},
           {"stops_measured", stop_.count}};
 }
@@ -156,7 +167,8 @@ Start start_of(const TravelTimes& times, const EtaCar& car) {
       // profile from where it was then is unknown; take the distance left now.
       s.learned = false;
       const std::int64_t from = car.position_mm.value_or(times.level_mm(*car.target));
-      whole = times.profile_s(std::abs(static_cast<double>(times.level_mm(*car.target) - from))) +
+      whole = times.profile_s(std::abs(static_cast<double>(times.level_mm(*car.target) - from)),
+                              times.level_mm(*car.target) > from) +
               car.elapsed_s;
     }
     s.s = std::max(0.0, whole - car.elapsed_s);

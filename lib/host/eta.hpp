@@ -68,8 +68,8 @@ class TravelTimes {
   double leg_s(int from, int to, bool* learned = nullptr) const;
   /// Seconds the car stands at a queued stop before it travels on.
   double stop_s() const;
-  /// The profile's time for a travel of `distance_mm`, overhead included.
-  double profile_s(double distance_mm) const;
+  /// The profile's time for a travel of `distance_mm` (up when `up`), overhead included.
+  double profile_s(double distance_mm, bool up = true) const;
   /// Whether the pair `from`, `to` was measured.
   bool learned(int from, int to) const;
 
@@ -87,17 +87,22 @@ class TravelTimes {
     bool empty() const noexcept { return count == 0; }
     double median() const;
   };
-  double speed_mm_s() const;
-  double acceleration_mm_s2() const;
-  double overhead_s() const;
+  /// Each direction's profile (index 1: up): a hydraulic car goes down on its valve, at a speed
+  /// of its own. A direction not measured yet takes the other's, then the configured one.
+  const Window& of(const std::array<Window, 2>& w, bool up) const {
+    return w[up ? 1 : 0].empty() ? w[up ? 0 : 1] : w[up ? 1 : 0];
+  }
+  double speed_mm_s(bool up) const;
+  double acceleration_mm_s2(bool up) const;
+  double overhead_s(bool up) const;
   static double motion_s(double distance_mm, double speed, double acceleration);
 
   std::vector<std::int64_t> levels_mm_;
   EtaDefaults defaults_;
   std::vector<Window> pairs_;  ///< [from * floors + to]
-  Window top_speed_;
-  Window acceleration_;
-  Window overhead_;
+  std::array<Window, 2> top_speed_;
+  std::array<Window, 2> acceleration_;
+  std::array<Window, 2> overhead_;
   Window stop_;
 };
 

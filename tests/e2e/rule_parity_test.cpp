@@ -291,6 +291,74 @@ TEST_P(RuleParity, ATravelToTheFloorTheCarStandsAtIsABadRequest) {
   });
 }
 
+// `eta` (issue #44, docs/api.md): the same answer on every kind. Before any travel the configured
+// profile, nothing learned; a travel between two floors is learned as the travels log measured
+// it (from rest, the same pair again is predicted as that duration); a car out of service gives
+// no times; a floor or queue position out of range is a bad request. How good the times are is
+// tools/bench/eta_accuracy.py's (a benchmark, not a timed test).
+TEST_P(RuleParity, EtaLearnsEachPairFromTheCarsOwnTravels) {
+  judged_unless_stalled([this] {
+    const auto lift = make_lift("eta");
+    ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump();
+    const int far = GetParam().far_floor;
+    const auto eta = [&](const json& extra = json::object()) {
+      json request = {{"cmd", "eta"}};
+      request.update(extra);
+      const json r = lift->call(request);
+      EXPECT_TRUE(r.value("ok", false)) << r.dump();
+      return r["result"];
+    };
+    json e = eta();
+    const std::size_t floors = lift->call({{"cmd", "config"}})["result"]["config"]["floors"].size();
+    ASSERT_EQ(e["floors"].size(), floors) << e.dump();
+    EXPECT_EQ(e["floors"][0], (json{{"floor", 0}, {"s", 0.0}, {"learned", true}}));
+    EXPECT_GT(e["floors"][static_cast<std::size_t>(far)]["s"].get<double>(), 0.0);
+    EXPECT_FALSE(e["floors"][static_cast<std::size_t>(far)]["learned"].get<bool>());
+    EXPECT_EQ(e["basis"]["pairs_learned"], 0);
+
+    const auto travel_to = [&](int floor) {
+      ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump();
+      ASSERT_TRUE(lift->call({{"cmd", "travel"}, {"floor", floor}}).value("ok", false));
+      const json mid = eta();
+      ASSERT_FALSE(mid["stops"].empty()) << mid.dump();
+      EXPECT_EQ(mid["stops"][0]["floor"], floor) << mid.dump();
+      const json end = lift->wait_travel_end(60s);
+      ASSERT_TRUE(end.is_object()) << lift->log();
+      ASSERT_EQ(end["data"]["event"], "finished") << end.dump();
+    };
+    ASSERT_NO_FATAL_FAILURE(travel_to(far));
+    ASSERT_NO_FATAL_FAILURE(travel_to(0));
+    ASSERT_TRUE(lift->wait_drive_state("ready"));
+    const json log = lift->call({{"cmd", "travels"}, {"last", 2}})["result"]["travels"];
+    ASSERT_EQ(log.size(), 2U) << log.dump();
+    e = eta();
+    EXPECT_EQ(e["basis"]["pairs_learned"], 2) << e.dump();
+    EXPECT_EQ(e["basis"]["up"]["travels_measured"], 1) << e.dump();
+    EXPECT_EQ(e["basis"]["down"]["travels_measured"], 1) << e.dump();
+    const json& there = e["floors"][static_cast<std::size_t>(far)];
+    EXPECT_TRUE(there["learned"].get<bool>()) << e.dump();
+    EXPECT_NEAR(there["s"].get<double>(), log[0]["duration_ms"].get<double>() / 1000.0, 0.002)
+        << log.dump() << e.dump();
+    // A floor added first: its time, and the cost to nothing queued.
+    e = eta({{"floor", 1}});
+    EXPECT_EQ(e["with"]["floor"], 1);
+    EXPECT_EQ(e["with"]["delays"], json::array());
+
+    const json bad_floor = lift->call({{"cmd", "eta"}, {"floor", static_cast<int>(floors)}});
+    EXPECT_EQ(error_of(bad_floor)["code"], "bad_request") << bad_floor.dump();
+    const json bad_position = lift->call({{"cmd", "eta"}, {"floor", 1}, {"position", 1}});
+    EXPECT_EQ(error_of(bad_position)["code"], "bad_request") << bad_position.dump();
+
+    ASSERT_TRUE(lift->call({{"cmd", "inputs"}, {"inspection", true}}).value("ok", false));
+    for (int i = 0; i < 100 && eta()["in_service"] != false; ++i) {
+      std::this_thread::sleep_for(50ms);
+    }
+    e = eta();
+    EXPECT_EQ(e["reason"], "inspection") << e.dump();
+    EXPECT_TRUE(e["floors"].is_null()) << e.dump();
+  });
+}
+
 INSTANTIATE_TEST_SUITE_P(EveryDriveKind, RuleParity, ::testing::ValuesIn(kDriveCases),
                          drive_case_name);
 

@@ -75,6 +75,16 @@ TEST(Eta, AMeasuredPairIsTakenAsMeasuredAndTheProfileFittedToIt) {
   EXPECT_FALSE(t.learned(1, 2));
 }
 
+TEST(Eta, EachDirectionHasItsOwnProfileOnceMeasured) {
+  // A hydraulic car: up on its pump at 0.6 m/s, down on its valve at 0.3 m/s.
+  TravelTimes t = six_floors();
+  t.travel({0, 1, 9.0, 600.0, 1.0});
+  EXPECT_NEAR(t.profile_s(6000.0, false), t.profile_s(6000.0, true), 1e-9);  // down: up's, yet
+  t.travel({3, 2, 14.0, 300.0, 1.0});
+  EXPECT_NEAR(t.leg_s(4, 2) - t.leg_s(4, 3), 3000.0 / 300.0, 1e-9);  // at 0.3 m/s
+  EXPECT_NEAR(t.leg_s(2, 4) - t.leg_s(3, 4), 3000.0 / 600.0, 1e-9);  // at 0.6 m/s
+}
+
 TEST(Eta, QueuedStopsComeFirstEachWithItsStopTime) {
   EtaCar car = at_rest(0);
   car.calls = {3, 1};
