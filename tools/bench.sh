@@ -3,7 +3,7 @@
 # liftd's cycle against a bare reference loop, the DCP engine against the echo engine, the
 # cycle with and without API load, API throughput against the real daemon, and how many
 # cycles events and commands take. Each benchmark's full output is kept in the log folder.
-#   tools/bench.sh                 build (default preset) if needed, then run (about 5 min)
+#   tools/bench.sh                 build (default preset) if needed, then run (about 11 min)
 #   LIFTD_BENCH_CYCLES=N ...       cycles per engine, over 3 alternating rounds (default 2000)
 # Run as root on a quiet machine (SCHED_FIFO and memory locking need it).
 set -euo pipefail
@@ -52,6 +52,9 @@ run travel "$bin/travel-bench"
 # travel writes. (api-load-bench's lift keeps its record too: each travel of its windows is a
 # write transaction on the io thread beside the measured cycle.)
 run record "$bin/record-bench"
+# eta's arrival times against the arrivals seen, through the API of liftd --simulate on every
+# drive kind (seeded random calls; about 5 min, the kinds side by side).
+run eta python3 tools/bench/eta_accuracy.py --bin "$bin"
 # Its exit status says whether a rate missed 10 %: the table shows that, the run goes on.
 "$bin/uss-bench" --cycles 300 >"$logs/uss.txt" 2>&1 || true
 
@@ -149,6 +152,10 @@ rec_bare=$(sed -n 's/^ *\([0-9.]*\) MB written() per 1000 travels without a curv
 printf '%-50s %12s   %s\n' "record of 1e6 travels: history, one floor a month, ms" "$rec_history" "< 50"
 printf '%-50s %12s   %s\n' "record of 1e6 travels: trend of a month, ms" "$rec_trend" "< 200"
 printf '%-50s %12s   %s\n' "record: MB written per 1000 travels, curve / none" "$rec_bytes / $rec_bare" "(docs/operations.md)"
+# eta: p95 of |predicted - seen| per kind and case, seconds (the bounds of issue #44).
+while IFS=$'\t' read -r _ kind case n p95 verdict; do
+  printf '%-50s %12s   %s\n' "eta $kind: $case, p95 s (n $n)" "$p95" "$verdict"
+done < <(grep '^eta-row' "$logs/eta.txt")
 for baud in 38400 187500; do
   raw=$(uss_line "$baud" "^mean .* of expected" 2)
   net=$(uss_line "$baud" "^platform share" 22)

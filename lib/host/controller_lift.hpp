@@ -187,10 +187,13 @@ class ControllerBackend : public api::Backend {
     car.floor = s.floor;
     car.target = s.target_floor;
     car.calls = s.calls;
+    const auto& log = travel_log_.travels();
+    if (!log.empty() && log.back().ended) {
+      car.since_arrival_s = std::chrono::duration<double>(mono_now() - log.back().end).count();
+    }
     if (s.target_floor) {
       // A travel taken whose run the log has not seen start yet counts from now.
       car.travelling = true;
-      const auto& log = travel_log_.travels();
       if (!log.empty() && !log.back().ended && !log.back().samples.empty()) {
         car.elapsed_s = std::chrono::duration<double>(mono_now() - log.back().start).count();
         car.origin = travel_origin(log.back());

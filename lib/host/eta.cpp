@@ -174,6 +174,7 @@ Start start_of(const TravelTimes& times, const EtaCar& car) {
     s.s = std::max(0.0, whole - car.elapsed_s);
     return s;
   }
+  s.s = std::max(0.0, times.stop_s() - car.since_arrival_s);
   if (car.floor) {
     s.floor = *car.floor;
   } else if (car.position_mm) {
@@ -193,7 +194,7 @@ std::vector<Stop> schedule(const TravelTimes& times, const Start& start,
   bool stopped = start.arrives;  // the car stands at `at` before it travels on
   for (int floor : plan) {
     if (floor == at && !stopped) {
-      out.push_back({floor, t, learned});
+      out.push_back({floor, 0.0, learned});  // the car stands there now
       continue;
     }
     bool leg_learned = true;

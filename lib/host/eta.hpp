@@ -36,7 +36,10 @@ struct EtaCar {
   std::optional<int> target;                ///< the running travel's target floor
   std::optional<int> origin;  ///< the floor the running travel started at (none: between)
   double elapsed_s = 0.0;     ///< since the running travel started
-  std::vector<int> calls;     ///< the calls queue, in order (the target not included)
+  /// At rest: since the last run ended. A car that just arrived can start again only once its
+  /// drive finished the stop (the stop time a queued stop measures).
+  double since_arrival_s = 1e9;
+  std::vector<int> calls;  ///< the calls queue, in order (the target not included)
 };
 
 /// One measured travel between two floors (a finished travel of the lift's own kind).

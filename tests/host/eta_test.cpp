@@ -85,6 +85,14 @@ TEST(Eta, EachDirectionHasItsOwnProfileOnceMeasured) {
   EXPECT_NEAR(t.leg_s(2, 4) - t.leg_s(3, 4), 3000.0 / 600.0, 1e-9);  // at 0.6 m/s
 }
 
+TEST(Eta, ACarThatJustArrivedStartsOnceItsStopTimeIsOver) {
+  EtaCar car = at_rest(0);
+  car.since_arrival_s = 1.0;  // of the 3 s a stop takes
+  const nlohmann::json a = estimate_eta(six_floors(), car, {});
+  EXPECT_NEAR(floor_s(a, 1), 2.0 + 7.0, 1e-3);
+  EXPECT_NEAR(floor_s(a, 0), 0.0, 1e-3);  // where it stands: there now
+}
+
 TEST(Eta, QueuedStopsComeFirstEachWithItsStopTime) {
   EtaCar car = at_rest(0);
   car.calls = {3, 1};
