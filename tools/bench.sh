@@ -3,7 +3,7 @@
 # liftd's cycle against a bare reference loop, the DCP engine against the echo engine, the
 # cycle with and without API load, API throughput against the real daemon, and how many
 # cycles events and commands take. Each benchmark's full output is kept in the log folder.
-#   tools/bench.sh                 build (default preset) if needed, then run (about 11 min)
+#   tools/bench.sh                 build (default preset) if needed, then run (about 18 min)
 #   LIFTD_BENCH_CYCLES=N ...       cycles per engine, over 3 alternating rounds (default 2000)
 # Run as root on a quiet machine (SCHED_FIFO and memory locking need it).
 set -euo pipefail
@@ -53,7 +53,7 @@ run travel "$bin/travel-bench"
 # write transaction on the io thread beside the measured cycle.)
 run record "$bin/record-bench"
 # eta's arrival times against the arrivals seen, through the API of liftd --simulate on every
-# drive kind (seeded random calls; about 5 min, the kinds side by side).
+# drive kind (seeded random calls; about 12 min, one kind after another).
 run eta python3 tools/bench/eta_accuracy.py --bin "$bin"
 # Its exit status says whether a rate missed 10 %: the table shows that, the run goes on.
 "$bin/uss-bench" --cycles 300 >"$logs/uss.txt" 2>&1 || true

@@ -100,6 +100,7 @@ class ControllerBackend : public api::Backend {
       done(api::Result::ok({{"calls", calls_list(controller_.snapshot())}}));
       return;
     }
+    if (action == "add") note_travel_asked();
     typename Drive::CallCommand cmd;
     cmd.add = action == "add";
     cmd.floor = static_cast<std::size_t>(floor.value_or(0));
@@ -240,6 +241,15 @@ class ControllerBackend : public api::Backend {
   }
 
  protected:
+  /// A travel or a call was asked for: with the car at rest and nothing queued, the run that
+  /// follows tells `eta` how long a car at rest takes from the request to its start.
+  void note_travel_asked() {
+    const auto s = controller_.snapshot();
+    const auto& log = travel_log_.travels();
+    const bool running = !log.empty() && !log.back().ended;
+    asked_at_.reset();
+    if (!s.target_floor && s.call_count == 0 && !running) asked_at_ = mono_now();
+  }
   static void not_offered(api::Responder& done) {
     done(api::Result::fail(api::ErrorCode::NotOffered,
                            "not offered by drive kind \"" + std::string(Drive::kName) + "\""));
@@ -351,11 +361,16 @@ class ControllerBackend : public api::Backend {
     const bool queued_before = stop_from_.has_value();
     const MonoTime stood_from = stop_from_.value_or(MonoTime{});
     stop_from_.reset();
+    const std::optional<MonoTime> asked = asked_at_;
+    asked_at_.reset();
     if (t.cause != std::optional<std::string>("arrived") || !t.target_floor) return;
     const auto snapshot = controller_.snapshot();
     if (snapshot.learning || !eta_floor_to_floor(t.kind)) return;
     if (queued_before && t.start > stood_from && t.start - stood_from < std::chrono::seconds(60)) {
       eta_times_.stop(std::chrono::duration<double>(t.start - stood_from).count());
+    }
+    if (asked && t.start >= *asked && t.start - *asked < std::chrono::seconds(10)) {
+      eta_times_.start(std::chrono::duration<double>(t.start - *asked).count());
     }
     // A stop follows when the car has another call queued at its arrival.
     if (snapshot.call_count > 0) stop_from_ = t.end;
@@ -402,6 +417,8 @@ class ControllerBackend : public api::Backend {
   TravelTimes eta_times_;  ///< `eta`'s measured travel and stop times
   /// The arrival of the last travel, when another call was queued then: the stop's start.
   std::optional<MonoTime> stop_from_;
+  /// When a travel or call was asked for with the car at rest and nothing queued.
+  std::optional<MonoTime> asked_at_;
   MonoTime mono_at_start_{};
   std::chrono::system_clock::time_point wall_at_start_{};
   std::function<void(const nlohmann::json&)> learn_listener_;

@@ -61,6 +61,14 @@ void TravelTimes::stop(double s) {
   if (s >= 0.0) stop_.add(s);
 }
 
+void TravelTimes::start(double s) {
+  if (s >= 0.0) start_.add(s);
+}
+
+double TravelTimes::start_s() const {
+  return start_.empty() ? 0.0 : start_.median();
+}
+
 double TravelTimes::speed_mm_s(bool up) const {
   const Window& w = of(top_speed_, up);
   return w.empty() ? defaults_.speed_mm_s : w.median();
@@ -120,11 +128,9 @@ nlohmann::json TravelTimes::basis_json() const {
                           {"overhead_s", seconds(overhead_s(up))},
                           {"travels_measured", overhead_[up ? 1 : 0].count}};
   };
-  return {{"up", direction(true)},
-          {"down", direction(false)},
-          {"stop_s", seconds(stop_s())},
-          {"pairs_learned", pairs},
-          {"stops_measured", stop_.count}};
+  return {{"up", direction(true)},       {"down", direction(false)},
+          {"stop_s", seconds(stop_s())}, {"start_s", seconds(start_s())},
+          {"pairs_learned", pairs},      {"stops_measured", stop_.count}};
 }
 
 namespace {
@@ -174,7 +180,9 @@ Start start_of(const TravelTimes& times, const EtaCar& car) {
     s.s = std::max(0.0, whole - car.elapsed_s);
     return s;
   }
-  s.s = std::max(0.0, times.stop_s() - car.since_arrival_s);
+  // From rest: the request's way to the run's start, or what is left of the stop the car makes
+  // after an arrival, whichever is longer.
+  s.s = std::max(times.start_s(), times.stop_s() - car.since_arrival_s);
   if (car.floor) {
     s.floor = *car.floor;
   } else if (car.position_mm) {

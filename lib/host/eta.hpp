@@ -65,12 +65,16 @@ class TravelTimes {
   void travel(const MeasuredTravel& t);
   /// The time a car stood at a queued stop: its arrival to the next travel's start.
   void stop(double seconds);
+  /// The time from a request to travel, the car at rest, to its run's start.
+  void start(double seconds);
 
   /// Seconds from a travel's start at `from` to the car at `to`'s level; `learned` tells whether
   /// this pair was measured.
   double leg_s(int from, int to, bool* learned = nullptr) const;
   /// Seconds the car stands at a queued stop before it travels on.
   double stop_s() const;
+  /// Seconds from a request to travel, the car at rest, to the run's start (0 until measured).
+  double start_s() const;
   /// The profile's time for a travel of `distance_mm` (up when `up`), overhead included.
   double profile_s(double distance_mm, bool up = true) const;
   /// Whether the pair `from`, `to` was measured.
@@ -107,6 +111,7 @@ class TravelTimes {
   std::array<Window, 2> acceleration_;
   std::array<Window, 2> overhead_;
   Window stop_;
+  Window start_;
 };
 
 /// Whether a travel of this kind (its API name) is one a call runs from floor to floor: not a

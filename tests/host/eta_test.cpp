@@ -93,6 +93,18 @@ TEST(Eta, ACarThatJustArrivedStartsOnceItsStopTimeIsOver) {
   EXPECT_NEAR(floor_s(a, 0), 0.0, 1e-3);  // where it stands: there now
 }
 
+TEST(Eta, FromRestTheMeasuredStartComesFirst) {
+  TravelTimes t = six_floors();
+  t.start(0.2);
+  t.start(0.4);
+  t.start(0.3);
+  EXPECT_DOUBLE_EQ(t.start_s(), 0.3);
+  EXPECT_NEAR(floor_s(estimate_eta(t, at_rest(0), {}), 1), 0.3 + 7.0, 1e-3);
+  EtaCar just_arrived = at_rest(0);
+  just_arrived.since_arrival_s = 2.0;  // 1 s of the 3 s stop left: longer than the start
+  EXPECT_NEAR(floor_s(estimate_eta(t, just_arrived, {}), 1), 1.0 + 7.0, 1e-3);
+}
+
 TEST(Eta, QueuedStopsComeFirstEachWithItsStopTime) {
   EtaCar car = at_rest(0);
   car.calls = {3, 1};

@@ -214,6 +214,7 @@ control::TravelCommand travel_command(const api::TravelArgs& args) {
 }  // namespace
 
 void DcpBackend::travel(const api::TravelArgs& args, api::Responder done) {
+  note_travel_asked();
   send(travel_command(args), std::move(done));
 }
 

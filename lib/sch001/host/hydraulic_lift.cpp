@@ -388,6 +388,7 @@ std::vector<api::TraceEntry> Sch001Backend::trace(std::size_t max_entries) {
 }
 
 void Sch001Backend::travel(const api::TravelArgs& args, api::Responder done) {
+  note_travel_asked();
   sch001::TravelCommand cmd;
   cmd.floor = static_cast<std::size_t>(args.floor);
   // V4 and V3 where the unit has them (else the next lower), any other name the fast speed.

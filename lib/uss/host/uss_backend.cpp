@@ -190,6 +190,7 @@ api::Result UssBackend::parameter_result(const ParameterContext& context,
 }
 
 void UssBackend::travel(const api::TravelArgs& args, api::Responder done) {
+  note_travel_asked();
   uss::TravelCommand cmd;
   cmd.floor = static_cast<std::size_t>(args.floor);
   if (args.speed) {
