@@ -321,6 +321,8 @@ TEST_P(RuleParity, EtaLearnsEachPairFromTheCarsOwnTravels) {
     const auto travel_to = [&](int floor) {
       ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump();
       ASSERT_TRUE(lift->call({{"cmd", "travel"}, {"floor", floor}}).value("ok", false));
+      // Mid-travel: once the run started (the reply can come a step before status shows it).
+      ASSERT_TRUE(lift->wait_travel("started").is_object()) << lift->log();
       const json mid = eta();
       ASSERT_FALSE(mid["stops"].empty()) << mid.dump();
       EXPECT_EQ(mid["stops"][0]["floor"], floor) << mid.dump();
