@@ -227,6 +227,31 @@ TEST_P(RuleParity, AnAbortedTravelNamesItsOwnTarget) {
   });
 }
 
+// Every travel answered ok ends with a travel event, even one stopped before it began (issue
+// #44's dispatcher waits for it): on DCP a travel asked for right after a stop waits for the I9
+// of that stop (DCP 5.12.9), and a stop in that window once dropped it without a word.
+TEST_P(RuleParity, ATravelStoppedBeforeItBeginsStillEndsWithAnEvent) {
+  judged_unless_stalled([this] {
+    const auto lift = make_lift("stopped-at-once");
+    ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump();
+    ASSERT_TRUE(lift->call({{"cmd", "travel"}, {"floor", 1}}).value("ok", false));
+    const json arrived = lift->wait_travel_end(40s);
+    ASSERT_TRUE(arrived.is_object()) << lift->log();
+    ASSERT_EQ(arrived["data"]["event"], "finished") << arrived.dump();
+    // At once: the travel back, then the stop (a drive still winding down answers busy).
+    json accepted = lift->call({{"cmd", "travel"}, {"floor", 0}});
+    for (int i = 0; i < 100 && error_of(accepted).value("code", "") == "busy"; ++i) {
+      accepted = lift->call({{"cmd", "travel"}, {"floor", 0}});
+    }
+    ASSERT_TRUE(accepted.value("ok", false)) << accepted.dump();
+    ASSERT_TRUE(lift->call({{"cmd", "stop"}}).value("ok", false));
+    const json ended = lift->wait_travel_end(30s);
+    ASSERT_TRUE(ended.is_object()) << "a travel answered ok never ended\n" << lift->log();
+    ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump();
+    EXPECT_FALSE(lift->status()["car"]["floor"].is_null()) << lift->status().dump();
+  });
+}
+
 // docs/api.md `status`: service says whether the car takes work and why not, the same on every
 // kind (issue #44: it was only in refusal texts); car.doors from the inputs.
 TEST_P(RuleParity, ServiceSaysWhetherTheCarTakesWorkAndWhyNot) {

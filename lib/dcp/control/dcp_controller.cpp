@@ -235,7 +235,7 @@ void DcpController::handle(const Command& command, travel::CycleInput& in) noexc
           lift_.calls().clear();
           reply(tag, ReplyCode::Ok);
         } else if constexpr (std::is_same_v<T, FastStopCommand>) {
-          if (travel_.active_kind() == TravelKind::None) {
+          if (travel_.active_kind() == TravelKind::None && !travel_.travel_queued()) {
             reply(tag, ReplyCode::BadRequest, "no travel running");
             return;
           }
@@ -706,7 +706,8 @@ void DcpController::drain_travel(MonoTime now) noexcept {
 
 void DcpController::serve_calls() noexcept {
   const auto front = lift_.calls().front();
-  if (!front || travel_.active_kind() != TravelKind::None || last_input_.status.travel_active) {
+  if (!front || travel_.active_kind() != TravelKind::None || travel_.travel_queued() ||
+      last_input_.status.travel_active) {
     return;
   }
   if (lift_.current_floor() == front) {

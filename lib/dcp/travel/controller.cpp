@@ -142,15 +142,23 @@ void TravelController::begin_pending(const CycleInput& in) noexcept {
   }
 }
 
-void TravelController::stop() noexcept {
+void TravelController::drop_queued(lift::Cause cause) noexcept {
+  if (!pending_) return;
+  const TravelRequest dropped = *pending_;
   pending_.reset();
+  StepContext ctx{config_, last_, events_};
+  ctx.emit(Event::Type::Aborted, dropped.kind, cause, dropped.target_mm);
+}
+
+void TravelController::stop() noexcept {
+  drop_queued(lift::Cause::StopRequested);
   dcp4_.request_stop(lift::Cause::StopRequested);
   dcp3_.request_stop(lift::Cause::StopRequested);
   relevel_.request_stop(lift::Cause::StopRequested);
 }
 
 void TravelController::fast_stop() noexcept {
-  pending_.reset();
+  drop_queued(lift::Cause::StopRequested);
   if (dcp4_.active()) dcp4_.request_fast_stop();
   if (dcp3_.active()) dcp3_.request_fast_stop();
   relevel_.request_stop(lift::Cause::StopRequested);
@@ -175,7 +183,7 @@ std::optional<std::int64_t> TravelController::stop_distance_mm() const noexcept 
 }
 
 std::optional<std::int64_t> TravelController::stop_at(std::int64_t target_mm) noexcept {
-  pending_.reset();
+  drop_queued(lift::Cause::StopRequested);
   if (dcp4_.active() && dcp4_.kind() == TravelKind::Dcp4Distance &&
       dcp4_.state() == Dcp4Travel::State::Distance) {
     // DCP 11.1.1 d: B2 stays until S6 falls at a level; the remaining distance now ends at the
@@ -196,7 +204,7 @@ std::optional<std::int64_t> TravelController::stop_at(std::int64_t target_mm) no
 
 void TravelController::shut_down(bool force) noexcept {
   shut_down_ = true;
-  pending_.reset();
+  drop_queued(lift::Cause::ShuttingDown);
   home_level_mm_.reset();  // no automatic relevelling from now on
   if (force && (dcp4_.active() || dcp3_.active() || relevel_.active() || inspection_.active())) {
     const TravelKind kind = active_kind();
@@ -269,10 +277,10 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
     // DCP 9.1.6: S3 resets B0 and ends the travel at once, whatever its machine is waiting for.
     // Without this a machine that sees S6/S1 drop in the same reply ends "normally" off the
     // level, and the event would blame the position instead of the drive.
-    if (fault && (pending_ || dcp4_.active() || dcp3_.active() || relevel_.active())) {
+    if (fault) drop_queued(lift::Cause::DriveFault);
+    if (fault && (dcp4_.active() || dcp3_.active() || relevel_.active())) {
       const TravelKind kind = active_kind();
       const std::int64_t target_mm = active_target_mm();
-      pending_.reset();
       dcp4_.abort_immediate();
       dcp3_.abort_immediate();
       relevel_.abort_immediate();
@@ -283,11 +291,11 @@ CycleOutput TravelController::step(const CycleInput& in) noexcept {
   }
 
   // Inspection / recall switched on during a normal travel: end it at once (DCP 9.1.1).
+  if (in.inputs.inspection || in.inputs.recall) drop_queued(lift::Cause::ModeChanged);
   if ((in.inputs.inspection || in.inputs.recall) &&
-      (dcp4_.active() || dcp3_.active() || relevel_.active() || pending_)) {
+      (dcp4_.active() || dcp3_.active() || relevel_.active())) {
     const TravelKind kind = active_kind();
     const std::int64_t target_mm = active_target_mm();
-    pending_.reset();
     dcp4_.abort_immediate();
     dcp3_.abort_immediate();
     relevel_.abort_immediate();

@@ -59,8 +59,10 @@ class TravelController {
   /// Events lost to a full ring.
   std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
 
-  /// Kind of the running travel (None when idle).
+  /// Kind of the running travel (None when idle, and while a travel is only queued).
   TravelKind active_kind() const noexcept;
+  /// True while a travel is queued (accepted by start(), not begun: held or before its step).
+  bool travel_queued() const noexcept { return pending_.has_value(); }
   /// The destination of the run in progress (or the pending one), for its events; 0 for a run
   /// without one (inspection).
   std::int64_t active_target_mm() const noexcept;
@@ -84,6 +86,9 @@ class TravelController {
   /// Automatic relevelling without a position: by the relevel_up / relevel_down shaft signals.
   void relevel_by_shaft_signals(const CycleInput& in) noexcept;
   void abort_all_immediately() noexcept;
+  /// Drops the queued travel, if any, with an Aborted event for `cause`: a travel start()
+  /// accepted ends with an event whatever ends it, even before it began.
+  void drop_queued(lift::Cause cause) noexcept;
 
   TravelConfig config_;
   CommandGate gate_;

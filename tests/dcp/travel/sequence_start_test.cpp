@@ -1,6 +1,8 @@
 // Fast start, fast stop, start supervision, start checks and the channel request body.
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include "fake_drive.hpp"
 #include "sequence_requests.hpp"
 
@@ -164,6 +166,61 @@ TEST(StartChecks, RequestsThatCannotRunAreRefused) {
   busy.cycle();
   EXPECT_EQ(busy.controller.start(dcp4_request(3000)), StartResult::Accepted);
   EXPECT_EQ(busy.controller.start(dcp4_request(6000)), StartResult::Busy);
+}
+
+// A travel start() accepted that is still queued (held until the I9 of the last stop reached the
+// drive, DCP 5.12.9) ends with one Aborted event naming what ended it, whatever ends it: a client
+// told "ok" waits for the travel's end and must get it.
+TEST(QueuedTravel, EndsWithAnAbortedEventWhateverEndsItBeforeItBegins) {
+  // Legend: what ends the queued travel, the cause its event names.
+  struct Case {
+    const char* name;
+    std::function<void(Rig&)> end;
+    lift::Cause cause;
+  };
+  const std::vector<Case> cases = {
+      {"stop", [](Rig& r) { r.controller.stop(); }, lift::Cause::StopRequested},
+      {"fast stop", [](Rig& r) { r.controller.fast_stop(); }, lift::Cause::StopRequested},
+      {"stop at a level", [](Rig& r) { (void)r.controller.stop_at(3000); },
+       lift::Cause::StopRequested},
+      {"service stop", [](Rig& r) { r.controller.shut_down(false); }, lift::Cause::ShuttingDown},
+      {"forced service stop", [](Rig& r) { r.controller.shut_down(true); },
+       lift::Cause::ShuttingDown},
+      {"inspection switched on", [](Rig& r) { r.input.inputs.inspection = true; },
+       lift::Cause::ModeChanged},
+      {"recall switched on", [](Rig& r) { r.input.inputs.recall = true; },
+       lift::Cause::ModeChanged},
+      {"drive fault (S3)", [](Rig& r) { r.drive.status().general_fault = true; },
+       lift::Cause::DriveFault},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    Rig rig(Protocol::Dcp4);
+    rig.cycle();
+    rig.controller.hold_start(true);
+    ASSERT_EQ(rig.controller.start(dcp4_request(9000)), StartResult::Accepted);
+    rig.cycle();
+    ASSERT_TRUE(rig.controller.travel_queued());
+    c.end(rig);
+    rig.cycle();
+    rig.cycle();
+    EXPECT_FALSE(rig.controller.travel_queued());
+    std::vector<Event> ends;
+    for (const Event& e : rig.events) {
+      if (e.type == Type::Aborted || e.type == Type::Finished || e.type == Type::Started) {
+        ends.push_back(e);
+      }
+    }
+    ASSERT_EQ(ends.size(), 1U);
+    EXPECT_EQ(ends[0].type, Type::Aborted);
+    EXPECT_EQ(ends[0].cause, c.cause);
+    EXPECT_EQ(ends[0].kind, TravelKind::Dcp4Distance);
+    EXPECT_EQ(ends[0].target_mm, 9000);
+    // Released, nothing begins: the dropped travel is gone.
+    rig.controller.hold_start(false);
+    rig.cycle();
+    EXPECT_EQ(rig.controller.active_kind(), TravelKind::None);
+  }
 }
 
 TEST(ChannelRequestBody, MatchesTheSpecsTextLayout) {
