@@ -296,7 +296,7 @@ void Backend::learn(Responder done) {
 void Backend::inspection(bool, const std::string&, Responder done) {
   no_travel(done);
 }
-void Backend::calls(const std::string&, std::optional<int>, Responder done) {
+void Backend::calls(const CallsArgs&, Responder done) {
   no_travel(done);
 }
 

@@ -97,6 +97,14 @@ struct EtaArgs {
   std::optional<std::size_t> position;  ///< where in the calls queue (`position`); none: the end
 };
 
+/// `calls`: what to do to the queue of destinations (validated by the command).
+struct CallsArgs {
+  std::string action = "list";          ///< list, add, cancel, insert or set
+  std::optional<int> floor;             ///< add, cancel, insert
+  std::optional<std::size_t> position;  ///< insert: where (0: first; none: the end)
+  std::vector<int> floors;              ///< set: the new queue, first served first
+};
+
 /// Everything `status` reports, filled by the backend. The drive-neutral fields every drive kind
 /// fills alike; what only one kind has goes into `details`, reported under the kind's name.
 struct StatusSnapshot {
@@ -245,8 +253,8 @@ class Backend {
   virtual void relevel(Responder done);
   /// Software inspection on/off with a held direction ("up", "down", "none").
   virtual void inspection(bool on, const std::string& direction, Responder done);
-  /// Calls queue: "list", "add" or "cancel" (with floor).
-  virtual void calls(const std::string& action, std::optional<int> floor, Responder done);
+  /// Calls queue: list, add, cancel, insert or set (CallsArgs).
+  virtual void calls(const CallsArgs& args, Responder done);
   /// The learning travel: answered when it ends, with the learned levels beside the configured
   /// ones (docs/api.md "learn"). Every lift's backend offers it (DCP, SCH001 and USS); the
   /// default, for a backend without travels, refuses: `not_offered`.

@@ -13,6 +13,24 @@
 namespace liftd::api {
 namespace {
 
+/// `calls set`'s `floors`: an array of floor indices; nullopt when `value` is one (filled into
+/// `out`), else what is wrong and what is allowed.
+std::optional<std::string> floor_list(const nlohmann::json& value, std::vector<int>& out) {
+  const std::string allowed = "an array of at most " + std::to_string(kMaxCallsQueued) +
+                              " floor indices 0.." + std::to_string(kMaxFloorIndex);
+  if (!value.is_array() || value.size() > static_cast<std::size_t>(kMaxCallsQueued)) {
+    return "floors must be " + allowed;
+  }
+  for (const nlohmann::json& floor : value) {
+    if (!floor.is_number_integer() || floor.get<std::int64_t>() < 0 ||
+        floor.get<std::int64_t>() > kMaxFloorIndex) {
+      return "floors must be " + allowed + ": " + floor.dump() + " is not one";
+    }
+    out.push_back(floor.get<int>());
+  }
+  return std::nullopt;
+}
+
 /// The last status answered and its serialised form: a dispatcher polling a lift at rest asks
 /// for the same object again and again, so it is serialised only when it changed.
 class StatusCache {
@@ -266,23 +284,49 @@ void add_travel_commands(Dispatcher& dispatcher, Backend& backend) {
                                   std::move(done));
                   },
                   kEveryDriveKind});
-  dispatcher.add({"calls",
-                  Access::Control,
-                  {choice_arg("action", false, {"list", "add", "cancel"},
-                              "list (default), add or cancel a destination"),
-                   optional_floor},
-                  "the queue of destinations, served in order",
-                  [b](const Call& call, Responder done) {
-                    const std::string action = arg_or<std::string>(call.request, "action", "list");
-                    std::optional<int> f;
-                    if (call.request.contains("floor")) f = call.request.at("floor").get<int>();
-                    if (action != "list" && !f) {
-                      done(Result::fail(ErrorCode::BadRequest, action + " needs a floor", "floor"));
-                      return;
-                    }
-                    b->calls(action, f, std::move(done));
-                  },
-                  kEveryDriveKind});
+  ArgSpec floors_list;
+  floors_list.name = "floors";
+  floors_list.type = ArgType::Any;
+  floors_list.description =
+      "set: the new queue, first served first (a floor may repeat, not "
+      "twice in a row)";
+  dispatcher.add(
+      {"calls",
+       Access::Control,
+       {choice_arg("action", false, {"list", "add", "cancel", "insert", "set"},
+                   "list (default), add, cancel or insert a destination, or set the queue"),
+        optional_floor,
+        int_arg("position", false, 0, kMaxCallsQueued - 1,
+                "insert: where in the queue (0: first; default: the end)"),
+        floors_list},
+       "the queue of destinations, served in order",
+       [b](const Call& call, Responder done) {
+         CallsArgs args;
+         args.action = arg_or<std::string>(call.request, "action", "list");
+         if (call.request.contains("floor")) args.floor = call.request.at("floor").get<int>();
+         const bool needs_floor =
+             args.action == "add" || args.action == "cancel" || args.action == "insert";
+         if (needs_floor && !args.floor) {
+           done(Result::fail(ErrorCode::BadRequest, args.action + " needs a floor", "floor"));
+           return;
+         }
+         if (args.action == "set") {
+           const auto it = call.request.find("floors");
+           if (it == call.request.end()) {
+             done(Result::fail(ErrorCode::BadRequest, "set needs floors", "floors"));
+             return;
+           }
+           if (auto bad = floor_list(*it, args.floors)) {
+             done(Result::fail(ErrorCode::BadRequest, *bad, "floors"));
+             return;
+           }
+         }
+         if (call.request.contains("position")) {
+           args.position = call.request.at("position").get<std::size_t>();
+         }
+         b->calls(args, std::move(done));
+       },
+       kEveryDriveKind});
   add_learn_command(dispatcher, backend);
 }
 

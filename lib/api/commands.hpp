@@ -21,6 +21,8 @@ inline constexpr std::int64_t kMaxTravels = 16;
 
 /// Highest floor index a request may name (the configuration allows at most 64 floors).
 inline constexpr std::int64_t kMaxFloorIndex = 63;
+/// Most destinations the calls queue holds (lift::CallQueue: one per floor of the largest table).
+inline constexpr std::int64_t kMaxCallsQueued = 128;
 
 /// The `floor` argument of the travel commands (0..kMaxFloorIndex).
 ArgSpec floor_arg(bool required);

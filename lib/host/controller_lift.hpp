@@ -95,16 +95,36 @@ class ControllerBackend : public api::Backend {
     cmd.direction = direction_of(direction);
     send(cmd, std::move(done));
   }
-  void calls(const std::string& action, std::optional<int> floor, api::Responder done) override {
-    if (action == "list") {
+  void calls(const api::CallsArgs& args, api::Responder done) override {
+    if (args.action == "list") {
       done(api::Result::ok({{"calls", calls_list(controller_.snapshot())}}));
       return;
     }
-    if (action == "add") note_travel_asked();
-    typename Drive::CallCommand cmd;
-    cmd.add = action == "add";
-    cmd.floor = static_cast<std::size_t>(floor.value_or(0));
-    send(cmd, std::move(done));
+    using Op = lift::CallCommand::Op;
+    lift::CallCommand cmd;
+    cmd.op = args.action == "add"      ? Op::Add
+             : args.action == "cancel" ? Op::Cancel
+             : args.action == "insert" ? Op::Insert
+                                       : Op::Set;
+    const bool adds_stops = cmd.op != Op::Cancel && !(cmd.op == Op::Set && args.floors.empty());
+    if (adds_stops) {
+      // docs/api.md `calls`: a car out of service takes no stop, as it starts no travel (the
+      // service stop keeps its own answer, the controller's).
+      const std::string reason = this->status().out_of_service;
+      if (!reason.empty() && reason != "stopping") {
+        done(api::Result::fail(api::ErrorCode::NotReady,
+                               "the car is out of service (" + reason + "): it takes no calls"));
+        return;
+      }
+      note_travel_asked();
+    }
+    cmd.floor = static_cast<std::size_t>(args.floor.value_or(0));
+    cmd.position = args.position;
+    cmd.count = std::min(args.floors.size(), cmd.floors.size());
+    for (std::size_t i = 0; i < cmd.count; ++i) {
+      cmd.floors[i] = static_cast<std::uint8_t>(args.floors[i]);
+    }
+    send(typename Drive::CallCommand{cmd}, std::move(done));
   }
   void sim(const api::SimRequest& request, api::Responder done) override {
     if (sim_ == nullptr) {
@@ -181,6 +201,7 @@ class ControllerBackend : public api::Backend {
                                    " is beyond the calls queue; allowed: 0.." +
                                    std::to_string(s.calls.size()));
     }
+    std::optional<std::size_t> position = args.position;
     EtaCar car;
     car.in_service = s.out_of_service.empty();
     car.reason = s.out_of_service;
@@ -203,11 +224,14 @@ class ControllerBackend : public api::Backend {
                                 config_.travel.relevel_threshold_mm);
       }
       // The queue's first call stays queued until served: it is the running travel's target.
+      // A position counts in the queue as `calls` lists it, where 0 and 1 both mean right after
+      // that target (as `calls insert` puts it).
       if (!car.calls.empty() && car.calls.front() == *s.target_floor) {
         car.calls.erase(car.calls.begin());
+        if (position && *position > 0) --*position;
       }
     }
-    return api::Result::ok(estimate_eta(eta_times_, car, {args.floor, args.position}));
+    return api::Result::ok(estimate_eta(eta_times_, car, {args.floor, position}));
   }
 
   /// The serial device of a drive link on a serial line (serial_device_report.hpp), for `stats`.
@@ -537,6 +561,9 @@ class ControllerLift : public LiftRunner {
         break;
       case Kind::CallServed:
         report_call_served(*server_, event.floor);
+        break;
+      case Kind::CallsDropped:
+        report_calls_dropped(*server_, event.dropped, event.cause);
         break;
       default:  // the drive's own events: handle_event()
         break;

@@ -192,6 +192,21 @@ std::string out_of_service(bool stopping, bool faulted, const lift::Inputs& inpu
   return {};
 }
 
+void report_calls_dropped(api::Server& server, const lift::DroppedCalls& dropped,
+                          lift::Cause cause) {
+  nlohmann::json floors = nlohmann::json::array();
+  std::string list;
+  for (std::size_t floor = 0; floor < dropped.floors.size(); ++floor) {
+    if (!dropped.floors.test(floor)) continue;
+    floors.push_back(floor);
+    list += (list.empty() ? "" : " ") + std::to_string(floor);
+  }
+  const std::string why(lift::to_string(cause));
+  log::event(log::Level::info, "travel", "calls_dropped", {{"floors", list}, {"cause", why}},
+             "calls dropped (" + why + "): floors " + list);
+  server.publish("calls_dropped", {{"floors", floors}, {"cause", why}});
+}
+
 void report_call_served(api::Server& server, std::size_t floor) {
   log::event(log::Level::info, "travel", "call_served", {{"floor", std::to_string(floor)}},
              "call served: floor " + std::to_string(floor));

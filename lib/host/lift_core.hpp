@@ -320,5 +320,9 @@ void report_travel(api::Server& server, const TravelEvent& t, Controller& contro
 }
 /// Journals and publishes a served call.
 void report_call_served(api::Server& server, std::size_t floor);
+/// liftd emptied the calls queue for `cause`: a journal line and the calls_dropped event with
+/// the floors the queue held.
+void report_calls_dropped(api::Server& server, const lift::DroppedCalls& dropped,
+                          lift::Cause cause);
 
 }  // namespace liftd::daemon

@@ -67,10 +67,6 @@ struct InspectionCommand {
   bool on = false;
   Direction direction = Direction::None;
 };
-struct CallCommand {
-  bool add = true;
-  std::size_t floor = 0;
-};
 struct InputsCommand {
   Inputs inputs;
 };
@@ -284,7 +280,7 @@ class ControllerCore {
   void handle_shared(std::uint32_t tag, const ShutdownCommand& body,
                      typename Types::Input& in) noexcept {
     shutting_down_ = true;
-    lift_.calls().clear();
+    drop_calls(Cause::ShuttingDown, in.now);
     learning_.stop();
     if (body.force) {
       travel_.abort(Cause::ShuttingDown, in.now);
@@ -294,9 +290,9 @@ class ControllerCore {
     reply(tag, ReplyCode::Ok);
   }
   void handle_shared(std::uint32_t tag, const StopCommand&, typename Types::Input& in) noexcept {
-    lift_.calls().clear();
     learning_.stop();
     const auto floor = travel_.stop(lift_.floors(), in);
+    drop_calls(Cause::StopRequested, in.now, floor);
     reply(tag, ReplyCode::Ok, {}, floor);
   }
   void handle_shared(std::uint32_t tag, const InspectionCommand& body,
@@ -305,7 +301,8 @@ class ControllerCore {
     reply(tag, ReplyCode::Ok);
   }
   void handle_shared(std::uint32_t tag, const CallCommand& body, typename Types::Input&) noexcept {
-    const Answer a = LiftRules::answer_call(lift_, body.add, body.floor, shutting_down_);
+    const Answer a = answer_call(body, travel_.busy() && travel_.target().has_value() &&
+                                           travel_.target() == lift_.calls().front());
     reply(tag, a.code, a.detail);
   }
 
@@ -594,13 +591,9 @@ class ControllerCore {
         learning_.leg_ended(t.type == Types::TravelEvent::Type::Aborted, t.cause);
       }
       if (t.type == Types::TravelEvent::Type::Finished && t.kind == Types::TravelKind::Travel) {
-        const auto front = lift_.calls().front();
-        if (front && *front == t.floor) {
-          lift_.calls().pop_front();
-          call_served(t.floor, now);
-        }
+        served_on_arrival(t.floor, now);
       } else if (t.type == Types::TravelEvent::Type::Aborted) {
-        lift_.calls().clear();
+        drop_calls(t.cause, now);
       }
     }
     note_travel_dropped(travel_.dropped_events());
@@ -619,6 +612,34 @@ class ControllerCore {
     served.at = now;
     served.floor = floor;
     push_event(served);
+  }
+  /// A travel ended with the car standing at `reached`: the first queued stop there is served,
+  /// whether it was first in the queue or not (the passengers there got their stop).
+  void served_on_arrival(std::optional<std::size_t> reached, MonoTime now) noexcept {
+    if (reached && lift_.calls().cancel(*reached)) call_served(*reached, now);
+  }
+  /// liftd empties the queue for `cause` (a stop, a fault, the service stop): the dispatcher
+  /// is told which floors it lost (event calls_dropped). `keep`: the floor a stop ends at stays
+  /// queued when it was, and is served there.
+  void drop_calls(Cause cause, MonoTime now, std::optional<std::size_t> keep = {}) noexcept {
+    const bool kept = keep && lift_.calls().contains(*keep);
+    lift::DroppedCalls dropped = lift_.calls().drop();
+    if (kept) {
+      dropped.floors.reset(*keep);
+      (void)lift_.calls().add(*keep, lift_.floors().size());
+    }
+    if (dropped.floors.none()) return;
+    typename Types::Event event;
+    event.kind = Types::Event::Kind::CallsDropped;
+    event.at = now;
+    event.dropped = dropped;
+    event.cause = cause;
+    push_event(event);
+  }
+  /// `calls` (LiftRules::answer_call) answered; `heading_for`: a travel runs to the queue's
+  /// first floor.
+  Answer answer_call(const CallCommand& call, bool heading_for) noexcept {
+    return LiftRules::answer_call(lift_, call, shutting_down_, heading_for);
   }
 
   /// The floor of the first call to travel to now, if any: none while a run is in progress or

@@ -66,10 +66,12 @@ class LiftRules {
   /// while the direction is held.
   Inputs current_inputs(MonoTime now) const noexcept;
 
-  /// `calls add` / `calls cancel` of `floor` on `lift`. While the service stops no call is
-  /// added (the calls were cleared and no travel starts); a floor already queued is ok.
-  static Answer answer_call(LiftModel& lift, bool add, std::size_t floor,
-                            bool shutting_down) noexcept;
+  /// `calls` add, cancel, insert or set on `lift`. While the service stops no call is added
+  /// (the calls were cleared and no travel starts); `add` of a floor already queued is ok.
+  /// `heading_for`: the queue's first floor is the one a travel runs to now; `set` and `insert`
+  /// keep it first (a running travel is not re-targeted by the queue).
+  static Answer answer_call(LiftModel& lift, const CallCommand& call, bool shutting_down,
+                            bool heading_for) noexcept;
 
  private:
   MonoTime inputs_timeout_;

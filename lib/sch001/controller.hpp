@@ -90,6 +90,7 @@ struct ControllerEvent {
     FaultRaised,   ///< `fault`
     FaultCleared,  ///< `fault`
     CallServed,    ///< `floor`
+    CallsDropped,  ///< liftd emptied the calls queue: `dropped`, for `cause`
   };
   Kind kind = Kind::Link;
   MonoTime at{};
@@ -98,6 +99,8 @@ struct ControllerEvent {
   bool endpoint_up = false;
   FaultCode fault = FaultCode::LinkFault;
   std::size_t floor = 0;
+  lift::DroppedCalls dropped{};
+  lift::Cause cause = lift::Cause::None;
 };
 
 /// Card document 3c: the card sends its status every 100 ms and each one is answered; this many

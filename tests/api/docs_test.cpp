@@ -197,9 +197,9 @@ void expect_table_rows(const std::vector<std::string>& names, const char* what) 
 
 // Every event the daemon publishes: the server's greeting, the watch start, the lifts.
 const std::vector<std::string> kEvents = {
-    "hello",   "state",       "display",           "link",   "travel",      "drive_error",
-    "fault",   "call_served", "parameter_changed", "missed", "watch_ended", "learn",
-    "stopping"};
+    "hello",    "state",        "display",           "link",   "travel",      "drive_error",
+    "fault",    "call_served",  "parameter_changed", "missed", "watch_ended", "learn",
+    "stopping", "calls_dropped"};
 
 TEST(ApiDocs, EventListMatchesWhatTheDaemonPublishes) {
   std::set<std::string> published;

@@ -5,9 +5,11 @@
 // once differed between the kinds (the recall switch was read by the DCP lift only).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 
 #include <string>
+#include <vector>
 
 #include "e2e/drive_cases.hpp"
 #include "e2e/harness.hpp"
@@ -110,12 +112,13 @@ TEST_P(RuleParity, InspectionOrRecallMidTravelEndsItAsModeChangedAndRefusesTheNe
       EXPECT_EQ(error_of(refused).value("code", ""), "not_ready") << refused.dump();
       EXPECT_EQ(error_of(refused).value("message", ""), "inspection or recall is switched on")
           << refused.dump();
-      // No call starts a travel either while the switch is on.
-      ASSERT_TRUE(
-          lift->call({{"cmd", "calls"}, {"action", "add"}, {"floor", 0}}).value("ok", false));
+      // Nor is a call taken while the switch is on (issue #44: it was, and waited).
+      const json call = lift->call({{"cmd", "calls"}, {"action", "add"}, {"floor", 0}});
+      EXPECT_EQ(error_of(call).value("code", ""), "not_ready") << call.dump();
+      EXPECT_EQ(error_of(call).value("message", ""),
+                std::string("the car is out of service (") + s.name + "): it takes no calls")
+          << call.dump();
       EXPECT_FALSE(lift->wait_travel("started", 2s).is_object()) << lift->log();
-      ASSERT_TRUE(
-          lift->call({{"cmd", "calls"}, {"action", "cancel"}, {"floor", 0}}).value("ok", false));
       // Switched off, the car is in service again.
       ASSERT_TRUE(lift->call(s.off).value("ok", false));
       ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump() << lift->log();
@@ -249,6 +252,67 @@ TEST_P(RuleParity, ATravelStoppedBeforeItBeginsStillEndsWithAnEvent) {
     ASSERT_TRUE(ended.is_object()) << "a travel answered ok never ended\n" << lift->log();
     ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump();
     EXPECT_FALSE(lift->status()["car"]["floor"].is_null()) << lift->status().dump();
+  });
+}
+
+// docs/api.md `calls`: a plan that visits a floor twice (set), a call_served for each stop the car
+// makes at a queued floor, and a calls_dropped naming what a stop took away; the same on every
+// kind (issue #44: the queue held each floor once, and a stop emptied it without a word).
+TEST_P(RuleParity, CallsPlanRepeatsServeEachStopAndNameWhatAStopDrops) {
+  judged_unless_stalled([this] {
+    const auto lift = make_lift("calls-plan");
+    ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump();
+    const json floors = lift->call({{"cmd", "config"}})["result"]["config"]["floors"];
+    const auto served_floors = [&] {
+      std::vector<int> served;
+      for (const json& e : lift->api().events()) {
+        if (e["event"] == "call_served") served.push_back(e["data"]["floor"].get<int>());
+      }
+      return served;
+    };
+    // 0 -> 1 -> 0 -> 1 in one request.
+    const json plan = lift->call({{"cmd", "calls"}, {"action", "set"}, {"floors", {1, 0, 1}}});
+    ASSERT_TRUE(plan.value("ok", false)) << plan.dump();
+    for (int i = 0; i < 3 && served_floors().size() < 3; ++i) {
+      (void)lift->api().wait_event(
+          "call_served", [](const json&) { return true; }, 60s);
+    }
+    EXPECT_EQ(served_floors(), (std::vector<int>{1, 0, 1})) << lift->log();
+    EXPECT_TRUE(lift->status()["travel"]["calls"].empty()) << lift->status().dump();
+    EXPECT_EQ(lift->count_events("calls_dropped", [](const json&) { return true; }), 0);
+
+    // Twice in a row is refused and changes nothing.
+    const json twice = lift->call({{"cmd", "calls"}, {"action", "set"}, {"floors", {0, 0}}});
+    EXPECT_EQ(error_of(twice).value("message", ""), "the same floor twice in a row")
+        << twice.dump();
+    EXPECT_TRUE(lift->status()["travel"]["calls"].empty()) << lift->status().dump();
+
+    // A stop on the way to the far floor: what it drops is named once, with its cause; a floor
+    // the stop lands at stays queued and is served there.
+    const int far = GetParam().far_floor;
+    ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump();
+    const json next = lift->call({{"cmd", "calls"}, {"action", "set"}, {"floors", {far, 0}}});
+    ASSERT_TRUE(next.value("ok", false)) << next.dump();
+    ASSERT_TRUE(lift->wait_travel("started", 20s).is_object()) << lift->log();
+    ASSERT_TRUE(lift->wait_moved(floors[1]["level_mm"].get<double>(), 300))
+        << lift->status().dump();
+    ASSERT_TRUE(lift->call({{"cmd", "stop"}}).value("ok", false));
+    const json dropped = lift->api().wait_event(
+        "calls_dropped", [](const json&) { return true; }, 10s);
+    ASSERT_TRUE(dropped.is_object()) << lift->log();
+    EXPECT_EQ(dropped["data"]["cause"], "stop_requested") << dropped.dump();
+    const json lost = dropped["data"]["floors"];
+    EXPECT_TRUE(std::find(lost.begin(), lost.end(), json(0)) != lost.end()) << dropped.dump();
+    const json ended = lift->wait_travel_end(40s);
+    ASSERT_TRUE(ended.is_object()) << lift->log();
+    lift->api().drain(500ms);
+    const bool far_dropped = std::find(lost.begin(), lost.end(), json(far)) != lost.end();
+    const std::vector<int> served = served_floors();
+    EXPECT_EQ(std::count(served.begin(), served.end(), far), far_dropped ? 0 : 1)
+        << "the far floor is either dropped or served\n"
+        << lift->log();
+    EXPECT_EQ(lift->count_events("calls_dropped", [](const json&) { return true; }), 1);
+    EXPECT_TRUE(lift->status()["travel"]["calls"].empty()) << lift->status().dump();
   });
 }
 

@@ -81,12 +81,14 @@ class StubTravel {
 };
 
 struct StubControllerEvent {
-  enum class Kind : std::uint8_t { Travel, FaultRaised, FaultCleared, CallServed };
+  enum class Kind : std::uint8_t { Travel, FaultRaised, FaultCleared, CallServed, CallsDropped };
   Kind kind = Kind::Travel;
   MonoTime at{};
   StubEvent travel{};
   FaultCode fault = FaultCode::LinkFault;
   std::size_t floor = 0;
+  DroppedCalls dropped{};
+  Cause cause = Cause::None;
 };
 
 struct StubSnapshot {
@@ -263,10 +265,10 @@ TEST_F(ControllerCoreTest, TheSnapshotSaysTheDriveAllowsATravelExactlyWhenItsSta
 
 TEST_F(ControllerCoreTest, CallsAreServedByTravelOrAtOnceWhenThere) {
   good_inputs();
-  EXPECT_EQ(command(1, CallCommand{true, 0}).code, ReplyCode::Ok);  // the car is at floor 0
-  EXPECT_EQ(command(2, CallCommand{true, 2}).code, ReplyCode::Ok);
-  EXPECT_EQ(command(3, CallCommand{true, 7}).code, ReplyCode::BadRequest);
-  EXPECT_EQ(command(4, CallCommand{false, 3}).code, ReplyCode::BadRequest);
+  EXPECT_EQ(command(1, CallCommand::adding(0)).code, ReplyCode::Ok);  // the car is at floor 0
+  EXPECT_EQ(command(2, CallCommand::adding(2)).code, ReplyCode::Ok);
+  EXPECT_EQ(command(3, CallCommand::adding(7)).code, ReplyCode::BadRequest);
+  EXPECT_EQ(command(4, CallCommand::cancelling(3)).code, ReplyCode::BadRequest);
   std::vector<StubControllerEvent> ev = events();
   ASSERT_FALSE(ev.empty());
   bool served_here = false;
@@ -370,8 +372,8 @@ TEST_F(ControllerCoreTest, ATravelThatEndsEarlyEmptiesTheCallsQueue) {
   // decides again: the car must not set off by itself, once the fault cleared, to a call the
   // dispatcher may have given to another car.
   good_inputs();
-  EXPECT_EQ(command(1, CallCommand{true, 2}).code, ReplyCode::Ok);
-  EXPECT_EQ(command(2, CallCommand{true, 3}).code, ReplyCode::Ok);
+  EXPECT_EQ(command(1, CallCommand::adding(2)).code, ReplyCode::Ok);
+  EXPECT_EQ(command(2, CallCommand::adding(3)).code, ReplyCode::Ok);
   ASSERT_EQ(controller.snapshot().travel_kind, StubKind::Travel);
   controller.abort(Cause::SafetyChainOpen, now);
   controller.step(now);

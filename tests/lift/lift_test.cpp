@@ -2,6 +2,7 @@
 // and the lift rules every controller shares (inputs, inspection, start grace, calls answers).
 #include <gtest/gtest.h>
 
+#include <initializer_list>
 #include <optional>
 #include <string>
 #include <vector>
@@ -196,34 +197,158 @@ LiftModel five_floors() {
   return lift;
 }
 
+/// A `calls set` command of `floors`.
+CallCommand setting(std::initializer_list<std::uint8_t> floors) {
+  CallCommand c;
+  c.op = CallCommand::Op::Set;
+  for (const std::uint8_t f : floors) c.floors[c.count++] = f;
+  return c;
+}
+/// A `calls insert` command of `floor` at `position` (none: the end).
+CallCommand inserting(std::size_t floor, std::optional<std::size_t> position) {
+  CallCommand c;
+  c.op = CallCommand::Op::Insert;
+  c.floor = floor;
+  c.position = position;
+  return c;
+}
+
 TEST(LiftRules, CallsAnswersAreTheApisOnEveryLift) {
-  // docs/api.md `calls`: what a dispatcher reads on every drive kind.
+  // docs/api.md `calls`: what a dispatcher reads on every drive kind, applied one after another
+  // to one queue (five floors); each change applies whole or changes nothing.
   struct Case {
     const char* what;
-    bool add;
-    std::size_t floor;
+    CallCommand call;
     bool shutting_down;
+    bool heading_for;  // a travel runs to the queue's first floor
     ReplyCode code;
     std::string_view detail;
+    std::vector<std::size_t> queue;  // afterwards
   };
+  constexpr std::string_view kKept =
+      "the car keeps travelling to the first queued floor: the change follows it";
   const Case cases[] = {
-      {"add", true, 3, false, ReplyCode::Ok, ""},
-      {"add again", true, 3, false, ReplyCode::Ok, "already queued"},
-      {"add a floor that does not exist", true, 5, false, ReplyCode::BadRequest, "no such floor"},
-      {"add while the service stops", true, 1, true, ReplyCode::NotReady,
-       "the service is stopping"},
-      {"cancel", false, 3, false, ReplyCode::Ok, ""},
-      {"cancel again", false, 3, false, ReplyCode::BadRequest, "floor is not queued"},
-      {"cancel while the service stops", false, 1, true, ReplyCode::BadRequest,
-       "floor is not queued"},
+      {"add", CallCommand::adding(3), false, false, ReplyCode::Ok, "", {3}},
+      {"add again", CallCommand::adding(3), false, false, ReplyCode::Ok, "already queued", {3}},
+      {"add a floor that does not exist",
+       CallCommand::adding(5),
+       false,
+       false,
+       ReplyCode::BadRequest,
+       "no such floor",
+       {3}},
+      {"add while the service stops",
+       CallCommand::adding(1),
+       true,
+       false,
+       ReplyCode::NotReady,
+       "the service is stopping",
+       {3}},
+      {"cancel", CallCommand::cancelling(3), false, false, ReplyCode::Ok, "", {}},
+      {"cancel again",
+       CallCommand::cancelling(3),
+       false,
+       false,
+       ReplyCode::BadRequest,
+       "floor is not queued",
+       {}},
+      {"cancel while the service stops",
+       CallCommand::cancelling(1),
+       true,
+       false,
+       ReplyCode::BadRequest,
+       "floor is not queued",
+       {}},
+      {"set with repeats", setting({0, 1, 0}), false, false, ReplyCode::Ok, "", {0, 1, 0}},
+      {"set twice in a row",
+       setting({2, 2}),
+       false,
+       false,
+       ReplyCode::BadRequest,
+       "the same floor twice in a row",
+       {0, 1, 0}},
+      {"set a floor that does not exist",
+       setting({2, 9}),
+       false,
+       false,
+       ReplyCode::BadRequest,
+       "no such floor",
+       {0, 1, 0}},
+      {"insert first", inserting(4, 0), false, false, ReplyCode::Ok, "", {4, 0, 1, 0}},
+      {"insert at the end",
+       inserting(2, std::nullopt),
+       false,
+       false,
+       ReplyCode::Ok,
+       "",
+       {4, 0, 1, 0, 2}},
+      {"insert next to itself",
+       inserting(1, 2),
+       false,
+       false,
+       ReplyCode::BadRequest,
+       "the same floor twice in a row",
+       {4, 0, 1, 0, 2}},
+      {"insert beyond the end",
+       inserting(3, 6),
+       false,
+       false,
+       ReplyCode::BadRequest,
+       "position is beyond the end of the queue",
+       {4, 0, 1, 0, 2}},
+      {"cancel takes the first of repeats",
+       CallCommand::cancelling(0),
+       false,
+       false,
+       ReplyCode::Ok,
+       "",
+       {4, 1, 0, 2}},
+      {"insert ahead of the running target goes after it",
+       inserting(3, 0),
+       false,
+       true,
+       ReplyCode::Ok,
+       kKept,
+       {4, 3, 1, 0, 2}},
+      {"set while a travel runs keeps its target first",
+       setting({1, 2}),
+       false,
+       true,
+       ReplyCode::Ok,
+       kKept,
+       {4, 1, 2}},
+      {"set that names the running target first means that stop",
+       setting({4, 0}),
+       false,
+       true,
+       ReplyCode::Ok,
+       kKept,
+       {4, 0}},
+      {"set nothing while a travel runs keeps its target",
+       setting({}),
+       false,
+       true,
+       ReplyCode::Ok,
+       kKept,
+       {4}},
+      {"set nothing at rest empties the queue", setting({}), false, false, ReplyCode::Ok, "", {}},
+      {"set while the service stops",
+       setting({1}),
+       true,
+       false,
+       ReplyCode::NotReady,
+       "the service is stopping",
+       {}},
   };
   LiftModel lift = five_floors();
   for (const Case& c : cases) {
-    const Answer a = LiftRules::answer_call(lift, c.add, c.floor, c.shutting_down);
+    const Answer a = LiftRules::answer_call(lift, c.call, c.shutting_down, c.heading_for);
     EXPECT_EQ(a.code, c.code) << c.what;
     EXPECT_EQ(a.detail, c.detail) << c.what;
+    std::vector<std::size_t> queue;
+    for (std::size_t i = 0; i < lift.calls().size(); ++i) queue.push_back(lift.calls().at(i));
+    EXPECT_EQ(queue, c.queue) << c.what;
   }
-  EXPECT_EQ(lift.calls().size(), 0U);
 }
 
 TEST(LiftRules, InputsAreValidWhileFreshAndTheApiInspectionHoldsItsDirection) {

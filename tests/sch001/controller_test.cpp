@@ -174,7 +174,8 @@ TEST_F(Sch001ControllerTest, NoReplyIsLostWhenCommandsComeFasterThanRepliesAreRe
   for (int round = 0; round < 40; ++round) {
     for (int i = 0; i < 20; ++i) {
       const bool add = (i % 2) == 0;
-      if (controller_.post({++tag_, CallCommand{add, static_cast<std::size_t>(1 + i % 3)}})) {
+      if (controller_.post({++tag_, (add ? CallCommand::adding : CallCommand::cancelling)(
+                                        static_cast<std::size_t>(1 + i % 3))})) {
         ++accepted;
       } else {
         ++refused;
@@ -198,8 +199,8 @@ TEST_F(Sch001ControllerTest, NoReplyIsLostWhenCommandsComeFasterThanRepliesAreRe
 
 TEST_F(Sch001ControllerTest, ACallToAFloorAlreadyQueuedIsOkAsOnEveryLift) {
   run_100ms();
-  ASSERT_EQ(ask(CallCommand{true, 2}).code, ReplyCode::Ok);
-  const CommandReply again = ask(CallCommand{true, 2});
+  ASSERT_EQ(ask(CallCommand::adding(2)).code, ReplyCode::Ok);
+  const CommandReply again = ask(CallCommand::adding(2));
   EXPECT_EQ(again.code, ReplyCode::Ok) << again.detail;
   EXPECT_EQ(again.detail, "already queued");
 }

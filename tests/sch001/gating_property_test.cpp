@@ -62,7 +62,8 @@ std::string run_seed(unsigned seed, Totals& totals) {
       controller.post({++tag, InspectionCommand{chance(50), chance(50) ? lift::Direction::Up
                                                                        : lift::Direction::Down}});
     }
-    if (chance(1)) controller.post({++tag, CallCommand{true, static_cast<std::size_t>(rng() % 4)}});
+    if (chance(1))
+      controller.post({++tag, CallCommand::adding(static_cast<std::size_t>(rng() % 4))});
     // The machine.
     if (chance(2)) inputs.safety_chain_closed = !inputs.safety_chain_closed || chance(70);
     if (chance(2)) inputs.doors_locked = !inputs.doors_locked || chance(70);

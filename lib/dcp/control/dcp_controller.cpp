@@ -230,22 +230,27 @@ void DcpController::handle(const Command& command, travel::CycleInput& in) noexc
           // As on every lift (ControllerCore's ShutdownCommand): no new travel or call, the
           // running travel stops as `stop` stops it, or at once when forced.
           shutting_down_ = true;
+          drop_calls(lift::Cause::ShuttingDown, in.now);
           travel_.shut_down(body.force);
           if (!body.force) handle_stop(0);
-          lift_.calls().clear();
           reply(tag, ReplyCode::Ok);
         } else if constexpr (std::is_same_v<T, FastStopCommand>) {
           if (travel_.active_kind() == TravelKind::None && !travel_.travel_queued()) {
             reply(tag, ReplyCode::BadRequest, "no travel running");
             return;
           }
-          lift_.calls().clear();
+          drop_calls(lift::Cause::StopRequested, in.now);
           travel_.fast_stop();
           reply(tag, ReplyCode::Ok);
         } else if constexpr (std::is_same_v<T, RelevelCommand>) {
           handle_relevel(tag);
+        } else if constexpr (std::is_same_v<T, CallCommand>) {
+          const bool running = travel_.active_kind() != TravelKind::None || travel_.travel_queued();
+          const lift::Answer a = answer_call(
+              body, running && target_floor_.has_value() && target_floor_ == lift_.calls().front());
+          reply(tag, a.code, a.detail);
         } else if constexpr (std::is_same_v<T, InspectionCommand> ||
-                             std::is_same_v<T, CallCommand> || std::is_same_v<T, InputsCommand>) {
+                             std::is_same_v<T, InputsCommand>) {
           handle_shared(tag, body, in);
         } else if constexpr (std::is_same_v<T, FastStartCommand>) {
           if (!fast_start_armed_) {
@@ -397,7 +402,6 @@ std::optional<std::size_t> DcpController::next_stop_floor() const noexcept {
 }
 
 void DcpController::handle_stop(std::uint32_t tag) noexcept {
-  lift_.calls().clear();
   stop_learning();
   const TravelKind kind = travel_.active_kind();
   // A car that moves under a distance or speed travel stops at a floor; the stop message of
@@ -431,6 +435,7 @@ void DcpController::handle_stop(std::uint32_t tag) noexcept {
   } else {
     travel_.stop();
   }
+  drop_calls(lift::Cause::StopRequested, last_input_.now, stop_floor);
   reply(tag, ReplyCode::Ok, {}, stop_floor);
 }
 
@@ -680,13 +685,13 @@ void DcpController::drain_travel(MonoTime now) noexcept {
         if (travel_start_mm_ && e->position_mm) {
           pending_i9_travel_mm_ = *e->position_mm - *travel_start_mm_;
         }
-        const auto front = lift_.calls().front();
-        const auto reached = e->position_mm ? lift_.floors().floor_at(
-                                                  *e->position_mm, config_.lift.level_tolerance_mm)
-                                            : std::nullopt;
-        if (front && reached && *front == *reached) {
-          lift_.calls().pop_front();
-          call_served(*front, now);
+        // A travel between floors (not a relevelling) served the queued stop it ended at.
+        const bool between_floors = e->kind == TravelKind::Dcp4Distance ||
+                                    e->kind == TravelKind::Dcp3Speed ||
+                                    e->kind == TravelKind::Dcp3Crawl;
+        if (between_floors && e->position_mm) {
+          served_on_arrival(
+              lift_.floors().floor_at(*e->position_mm, config_.lift.level_tolerance_mm), now);
         }
         target_floor_.reset();
         break;
@@ -695,7 +700,7 @@ void DcpController::drain_travel(MonoTime now) noexcept {
         fast_start_armed_ = false;
         target_floor_.reset();
         // A travel ended by a fault or a stop drops the queue: the dispatcher re-assigns.
-        lift_.calls().clear();
+        drop_calls(e->cause, now);
         break;
       default:
         break;

@@ -140,6 +140,7 @@ struct ControllerEvent {
     FaultRaised,   ///< `fault`
     FaultCleared,  ///< `fault`
     CallServed,    ///< `floor` was reached and left the calls queue
+    CallsDropped,  ///< liftd emptied the calls queue: `dropped`, for `cause`
   };
   Kind kind = Kind::Link;
   MonoTime at{};
@@ -148,6 +149,8 @@ struct ControllerEvent {
   dcp::DriveErrorText drive_error{};
   FaultCode fault = FaultCode::LinkFault;
   std::size_t floor = 0;
+  lift::DroppedCalls dropped{};
+  lift::Cause cause = lift::Cause::None;
 };
 
 /// Bound on queued calls shown in the snapshot.

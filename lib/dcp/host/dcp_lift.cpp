@@ -226,6 +226,7 @@ void DcpLift::handle_event(const control::ControllerEvent& event) {
     case Kind::FaultRaised:
     case Kind::FaultCleared:  // as on every lift: the recorder written on a link fault
     case Kind::CallServed:
+    case Kind::CallsDropped:
       report_lift_event(event);
       return;
   }

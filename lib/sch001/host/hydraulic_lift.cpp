@@ -636,6 +636,7 @@ void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
     case Kind::FaultRaised:
     case Kind::FaultCleared:
     case Kind::CallServed:
+    case Kind::CallsDropped:
       report_lift_event(event);
       break;
   }

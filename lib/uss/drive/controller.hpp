@@ -124,6 +124,7 @@ struct ControllerEvent {
     FaultRaised,   ///< `fault`
     FaultCleared,  ///< `fault`
     CallServed,    ///< `floor`
+    CallsDropped,  ///< liftd emptied the calls queue: `dropped`, for `cause`
   };
   Kind kind = Kind::Link;
   MonoTime at{};
@@ -137,6 +138,8 @@ struct ControllerEvent {
   TravelEvent travel{};
   FaultCode fault = FaultCode::LinkFault;
   std::size_t floor = 0;
+  lift::DroppedCalls dropped{};
+  lift::Cause cause = lift::Cause::None;
 };
 
 /// One configured slave as the snapshot shows it.

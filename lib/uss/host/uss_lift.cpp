@@ -233,6 +233,7 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
     case Kind::FaultRaised:
     case Kind::FaultCleared:
     case Kind::CallServed:
+    case Kind::CallsDropped:
       report_lift_event(event);
       break;
   }

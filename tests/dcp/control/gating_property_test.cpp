@@ -184,7 +184,7 @@ std::string run_seed(std::uint32_t seed, Coverage& coverage) {
         what = "fast start go/abort";
         break;
       case 9:
-        rig.post(CallCommand{true, static_cast<std::size_t>(pick(static_cast<int>(floors)))});
+        rig.post(CallCommand::adding(static_cast<std::size_t>(pick(static_cast<int>(floors)))));
         what = "call";
         break;
       case 10:

@@ -599,14 +599,14 @@ TEST(Calls, AnsweredAsOnEveryLiftAndRefusedWhileTheServiceStops) {
   // USS lifts do: docs/api.md's texts, and no new call once the service is stopping.
   Rig rig;
   ASSERT_TRUE(rig.warm_up());
-  CommandReply r = rig.command(CallCommand{true, 99});
+  CommandReply r = rig.command(CallCommand::adding(99));
   EXPECT_EQ(r.code, ReplyCode::BadRequest);
   EXPECT_EQ(r.detail, "no such floor");
-  r = rig.command(CallCommand{false, 2});
+  r = rig.command(CallCommand::cancelling(2));
   EXPECT_EQ(r.code, ReplyCode::BadRequest);
   EXPECT_EQ(r.detail, "floor is not queued");
   ASSERT_EQ(rig.command(ShutdownCommand{false}).code, ReplyCode::Ok);
-  r = rig.command(CallCommand{true, 2});
+  r = rig.command(CallCommand::adding(2));
   EXPECT_EQ(r.code, ReplyCode::NotReady);
   EXPECT_EQ(r.detail, "the service is stopping");
   EXPECT_EQ(rig.controller.snapshot().call_count, 0U);
@@ -644,7 +644,8 @@ TEST(Calls, NoReplyIsLostWhenCommandsComeFasterThanRepliesAreRead) {
   for (int round = 0; round < 40; ++round) {
     for (int i = 0; i < 20; ++i) {
       const bool add = (i % 2) == 0;
-      const Command c{++rig.next_tag, CallCommand{add, static_cast<std::size_t>(1 + i % 3)}};
+      const Command c{++rig.next_tag, (add ? CallCommand::adding : CallCommand::cancelling)(
+                                          static_cast<std::size_t>(1 + i % 3))};
       if (rig.controller.post(c)) {
         ++accepted;
       } else {
@@ -667,7 +668,7 @@ TEST(Calls, ServedInOrder) {
   Rig rig;
   ASSERT_TRUE(rig.warm_up());
   for (std::size_t floor : {3U, 1U, 4U}) {
-    ASSERT_EQ(rig.command(CallCommand{true, floor}).code, ReplyCode::Ok);
+    ASSERT_EQ(rig.command(CallCommand::adding(floor)).code, ReplyCode::Ok);
   }
   ASSERT_TRUE(rig.run_until(
       [&] { return rig.events_of(ControllerEvent::Kind::CallServed).size() == 3; }, 120s));

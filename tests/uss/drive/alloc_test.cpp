@@ -76,8 +76,8 @@ TEST(UssControllerAlloc, TheStepAllocatesNothingThroughTravelsFaultsAndParameter
   ASSERT_TRUE(bus.run_until([&] { return bus.stw_sent.back() == 0x047E; }, 2000));
 
   // Calls served in order, inspection hold-to-run, relevelling.
-  bus.post(9, CallCommand{true, 0});
-  bus.post(10, CallCommand{true, 2});
+  bus.post(9, CallCommand::adding(0));
+  bus.post(10, CallCommand::adding(2));
   ASSERT_TRUE(bus.run_until([&] { return bus.idle() && bus.controller.snapshot().floor == 2U; }));
   for (int i = 0; i < 60; ++i) {
     if (i % 20 == 0) bus.post(0, InspectionCommand{true, lift::Direction::Down});

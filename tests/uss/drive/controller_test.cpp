@@ -288,8 +288,8 @@ TEST(UssController, ParameterReadAndMirrorRepliesCarryTheirResults) {
 
 TEST(UssController, CallsAreServedInOrder) {
   Bus bus;
-  EXPECT_EQ(bus.command(1, CallCommand{true, 1}).code, ReplyCode::Ok);
-  EXPECT_EQ(bus.command(2, CallCommand{true, 3}).code, ReplyCode::Ok);
+  EXPECT_EQ(bus.command(1, CallCommand::adding(1)).code, ReplyCode::Ok);
+  EXPECT_EQ(bus.command(2, CallCommand::adding(3)).code, ReplyCode::Ok);
   ASSERT_TRUE(
       bus.run_until([&] { return bus.controller.snapshot().call_count == 0 && bus.idle(); }));
   EXPECT_LE(std::abs(bus.car.position_mm - 9000.0), 5.0);
