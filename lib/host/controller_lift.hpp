@@ -309,6 +309,8 @@ class ControllerBackend : public api::Backend {
     if (s.travel_kind == TravelKind::None && s.floor) {
       out.floor = static_cast<int>(*s.floor);
       out.next_possible_stop = out.floor;
+    } else if (s.next_possible_stop) {  // where a stop now would land the moving car
+      out.next_possible_stop = static_cast<int>(*s.next_possible_stop);
     }
     out.travel_state = std::string(to_string(s.travel_kind));
     out.travel_direction = direction_name(s.direction);

@@ -300,9 +300,20 @@ class ControllerCore {
     rules_.take_inspection(body.on, body.direction, in.now);
     reply(tag, ReplyCode::Ok);
   }
-  void handle_shared(std::uint32_t tag, const CallCommand& body, typename Types::Input&) noexcept {
-    const Answer a = answer_call(body, travel_.busy() && travel_.target().has_value() &&
-                                           travel_.target() == lift_.calls().front());
+  void handle_shared(std::uint32_t tag, const CallCommand& body,
+                     typename Types::Input& in) noexcept {
+    const bool heading_for =
+        travel_.busy() && travel_.target().has_value() && travel_.target() == lift_.calls().front();
+    if (body.op == CallCommand::Op::Cancel && heading_for && body.floor == travel_.target()) {
+      // docs/api.md `calls` cancel: the running travel stops at the next floor it can.
+      const std::optional<std::size_t> landing = travel_.landing_floor(lift_.floors(), in);
+      if (landing == body.floor) return (void)refuse(tag, ReplyCode::Busy, kTooLateToCancel);
+      lift_.calls().pop_front();
+      keep_calls_on_stop_ = true;
+      const std::optional<std::size_t> stop_floor = travel_.stop(lift_.floors(), in);
+      return reply(tag, ReplyCode::Ok, stop_floor ? kCancelStopsAt : kCancelStopsNow, stop_floor);
+    }
+    const Answer a = answer_call(body, heading_for);
     reply(tag, a.code, a.detail);
   }
 
@@ -593,7 +604,7 @@ class ControllerCore {
       if (t.type == Types::TravelEvent::Type::Finished && t.kind == Types::TravelKind::Travel) {
         served_on_arrival(t.floor, now);
       } else if (t.type == Types::TravelEvent::Type::Aborted) {
-        drop_calls(t.cause, now);
+        calls_after_abort(t.cause, now);
       }
     }
     note_travel_dropped(travel_.dropped_events());
@@ -616,6 +627,7 @@ class ControllerCore {
   /// A travel ended with the car standing at `reached`: the first queued stop there is served,
   /// whether it was first in the queue or not (the passengers there got their stop).
   void served_on_arrival(std::optional<std::size_t> reached, MonoTime now) noexcept {
+    keep_calls_on_stop_ = false;
     if (reached && lift_.calls().cancel(*reached)) call_served(*reached, now);
   }
   /// liftd empties the queue for `cause` (a stop, a fault, the service stop): the dispatcher
@@ -635,6 +647,12 @@ class ControllerCore {
     event.dropped = dropped;
     event.cause = cause;
     push_event(event);
+  }
+  /// A travel ended early for `cause`: the queue is dropped, unless the travel was stopped by
+  /// `calls cancel` of its target (the queue goes on without it).
+  void calls_after_abort(Cause cause, MonoTime now) noexcept {
+    if (!(keep_calls_on_stop_ && cause == Cause::StopRequested)) drop_calls(cause, now);
+    keep_calls_on_stop_ = false;
   }
   /// `calls` (LiftRules::answer_call) answered; `heading_for`: a travel runs to the queue's
   /// first floor.
@@ -687,6 +705,7 @@ class ControllerCore {
     s.position_mm = lift_.position_mm();
     s.floor = lift_.current_floor();
     s.travel_kind = travel_.kind();
+    s.next_possible_stop = travel_.landing_floor(lift_.floors(), in);
     s.phase = travel_.phase();
     s.direction = travel_.direction();
     s.target_floor = travel_.target();
@@ -702,6 +721,8 @@ class ControllerCore {
   }
 
   typename Types::Travel travel_;
+  /// `calls cancel` stopped the running travel: its stop keeps the rest of the queue.
+  bool keep_calls_on_stop_ = false;
   LiftModel lift_;
   bool shutting_down_ = false;
   std::uint64_t steps_ = 0;

@@ -33,6 +33,12 @@ struct Answer {
   std::string_view detail;
 };
 
+/// docs/api.md `calls` cancel of the floor a travel runs to: its answers.
+inline constexpr std::string_view kTooLateToCancel =
+    "the car can no longer stop before the floor it travels to";
+inline constexpr std::string_view kCancelStopsAt = "the car stops at the next floor it can";
+inline constexpr std::string_view kCancelStopsNow = "the travel ended before the car moved";
+
 class LiftRules {
  public:
   /// `inputs_timeout`: inputs older than this count as lost (config inputs.timeout_ms).

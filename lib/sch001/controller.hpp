@@ -137,6 +137,7 @@ struct ControllerSnapshot {
   Phase phase = Phase::Idle;
   lift::Direction direction = lift::Direction::None;
   std::optional<std::size_t> target_floor;
+  std::optional<std::size_t> next_possible_stop;  ///< a moving travel's: where a stop now lands
   lift::Inputs inputs{};
   std::array<std::uint8_t, kMaxSnapshotCalls> calls{};
   std::size_t call_count = 0;

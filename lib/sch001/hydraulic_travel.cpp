@@ -176,26 +176,35 @@ std::optional<std::size_t> HydraulicTravel::stop(const lift::FloorTable& floors,
     case TravelKind::Travel:
       break;
   }
-  if (phase_ == Phase::MotorStart || !in.position_mm) {
+  const std::optional<std::size_t> landing = landing_floor(floors, in);
+  if (!landing) {
     // Not moving yet (or blind): nothing to land, drop everything now.
     end(TravelEvent::Type::Aborted, lift::Cause::StopRequested, in.now);
     return std::nullopt;
   }
-  if (phase_ == Phase::Fast) {
-    // The first floor ahead still beyond this speed's slowdown distance.
-    const auto n = static_cast<std::ptrdiff_t>(floors.size());
-    const bool up = direction_ == lift::Direction::Up;
-    for (std::ptrdiff_t i = up ? 0 : n - 1; up ? i < n : i >= 0; i += up ? 1 : -1) {
-      const auto floor = static_cast<std::size_t>(i);
-      const std::int64_t d =
-          lift::distance_ahead(*in.position_mm, floors.level_mm(floor), direction_);
-      if (d >= static_cast<std::int64_t>(slowdown_mm())) {
-        if (up ? floor < target_ : floor > target_) {
-          target_ = floor;
-          target_mm_ = floors.level_mm(floor);
-        }
-        break;
-      }
+  if (*landing != target_) {
+    target_ = *landing;
+    target_mm_ = floors.level_mm(*landing);
+  }
+  return target_;
+}
+
+std::optional<std::size_t> HydraulicTravel::landing_floor(const lift::FloorTable& floors,
+                                                          const TickInput& in) const noexcept {
+  if (kind_ != TravelKind::Travel || phase_ == Phase::Idle || phase_ == Phase::MotorStart ||
+      !in.position_mm) {
+    return std::nullopt;
+  }
+  if (phase_ != Phase::Fast) return target_;
+  // The first floor ahead still beyond this speed's slowdown distance.
+  const auto n = static_cast<std::ptrdiff_t>(floors.size());
+  const bool up = direction_ == lift::Direction::Up;
+  for (std::ptrdiff_t i = up ? 0 : n - 1; up ? i < n : i >= 0; i += up ? 1 : -1) {
+    const auto floor = static_cast<std::size_t>(i);
+    const std::int64_t d =
+        lift::distance_ahead(*in.position_mm, floors.level_mm(floor), direction_);
+    if (d >= static_cast<std::int64_t>(slowdown_mm())) {
+      return (up ? floor < target_ : floor > target_) ? floor : target_;
     }
   }
   return target_;

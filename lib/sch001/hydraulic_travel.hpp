@@ -129,6 +129,11 @@ class HydraulicTravel {
   /// leg drops every signal now (the valve's soft stop lands the car).
   /// Returns the floor the car will stop at (nullopt: stopped at once between floors).
   std::optional<std::size_t> stop(const lift::FloorTable& floors, const TickInput& in) noexcept;
+  /// The floor a travel between floors would land at if stop() were called now (the next
+  /// possible stop): the first floor ahead beyond the slowdown distance at speed, the target once
+  /// slowing; nullopt while no such travel moves (not yet started, no position, other kinds).
+  std::optional<std::size_t> landing_floor(const lift::FloorTable& floors,
+                                           const TickInput& in) const noexcept;
   /// Ends whatever runs at once, with `cause` (reported once).
   void abort(lift::Cause cause, MonoTime now) noexcept;
 

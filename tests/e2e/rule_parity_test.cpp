@@ -316,6 +316,40 @@ TEST_P(RuleParity, CallsPlanRepeatsServeEachStopAndNameWhatAStopDrops) {
   });
 }
 
+// docs/api.md `calls` cancel of the floor a travel runs to: the travel stops at the next floor it
+// can still stop at (`car.next_possible_stop`, set while the car moves on every kind: issue #44
+// found it null for whole travels on SCH001 and USS) and the rest of the queue goes on.
+TEST_P(RuleParity, CancellingTheFloorATravelRunsToStopsItAtTheNextFloorItCan) {
+  judged_unless_stalled([this] {
+    const auto lift = make_lift("cancel-target");
+    ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump();
+    const int far = GetParam().far_floor;
+    ASSERT_TRUE(
+        lift->call({{"cmd", "calls"}, {"action", "set"}, {"floors", {far, 0}}}).value("ok", false));
+    ASSERT_TRUE(lift->wait_travel("started", 20s).is_object()) << lift->log();
+    ASSERT_TRUE(lift->wait_moved(0, 300)) << lift->status().dump();
+    const json moving = lift->status();
+    EXPECT_TRUE(moving["car"]["next_possible_stop"].is_number_integer()) << moving.dump();
+    const json cancelled = lift->call({{"cmd", "calls"}, {"action", "cancel"}, {"floor", far}});
+    ASSERT_TRUE(cancelled.value("ok", false)) << cancelled.dump();
+    EXPECT_EQ(cancelled["result"]["detail"], "the car stops at the next floor it can")
+        << cancelled.dump();
+    const int stop_floor = cancelled["result"].value("floor", -1);
+    EXPECT_GT(stop_floor, 0) << cancelled.dump();
+    EXPECT_LT(stop_floor, far) << cancelled.dump();
+    const json ended = lift->wait_travel_end(40s);
+    ASSERT_TRUE(ended.is_object()) << lift->log();
+    EXPECT_EQ(ended["data"]["event"], "finished") << ended.dump();
+    // The queue goes on: the car travels to floor 0 and serves it; nothing was dropped.
+    const json served = lift->api().wait_event(
+        "call_served", [](const json& d) { return d["floor"] == 0; }, 60s);
+    EXPECT_TRUE(served.is_object()) << lift->log();
+    EXPECT_EQ(lift->count_events("calls_dropped", [](const json&) { return true; }), 0);
+    EXPECT_EQ(lift->count_events("call_served", [&](const json& d) { return d["floor"] == far; }),
+              0);
+  });
+}
+
 // docs/api.md `status`: service says whether the car takes work and why not, the same on every
 // kind (issue #44: it was only in refusal texts); car.doors from the inputs.
 TEST_P(RuleParity, ServiceSaysWhetherTheCarTakesWorkAndWhyNot) {

@@ -59,6 +59,9 @@ class StubTravel {
     events_.push({StubEvent::Type::Finished, kind_, Direction::Up, target_, Cause::None, now});
     kind_ = StubKind::None;
   }
+  std::optional<std::size_t> landing_floor(const FloorTable&, const StubInput&) const noexcept {
+    return target();
+  }
   std::optional<std::size_t> stop(const FloorTable&, const StubInput&) noexcept {
     return busy() ? std::optional<std::size_t>(target_) : std::nullopt;
   }
@@ -100,6 +103,7 @@ struct StubSnapshot {
   StubPhase phase = StubPhase::Idle;
   Direction direction = Direction::None;
   std::optional<std::size_t> target_floor;
+  std::optional<std::size_t> next_possible_stop;  ///< a moving travel's: where a stop now lands
   Inputs inputs{};
   std::array<std::uint8_t, kMaxSnapshotCalls> calls{};
   std::size_t call_count = 0;
@@ -382,6 +386,34 @@ TEST_F(ControllerCoreTest, ATravelThatEndsEarlyEmptiesTheCallsQueue) {
   EXPECT_EQ(after.travel_kind, StubKind::None);
   controller.step(now);
   EXPECT_EQ(controller.snapshot().travel_kind, StubKind::None) << "a call was served anyway";
+}
+
+TEST_F(ControllerCoreTest, WhatEmptiesTheQueueIsNamedOnceAndCancellingTheTargetTooLateIsSaid) {
+  // docs/api.md `calls_dropped`: the floors and the cause, once; `calls` cancel of the floor the
+  // travel runs to when it can no longer stop before it (the stub lands at its target): busy,
+  // and the queue stays as it was.
+  good_inputs();
+  EXPECT_EQ(command(1, CallCommand::adding(2)).code, ReplyCode::Ok);
+  EXPECT_EQ(command(2, CallCommand::adding(3)).code, ReplyCode::Ok);
+  ASSERT_EQ(controller.snapshot().travel_kind, StubKind::Travel);
+  EXPECT_EQ(controller.snapshot().next_possible_stop, std::optional<std::size_t>(2));
+  const CommandReply late = command(3, CallCommand::cancelling(2));
+  EXPECT_EQ(late.code, ReplyCode::Busy);
+  EXPECT_EQ(late.detail, kTooLateToCancel);
+  EXPECT_EQ(controller.snapshot().call_count, 2U);
+  (void)events();
+  controller.abort(Cause::SafetyChainOpen, now);
+  controller.step(now);
+  controller.step(now);
+  std::vector<StubControllerEvent> dropped;
+  for (const StubControllerEvent& e : events()) {
+    if (e.kind == StubControllerEvent::Kind::CallsDropped) dropped.push_back(e);
+  }
+  ASSERT_EQ(dropped.size(), 1U);
+  EXPECT_EQ(dropped[0].cause, Cause::SafetyChainOpen);
+  EXPECT_TRUE(dropped[0].dropped.floors.test(2));
+  EXPECT_TRUE(dropped[0].dropped.floors.test(3));
+  EXPECT_EQ(dropped[0].dropped.floors.count(), 2U);
 }
 
 }  // namespace

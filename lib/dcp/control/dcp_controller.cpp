@@ -246,8 +246,13 @@ void DcpController::handle(const Command& command, travel::CycleInput& in) noexc
           handle_relevel(tag);
         } else if constexpr (std::is_same_v<T, CallCommand>) {
           const bool running = travel_.active_kind() != TravelKind::None || travel_.travel_queued();
-          const lift::Answer a = answer_call(
-              body, running && target_floor_.has_value() && target_floor_ == lift_.calls().front());
+          const bool heading_for =
+              running && target_floor_.has_value() && target_floor_ == lift_.calls().front();
+          if (body.op == CallCommand::Op::Cancel && heading_for && body.floor == target_floor_) {
+            cancel_target(tag, body.floor);
+            return;
+          }
+          const lift::Answer a = answer_call(body, heading_for);
           reply(tag, a.code, a.detail);
         } else if constexpr (std::is_same_v<T, InspectionCommand> ||
                              std::is_same_v<T, InputsCommand>) {
@@ -401,19 +406,25 @@ std::optional<std::size_t> DcpController::next_stop_floor() const noexcept {
                                   static_cast<std::uint32_t>(*needed_mm), 0);
 }
 
-void DcpController::handle_stop(std::uint32_t tag) noexcept {
-  stop_learning();
+DcpController::MovingTravel DcpController::moving_travel() const noexcept {
   const TravelKind kind = travel_.active_kind();
+  MovingTravel m;
   // A car that moves under a distance or speed travel stops at a floor; the stop message of
   // DCP 3.5.3.2 is only for the deceleration and for travels that do not move yet.
-  const bool dcp4_moving = kind == TravelKind::Dcp4Distance &&
-                           travel_.dcp4().state() == travel::Dcp4Travel::State::Distance &&
-                           (travel_.dcp4().moving() || last_input_.status.brake_open);
+  m.dcp4 = kind == TravelKind::Dcp4Distance &&
+           travel_.dcp4().state() == travel::Dcp4Travel::State::Distance &&
+           (travel_.dcp4().moving() || last_input_.status.brake_open);
   const auto dcp3_state = travel_.dcp3().state();
-  const bool dcp3_moving =
-      kind == TravelKind::Dcp3Speed && (dcp3_state == travel::Dcp3Travel::State::FastStartGo ||
-                                        dcp3_state == travel::Dcp3Travel::State::Travel ||
-                                        dcp3_state == travel::Dcp3Travel::State::Creep);
+  m.dcp3 = kind == TravelKind::Dcp3Speed && (dcp3_state == travel::Dcp3Travel::State::FastStartGo ||
+                                             dcp3_state == travel::Dcp3Travel::State::Travel ||
+                                             dcp3_state == travel::Dcp3Travel::State::Creep);
+  m.before_decel_point = m.dcp4 || dcp3_state != travel::Dcp3Travel::State::Creep;
+  return m;
+}
+
+std::optional<std::size_t> DcpController::stop_travel() noexcept {
+  const TravelKind kind = travel_.active_kind();
+  const MovingTravel m = moving_travel();
   // A VN' relevelling (DCP 11.1.4) already ends at the nearest level, B2 held until S6 falls
   // (step 4): it is left to finish there.
   const bool dcp4_relevel = kind == TravelKind::Dcp4Relevel &&
@@ -422,21 +433,49 @@ void DcpController::handle_stop(std::uint32_t tag) noexcept {
   if (dcp4_relevel) {
     stop_floor =
         lift_.floors().floor_at(travel_.dcp4().target_mm(), config_.lift.level_tolerance_mm);
-  } else if (dcp4_moving || dcp3_moving) {
+  } else if (m.dcp4 || m.dcp3) {
     std::optional<std::int64_t> level;
-    const bool before_decel_point = dcp4_moving || dcp3_state != travel::Dcp3Travel::State::Creep;
-    const auto floor = before_decel_point ? next_stop_floor() : std::nullopt;
+    const auto floor = m.before_decel_point ? next_stop_floor() : std::nullopt;
     if (floor) level = travel_.stop_at(lift_.floors().level_mm(*floor));
     // No nearer floor within reach (or no position): the car goes on to its own target.
-    if (!level && dcp4_moving) level = travel_.dcp4().target_mm();
-    if (!level && dcp3_moving) level = travel_.dcp3().target_mm();
+    if (!level && m.dcp4) level = travel_.dcp4().target_mm();
+    if (!level && m.dcp3) level = travel_.dcp3().target_mm();
     stop_floor = lift_.floors().floor_at(*level, config_.lift.level_tolerance_mm);
     if (stop_floor) target_floor_ = stop_floor;
   } else {
     travel_.stop();
   }
+  return stop_floor;
+}
+
+void DcpController::handle_stop(std::uint32_t tag) noexcept {
+  stop_learning();
+  const std::optional<std::size_t> stop_floor = stop_travel();
   drop_calls(lift::Cause::StopRequested, last_input_.now, stop_floor);
   reply(tag, ReplyCode::Ok, {}, stop_floor);
+}
+
+void DcpController::cancel_target(std::uint32_t tag, std::size_t floor) noexcept {
+  // docs/api.md `calls` cancel: the running travel stops at the next floor it can still stop at
+  // (as `stop` stops it), the rest of the queue goes on; too late for any floor before it: said.
+  const MovingTravel m = moving_travel();
+  if (m.dcp4 || m.dcp3) {
+    const auto landing = m.before_decel_point ? next_stop_floor() : std::nullopt;
+    if (!landing || *landing == floor) {
+      reply(tag, ReplyCode::Busy, lift::kTooLateToCancel);
+      return;
+    }
+  }
+  lift_.calls().pop_front();
+  keep_calls_on_stop_ = true;
+  const std::optional<std::size_t> stop_floor = stop_travel();
+  if (stop_floor == floor) {  // the drive could not take the shorter distance
+    (void)lift_.calls().insert(0, floor, lift_.floors().size());
+    keep_calls_on_stop_ = false;
+    reply(tag, ReplyCode::Busy, lift::kTooLateToCancel);
+    return;
+  }
+  reply(tag, ReplyCode::Ok, stop_floor ? lift::kCancelStopsAt : lift::kCancelStopsNow, stop_floor);
 }
 
 // ---- the learning travel (lift::LearningTravel through ControllerCore) ----
@@ -689,10 +728,11 @@ void DcpController::drain_travel(MonoTime now) noexcept {
         const bool between_floors = e->kind == TravelKind::Dcp4Distance ||
                                     e->kind == TravelKind::Dcp3Speed ||
                                     e->kind == TravelKind::Dcp3Crawl;
-        if (between_floors && e->position_mm) {
-          served_on_arrival(
-              lift_.floors().floor_at(*e->position_mm, config_.lift.level_tolerance_mm), now);
-        }
+        served_on_arrival(
+            between_floors && e->position_mm
+                ? lift_.floors().floor_at(*e->position_mm, config_.lift.level_tolerance_mm)
+                : std::nullopt,
+            now);
         target_floor_.reset();
         break;
       }
@@ -700,7 +740,7 @@ void DcpController::drain_travel(MonoTime now) noexcept {
         fast_start_armed_ = false;
         target_floor_.reset();
         // A travel ended by a fault or a stop drops the queue: the dispatcher re-assigns.
-        drop_calls(e->cause, now);
+        calls_after_abort(e->cause, now);
         break;
       default:
         break;

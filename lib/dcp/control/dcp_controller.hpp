@@ -250,6 +250,18 @@ class DcpController final : public rt::CycleEngine, public lift::ControllerCore<
   void handle(const Command& command, travel::CycleInput& in) noexcept;
   void handle_travel(std::uint32_t tag, const TravelCommand& cmd) noexcept;
   void handle_relevel(std::uint32_t tag) noexcept;
+  /// What a running travel is doing, for a stop: moving under a DCP4 distance or a DCP3 speed
+  /// travel, and (DCP3) still before its deceleration point.
+  struct MovingTravel {
+    bool dcp4 = false;
+    bool dcp3 = false;
+    bool before_decel_point = false;
+  };
+  MovingTravel moving_travel() const noexcept;
+  /// Ends the running travel as `stop` does; the floor it will stop at (nullopt: ended at once).
+  std::optional<std::size_t> stop_travel() noexcept;
+  /// `calls cancel` of the floor the running travel heads for.
+  void cancel_target(std::uint32_t tag, std::size_t floor) noexcept;
   void handle_stop(std::uint32_t tag) noexcept;
   void handle_learn(std::uint32_t tag) noexcept;
   /// The drive's refusal of a learning leg (not ready, general fault), as a travel's start has.

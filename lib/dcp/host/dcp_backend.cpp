@@ -72,9 +72,6 @@ api::StatusSnapshot DcpBackend::status() {
     dcp_details_ = dcp_status_json(facts);
   }
   out.details = dcp_details_;
-  // DCP 4.1 / 11: the drive's deceleration distance gives the next floor it can still stop at.
-  out.next_possible_stop.reset();
-  if (s.next_possible_stop) out.next_possible_stop = static_cast<int>(*s.next_possible_stop);
   if (s.travel_kind == travel::TravelKind::None) out.travel_state = "idle";
   if (s.fast_start_armed) out.travel_state = "fast_start";  // DCP 12: held on an open brake
   out.brake_open = s.brake_open;

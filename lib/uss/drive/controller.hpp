@@ -190,6 +190,7 @@ struct ControllerSnapshot {
   Phase phase = Phase::Idle;
   lift::Direction direction = lift::Direction::None;
   std::optional<std::size_t> target_floor;
+  std::optional<std::size_t> next_possible_stop;  ///< a moving travel's: where a stop now lands
   SpeedName speed = SpeedName::V4;
   lift::Inputs inputs{};
   std::array<std::uint8_t, kMaxSnapshotCalls> calls{};

@@ -366,23 +366,52 @@ std::optional<std::size_t> LiftTravel::stop(const lift::FloorTable& floors,
     abort(lift::Cause::StopRequested, in.now);
     return std::nullopt;
   }
-  // The first floor ahead still beyond this speed's slowdown distance.
+  const std::optional<std::size_t> ahead = first_floor_beyond_slowdown(floors, *in.position_mm);
+  if (!ahead) {
+    abort(lift::Cause::StopRequested, in.now);
+    return std::nullopt;
+  }
+  if (earlier_than_target(*ahead)) {
+    target_ = *ahead;
+    target_mm_ = floors.level_mm(*ahead);
+  }
+  return target_;
+}
+
+std::optional<std::size_t> LiftTravel::landing_floor(const lift::FloorTable& floors,
+                                                     const DriveInput& in) const noexcept {
+  if (kind_ != TravelKind::Travel) return std::nullopt;
+  switch (phase_) {
+    case Phase::Run:
+      break;
+    case Phase::Crawl:
+    case Phase::Stopping:
+      return target_;
+    default:  // not moving yet, or the tail of a run
+      return std::nullopt;
+  }
+  if (config_.reference != Reference::Position || !in.position_mm) return target_;
+  const std::optional<std::size_t> ahead = first_floor_beyond_slowdown(floors, *in.position_mm);
+  return ahead && earlier_than_target(*ahead) ? *ahead : target_;  // else too late for any
+}
+
+std::optional<std::size_t> LiftTravel::first_floor_beyond_slowdown(
+    const lift::FloorTable& floors, std::int64_t position_mm) const noexcept {
   const std::uint32_t slowdown = config_.slowdown_mm[speed_index(speed_)];
   const auto n = static_cast<std::ptrdiff_t>(floors.size());
   const bool up = direction_ == lift::Direction::Up;
   for (std::ptrdiff_t i = up ? 0 : n - 1; up ? i < n : i >= 0; i += up ? 1 : -1) {
     const auto floor = static_cast<std::size_t>(i);
-    if (lift::distance_ahead(*in.position_mm, floors.level_mm(floor), direction_) >=
+    if (lift::distance_ahead(position_mm, floors.level_mm(floor), direction_) >=
         static_cast<std::int64_t>(slowdown)) {
-      if (up ? floor < target_ : floor > target_) {
-        target_ = floor;
-        target_mm_ = floors.level_mm(floor);
-      }
-      return target_;
+      return floor;
     }
   }
-  abort(lift::Cause::StopRequested, in.now);
   return std::nullopt;
+}
+
+bool LiftTravel::earlier_than_target(std::size_t floor) const noexcept {
+  return direction_ == lift::Direction::Up ? floor < target_ : floor > target_;
 }
 
 void LiftTravel::abort(lift::Cause cause, MonoTime now) noexcept {

@@ -223,6 +223,11 @@ class LiftTravel {
   /// Inspection and a learning leg: the normal stop sequence. Returns the floor the car will
   /// stop at.
   std::optional<std::size_t> stop(const lift::FloorTable& floors, const DriveInput& in) noexcept;
+  /// The next possible stop of a travel between floors that moves: the first floor ahead beyond
+  /// its speed's slowdown distance (by position), else its target; nullopt while no such travel
+  /// moves (not yet started, other kinds).
+  std::optional<std::size_t> landing_floor(const lift::FloorTable& floors,
+                                           const DriveInput& in) const noexcept;
   /// Ends whatever runs at once with `cause` (reported once), leaving abort_wish(cause).
   void abort(lift::Cause cause, MonoTime now) noexcept;
   /// Arms a fault acknowledge (DriveProfile::acknowledge).
@@ -267,6 +272,11 @@ class LiftTravel {
   std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
 
  private:
+  /// The nearest floor ahead at least this speed's slowdown distance away (by position).
+  std::optional<std::size_t> first_floor_beyond_slowdown(const lift::FloorTable& floors,
+                                                         std::int64_t position_mm) const noexcept;
+  /// Whether `floor` comes before the target in the travel's direction.
+  bool earlier_than_target(std::size_t floor) const noexcept;
   lift::Cause begin(TravelKind kind, std::size_t floor, SpeedName speed, lift::Direction direction,
                     const DriveInput& in) noexcept;
   void enter(Phase phase, MonoTime now) noexcept;
