@@ -139,6 +139,42 @@ lift::Inputs to_lift(const api::Inputs& in) {
   return out;
 }
 
+api::Inputs from_lift(const lift::Inputs& in) {
+  api::Inputs out;
+  out.safety_chain = in.safety_chain_closed;
+  out.doors_closed = in.doors_closed;
+  out.doors_locked = in.doors_locked;
+  out.inspection = in.inspection;
+  out.recall = in.recall;
+  out.button_up = in.button_up;
+  out.button_down = in.button_down;
+  out.end_zone_top = in.end_zone_top;
+  out.end_zone_bottom = in.end_zone_bottom;
+  out.zone_door = in.door_zone_bridge;
+  out.door_reversal = in.door_reversal;
+  out.zone_level = in.level_zone;
+  out.relevel_up = in.relevel_up;
+  out.relevel_down = in.relevel_down;
+  bool* const up[] = {&out.decel_v1_up, &out.decel_v2_up, &out.decel_v3_up, &out.decel_v4_up,
+                      &out.decel_v5_up, &out.decel_v6_up, &out.decel_v7_up};
+  bool* const down[] = {&out.decel_v1_down, &out.decel_v2_down, &out.decel_v3_down,
+                        &out.decel_v4_down, &out.decel_v5_down, &out.decel_v6_down,
+                        &out.decel_v7_down};
+  for (std::size_t i = 0; i < std::size(up); ++i) {
+    *up[i] = in.decel_up[i];
+    *down[i] = in.decel_down[i];
+  }
+  return out;
+}
+
+api::Inputs MachineInputs::seen() const {
+  const std::optional<lift::Inputs> now = simulated_ ? current() : std::nullopt;
+  if (!now) return api_;
+  api::Inputs out = from_lift(*now);
+  out.position_mm = api_.position_mm;
+  return out;
+}
+
 std::optional<api::Result> MachineInputs::update(const api::InputUpdate& update) {
   if (update.position_mm && config_.position.source != config::PositionSource::api) {
     return api::Result::fail(api::ErrorCode::BadRequest,

@@ -59,15 +59,17 @@ class MachineInputs {
   void simulated_sample(const lift::Inputs& sample) { sample_ = sample; }
   /// What the cycle should see now; nullopt under --simulate before the machine's first sample.
   std::optional<lift::Inputs> current() const;
-  /// The API's inputs as merged so far (the `inputs` command's result).
-  const api::Inputs& from_api() const noexcept { return api_; }
+  /// The `inputs` command's result: the inputs the cycle sees. On a real lift the API's as
+  /// merged so far; under --simulate the simulated machine's with the API's shaft signals (an
+  /// API value the machine overrides, such as a safety chain it keeps closed, is not shown).
+  api::Inputs seen() const;
   /// The `inputs` command of every backend: takes the update, hands `send` what the controller
   /// should see now, and gives the command's result (or the refusal, changing nothing).
   template <typename Send>
   api::Result take(const api::InputUpdate& update, Send&& send) {
     if (auto refused = this->update(update)) return std::move(*refused);
     if (const auto now = current()) send(*now);
-    return api::Result::ok(api::to_json(from_api()));
+    return api::Result::ok(api::to_json(seen()));
   }
   /// A sample of the simulated machine, handed to `send` with the API's shaft signals at once.
   template <typename Send>
@@ -210,6 +212,8 @@ std::optional<api::Result> apply_sim(const api::KindSimActions& mine,
 
 /// The sequencers' inputs from the API's inputs (every drive kind reads the same machine).
 lift::Inputs to_lift(const api::Inputs& inputs);
+/// The API's view of the cycle's inputs (the `inputs` result under --simulate).
+api::Inputs from_lift(const lift::Inputs& inputs);
 /// "state changed" -> "state_changed": journal field values are snake_case words.
 std::string snake(std::string_view text);
 

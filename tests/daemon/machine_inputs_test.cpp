@@ -68,7 +68,7 @@ TEST(MachineInputs, DoorReversalAndRelevelSignalsArrive) {
   MachineInputs inputs(config, nullptr, false);
   ASSERT_EQ(inputs.update(set_only(flag("door_reversal"), true)), std::nullopt);
   EXPECT_TRUE(inputs.current()->door_reversal);
-  EXPECT_TRUE(inputs.from_api().door_reversal);
+  EXPECT_TRUE(inputs.seen().door_reversal);
   ASSERT_EQ(inputs.update(set_only(flag("relevel_up"), true)), std::nullopt);
   EXPECT_TRUE(inputs.current()->relevel_up);
   EXPECT_TRUE(inputs.current()->relevel_towards(lift::Direction::Up));
@@ -84,8 +84,8 @@ TEST(MachineInputs, APositionIsRefusedUnlessTheApiIsThePositionSource) {
   update.flags[flag("safety_chain")] = true;
   const auto refused = inputs.update(update);
   ASSERT_TRUE(refused.has_value());
-  EXPECT_FALSE(inputs.from_api().safety_chain) << "a refused update changes nothing";
-  EXPECT_EQ(inputs.from_api().position_mm, std::nullopt);
+  EXPECT_FALSE(inputs.seen().safety_chain) << "a refused update changes nothing";
+  EXPECT_EQ(inputs.seen().position_mm, std::nullopt);
 }
 
 TEST(MachineInputs, UnderSimulateTheApiAddsShaftSignalsAndNeverOverridesTheMachine) {
@@ -120,6 +120,30 @@ TEST(MachineInputs, UnderSimulateTheApiAddsShaftSignalsAndNeverOverridesTheMachi
   machine.door_reversal = true;
   inputs.simulated_sample(machine);
   EXPECT_TRUE(inputs.current()->door_reversal);
+}
+
+TEST(MachineInputs, EveryApiInputReadsBackAsTheCycleSeesIt) {
+  // from_lift is to_lift's inverse for every input the API names: the `inputs` result under
+  // --simulate (MachineInputs::seen) shows each one as the cycle took it.
+  for (const api::InputFlag& f : api::kInputFlags) {
+    api::Inputs one;
+    one.*(f.member) = true;
+    const api::Inputs back = from_lift(to_lift(one));
+    for (const api::InputFlag& g : api::kInputFlags) {
+      EXPECT_EQ(back.*(g.member), &g == &f) << f.name << " read back as " << g.name;
+    }
+  }
+  const config::Config config;
+  MachineInputs inputs(config, nullptr, true);
+  lift::Inputs machine;
+  machine.valid = true;
+  machine.safety_chain_closed = true;
+  machine.doors_locked = true;
+  inputs.simulated_sample(machine);
+  ASSERT_EQ(inputs.update(set_only(flag("zone_level"), true)), std::nullopt);
+  EXPECT_TRUE(inputs.seen().safety_chain) << "the machine's chain, not the API's default";
+  EXPECT_TRUE(inputs.seen().doors_locked);
+  EXPECT_TRUE(inputs.seen().zone_level) << "the API's shaft signal";
 }
 
 }  // namespace

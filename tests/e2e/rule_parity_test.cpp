@@ -350,6 +350,23 @@ TEST_P(RuleParity, CancellingTheFloorATravelRunsToStopsItAtTheNextFloorItCan) {
   });
 }
 
+// docs/api.md `inputs`: the result is what the cycle sees; under --simulate, the simulated
+// machine's (issue #44: it said the safety chain was open and the doors unlocked while the car
+// travelled), with the shaft signals the API gives.
+TEST_P(RuleParity, TheInputsResultIsWhatTheCycleSees) {
+  judged_unless_stalled([this] {
+    const auto lift = make_lift("inputs-seen");
+    ASSERT_NO_FATAL_FAILURE(start_far_travel(*lift));
+    const json seen = lift->call({{"cmd", "inputs"}, {"end_zone_top", false}});
+    ASSERT_TRUE(seen.value("ok", false)) << seen.dump();
+    EXPECT_EQ(seen["result"]["safety_chain"], true) << seen.dump();
+    EXPECT_EQ(seen["result"]["doors_closed"], true) << seen.dump();
+    EXPECT_EQ(seen["result"]["doors_locked"], true) << seen.dump();
+    ASSERT_TRUE(lift->call({{"cmd", "stop"}}).value("ok", false));
+    ASSERT_TRUE(lift->wait_travel_end(40s).is_object()) << lift->log();
+  });
+}
+
 // docs/api.md `status`: service says whether the car takes work and why not, the same on every
 // kind (issue #44: it was only in refusal texts); car.doors from the inputs.
 TEST_P(RuleParity, ServiceSaysWhetherTheCarTakesWorkAndWhyNot) {
