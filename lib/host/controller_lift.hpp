@@ -78,6 +78,7 @@ class ControllerBackend : public api::Backend {
         mono_at_start_(mono_now()),
         wall_at_start_(std::chrono::system_clock::now()) {
     travel_log_.set_completion_listener([this](const RecordedTravel& t) { keep_travel(t); });
+    preload_eta();
   }
 
   drive::Kind drive_kind() const override { return Drive::kKind; }
@@ -379,6 +380,21 @@ class ControllerBackend : public api::Backend {
     if (t.samples.empty() || !t.samples.front().position_known) return std::nullopt;
     return floor_near(floor_levels_mm(config_), t.samples.front().position_mm,
                       config_.travel.relevel_threshold_mm);
+  }
+  /// `eta` after a restart rests on the travels the lift's record kept (docs/api.md "Arrival
+  /// times"): the newest arrived ones, enough for every pair's window of the largest table.
+  void preload_eta() {
+    api::HistoryArgs newest;
+    newest.outcome = "arrived";
+    newest.limit = 2000;
+    const api::Result kept = record_.history(newest);
+    if (!kept.is_ok()) return;  // the record is off: its status says why
+    const std::size_t taken =
+        preload_travel_times(eta_times_, kept.value().value("travels", nlohmann::json::array()),
+                             config_.travel.relevel_threshold_mm);
+    if (taken == 0) return;
+    log::event(log::Level::info, "travel", "eta_preloaded", {{"travels", std::to_string(taken)}},
+               "eta: " + std::to_string(taken) + " floor-to-floor travels taken from the record");
   }
   /// A completed travel to `eta`'s times: a floor-to-floor travel of the lift's own (not a
   /// relevelling, an inspection or recall run, nor a learning travel's leg) that stood at its

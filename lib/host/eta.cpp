@@ -277,4 +277,36 @@ nlohmann::json estimate_eta(const TravelTimes& times, const EtaCar& car,
   return out;
 }
 
+std::size_t preload_travel_times(TravelTimes& times, const nlohmann::json& travels,
+                                 std::int64_t level_window_mm) {
+  if (!travels.is_array()) return 0;
+  std::size_t taken = 0;
+  for (auto it = travels.rbegin(); it != travels.rend(); ++it) {  // oldest first
+    const nlohmann::json& t = *it;
+    const auto number = [&](const char* key) -> std::optional<std::int64_t> {
+      const auto f = t.find(key);
+      if (f == t.end() || !f->is_number_integer()) return std::nullopt;
+      return f->get<std::int64_t>();
+    };
+    const auto from = number("from_floor");
+    const auto to = number("to_floor");
+    const auto end = number("end_floor");
+    const auto duration_ms = number("duration_ms");
+    const auto error_mm = number("stop_error_mm");
+    if (t.value("outcome", "") != "arrived" || !eta_floor_to_floor(t.value("kind", "")) || !from ||
+        !to || !end || *from == *to || *end != *to || !duration_ms || !error_mm ||
+        std::llabs(*error_mm) > level_window_mm) {
+      continue;
+    }
+    MeasuredTravel m;
+    m.from = static_cast<int>(*from);
+    m.to = static_cast<int>(*to);
+    m.duration_s = static_cast<double>(*duration_ms) / 1000.0;
+    m.top_speed_mm_s = static_cast<double>(number("top_speed_mm_s").value_or(0));
+    times.travel(m);
+    ++taken;
+  }
+  return taken;
+}
+
 }  // namespace liftd::daemon

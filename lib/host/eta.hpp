@@ -118,6 +118,15 @@ class TravelTimes {
 /// relevelling, an inspection or recall run, a learning travel or DCP3's crawl.
 bool eta_floor_to_floor(std::string_view kind) noexcept;
 
+/// Feeds `times` the floor-to-floor travels of the lift's record (a `history` answer's
+/// `travels`, newest first, as lift::LiftRecord gives them) so that arrival times after a restart
+/// rest on what the car measured before it: each arrived travel of a floor-to-floor kind between
+/// two different floors that ended at its target within `level_window_mm`. The record keeps the
+/// highest speed sampled, not the curve: the profile's acceleration waits for new travels.
+/// Returns how many travels it took.
+std::size_t preload_travel_times(TravelTimes& times, const nlohmann::json& travels,
+                                 std::int64_t level_window_mm);
+
 /// `eta`'s question: the car's state, and optionally a floor to add at queue position
 /// `position` (0 = before the first queued call; none: at the end).
 struct EtaQuestion {

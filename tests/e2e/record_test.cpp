@@ -150,6 +150,12 @@ TEST_P(RecordParity, ATravelIsCountedKeptAndFoundAgainAfterARestart) {
     const json kept = counters_once(again, 1);
     EXPECT_EQ(kept["counters"]["travels"], 1) << kept.dump();
     EXPECT_EQ(kept["counters"]["travels." + kind + ".arrived"], 1) << kept.dump();
+    // `eta` starts from the travels the record kept (docs/api.md "Arrival times"): the pair
+    // 0 -> 1 is known before the car moved again.
+    const json eta = again.call({{"cmd", "eta"}});
+    ASSERT_TRUE(eta.value("ok", false)) << eta.dump();
+    EXPECT_EQ(eta["result"]["basis"]["pairs_learned"], 1) << eta.dump();
+    EXPECT_EQ(eta["result"]["floors"][1]["learned"], true) << eta.dump();
     travel_to(again, 2);  // the simulated car starts at the lowest floor again
     const json counted = counters_once(again, 2);
     EXPECT_EQ(counted["counters"]["travels"], 2) << counted.dump();

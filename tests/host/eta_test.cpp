@@ -200,5 +200,39 @@ TEST(EtaKinds, OnlyFloorToFloorTravelsAreLearned) {
   }
 }
 
+TEST(EtaPreload, TheRecordsFloorToFloorArrivalsAreLearnedOldestFirst) {
+  // A `history` answer's travels, newest first: only arrived floor-to-floor runs between two
+  // floors that ended standing at their target count.
+  const auto travel = [](const char* kind, const char* outcome, nlohmann::json from, int to,
+                         nlohmann::json end, int duration_ms, nlohmann::json error_mm) {
+    return nlohmann::json{{"kind", kind},
+                          {"outcome", outcome},
+                          {"from_floor", from},
+                          {"to_floor", to},
+                          {"end_floor", end},
+                          {"duration_ms", duration_ms},
+                          {"stop_error_mm", error_mm},
+                          {"top_speed_mm_s", 1000}};
+  };
+  const nlohmann::json travels = nlohmann::json::array({
+      travel("distance", "arrived", 0, 2, 2, 9000, 1),              // newest: 0 -> 2 in 9 s
+      travel("distance", "arrived", 0, 2, 2, 7000, -2),             // older: 7 s
+      travel("distance", "aborted", 0, 3, nullptr, 4000, nullptr),  // ended early
+      travel("relevel_distance", "arrived", 1, 1, 1, 900, 0),       // not floor to floor
+      travel("distance", "arrived", nullptr, 4, 4, 5000, 0),        // started between floors
+      travel("distance", "arrived", 0, 5, 5, 14000, 40),            // stood off its level
+      travel("hydraulic", "arrived", 5, 1, 1, 16000, 3),
+  });
+  TravelTimes times = six_floors();
+  EXPECT_EQ(preload_travel_times(times, travels, 20), 3U);
+  EXPECT_TRUE(times.learned(0, 2));
+  EXPECT_TRUE(times.learned(5, 1));
+  EXPECT_FALSE(times.learned(0, 3));
+  EXPECT_FALSE(times.learned(0, 5));
+  EXPECT_FALSE(times.learned(1, 4));
+  EXPECT_DOUBLE_EQ(times.leg_s(0, 2), 8.0);  // the median of 7 and 9
+  EXPECT_EQ(preload_travel_times(times, nlohmann::json::object(), 20), 0U);
+}
+
 }  // namespace
 }  // namespace liftd::daemon
