@@ -199,6 +199,7 @@ nlohmann::json to_json(const StatusSnapshot& s) {
   car["brake_open"] = s.brake_open;
   car["contactors_on"] = s.contactors_on;
   car["doors"] = or_null(s.doors);
+  car["motion"] = s.motion;
   nlohmann::json& travel = j["travel"];
   travel["state"] = s.travel_state;
   travel["direction"] = or_null(s.travel_direction);

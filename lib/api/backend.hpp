@@ -121,6 +121,8 @@ struct StatusSnapshot {
   std::optional<std::string> doors;
   /// service.reason: why the car takes no call now ("stopping", "fault", "inspection", "recall",
   /// "learning", "not_ready"); empty: in service
+  /// car.motion: standing, starting, accelerating, at_speed, decelerating, levelling.
+  std::string motion = "standing";
   std::string out_of_service;
   std::string travel_state = "idle";                ///< travel.state, snake_case
   std::optional<std::string> travel_direction;      ///< travel.direction: "up", "down" or null

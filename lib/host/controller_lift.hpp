@@ -41,6 +41,7 @@
 #include "host/learn_report.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
+#include "host/motion.hpp"
 #include "host/record_feed.hpp"
 #include "host/serial_device_report.hpp"
 #include "host/trace_files.hpp"
@@ -320,6 +321,9 @@ class ControllerBackend : public api::Backend {
     out.rt = rt_info(runner_.thread_status(), config_.rt.priority);
     out.record = record_.status();
     out.doors = door_state(s.inputs);
+    const auto& log = travel_log_.travels();
+    out.motion =
+        motion_phase(s.travel_kind != TravelKind::None, log.empty() ? nullptr : &log.back());
     out.out_of_service =
         out_of_service(s.shutting_down, !out.faults.empty(), s.inputs, s.learning, out.drive_state);
     return out;

@@ -265,7 +265,8 @@ TEST_F(DispatcherTest, StatusNamesEveryField) {
                                {"next_possible_stop", nullptr},
                                {"brake_open", false},
                                {"contactors_on", false},
-                               {"doors", nullptr}}));
+                               {"doors", nullptr},
+                               {"motion", "standing"}}));
   EXPECT_EQ(r.at("service"), (json{{"in_service", true}, {"reason", nullptr}}));
   EXPECT_EQ(r.at("travel").at("state"), "idle");
   EXPECT_EQ(r.at("faults").at(0).at("since"), "1970-01-01T00:00:00.000Z");

@@ -9,6 +9,7 @@
 #include <cstdio>
 
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "e2e/drive_cases.hpp"
@@ -364,6 +365,38 @@ TEST_P(RuleParity, TheInputsResultIsWhatTheCycleSees) {
     EXPECT_EQ(seen["result"]["doors_locked"], true) << seen.dump();
     ASSERT_TRUE(lift->call({{"cmd", "stop"}}).value("ok", false));
     ASSERT_TRUE(lift->wait_travel_end(40s).is_object()) << lift->log();
+  });
+}
+
+// docs/api.md `status` car.motion: the phases of a travel, read from the car's measured speed,
+// the same on every kind (issue #44: a dispatcher had only the direction).
+TEST_P(RuleParity, TheMotionPhaseFollowsTheTravel) {
+  judged_unless_stalled([this] {
+    const auto lift = make_lift("motion");
+    ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump();
+    EXPECT_EQ(lift->status()["car"]["motion"], "standing");
+    ASSERT_TRUE(
+        lift->call({{"cmd", "travel"}, {"floor", GetParam().far_floor}}).value("ok", false));
+    std::vector<std::string> seen;
+    for (int i = 0; i < 1200; ++i) {  // 60 s at most
+      const json status = lift->status();
+      const std::string motion = status["car"]["motion"].get<std::string>();
+      if (seen.empty() || seen.back() != motion) seen.push_back(motion);
+      if (status["travel"]["state"] == "idle" && seen.size() > 2) break;
+      std::this_thread::sleep_for(50ms);
+    }
+    std::string trail;
+    for (const std::string& m : seen) trail += m + " ";
+    std::printf("motion: %s\n", trail.c_str());
+    const auto at = [&](const char* phase) {
+      return std::find(seen.begin(), seen.end(), phase) - seen.begin();
+    };
+    const auto n = static_cast<std::ptrdiff_t>(seen.size());
+    EXPECT_LT(at("accelerating"), n) << trail;
+    EXPECT_LT(at("at_speed"), n) << trail;
+    EXPECT_LT(at("decelerating"), n) << trail;
+    EXPECT_LT(at("accelerating"), at("decelerating")) << trail;
+    EXPECT_EQ(seen.back(), "standing") << trail;
   });
 }
 
