@@ -561,6 +561,24 @@ class ControllerLift : public LiftRunner {
   /// An event of the runner's own (its port, its timing), where it has them.
   virtual void handle_runner_event(const rt::CycleEvent& event) { journal_port_event(event); }
 
+  /// docs/api.md `travel` events drive_fault and drive_fault_cleared: a DCP drive's travel
+  /// events carry its S3 edges themselves (DCP 9.1.6); on the other kinds they are the edges of
+  /// the drive fault (the SCH001 card's ERR, the USS status word's fault), with the travel that
+  /// runs, if any.
+  void report_drive_fault_edge(bool raised) {
+    using TravelEvent = decltype(std::declval<typename Drive::Event>().travel);
+    if constexpr (!requires(const TravelEvent& t) { t.target_mm; }) {
+      const auto s = controller_->snapshot();
+      const auto floors = controller_->floors_mm();
+      std::optional<std::int64_t> target_mm;
+      if (s.target_floor && *s.target_floor < floors.size()) target_mm = floors[*s.target_floor];
+      const bool running = s.travel_kind != typename Drive::TravelKind{};
+      report_travel(*server_, raised ? "drive_fault" : "drive_fault_cleared",
+                    running ? to_string(s.travel_kind) : "none",
+                    raised ? lift::Cause::DriveFault : lift::Cause::None, false, target_mm,
+                    s.position_mm);
+    }
+  }
   /// Journals and publishes the events every such controller reports alike: a travel, a fault
   /// raised or cleared, a served call.
   void report_lift_event(const typename Drive::Event& event) {
@@ -579,6 +597,9 @@ class ControllerLift : public LiftRunner {
         if (event.kind == Kind::FaultRaised) backend_->record_fault(event.fault, event.at);
         if (event.kind == Kind::FaultRaised && event.fault == lift::FaultCode::LinkFault) {
           (void)backend_->write_flight_recorder("link fault");
+        }
+        if (event.fault == lift::FaultCode::DriveFault) {
+          report_drive_fault_edge(event.kind == Kind::FaultRaised);
         }
         break;
       case Kind::CallServed:

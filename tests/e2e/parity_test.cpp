@@ -265,6 +265,16 @@ TEST_P(LiftParity, ADriveFaultIsRaisedOnceAndClearedOnce) {
     lift_->api().drain(500ms);
     EXPECT_EQ(lift_->count_events("fault", is_drive_fault(true)), 1);
     EXPECT_EQ(lift_->count_events("fault", is_drive_fault(false)), 1);
+    // The travel events of docs/api.md `travel` too, on every kind (issue #44: DCP only).
+    const auto travel_event = [](const char* type) {
+      return [type](const json& d) { return d["event"] == type; };
+    };
+    EXPECT_EQ(lift_->count_events("travel", travel_event("drive_fault")), 1);
+    EXPECT_EQ(lift_->count_events("travel", travel_event("drive_fault_cleared")), 1);
+    EXPECT_EQ(lift_->count_events(
+                  "travel",
+                  [](const json& d) { return d["event"] == "drive_fault" && d["kind"] == "none"; }),
+              1);
     const std::string log = lift_->log();
     const auto count = [&log](const std::string& text) {
       int n = 0;
