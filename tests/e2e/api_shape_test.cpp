@@ -113,7 +113,7 @@ TEST_P(ApiShapeTest, StatusHasTheNeutralKeysAndTheKindsObject) {
                                                           << s.dump();
   EXPECT_EQ(keys_of(s["link"]), (Keys{"state"})) << "handshake_problem is under dcp only";
   EXPECT_EQ(keys_of(s["car"]), (Keys{"position_mm", "floor", "next_possible_stop", "brake_open",
-                                     "contactors_on", "doors"}));
+                                     "contactors_on", "doors", "motion"}));
   EXPECT_EQ(keys_of(s["service"]), (Keys{"in_service", "reason"})) << s.dump();
   EXPECT_EQ(keys_of(s["travel"]),
             (Keys{"state", "direction", "target_floor", "calls", "last_slip_mm"}));
