@@ -4,14 +4,16 @@ The simulated machine of `liftd --simulate` moves its doors only when told (docs
 `open_doors`, `close_doors`, `door_reversal`); liftd itself never opens them. A real lift's
 door operator is the controller's job; here the runner does it:
 
-1. While the car travels to a queued floor, `sim open_doors` is sent once the car moves: the
-   simulated doors then start to open the moment the car stops (`open_doors` "while the car
-   moves: when it stops"). Sending it before the car moves would open the doors at once and
-   liftd would end the travel (`aborted`, cause `doors_not_locked`). Opening on arrival also
-   closes a race: after a stop liftd starts the travel to the next queued floor within a cycle
-   or two if the doors are still locked.
-2. A floor served at once (the car already stood there: `call_served` with the car at rest)
-   gets `open_doors` right away.
+1. liftd starts the travel to the next queued floor within a cycle or two after a stop if the
+   doors are still locked, and opening doors under a travel that has started ends it
+   (`aborted`, cause `doors_not_locked`, which empties the queue). Opening the doors while the
+   car stops (`open_doors` sent while it moves) ends the arriving travel the same way on a DCP
+   drive: the doors open before the drive has ended the travel. So the door operator holds the
+   rest of the queue back: once the car is within `HOLD_WITHIN_MM` of its target, the floors
+   queued behind it are taken out (`calls cancel`) and kept here, the car stops with an empty
+   queue, and they go back in (`calls add`, same order) as soon as the doors are open. Floors
+   the dispatcher adds meanwhile wait with them.
+2. At the stop (`call_served`), `sim open_doors`.
 3. When the doors begin to open at a level, the building lets passengers out and in; the doors
    stay open for the dwell: the time the doors take to open (2 s on the simulated machine,
    docs/api.md "`sim`"), a base dwell, and a transfer time for each passenger alighting or
@@ -28,8 +30,11 @@ runner.
 
 import time
 
+import dispatcher
+from car import ApiError
+
 DOOR_OPERATE_S = 2.0   # the simulated doors take 2 s to open or to close (docs/api.md "`sim`")
-PRE_OPEN_AFTER_MM = 30  # the car has moved: an `open_doors` now waits for the stop
+HOLD_WITHIN_MM = 2500  # hold the queue behind the target from this far before it
 
 
 class DoorOperator:
@@ -45,8 +50,9 @@ class DoorOperator:
         self.floor = None          # the level the doors serve while not idle
         self.direction = None      # the car's way on from this stop: "up", "down" or None
         self.close_at = None       # monotonic time to send close_doors
-        self.travel_from_mm = None
-        self.pre_opened = False
+        self.holding = False
+        self.held = []             # floors taken out of the car's queue while it arrives
+        self.released = []         # the floors last put back: the car's way on from the stop
         self.open_off_level_since = None
         self.travels = 0
         self.aborted = 0
@@ -58,20 +64,14 @@ class DoorOperator:
         travel = state["travel"]
         doors = car["doors"]
         position = car["position_mm"]
-        if travel["state"] != "idle" and travel["target_floor"] is not None:
-            if self.travel_from_mm is None:
-                self.travel_from_mm = position
-            if (not self.pre_opened and position is not None and self.travel_from_mm is not None
-                    and abs(position - self.travel_from_mm) > PRE_OPEN_AFTER_MM):
-                self._sim("open_doors")
-                self.pre_opened = True
-        else:
-            self.travel_from_mm = None
-            self.pre_opened = False if doors == "locked" else self.pre_opened
+        target = travel["target_floor"]
+        if (travel["state"] != "idle" and target is not None and position is not None
+                and not self.holding
+                and abs(self.car.levels_mm[target] - position) <= HOLD_WITHIN_MM):
+            self._hold(target, travel["calls"])
 
         if self.phase == "idle" and doors not in ("locked", None) and travel["state"] == "idle":
             if car["floor"] is not None:
-                self.pre_opened = False
                 self.open_off_level_since = None
                 self._opening(car["floor"], now)
             else:
@@ -90,15 +90,46 @@ class DoorOperator:
     def on_call_served(self, floor, now):
         state = self.car.state or {}
         doors = (state.get("car") or {}).get("doors")
-        if self.phase == "idle" and doors == "locked" and not self.pre_opened:
-            # Served at once: the car stood at that floor. Nothing moves: open now.
+        if self.phase == "idle" and doors == "locked":
             self._sim("open_doors")
+
+    # -- the queue behind the stop ----------------------------------------------------------
+
+    def add_stop(self, floor):
+        """Queue `floor` on the car: held back while the car arrives at a stop (above)."""
+        if self.holding:
+            if floor not in self.held:
+                self.held.append(floor)
+            return
+        dispatcher.add_stop(self.car, floor)
+
+    def _hold(self, target, calls):
+        self.holding = True
+        for floor in calls:
+            if floor == target:
+                continue
+            try:
+                self.car.calls_cancel(floor)
+            except ApiError:
+                continue  # served or gone meanwhile
+            if floor not in self.held:
+                self.held.append(floor)
+
+    def _release(self):
+        held, self.held, self.holding = self.held, [], False
+        self.released = held
+        for floor in held:
+            try:
+                dispatcher.add_stop(self.car, floor)
+            except ApiError as error:
+                self.log(f"car {self.car.name}: calls add {floor}: {error}")
 
     def on_travel(self, data):
         if data["event"] == "finished":
             self.travels += 1
         elif data["event"] == "aborted":
             self.aborted += 1
+            self._release()
             self.log(f"car {self.car.name}: travel aborted ({data['cause']})")
 
     # -- the stop ---------------------------------------------------------------------------
@@ -106,6 +137,7 @@ class DoorOperator:
     def _opening(self, floor, now):
         self.phase = "dwell"
         self.floor = floor
+        self._release()
         transfers = self.building.doors_opening(self, floor, now)
         self.close_at = now + DOOR_OPERATE_S + self.dwell_s + self.transfer_s * transfers
 

@@ -103,7 +103,7 @@ class Building:
         if name is None:
             return  # no car can take it now: tried again each tick
         try:
-            dispatcher.add_stop(self._car(name), call.floor)
+            self.doors[name].add_stop(call.floor)
         except ApiError as error:
             self.log(f"car {name}: calls add {call.floor}: {error}")
             call.car = None
@@ -122,7 +122,7 @@ class Building:
             self.log(f"P{p.number:<4} {p.origin}->{p.destination} car {name}  "
                      f"wait {p.boarded_at - p.arrived_at:6.1f} s  "
                      f"journey {p.delivered_at - p.arrived_at:6.1f} s")
-        door.direction = self._way_on(door.car, floor)
+        door.direction = self._way_on(door, floor)
         if door.direction is None:
             # Nothing queued beyond this stop: the car goes the way of whoever waits longest,
             # the hall call given to this car first.
@@ -164,7 +164,7 @@ class Building:
                               reverse=(door.direction == "down"))
         for d in destinations:
             try:
-                dispatcher.add_stop(door.car, d)
+                door.add_stop(d)
             except ApiError as error:
                 self.log(f"car {name}: calls add {d}: {error} (tried again later)")
         for direction in ("up", "down"):
@@ -193,8 +193,9 @@ class Building:
         except ApiError:
             pass  # not queued (served meanwhile): nothing to take out
 
-    def _way_on(self, car, floor):
-        calls = [f for f in (car.state or {}).get("travel", {}).get("calls", []) if f != floor]
+    def _way_on(self, door, floor):
+        calls = door.released or (door.car.state or {}).get("travel", {}).get("calls", [])
+        calls = [f for f in calls if f != floor]
         if calls:
             return "up" if calls[0] > floor else "down"
         return None
@@ -224,7 +225,7 @@ class Building:
         door = self.doors[car.name]
         owed = {p.destination for p in self.inside[car.name]}
         owed |= {c.floor for c in self.hall_calls.values() if c.car == car.name}
-        at_rest = (door.phase == "idle" and state.get("travel", {}).get("state") == "idle"
+        at_rest = (door.phase == "idle" and not door.holding and state.get("travel", {}).get("state") == "idle"
                    and not state.get("travel", {}).get("calls")
                    and state.get("car", {}).get("doors") == "locked")
         if not (owed and at_rest):
@@ -239,7 +240,7 @@ class Building:
         for floor in sorted(owed, key=lambda f: abs(self.levels_mm[f] - position)):
             self.log(f"car {car.name}: floor {floor} queued again (here: {here})")
             try:
-                dispatcher.add_stop(car, floor)
+                door.add_stop(floor)
             except ApiError as error:
                 self.log(f"car {car.name}: calls add {floor}: {error}")
 
