@@ -35,6 +35,23 @@ def add_stop(car, floor):
     return car.calls_add(floor)
 
 
+def sweep_order(queue, floor, direction):
+    """The queued floors in the order of one sweep from `floor` going `direction` (None: the
+    way of the first queued floor): those ahead nearest first, then the rest on the way back,
+    nearest first again. The order a collective control serves its car calls in."""
+    if not queue:
+        return []
+    if direction is None:
+        direction = "up" if queue[0] > floor else "down"
+    if direction == "up":
+        ahead = sorted(f for f in queue if f > floor)
+        back = sorted((f for f in queue if f <= floor), reverse=True)
+    else:
+        ahead = sorted((f for f in queue if f < floor), reverse=True)
+        back = sorted(f for f in queue if f >= floor)
+    return ahead + back
+
+
 def ride_s(basis, from_mm, to_mm):
     """Time of one travel from `from_mm` to `to_mm` on the car's fitted profile (`eta` basis):
     accelerate, run at speed, decelerate alike (a triangle when too short), plus the overhead
