@@ -9,6 +9,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)),
                                 "..", "..", "tools", "dispatcher"))
 
 import dispatcher  # noqa: E402
+import uppeak  # noqa: E402
 
 LEVELS = [0, 3000, 6000, 9000, 12000, 15000]
 
@@ -77,6 +78,23 @@ class Sweep(unittest.TestCase):
     def test_without_direction_the_first_queued_floor_sets_it(self):
         self.assertEqual(dispatcher.sweep_order([1, 4, 3], 2, None), [1, 3, 4])
         self.assertEqual(dispatcher.sweep_order([], 2, None), [])
+
+
+class UpPeak(unittest.TestCase):
+    def test_equal_floors_give_the_textbook_s_and_h(self):
+        # Equal populations: S = N (1 - (1 - 1/N)^P), H = N - sum (i/N)^P for i < N.
+        n, p = 5, 6.4
+        s, h = uppeak.stops_and_reversal([0] + [60] * n, p)
+        self.assertAlmostEqual(s, n * (1 - (1 - 1 / n) ** p))
+        self.assertAlmostEqual(h, n - sum((i / n) ** p for i in range(1, n)))
+
+    def test_a_faster_car_carries_more(self):
+        basis = {"up": profile(1600.0), "down": profile(1600.0), "stop_s": 1.0}
+        slow = {"up": profile(500.0), "down": profile(500.0), "stop_s": 1.0}
+        per_car, percent = uppeak.handling_capacity([basis, slow], LEVELS, [0] + [60] * 5,
+                                                    8, 2.0, 1.2)
+        self.assertGreater(per_car[0][1], per_car[1][1])
+        self.assertAlmostEqual(percent, 100 * (per_car[0][1] + per_car[1][1]) / 300)
 
 
 if __name__ == "__main__":

@@ -78,6 +78,15 @@ def cost(eta_reply, levels_mm, origin, destination):
     return with_["s"] + delays + ride
 
 
+def cost_queued(eta_reply, levels_mm, origin, destination):
+    """The cost for the car that has the origin queued already: when its plan stands there
+    (`floors`), plus the ride. None when out of service."""
+    if not eta_reply.get("in_service") or not eta_reply.get("floors"):
+        return None
+    at = next(f["s"] for f in eta_reply["floors"] if f["floor"] == origin)
+    return at + ride_s(eta_reply["basis"], levels_mm[origin], levels_mm[destination])
+
+
 def choose(candidates, levels_mm, origin, destination):
     """Pick the car for a hall call.
 

@@ -35,6 +35,7 @@ import dispatcher
 from car import ApiError
 
 DOOR_OPERATE_S = 2.0   # the simulated doors take 2 s to open or to close (docs/api.md "`sim`")
+LOCK_S = 0.3           # and lock 300 ms after they closed (docs/api.md "`sim`" close_doors)
 HOLD_WITHIN_MM = 2500  # hold the queue behind the target from this far before it
 
 

@@ -30,8 +30,15 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import dispatcher  # noqa: E402
 import svg  # noqa: E402
 import traffic  # noqa: E402
+import uppeak  # noqa: E402
 from car import ApiError, CarGone, connect  # noqa: E402
 from doors import DoorOperator  # noqa: E402
+
+
+REASSESS_AFTER_S = 5.0   # a hall call waiting this long is costed again ...
+REASSESS_EVERY_S = 3.0   # ... this often,
+REASSIGN_MARGIN_S = 5.0  # and moves to a car this much better only: no flapping
+PARK_AFTER_S = 3.0       # up-peak: a car idle this long goes back to the main terminal
 
 
 class HallCall:
@@ -42,13 +49,16 @@ class HallCall:
         self.direction = direction
         self.since = since
         self.car = None
+        self.reassessed = since
 
 
 class Building:
     """Landings, hall calls, passengers in cars: what the runner knows besides the cars."""
 
-    def __init__(self, cars, capacity, dwell_s, transfer_s, log):
+    def __init__(self, cars, capacity, dwell_s, transfer_s, log, park_floor=None):
         self.cars = cars
+        self.park_floor = park_floor
+        self.parking_since = {}
         self.capacity = capacity
         self.log = log
         self.levels_mm = cars[0].levels_mm
@@ -80,17 +90,27 @@ class Building:
         self.hall_marks.append((now, passenger.origin, passenger.direction))
         self.assign(call, passenger.destination)
 
-    def assign(self, call, destination=None):
-        """Give a hall call to the car with the least ETD cost (dispatcher.py)."""
+    def assign(self, call, destination=None, reassess=False):
+        """Give a hall call to the car with the least ETD cost (dispatcher.py). With
+        `reassess`, a call already given to a car moves only to a car that is clearly better
+        (REASSIGN_MARGIN_S): the car it has may have been held up since, or another become
+        free."""
+        waiting = [p for p in self.waiting[call.floor] if p.direction == call.direction]
         if destination is None:
-            waiting = [p for p in self.waiting[call.floor] if p.direction == call.direction]
             if not waiting:
                 self.hall_calls.pop((call.floor, call.direction), None)
                 return
             destination = waiting[0].destination
         candidates = []
+        current_cost = None
         for car in self.cars:
             try:
+                if reassess and car.name == call.car:
+                    # Its queue has the floor already: the time it stands there, and the ride.
+                    reply = car.eta()
+                    current_cost = dispatcher.cost_queued(reply, self.levels_mm, call.floor,
+                                                          destination)
+                    continue
                 queue = (car.state or {}).get("travel", {}).get("calls", [])
                 reply = car.eta(call.floor, dispatcher.stop_position(queue))
             except ApiError as error:
@@ -99,6 +119,16 @@ class Building:
             full = len(self.inside[car.name]) >= self.capacity
             candidates.append((car.name, reply, full))
         name, cost = dispatcher.choose(candidates, self.levels_mm, call.floor, destination)
+        if reassess:
+            if name is None or (current_cost is not None
+                                and cost + REASSIGN_MARGIN_S >= current_cost):
+                return
+            old = self._car(call.car)
+            self.log(f"hall call {call.floor} {call.direction}: car {call.car} -> car {name} "
+                     f"({current_cost if current_cost is None else round(current_cost)} s -> "
+                     f"{round(cost)} s)")
+            call.car = name
+            self._cancel_if_unneeded(old, call.floor)
         call.car = name
         if name is None:
             return  # no car can take it now: tried again each tick
@@ -185,6 +215,10 @@ class Building:
             return
         if any(c.car == car.name and c.floor == floor for c in self.hall_calls.values()):
             return
+        door = self.doors[car.name]
+        if floor in door.held:
+            door.held.remove(floor)
+            return
         travel = (car.state or {}).get("travel", {})
         if travel.get("target_floor") == floor:
             return  # already on its way there: it stops, opens and goes on
@@ -215,8 +249,39 @@ class Building:
         for call in list(self.hall_calls.values()):
             if call.car is None:
                 self.assign(call)
+            elif now - call.since > REASSESS_AFTER_S and now - call.reassessed > REASSESS_EVERY_S:
+                call.reassessed = now
+                if not self._answering(call):
+                    self.assign(call, reassess=True)
         for car in self.cars:
             self._requeue(car, now)
+            self._park(car, now)
+
+    def _answering(self, call):
+        """The car given the call stands at its floor with its doors open now."""
+        return call.car is not None and self.doors[call.car].standing_at(call.floor)
+
+    def _park(self, car, now):
+        """Up-peak: a car with nothing to do goes back to the main terminal, where the
+        passengers come from (the lobby return of up-peak group control, Barney 2003, ch. 9)."""
+        if self.park_floor is None:
+            return
+        state = car.state or {}
+        door = self.doors[car.name]
+        owed = any(c.car == car.name for c in self.hall_calls.values()) or self.inside[car.name]
+        free = (door.phase == "idle" and not door.holding and not owed
+                and state.get("travel", {}).get("state") == "idle"
+                and not state.get("travel", {}).get("calls")
+                and state.get("car", {}).get("doors") == "locked"
+                and state.get("car", {}).get("floor") not in (None, self.park_floor))
+        if not free:
+            self.parking_since.pop(car.name, None)
+            return
+        since = self.parking_since.setdefault(car.name, now)
+        if now - since >= PARK_AFTER_S:
+            self.parking_since.pop(car.name, None)
+            self.log(f"car {car.name}: parks at floor {self.park_floor}")
+            door.add_stop(self.park_floor)
 
     def _requeue(self, car, now):
         """A car at rest with nothing queued but floors it owes (its travel was aborted, which
@@ -277,6 +342,16 @@ def summary(passengers, building, args, plan):
         carried = sum(1 for p in delivered if p.car == car.name)
         lines.append(f"car {car.name} ({car.drive_kind}): {door.travels} travels, "
                      f"{door.aborted} aborted, {carried} passengers")
+    try:
+        bases = [car.eta()["basis"] for car in building.cars]
+        per_car, percent = uppeak.handling_capacity(bases, building.levels_mm, plan,
+                                                    args.capacity, args.dwell, args.transfer)
+        lines.append(f"up-peak handling capacity (classic round trip, {args.capacity} "
+                     f"passengers a car, 80 % loaded): {percent:.0f} % of {sum(plan)} people "
+                     f"in 5 min; round trip " + ", ".join(
+                         f"{c.name} {rtt:.0f} s" for c, (rtt, _) in zip(building.cars, per_car)))
+    except (ApiError, CarGone, ZeroDivisionError, KeyError) as error:
+        lines.append(f"up-peak handling capacity: not computed ({error})")
     print("\n".join(lines), flush=True)
 
 
@@ -297,6 +372,8 @@ def main(argv=None):
                         help="transfer time per passenger in or out, s (default 1.2)")
     parser.add_argument("--drain-timeout", type=float, default=300.0,
                         help="after the stream: longest wait for the last passengers, s")
+    parser.add_argument("--no-park", action="store_true",
+                        help="up-peak: leave idle cars where they are (default: back to floor 0)")
     parser.add_argument("--svg", help="write the plot of the run to this file")
     parser.add_argument("--quiet", action="store_true", help="no line per passenger")
     args = parser.parse_args(argv)
@@ -321,7 +398,8 @@ def main(argv=None):
           f"({args.mode}, {args.rate} % of {sum(plan)} people in 5 min, seed {args.seed})",
           flush=True)
 
-    building = Building(cars, args.capacity, args.dwell, args.transfer, log)
+    building = Building(cars, args.capacity, args.dwell, args.transfer, log,
+                        park_floor=0 if args.mode == "up-peak" and not args.no_park else None)
     traces = {c.name: [] for c in cars}
     selector = selectors.DefaultSelector()
     for car in cars:

@@ -9,7 +9,8 @@ user, as tools/demo.sh does for one car: its own API socket in its own directory
 simulated SCH001 card's socket `sch001-card.sock`, the record database `record.db` and the
 flight recorder's trace files beside the API socket unless RUNTIME_DIRECTORY is set, so one
 directory per car keeps them apart), no group ownership, no real-time requirement, no locked
-memory, a car name (A, B, ...) and the same floors for every car.
+memory, a car name (A, B, ...), the same floors for every car, and the time a stop takes
+(`eta.stop_ms`) with the door cycle the runner plays.
 
 `start()` and `stop()` run them as processes for the tests.
 """
@@ -40,6 +41,10 @@ def car_config(kind, name, directory, floors=FLOORS):
     rt["lock_memory"] = False
     config["floors"] = floors
     config.setdefault("record", {})["path"] = os.path.join(directory, "record.db")
+    # The door operator (doors.py) holds the queue back while the car stands at a stop, so
+    # the car never measures how long it stands at a queued stop: tell its `eta` what a stop
+    # with a door cycle costs (2 s opening, 2 s dwell, 2 s closing, locking, a passenger).
+    config.setdefault("eta", {})["stop_ms"] = 7500
     return config
 
 
