@@ -19,12 +19,15 @@ door operator is the controller's job; here the runner does it:
    docs/api.md "`sim`"), a base dwell, and a transfer time for each passenger alighting or
    boarding. Then `sim close_doors`.
 4. A passenger who reaches the landing while the doors close and may board reopens them
-   (`sim door_reversal`, as the light curtain would) and the dwell starts again.
+   (`sim door_reversal`, as the light curtain would) and the dwell starts again, unless the
+   car has stood there for `REOPEN_WITHIN_S` already: under a steady stream (up-peak at the
+   main terminal) the doors would otherwise never close, and those in the car wait for the
+   late ones. The late passenger waits for the next car.
 5. Before the doors close, the queue is put in sweep order (`_sweep`).
 6. liftd starts the travel to the next queued floor by itself once the doors are locked.
 
 Figures: passenger transfer time about 1.2 s per passenger (Barney, "Elevator Traffic Handbook",
-2003, ch. 5, for an office with a wide entrance) and a door dwell of about 2 to 3 s after the
+2003, for an office with a wide entrance) and a door dwell of about 2 to 3 s after the
 doors opened (the same source's door dwell for landing and car calls). Both are arguments of the
 runner.
 """
@@ -36,6 +39,7 @@ from car import ApiError
 
 DOOR_OPERATE_S = 2.0   # the simulated doors take 2 s to open or to close (docs/api.md "`sim`")
 LOCK_S = 0.3           # and lock 300 ms after they closed (docs/api.md "`sim`" close_doors)
+REOPEN_WITHIN_S = 10.0  # no reversal for a late passenger once the car stood this long at a stop
 HOLD_WITHIN_MM = 2500  # hold the queue behind the target from this far before it
 
 
@@ -52,6 +56,7 @@ class DoorOperator:
         self.floor = None          # the level the doors serve while not idle
         self.direction = None      # the car's way on from this stop: "up", "down" or None
         self.close_at = None       # monotonic time to send close_doors
+        self.opened_at = 0.0       # when the doors began to open at this stop
         self.holding = False
         self.held = []             # floors taken out of the car's queue while it arrives
         self.released = []         # the floors last put back: the car's way on from the stop
@@ -163,6 +168,7 @@ class DoorOperator:
     def _opening(self, floor, now):
         self.phase = "dwell"
         self.floor = floor
+        self.opened_at = now
         self._release()
         transfers = self.building.doors_opening(self, floor, now)
         self.close_at = now + DOOR_OPERATE_S + self.dwell_s + self.transfer_s * transfers
@@ -176,6 +182,8 @@ class DoorOperator:
         (`sim door_reversal`). False when they had already locked: the car is leaving."""
         if self.phase != "closing":
             return self.phase == "dwell"
+        if now - self.opened_at > REOPEN_WITHIN_S:
+            return False  # the car has stood here long enough: the next car takes them
         result = self._sim("door_reversal")
         if result is None or result.get("doors") == "locked":
             return False

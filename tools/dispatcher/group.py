@@ -14,7 +14,7 @@ passenger has arrived, or fails loudly after --drain-timeout seconds.
 It prints a line per passenger delivered and a summary: waiting time (arrival at the landing
 until the doors of the car taken begin to open there) and journey time (arrival until the doors
 begin to open at the destination), as the lift traffic literature defines them (Barney,
-"Elevator Traffic Handbook", 2003, ch. 8: passenger waiting time and time to destination), the
+"Elevator Traffic Handbook", 2003: passenger waiting time and time to destination), the
 average, 95th percentile and longest of each, passengers generated and delivered, and the
 travels each car made. Exit status 0 when every passenger arrived, 1 otherwise.
 """
@@ -263,7 +263,7 @@ class Building:
 
     def _park(self, car, now):
         """Up-peak: a car with nothing to do goes back to the main terminal, where the
-        passengers come from (the lobby return of up-peak group control, Barney 2003, ch. 9)."""
+        passengers come from (the lobby return of up-peak group control, Barney 2003)."""
         if self.park_floor is None:
             return
         state = car.state or {}

@@ -1,7 +1,7 @@
 """The seeded passenger stream: who arrives at which landing, when, and where they go.
 
 Three traffic modes as the classic lift traffic studies name them (Barney, "Elevator Traffic
-Handbook", 2003, ch. 3 and 4; CIBSE Guide D, "Transportation systems in buildings", ch. 3):
+Handbook", 2003; CIBSE Guide D, "Transportation systems in buildings"):
 
 - `up-peak`: the morning arrival. Everyone enters at the main terminal (floor 0) and goes to an
   upper floor; a floor with more people receives more of them (weighted by population).
@@ -11,7 +11,7 @@ Handbook", 2003, ch. 3 and 4; CIBSE Guide D, "Transportation systems in building
   each floor equally likely.
 
 Arrivals form a Poisson process (exponential gaps between passengers), the arrival model the
-classic up-peak calculation rests on (Barney 2003, ch. 4). The rate is given the way handling
+classic up-peak calculation rests on (Barney 2003). The rate is given the way handling
 capacity is quoted in lift traffic design: a percentage of the building's population arriving
 in five minutes. A typical office design figure is 12 % in five minutes (British Council for
 Offices guide, 2014, up-peak); older guidance used 15 % (CIBSE Guide D).

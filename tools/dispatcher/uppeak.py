@@ -1,7 +1,7 @@
 """The classic up-peak calculation: what a group can carry in five minutes of up-peak.
 
-The round trip of one car in up-peak (Barney, "Elevator Traffic Handbook", 2003, ch. 4; the
-same equation is in CIBSE Guide D, ch. 3):
+The round trip of one car in up-peak (Barney, "Elevator Traffic Handbook", 2003; the
+same equation is in CIBSE Guide D):
 
     RTT = 2 H tv + (S + 1) ts + 2 P tp
 
