@@ -71,9 +71,9 @@ def start(liftd, directory, kinds):
     env.pop("RUNTIME_DIRECTORY", None)
     running = []
     for name, kind, path, sock in write_configs(directory, kinds):
-        log = open(os.path.join(os.path.dirname(path), "liftd.log"), "w")
-        process = subprocess.Popen([liftd, "--simulate", "--config", path], stdout=log,
-                                   stderr=subprocess.STDOUT, env=env)
+        with open(os.path.join(os.path.dirname(path), "liftd.log"), "w") as log:
+            process = subprocess.Popen([liftd, "--simulate", "--config", path], stdout=log,
+                                       stderr=subprocess.STDOUT, env=env)
         running.append((process, sock))
     return running
 
