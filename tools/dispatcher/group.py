@@ -452,6 +452,8 @@ def main(argv=None):
                     handle(building, traces, car, message, now - start, now)
     except CarGone as error:
         failed = f"lost a car: {error}"
+    except KeyboardInterrupt:
+        failed = "interrupted"
 
     summary(passengers, building, args, plan)
     if args.svg:
