@@ -44,7 +44,8 @@ HOLD_WITHIN_MM = 2500  # hold the queue behind the target from this far before i
 
 
 class DoorOperator:
-    """Door phases of one car: idle (doors locked or left alone), opening, dwell, closing."""
+    """The doors of one car at its stops: phase `idle` (locked, or the car travels), `dwell`
+    (opening, then open for the passengers), `closing` (close_doors sent, until locked)."""
 
     def __init__(self, car, building, dwell_s, transfer_s, log):
         self.car = car
@@ -90,9 +91,12 @@ class DoorOperator:
                     self._sim("close_doors")
                     self.open_off_level_since = None
         elif self.phase == "closing" and doors == "locked":
-            self.phase = "idle"
-            floor, self.floor, self.direction = self.floor, None, None
-            self.building.doors_locked(self, floor, now)
+            self._locked(now)
+
+    def _locked(self, now):
+        self.phase = "idle"
+        floor, self.floor, self.direction = self.floor, None, None
+        self.building.doors_locked(self, floor, now)
 
     def on_call_served(self, floor, now):
         state = self.car.state or {}
@@ -200,6 +204,11 @@ class DoorOperator:
             self._sweep()
             self._sim("close_doors")
             self.phase = "closing"
+        elif self.phase == "closing":
+            # A `state` event comes only with a change: doors that were locked already when
+            # close_doors went out send none.
+            if ((self.car.state or {}).get("car") or {}).get("doors") == "locked":
+                self._locked(now)
 
     def _sim(self, action):
         try:
