@@ -360,18 +360,19 @@ def main(argv=None):
     parser.add_argument("--car", action="append", required=True, metavar="SOCKET",
                         help="API socket of a car (repeat for each car)")
     parser.add_argument("--mode", choices=traffic.MODES, default="up-peak")
-    parser.add_argument("--minutes", type=float, default=5.0, help="minutes of traffic")
+    parser.add_argument("--minutes", type=float, default=5.0, help="minutes of traffic (default 5)")
     parser.add_argument("--rate", type=float, default=12.0,
                         help="arrivals in %% of the population per five minutes (default 12)")
-    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--seed", type=int, default=1,
+                        help="seed of the passenger stream (default 1)")
     parser.add_argument("--population", default="60",
                         help="people per upper floor, or per floor from floor 0 (default 60)")
-    parser.add_argument("--capacity", type=int, default=8, help="passengers per car")
+    parser.add_argument("--capacity", type=int, default=8, help="passengers per car (default 8)")
     parser.add_argument("--dwell", type=float, default=2.0, help="door dwell, s (default 2)")
     parser.add_argument("--transfer", type=float, default=1.2,
                         help="transfer time per passenger in or out, s (default 1.2)")
     parser.add_argument("--drain-timeout", type=float, default=300.0,
-                        help="after the stream: longest wait for the last passengers, s")
+                        help="after the stream: longest wait for the last passengers, s (default 300)")
     parser.add_argument("--no-park", action="store_true",
                         help="up-peak: leave idle cars where they are (default: back to floor 0)")
     parser.add_argument("--svg", help="write the plot of the run to this file")
