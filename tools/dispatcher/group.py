@@ -290,7 +290,8 @@ class Building:
         door = self.doors[car.name]
         owed = {p.destination for p in self.inside[car.name]}
         owed |= {c.floor for c in self.hall_calls.values() if c.car == car.name}
-        at_rest = (door.phase == "idle" and not door.holding and state.get("travel", {}).get("state") == "idle"
+        at_rest = (door.phase == "idle" and not door.holding
+                   and state.get("travel", {}).get("state") == "idle"
                    and not state.get("travel", {}).get("calls")
                    and state.get("car", {}).get("doors") == "locked")
         if not (owed and at_rest):
@@ -372,7 +373,8 @@ def main(argv=None):
     parser.add_argument("--transfer", type=float, default=1.2,
                         help="transfer time per passenger in or out, s (default 1.2)")
     parser.add_argument("--drain-timeout", type=float, default=300.0,
-                        help="after the stream: longest wait for the last passengers, s (default 300)")
+                        help="after the stream: longest wait for the last passengers, "
+                        "s (default 300)")
     parser.add_argument("--no-park", action="store_true",
                         help="up-peak: leave idle cars where they are (default: back to floor 0)")
     parser.add_argument("--svg", help="write the plot of the run to this file")
