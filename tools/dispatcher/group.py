@@ -410,13 +410,13 @@ def main(argv=None):
         car.sim("close_doors")
         selector.register(car.sock, selectors.EVENT_READ, car)
     # Wait until every car is in service with its doors locked.
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + 120
     while True:
         states = [c.status() for c in cars]
         if all(s["service"]["in_service"] and s["car"]["doors"] == "locked" for s in states):
             break
         if time.monotonic() > deadline:
-            sys.exit("cars not in service with locked doors after 60 s: "
+            sys.exit("cars not in service with locked doors after 120 s: "
                      + ", ".join(f"{c.name}: {s['service']}" for c, s in zip(cars, states)))
         time.sleep(0.2)
     for car in cars:
