@@ -12,8 +12,10 @@
 #   interfloor] [--minutes M] [--rate PERCENT] [--seed S] [--svg FILE] [other options of
 #   tools/dispatcher/group.py]. Each car gets its configuration, socket and runtime directory
 #   in a temporary directory; the cars stop (SIGTERM) when the dispatcher ends.
-# LIFTD_BIN=path/to/liftd runs that binary and builds nothing (default: build, then build/bin/liftd).
+# LIFTD_BIN=path/to/liftd runs that binary and builds nothing (default: build, then
+# build/bin/liftd).
 set -euo pipefail
+[ -z "${LIFTD_BIN:-}" ] || LIFTD_BIN=$(realpath "$LIFTD_BIN")
 cd "$(dirname "$0")/.."
 
 if [ -z "${LIFTD_BIN:-}" ]; then
