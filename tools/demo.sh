@@ -6,12 +6,78 @@
 #   tools/demo.sh --hydraulic  hydraulic lift: the SCH001 card over CAN (config/hydraulic.json)
 #   tools/demo.sh --uss        USS drive on an 8E1 pseudo-terminal (config/uss.json)
 #   tools/demo.sh --config F   your own configuration (floors, sim.dcp = 3, ...) with --simulate
+#   tools/demo.sh --group N    N simulated cars and the reference group dispatcher
+#                              (tools/dispatcher) with passengers; more options below
+# A group: tools/demo.sh --group 4 [--kinds dcp,sch001,uss,...] [--mode up-peak|down-peak|
+#   interfloor] [--minutes M] [--rate PERCENT] [--seed S] [--svg FILE] [other options of
+#   tools/dispatcher/group.py]. Each car gets its configuration, socket and runtime directory
+#   in a temporary directory; the cars stop (SIGTERM) when the dispatcher ends.
+# LIFTD_BIN=path/to/liftd runs that binary and builds nothing (default: build, then
+# build/bin/liftd).
 set -euo pipefail
+[ -z "${LIFTD_BIN:-}" ] || LIFTD_BIN=$(realpath "$LIFTD_BIN")
 cd "$(dirname "$0")/.."
 
-tools/install-deps.sh
-cmake --preset default >/dev/null
-cmake --build --preset default --parallel "${LIFTD_JOBS:-$(nproc)}" --target liftd liftctl
+if [ -z "${LIFTD_BIN:-}" ]; then
+  tools/install-deps.sh
+  cmake --preset default >/dev/null
+  cmake --build --preset default --parallel "${LIFTD_JOBS:-$(nproc)}" --target liftd liftctl
+fi
+liftd=${LIFTD_BIN:-build/bin/liftd}
+
+group=0
+kinds=""
+for ((i = 1; i <= $#; i++)); do
+  case "${!i}" in
+    --group) j=$((i + 1)); group=${!j} ;;
+    --kinds) j=$((i + 1)); kinds=${!j} ;;
+  esac
+done
+if [ "$group" != 0 ] || [ -n "$kinds" ]; then
+  # The group demo: N cars (default a mix of the three drive kinds), then the dispatcher.
+  if [ -z "$kinds" ]; then
+    mix=(dcp sch001 uss)
+    for ((i = 0; i < group; i++)); do kinds+="${kinds:+,}${mix[i % 3]}"; done
+  fi
+  IFS=, read -ra kind_list <<<"$kinds"
+  if [ "$group" != 0 ] && [ "${#kind_list[@]}" != "$group" ]; then
+    echo "demo.sh: --group $group but --kinds names ${#kind_list[@]} cars" >&2
+    exit 2
+  fi
+  dispatcher_args=()
+  skip=0
+  for arg in "$@"; do
+    if [ $skip = 1 ]; then skip=0; continue; fi
+    case "$arg" in
+      --group|--kinds) skip=1 ;;
+      *) dispatcher_args+=("$arg") ;;
+    esac
+  done
+  work=$(mktemp -d "${TMPDIR:-/tmp}/liftd-group.XXXXXX")
+  pids=()
+  stop_cars() {
+    [ "${#pids[@]}" = 0 ] || kill -TERM "${pids[@]}" 2>/dev/null || true
+    for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
+    pids=()
+  }
+  trap stop_cars EXIT
+  trap 'exit 130' INT TERM
+  car_args=()
+  while read -r name kind config socket; do
+    # RUNTIME_DIRECTORY unset: each car keeps its card socket, record and traces beside its
+    # own API socket.
+    env -u RUNTIME_DIRECTORY "$liftd" --simulate --config "$config" \
+      >"$(dirname "$config")/liftd.log" 2>&1 &
+    pids+=($!)
+    car_args+=(--car "$socket")
+    echo "car $name: $kind, $config (log: $(dirname "$config")/liftd.log)"
+  done < <(python3 tools/dispatcher/simcars.py configs "$work" "$kinds")
+  status=0
+  python3 tools/dispatcher/group.py "${car_args[@]}" "${dispatcher_args[@]}" || status=$?
+  stop_cars
+  echo "the cars' configurations and logs: $work"
+  exit $status
+fi
 
 runtime=${XDG_RUNTIME_DIR:-$PWD}
 socket="$runtime/liftd-sim.sock"
@@ -49,4 +115,4 @@ liftd is starting against a simulated lift. In another terminal, try:
 Ctrl-C stops liftd.
 
 INFO
-exec build/bin/liftd --simulate "${args[@]}"
+exec "$liftd" --simulate "${args[@]}"
