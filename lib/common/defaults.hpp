@@ -15,6 +15,7 @@ inline constexpr int kRelevelThresholdMm = 15;       ///< drift that starts a re
 inline constexpr bool kRelevelElectricStop = false;  ///< DCP 9.2.3.1 (false) or 9.2.3.2 (true)
 inline constexpr bool kUseStartParameters = true;    ///< I7 before a DCP4 travel (DCP 5.12.7)
 inline constexpr int kFastStartTimeoutMs = 3000;     ///< longest fast start hold (DCP 12)
+inline constexpr int kCallStopMs = 1500;             ///< at a served call: the doors' time to open
 inline constexpr int kInspectionHoldMs = 500;        ///< hold-to-run repeat time
 /// DCP3 by position: B2 goes off this far before the level, the drive's stop from crawl (V0 of
 /// 0.05 m/s on a soft stop of about 0.3 s is some 8 mm; the simulated drive's is 7.7 mm).

@@ -146,6 +146,7 @@ struct PositionConfig {
 /// `travel.*`
 struct TravelConfig {
   int level_tolerance_mm = defaults::kLevelToleranceMm;         ///< travel.level_tolerance_mm
+  int call_stop_ms = defaults::kCallStopMs;                     ///< travel.call_stop_ms
   int relevel_threshold_mm = defaults::kRelevelThresholdMm;     ///< travel.relevel_threshold_mm
   RelevelDoors relevel_with_doors = RelevelDoors::both;         ///< travel.relevel_with_doors
   bool relevel_electric_stop = defaults::kRelevelElectricStop;  ///< travel.relevel_electric_stop

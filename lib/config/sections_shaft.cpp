@@ -269,6 +269,11 @@ std::vector<Key> travel_keys() {
   t.push_back(int_key("travel.fast_start_timeout_ms", 100, 10000,
                       "longest the car is held on an open brake in fast start (DCP 12)",
                       &Config::travel, &TravelConfig::fast_start_timeout_ms));
+  t.push_back(int_key("travel.call_stop_ms", 0, 60000,
+                      "at a served call the car stands at least this long before the next "
+                      "queued travel starts (the doors' time to open); then it leaves once "
+                      "they are locked",
+                      &Config::travel, &TravelConfig::call_stop_ms));
   t.push_back(int_key(
       "travel.inspection_hold_ms", 100, 5000,
       "hold-to-run: an inspection travel stops unless its command is repeated within this time",

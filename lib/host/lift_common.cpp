@@ -113,6 +113,13 @@ api::LogFn api_log_sink() {
   };
 }
 
+lift::LiftConfig lift_config(const config::Config& c) {
+  lift::LiftConfig out;
+  out.level_tolerance_mm = static_cast<std::uint32_t>(c.travel.level_tolerance_mm);
+  out.call_stop_ms = static_cast<std::uint32_t>(c.travel.call_stop_ms);
+  return out;
+}
+
 lift::Inputs to_lift(const api::Inputs& in) {
   lift::Inputs out;
   out.valid = true;

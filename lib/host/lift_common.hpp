@@ -21,6 +21,7 @@
 #include "common/position_source.hpp"
 #include "config/config.hpp"
 #include "lift/inputs.hpp"
+#include "lift/lift_model.hpp"
 #include "sim/shaft.hpp"
 #include "sim/sim_io.hpp"
 
@@ -212,6 +213,8 @@ std::optional<api::Result> apply_sim(const api::KindSimActions& mine,
 
 /// The sequencers' inputs from the API's inputs (every drive kind reads the same machine).
 lift::Inputs to_lift(const api::Inputs& inputs);
+/// The lift model's settings of every kind from the configuration (travel.*).
+lift::LiftConfig lift_config(const config::Config& config);
 /// The API's view of the cycle's inputs (the `inputs` result under --simulate).
 api::Inputs from_lift(const lift::Inputs& inputs);
 /// "state changed" -> "state_changed": journal field values are snake_case words.

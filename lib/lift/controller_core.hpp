@@ -618,6 +618,7 @@ class ControllerCore {
   void restart_start_grace(MonoTime now) noexcept { rules_.start(now); }
   /// `floor` left the calls queue because the car is there (event call_served).
   void call_served(std::size_t floor, MonoTime now) noexcept {
+    call_stop_until_ = now + std::chrono::milliseconds(lift_.config().call_stop_ms);
     typename Types::Event served;
     served.kind = Types::Event::Kind::CallServed;
     served.at = now;
@@ -630,6 +631,9 @@ class ControllerCore {
     keep_calls_on_stop_ = false;
     if (reached && lift_.calls().cancel(*reached)) call_served(*reached, now);
   }
+  /// Whether the next queued travel may start: not within travel.call_stop_ms of the car serving
+  /// a call (the doors' time to open at that stop).
+  bool call_stop_over(MonoTime now) const noexcept { return now >= call_stop_until_; }
   /// liftd empties the queue for `cause` (a stop, a fault, the service stop): the dispatcher
   /// is told which floors it lost (event calls_dropped). `keep`: the floor a stop ends at stays
   /// queued when it was, and is served there.
@@ -664,6 +668,7 @@ class ControllerCore {
   /// inspection or recall is on; a call to the floor the car is at is served at once.
   std::optional<std::size_t> next_call(const typename Types::Input& in) noexcept {
     if (travel_.busy() || in.inputs.button_mode() || learning_.active()) return std::nullopt;
+    if (!call_stop_over(in.now)) return std::nullopt;
     const auto front = lift_.calls().front();
     if (!front) return std::nullopt;
     const std::size_t floor = *front;
@@ -723,6 +728,8 @@ class ControllerCore {
   typename Types::Travel travel_;
   /// `calls cancel` stopped the running travel: its stop keeps the rest of the queue.
   bool keep_calls_on_stop_ = false;
+  /// No queued travel starts before this (travel.call_stop_ms after a call was served).
+  MonoTime call_stop_until_{};
   LiftModel lift_;
   bool shutting_down_ = false;
   std::uint64_t steps_ = 0;

@@ -19,6 +19,9 @@ struct LiftConfig {
   std::uint32_t level_tolerance_mm = defaults::kLevelToleranceMm;
   /// Added to the drive's deceleration distance before a floor counts as still reachable.
   std::uint32_t stop_margin_mm = 100;
+  /// At a served call the car stands at least this long before the next queued travel (the
+  /// machine's door operator opens the doors on arrival; the travel then waits for them locked).
+  std::uint32_t call_stop_ms = defaults::kCallStopMs;
 };
 
 /// Floors, car position and direction, next possible stop and the calls queue.
@@ -26,6 +29,8 @@ class LiftModel {
  public:
   /// A model with the given tunables and no floors yet.
   explicit LiftModel(const LiftConfig& config = {}) noexcept : config_(config) {}
+  /// The settings it was made with.
+  const LiftConfig& config() const noexcept { return config_; }
   /// Sets the floor levels (strictly increasing); false if rejected (the old table stays).
   bool set_floors(std::span<const std::int64_t> levels_mm) noexcept;
   /// Feeds one cycle: absolute position if valid, direction of travel and the deceleration

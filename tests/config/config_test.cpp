@@ -100,6 +100,7 @@ TEST(ConfigDefaults, EmptyObjectGivesTheDocumentedDefaults) {
       {"/travel/relevel_electric_stop", false},
       {"/travel/use_start_parameters", true},
       {"/travel/fast_start_timeout_ms", 3000},
+      {"/travel/call_stop_ms", 1500},
       {"/travel/inspection_hold_ms", 500},
       {"/travel/dcp3_stop_lead_mm", 8},
       {"/travel/dcp3_speed_count", 2},

@@ -261,7 +261,7 @@ TEST_P(RuleParity, ATravelStoppedBeforeItBeginsStillEndsWithAnEvent) {
 // kind (issue #44: the queue held each floor once, and a stop emptied it without a word).
 TEST_P(RuleParity, CallsPlanRepeatsServeEachStopAndNameWhatAStopDrops) {
   judged_unless_stalled([this] {
-    const auto lift = make_lift("calls-plan");
+    const auto lift = make_lift("calls-plan", {{"travel", {{"call_stop_ms", 2000}}}});
     ASSERT_TRUE(lift->wait_drive_state("ready")) << lift->status().dump();
     const json floors = lift->call({{"cmd", "config"}})["result"]["config"]["floors"];
     const auto served_floors = [&] {
@@ -274,6 +274,16 @@ TEST_P(RuleParity, CallsPlanRepeatsServeEachStopAndNameWhatAStopDrops) {
     // 0 -> 1 -> 0 -> 1 in one request.
     const json plan = lift->call({{"cmd", "calls"}, {"action", "set"}, {"floors", {1, 0, 1}}});
     ASSERT_TRUE(plan.value("ok", false)) << plan.dump();
+    // travel.call_stop_ms: the car stands at a served call before it sets off to the next (the
+    // doors' time to open). A lower bound: a slow machine only makes it longer.
+    ASSERT_TRUE(lift->api()
+                    .wait_event(
+                        "call_served", [](const json& d) { return d["floor"] == 1; }, 60s)
+                    .is_object())
+        << lift->log();
+    const auto served_at = std::chrono::steady_clock::now();
+    ASSERT_TRUE(lift->wait_travel("started", 20s).is_object()) << lift->log();
+    EXPECT_GE(std::chrono::steady_clock::now() - served_at, 1800ms);
     for (int i = 0; i < 3 && served_floors().size() < 3; ++i) {
       (void)lift->api().wait_event(
           "call_served", [](const json&) { return true; }, 60s);

@@ -280,6 +280,12 @@ TEST_F(ControllerCoreTest, CallsAreServedByTravelOrAtOnceWhenThere) {
     served_here = served_here || (e.kind == StubControllerEvent::Kind::CallServed && e.floor == 0);
   }
   EXPECT_TRUE(served_here);
+  // travel.call_stop_ms: the car stands at the call it served (the doors' time to open), then
+  // sets off to the next.
+  EXPECT_EQ(controller.snapshot().travel_kind, StubKind::None);
+  now += milliseconds(defaults::kCallStopMs);
+  controller.step(now);
+  (void)events();  // the travel's start
   const StubSnapshot moving = controller.snapshot();
   EXPECT_EQ(moving.travel_kind, StubKind::Travel);
   EXPECT_EQ(moving.target_floor, 2U);

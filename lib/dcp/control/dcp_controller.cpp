@@ -761,6 +761,7 @@ void DcpController::serve_calls() noexcept {
     return;
   }
   if (!link_.travel_allowed() || not_ready_reason(false)) return;  // wait until ready
+  if (!call_stop_over(last_input_.now)) return;                    // the doors' time to open
   TravelCommand cmd;
   cmd.floor = *front;
   handle_travel(0, cmd);

@@ -59,7 +59,7 @@ control::ControllerConfig dcp_controller_config(const config::Config& c) {
           static_cast<std::uint32_t>(mm);
     }
   }
-  out.lift.level_tolerance_mm = static_cast<std::uint32_t>(c.travel.level_tolerance_mm);
+  out.lift = lift_config(c);
   for (const auto& f : c.floors) out.floors_mm.push_back(f.level_mm);
   out.inputs_timeout = std::chrono::milliseconds(c.inputs.timeout_ms);
   out.inspection_hold = std::chrono::milliseconds(c.travel.inspection_hold_ms);

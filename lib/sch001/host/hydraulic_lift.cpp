@@ -59,7 +59,7 @@ sch001::ControllerConfig sch001_controller_config(const config::Config& c) {
                          c.travel.relevel_with_doors == config::RelevelDoors::both;
   out.auto_relevel =
       c.sch001.auto_relevel && c.travel.relevel_with_doors != config::RelevelDoors::never;
-  out.lift.level_tolerance_mm = static_cast<std::uint32_t>(c.travel.level_tolerance_mm);
+  out.lift = lift_config(c);
   for (const auto& f : c.floors) out.floors_mm.push_back(f.level_mm);
   out.inputs_timeout = std::chrono::milliseconds(c.inputs.timeout_ms);
   out.inspection_hold = std::chrono::milliseconds(c.travel.inspection_hold_ms);

@@ -72,7 +72,7 @@ uss::UssControllerConfig uss_controller_config(const config::Config& c) {
                          c.travel.relevel_with_doors == config::RelevelDoors::both;
   t.profile.switch_on_timeout_ms = static_cast<std::uint32_t>(c.uss.profile_timeout_ms);
   out.link_fault_replies = static_cast<std::uint32_t>(c.uss.telegram_failures);
-  out.lift.level_tolerance_mm = static_cast<std::uint32_t>(c.travel.level_tolerance_mm);
+  out.lift = lift_config(c);
   for (const auto& f : c.floors) out.floors_mm.push_back(f.level_mm);
   out.inputs_timeout = std::chrono::milliseconds(c.inputs.timeout_ms);
   out.inspection_hold = std::chrono::milliseconds(c.travel.inspection_hold_ms);
