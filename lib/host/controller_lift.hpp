@@ -204,6 +204,7 @@ class ControllerBackend : public api::Backend {
                                    std::to_string(s.calls.size()));
     }
     std::optional<std::size_t> position = args.position;
+    bool target_first = false;  // the queue's first floor is the running travel's target
     EtaCar car;
     car.in_service = s.out_of_service.empty();
     car.reason = s.out_of_service;
@@ -231,9 +232,16 @@ class ControllerBackend : public api::Backend {
       if (!car.calls.empty() && car.calls.front() == *s.target_floor) {
         car.calls.erase(car.calls.begin());
         if (position && *position > 0) --*position;
+        target_first = true;
       }
     }
-    return api::Result::ok(estimate_eta(eta_times_, car, {args.floor, position}));
+    nlohmann::json answer = estimate_eta(eta_times_, car, {args.floor, position});
+    // The answer's position counts as the question's did.
+    nlohmann::json& with = answer["with"];
+    if (target_first && with.is_object() && with["position"].is_number_integer()) {
+      with["position"] = with["position"].get<std::size_t>() + 1;
+    }
+    return api::Result::ok(std::move(answer));
   }
 
   /// The serial device of a drive link on a serial line (serial_device_report.hpp), for `stats`.

@@ -258,6 +258,25 @@ nlohmann::json estimate_eta(const TravelTimes& times, const EtaCar& car,
   }
   out["floors"] = std::move(floors);
 
+  if (question.floor && !question.position) {
+    // `calls add` of a floor already planned adds nothing (docs/api.md `calls`): its stop as it
+    // is, and no delay.
+    std::optional<Stop> planned;
+    if (start.arrives && start.floor == *question.floor) {
+      planned = Stop{start.floor, start.s, start.learned};
+    }
+    for (const Stop& stop : stops) {
+      if (!planned && stop.floor == *question.floor) planned = stop;
+    }
+    if (planned) {
+      nlohmann::json delays = nlohmann::json::array();
+      for (const Stop& stop : stops) delays.push_back({{"floor", stop.floor}, {"s", 0.0}});
+      out["with"] = {
+          {"floor", *question.floor}, {"position", nullptr},         {"queued", true},
+          {"s", seconds(planned->s)}, {"learned", planned->learned}, {"delays", std::move(delays)}};
+      return out;
+    }
+  }
   if (question.floor) {
     const std::size_t at = std::min(question.position.value_or(car.calls.size()), car.calls.size());
     std::vector<int> plan = car.calls;
@@ -270,6 +289,7 @@ nlohmann::json estimate_eta(const TravelTimes& times, const EtaCar& car,
     }
     out["with"] = {{"floor", *question.floor},
                    {"position", at},
+                   {"queued", false},
                    {"s", seconds(with[at].s)},
                    {"learned", with[at].learned},
                    {"delays", std::move(delays)}};

@@ -41,7 +41,7 @@ TEST_F(ApiAbuse, DuplicateKeysAreBadJsonAndRunNothing) {
         << line;
     EXPECT_TRUE(reply->at("id").is_null()) << line;
   }
-  EXPECT_TRUE(on_io([this] { return backend_.calls.empty(); }));
+  EXPECT_TRUE(on_io([this] { return backend_.requests_seen.empty(); }));
   // The same key in two different objects is fine.
   EXPECT_EQ(client->call(json::parse(R"({"cmd":"version","id":{"id":1}})")).at("ok"), true);
 }
@@ -58,7 +58,7 @@ TEST_F(ApiAbuse, RawNulInALineIsBadJsonNotTheEndOfTheLine) {
   EXPECT_EQ(reply->at("error").at("message"),
             "raw NUL byte at offset 21: JSON text cannot contain one (inside a string write "
             "\\u0000)");
-  EXPECT_TRUE(on_io([this] { return backend_.calls.empty(); }));
+  EXPECT_TRUE(on_io([this] { return backend_.requests_seen.empty(); }));
   // An escaped NUL inside a string is just a character.
   EXPECT_EQ(client->call(json::parse(R"({"cmd":"version","id":"a\u0000b"})")).at("id"),
             std::string("a\0b", 3));

@@ -218,7 +218,7 @@ TEST_F(ApiAccess, ReadGroupMemberMayReadOnly) {
   EXPECT_EQ(code(r.lines[1]), "ok");
   EXPECT_EQ(code(r.lines[2]), "forbidden");
   EXPECT_EQ(code(r.lines[3]), "forbidden");
-  EXPECT_TRUE(on_io([this] { return backend_.calls.empty(); }));
+  EXPECT_TRUE(on_io([this] { return backend_.requests_seen.empty(); }));
 }
 
 TEST_F(ApiAccess, SupplementaryControlGroupAllowsControl) {

@@ -202,8 +202,9 @@ TEST_F(DispatcherTest, ForwardsControlArgumentsToTheBackend) {
   handle(R"({"cmd":"power","supply":"emergency","saving":2})");
   handle(R"({"cmd":"power","supply":"mains"})");
   handle(R"({"cmd":"load","percent":75})");
-  EXPECT_EQ(backend_.calls, (std::vector<std::string>{"key 3", "drive_reset", "power emergency 2",
-                                                      "power mains 0", "load 75"}));
+  EXPECT_EQ(backend_.requests_seen,
+            (std::vector<std::string>{"key 3", "drive_reset", "power emergency 2", "power mains 0",
+                                      "load 75"}));
 }
 
 TEST_F(DispatcherTest, InputsKeepOmittedFields) {
@@ -522,7 +523,7 @@ TEST_F(OtherDriveKindTest, DriveSpecificCommandsAreNotOffered) {
               "\"" + name + "\" is not offered by drive kind \"sch001\" (it has no " +
                   c.capability + " function)");
   }
-  EXPECT_TRUE(backend_.calls.empty()) << "a refused command reached the backend";
+  EXPECT_TRUE(backend_.requests_seen.empty()) << "a refused command reached the backend";
 }
 
 TEST_F(OtherDriveKindTest, CommonCommandsStillRun) {
@@ -575,11 +576,11 @@ TEST_F(UssDriveKindTest, ParameterCommandsReachTheBackendWithTheirArguments) {
           Case{R"({"cmd":"uss_mirror","address":31})", "mirror 31"},
           Case{R"({"cmd":"drive_reset"})", "drive_reset"},
       }) {
-    backend_.calls.clear();
+    backend_.requests_seen.clear();
     const json reply = handle(c.request);
     EXPECT_TRUE(reply.at("ok").get<bool>()) << c.request << " " << reply.dump();
-    ASSERT_EQ(backend_.calls.size(), 1U) << c.request;
-    EXPECT_EQ(backend_.calls[0], c.call);
+    ASSERT_EQ(backend_.requests_seen.size(), 1U) << c.request;
+    EXPECT_EQ(backend_.requests_seen[0], c.call);
   }
 }
 
@@ -602,7 +603,7 @@ TEST_F(UssDriveKindTest, BadParameterRequestsChangeNothing) {
     EXPECT_EQ(code_of(reply), "bad_request") << c.request;
     EXPECT_EQ(reply.at("error").at("field"), c.field) << c.request;
   }
-  EXPECT_TRUE(backend_.calls.empty()) << "a refused request reached the backend";
+  EXPECT_TRUE(backend_.requests_seen.empty()) << "a refused request reached the backend";
   for (const char* request : {R"({"cmd":"key","key":1})", R"({"cmd":"fast_stop"})"}) {
     EXPECT_EQ(code_of(handle(request)), "not_offered") << request;
   }

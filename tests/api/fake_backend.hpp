@@ -99,6 +99,16 @@ class FakeBackend : public Backend,
   void load(int percent, Responder done) override {
     answer("load " + std::to_string(percent), Result::ok(), std::move(done));
   }
+  void calls(const CallsArgs& args, Responder done) override {
+    std::string call = "calls " + args.action;
+    if (args.floor) call += " " + std::to_string(*args.floor);
+    if (args.position) call += " @" + std::to_string(*args.position);
+    for (const int floor : args.floors) call += " " + std::to_string(floor);
+    // No travel control unless the test says what control commands answer.
+    answer(std::move(call),
+           Result::fail(ErrorCode::NotReady, "this daemon has no travel control for its drive"),
+           std::move(done));
+  }
   // No travel control, as the defaults of the common travel commands.
   void fast_stop(Responder done) override { no_travel(done); }
   void fast_start(const std::string&, const TravelArgs&, Responder done) override {
@@ -114,20 +124,20 @@ class FakeBackend : public Backend,
   std::vector<TraceEntry> trace_entries;     ///< what trace() picks from
   daemon::DisplaySnapshot display_snapshot;  ///< what display() returns
   nlohmann::json travels_result = {{"travels", nlohmann::json::array()}, {"dropped_samples", 0}};
-  std::size_t travels_asked = 0;         ///< the `last` travels() was called with
-  nlohmann::json config_json;            ///< what config() returns
-  Inputs inputs_state;                   ///< updated by update_inputs()
-  std::optional<Result> control_result;  ///< set: control commands answer this
-  bool defer = false;                    ///< true: hold control responders in `deferred`
-  std::vector<Responder> deferred;       ///< held responders
-  std::vector<std::string> calls;        ///< control calls seen, e.g. "load 50"
+  std::size_t travels_asked = 0;           ///< the `last` travels() was called with
+  nlohmann::json config_json;              ///< what config() returns
+  Inputs inputs_state;                     ///< updated by update_inputs()
+  std::optional<Result> control_result;    ///< set: control commands answer this
+  bool defer = false;                      ///< true: hold control responders in `deferred`
+  std::vector<Responder> deferred;         ///< held responders
+  std::vector<std::string> requests_seen;  ///< control requests seen, e.g. "load 50"
 
  private:
   static void no_travel(Responder& done) {
     done(Result::fail(ErrorCode::NotReady, "this daemon has no travel control for its drive"));
   }
   void answer(std::string call, Result fallback, Responder done) {
-    calls.push_back(std::move(call));
+    requests_seen.push_back(std::move(call));
     if (defer) {
       deferred.push_back(std::move(done));
       return;

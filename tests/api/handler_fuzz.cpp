@@ -47,6 +47,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (parsed.is_discarded() || !parsed.contains("id") || parsed.at("ok") != ok) std::abort();
   });
   if (replies != 1) std::abort();
-  backend.calls.clear();
+  backend.requests_seen.clear();
   return 0;
 }

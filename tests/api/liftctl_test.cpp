@@ -96,8 +96,25 @@ TEST_F(Liftctl, ControlCommandsReachTheBackend) {
   EXPECT_EQ(run_command(liftctl("reset")).exit_code, 0);
   EXPECT_EQ(run_command(liftctl("power emergency 1")).exit_code, 0);
   EXPECT_EQ(run_command(liftctl("load 80")).exit_code, 0);
-  EXPECT_EQ(on_io([this] { return backend_.calls; }),
+  EXPECT_EQ(on_io([this] { return backend_.requests_seen; }),
             (std::vector<std::string>{"key 2", "drive_reset", "power emergency 1", "load 80"}));
+}
+
+TEST_F(Liftctl, CallsCommandsReachTheBackend) {
+  backend_.control_result = Result::ok();
+  start_server();
+  for (const char* args : {"calls add 2", "calls cancel 2", "calls insert 3", "calls insert 1 0",
+                           "calls set 0 1 0", "calls set"}) {
+    const RunResult r = run_command(liftctl(args));
+    EXPECT_EQ(r.exit_code, 0) << args << ": " << r.output;
+  }
+  EXPECT_EQ(on_io([this] { return backend_.requests_seen; }),
+            (std::vector<std::string>{"calls add 2", "calls cancel 2", "calls insert 3",
+                                      "calls insert 1 @0", "calls set 0 1 0", "calls set"}));
+  for (const char* args : {"calls add", "calls add x", "calls insert", "calls insert 1 2 3",
+                           "calls set 1 x", "calls drop 1"}) {
+    EXPECT_EQ(run_command(liftctl(args)).exit_code, 2) << args;
+  }
 }
 
 TEST_F(Liftctl, StatusOfAUssLiftShowsTheDriveProfile) {
@@ -135,7 +152,7 @@ TEST_F(Liftctl, UssParameterCommandsReachTheBackend) {
     const RunResult r = run_command(liftctl(args));
     EXPECT_EQ(r.exit_code, 0) << args << ": " << r.output;
   }
-  EXPECT_EQ(on_io([this] { return backend_.calls; }),
+  EXPECT_EQ(on_io([this] { return backend_.requests_seen; }),
             (std::vector<std::string>{
                 "parameter -1 52 value 0", "parameter 5 7 text 3", "parameter -1 4 description 255",
                 "parameter -1 4 array 2 write -1 dword",

@@ -67,7 +67,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
   });
   if (replies != 1) std::abort();
-  if ((has_nul || (valid_json && duplicate)) && !backend.calls.empty()) std::abort();
-  backend.calls.clear();
+  if ((has_nul || (valid_json && duplicate)) && !backend.requests_seen.empty()) std::abort();
+  backend.requests_seen.clear();
   return 0;
 }

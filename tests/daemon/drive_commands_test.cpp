@@ -65,23 +65,23 @@ TEST_F(DriveCommandsTest, AnotherKindsCommandIsNotOffered) {
   const json read = handle(R"({"cmd":"uss_read","pnu":52})");
   EXPECT_EQ(read.at("error").at("message"),
             "\"uss_read\" is not offered by drive kind \"sch001\" (it has no parameters function)");
-  EXPECT_TRUE(backend_.calls.empty()) << "a refused command reached the backend";
+  EXPECT_TRUE(backend_.requests_seen.empty()) << "a refused command reached the backend";
 }
 
 TEST_F(DriveCommandsTest, TheLiftsOwnKindServesItsCommands) {
   make_lift(drive::Kind::Uss);
   EXPECT_TRUE(handle(R"({"cmd":"uss_mirror","address":3})").at("ok").get<bool>());
   EXPECT_EQ(handle(R"({"cmd":"fast_stop"})").at("error").at("code"), "not_offered");
-  ASSERT_EQ(backend_.calls.size(), 1U);
-  EXPECT_EQ(backend_.calls[0], "mirror 3");
+  ASSERT_EQ(backend_.requests_seen.size(), 1U);
+  EXPECT_EQ(backend_.requests_seen[0], "mirror 3");
 
-  backend_.calls.clear();
+  backend_.requests_seen.clear();
   dispatcher_ = api::Dispatcher{};
   make_lift(drive::Kind::Dcp);
   EXPECT_TRUE(handle(R"({"cmd":"key","key":3})").at("ok").get<bool>());
   EXPECT_EQ(handle(R"({"cmd":"uss_mirror"})").at("error").at("code"), "not_offered");
-  ASSERT_EQ(backend_.calls.size(), 1U);
-  EXPECT_EQ(backend_.calls[0], "key 3");
+  ASSERT_EQ(backend_.requests_seen.size(), 1U);
+  EXPECT_EQ(backend_.requests_seen[0], "key 3");
 }
 
 }  // namespace

@@ -200,6 +200,23 @@ TEST(EtaKinds, OnlyFloorToFloorTravelsAreLearned) {
   }
 }
 
+TEST(Eta, AFloorPlannedAlreadyCostsNothing) {
+  // `calls add` of a floor already queued adds nothing: `with` is its stop as planned.
+  EtaCar car = at_rest(0);
+  car.calls = {2, 4};
+  const TravelTimes times = six_floors();
+  const nlohmann::json plain = estimate_eta(times, car, {});
+  const nlohmann::json again = estimate_eta(times, car, {4, std::nullopt});
+  EXPECT_EQ(again["with"]["queued"], true);
+  EXPECT_TRUE(again["with"]["position"].is_null());
+  EXPECT_EQ(again["with"]["s"], plain["stops"][1]["s"]);
+  for (const auto& d : again["with"]["delays"]) EXPECT_EQ(d["s"], 0.0);
+  // At a position the dispatcher chose, the floor is a stop more, as `calls insert` makes it.
+  const nlohmann::json inserted = estimate_eta(times, car, {4, std::size_t{0}});
+  EXPECT_EQ(inserted["with"]["queued"], false);
+  EXPECT_EQ(inserted["with"]["position"], 0);
+}
+
 TEST(EtaPreload, TheRecordsFloorToFloorArrivalsAreLearnedOldestFirst) {
   // A `history` answer's travels, newest first: only arrived floor-to-floor runs between two
   // floors that ended standing at their target count.

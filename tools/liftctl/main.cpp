@@ -64,6 +64,8 @@ void usage(std::FILE* out) {
       "  fast-stop              DCP fast stop of the running travel\n"
       "  relevel                relevel to the nearest floor\n"
       "  calls [add|cancel N]   list, add or cancel destinations (served in order)\n"
+      "  calls insert N [POS]   put floor N at queue position POS (0: first; default: last)\n"
+      "  calls set [N...]       replace the queue (a floor may repeat, not twice in a row)\n"
       "  learn [--apply FILE]   learning travel: each floor's level from the shaft's level\n"
       "                         zones; --apply writes them into the configuration FILE\n"
       "                         (the old one kept as FILE.bak); floors take effect at restart\n"
@@ -439,16 +441,27 @@ Request request_stop(const Args& args) {
 }
 
 Request request_calls(const Args& args) {
+  constexpr const char* kUsage =
+      "usage: calls [add|cancel FLOOR | insert FLOOR [POSITION] | set [FLOOR...]]";
   json request = {{"cmd", "calls"}};
-  if (args.size() == 3) {
-    const auto floor = parse_int(args[2]);
-    if (!floor || (args[1] != "add" && args[1] != "cancel")) {
-      return bad_usage("usage: calls [add|cancel FLOOR]");
-    }
-    request["action"] = args[1];
-    request["floor"] = *floor;
-  } else if (args.size() != 1) {
-    return bad_usage("usage: calls [add|cancel FLOOR]");
+  if (args.size() == 1) return request;
+  const std::string& action = args[1];
+  std::vector<long> numbers;
+  for (std::size_t i = 2; i < args.size(); ++i) {
+    const auto n = parse_int(args[i]);
+    if (!n) return bad_usage(kUsage);
+    numbers.push_back(*n);
+  }
+  request["action"] = action;
+  if ((action == "add" || action == "cancel") && numbers.size() == 1) {
+    request["floor"] = numbers[0];
+  } else if (action == "insert" && (numbers.size() == 1 || numbers.size() == 2)) {
+    request["floor"] = numbers[0];
+    if (numbers.size() == 2) request["position"] = numbers[1];
+  } else if (action == "set") {
+    request["floors"] = numbers;  // none: empty the queue
+  } else {
+    return bad_usage(kUsage);
   }
   return request;
 }
