@@ -53,6 +53,10 @@ class FakeCar:
         self.calls.remove(floor)
         return {}
 
+    def calls_set(self, floors):
+        self.calls[:] = list(floors)
+        return {}
+
     def request(self, cmd, **args):
         assert cmd == "calls" and not args
         return {"calls": list(self.calls)}

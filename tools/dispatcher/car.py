@@ -158,6 +158,10 @@ class Car:
     def calls_cancel(self, floor):
         return self.request("calls", action="cancel", floor=floor)
 
+    def calls_set(self, floors):
+        """Replace the whole queue in one request (docs/api.md "`calls`" set)."""
+        return self.request("calls", action="set", floors=list(floors))
+
     def sim(self, action, **args):
         """A `sim` action (only `liftd --simulate` serves them): here the door operator's hands."""
         return self.request("sim", action=action, **args)

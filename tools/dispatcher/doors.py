@@ -4,15 +4,14 @@ The simulated machine of `liftd --simulate` moves its doors only when told (docs
 `open_doors`, `close_doors`, `door_reversal`); liftd itself never opens them. A real lift's
 door operator is the controller's job; here the runner does it:
 
-1. liftd starts the travel to the next queued floor within a cycle or two after a stop if the
-   doors are still locked, and opening doors under a travel that has started ends it
-   (`aborted`, cause `doors_not_locked`, which empties the queue). Opening the doors while the
-   car stops (`open_doors` sent while it moves) ends the arriving travel the same way on a DCP
-   drive: the doors open before the drive has ended the travel. So the door operator holds the
-   rest of the queue back: once the car is within `HOLD_WITHIN_MM` of its target, the floors
-   queued behind it are taken out (`calls cancel`) and kept here, the car stops with an empty
-   queue, and they go back in (`calls add`, same order) as soon as the doors are open. Floors
-   the dispatcher adds meanwhile wait with them.
+1. After a stop at a served call liftd waits `travel.call_stop_ms` (1.5 s) before it starts the
+   next queued travel, then for the doors locked; the runner opens them within that time.
+   Opening the doors while the car still stops (`open_doors` sent while it moves) ends the
+   arriving travel on a DCP drive (`aborted`, cause `doors_not_locked`, which empties the
+   queue), so they open only at `call_served`. The runner also takes the floors queued behind
+   a stop out of the queue while the car arrives (within `HOLD_WITHIN_MM` of its target) and
+   puts them back (`calls add`, same order) once the doors are open, as it did before liftd
+   had that wait; floors the dispatcher adds meanwhile wait with them.
 2. At the stop (`call_served`), `sim open_doors`.
 3. When the doors begin to open at a level, the building lets passengers out and in; the doors
    stay open for the dwell: the time the doors take to open (2 s on the simulated machine,
@@ -23,7 +22,7 @@ door operator is the controller's job; here the runner does it:
    car has stood there for `REOPEN_WITHIN_S` already: under a steady stream (up-peak at the
    main terminal) the doors would otherwise never close, and those in the car wait for the
    late ones. The late passenger waits for the next car.
-5. Before the doors close, the queue is put in sweep order (`_sweep`).
+5. Before the doors close, the queue is put in sweep order (`_sweep`, one `calls set`).
 6. liftd starts the travel to the next queued floor by itself once the doors are locked.
 
 Figures: passenger transfer time about 1.2 s per passenger (Barney, "Elevator Traffic Handbook",
@@ -128,10 +127,10 @@ class DoorOperator:
 
     def _sweep(self):
         """Put the queue in the order of one sweep before the doors close: the floors ahead in
-        the car's way nearest first, then the others on the way back. The queue is strictly
-        first in first out (docs/api.md "`calls`"), so passengers who got in one after the
-        other would otherwise ride to each other's floors in the order they pressed. The car
-        cannot leave while its doors are open, so cancelling and adding again is safe here."""
+        the car's way nearest first, then the others on the way back. The queue is served in
+        order (docs/api.md "`calls`"), so passengers who got in one after the other would
+        otherwise ride to each other's floors in the order they pressed. One `calls set`
+        replaces it whole; the car cannot leave while its doors are open."""
         try:
             queue = self.car.request("calls")["calls"]
         except ApiError:
@@ -139,16 +138,10 @@ class DoorOperator:
         order = dispatcher.sweep_order(queue, self.floor, self.direction)
         if order == queue:
             return
-        for floor in queue:
-            try:
-                self.car.calls_cancel(floor)
-            except ApiError:
-                pass
-        for floor in order:
-            try:
-                dispatcher.add_stop(self.car, floor)
-            except ApiError as error:
-                self.log(f"car {self.car.name}: calls add {floor}: {error}")
+        try:
+            self.car.calls_set(order)
+        except ApiError as error:
+            self.log(f"car {self.car.name}: calls set {order}: {error}")
 
     def _release(self):
         held, self.held, self.holding = self.held, [], False
