@@ -304,7 +304,8 @@ class ControllerCore {
                      typename Types::Input& in) noexcept {
     const bool heading_for =
         travel_.busy() && travel_.target().has_value() && travel_.target() == lift_.calls().front();
-    if (body.op == CallCommand::Op::Cancel && heading_for && body.floor == travel_.target()) {
+    if (body.op == CallCommand::Op::Cancel && heading_for && body.floor == travel_.target() &&
+        travel_.kind() == Types::TravelKind::Travel) {  // not a relevelling at that floor
       // docs/api.md `calls` cancel: the running travel stops at the next floor it can.
       const std::optional<std::size_t> landing = travel_.landing_floor(lift_.floors(), in);
       if (landing == body.floor) return (void)refuse(tag, ReplyCode::Busy, kTooLateToCancel);
