@@ -120,56 +120,61 @@ lift::LiftConfig lift_config(const config::Config& c) {
   return out;
 }
 
+namespace {
+
+// The boolean inputs the API and the cycle both name, each pair once (to_lift and from_lift are
+// each other's inverse). The shaft's deceleration points are arrays on the cycle's side.
+struct InputPair {
+  bool api::Inputs::*api;
+  bool lift::Inputs::*lift;
+};
+constexpr InputPair kInputPairs[] = {
+    {&api::Inputs::safety_chain, &lift::Inputs::safety_chain_closed},
+    {&api::Inputs::doors_closed, &lift::Inputs::doors_closed},
+    {&api::Inputs::doors_locked, &lift::Inputs::doors_locked},
+    {&api::Inputs::inspection, &lift::Inputs::inspection},
+    {&api::Inputs::recall, &lift::Inputs::recall},
+    {&api::Inputs::button_up, &lift::Inputs::button_up},
+    {&api::Inputs::button_down, &lift::Inputs::button_down},
+    {&api::Inputs::end_zone_top, &lift::Inputs::end_zone_top},
+    {&api::Inputs::end_zone_bottom, &lift::Inputs::end_zone_bottom},
+    {&api::Inputs::zone_door, &lift::Inputs::door_zone_bridge},
+    {&api::Inputs::door_reversal, &lift::Inputs::door_reversal},
+    // Shaft signals: the level zone and the relevelling zones.
+    {&api::Inputs::zone_level, &lift::Inputs::level_zone},
+    {&api::Inputs::relevel_up, &lift::Inputs::relevel_up},
+    {&api::Inputs::relevel_down, &lift::Inputs::relevel_down},
+};
+// Every speed's deceleration points by direction, V1..V7 (a travel at Vn looks only at Vn's
+// point for its direction).
+constexpr bool api::Inputs::*kDecelUp[] = {&api::Inputs::decel_v1_up, &api::Inputs::decel_v2_up,
+                                           &api::Inputs::decel_v3_up, &api::Inputs::decel_v4_up,
+                                           &api::Inputs::decel_v5_up, &api::Inputs::decel_v6_up,
+                                           &api::Inputs::decel_v7_up};
+constexpr bool api::Inputs::*kDecelDown[] = {
+    &api::Inputs::decel_v1_down, &api::Inputs::decel_v2_down, &api::Inputs::decel_v3_down,
+    &api::Inputs::decel_v4_down, &api::Inputs::decel_v5_down, &api::Inputs::decel_v6_down,
+    &api::Inputs::decel_v7_down};
+
+}  // namespace
+
 lift::Inputs to_lift(const api::Inputs& in) {
   lift::Inputs out;
   out.valid = true;
-  out.safety_chain_closed = in.safety_chain;
-  out.doors_closed = in.doors_closed;
-  out.doors_locked = in.doors_locked;
-  out.inspection = in.inspection;
-  out.recall = in.recall;
-  out.button_up = in.button_up;
-  out.button_down = in.button_down;
-  out.end_zone_top = in.end_zone_top;
-  out.end_zone_bottom = in.end_zone_bottom;
-  out.door_zone_bridge = in.zone_door;
-  out.door_reversal = in.door_reversal;
-  // Shaft signals: the level zone, the relevelling zones and every speed's deceleration points
-  // by direction (a travel at Vn looks only at Vn's point for its direction).
-  out.level_zone = in.zone_level;
-  out.relevel_up = in.relevel_up;
-  out.relevel_down = in.relevel_down;
-  out.decel_up = {in.decel_v1_up, in.decel_v2_up, in.decel_v3_up, in.decel_v4_up,
-                  in.decel_v5_up, in.decel_v6_up, in.decel_v7_up};
-  out.decel_down = {in.decel_v1_down, in.decel_v2_down, in.decel_v3_down, in.decel_v4_down,
-                    in.decel_v5_down, in.decel_v6_down, in.decel_v7_down};
+  for (const InputPair& p : kInputPairs) out.*(p.lift) = in.*(p.api);
+  for (std::size_t i = 0; i < std::size(kDecelUp); ++i) {
+    out.decel_up[i] = in.*(kDecelUp[i]);
+    out.decel_down[i] = in.*(kDecelDown[i]);
+  }
   return out;
 }
 
 api::Inputs from_lift(const lift::Inputs& in) {
   api::Inputs out;
-  out.safety_chain = in.safety_chain_closed;
-  out.doors_closed = in.doors_closed;
-  out.doors_locked = in.doors_locked;
-  out.inspection = in.inspection;
-  out.recall = in.recall;
-  out.button_up = in.button_up;
-  out.button_down = in.button_down;
-  out.end_zone_top = in.end_zone_top;
-  out.end_zone_bottom = in.end_zone_bottom;
-  out.zone_door = in.door_zone_bridge;
-  out.door_reversal = in.door_reversal;
-  out.zone_level = in.level_zone;
-  out.relevel_up = in.relevel_up;
-  out.relevel_down = in.relevel_down;
-  bool* const up[] = {&out.decel_v1_up, &out.decel_v2_up, &out.decel_v3_up, &out.decel_v4_up,
-                      &out.decel_v5_up, &out.decel_v6_up, &out.decel_v7_up};
-  bool* const down[] = {&out.decel_v1_down, &out.decel_v2_down, &out.decel_v3_down,
-                        &out.decel_v4_down, &out.decel_v5_down, &out.decel_v6_down,
-                        &out.decel_v7_down};
-  for (std::size_t i = 0; i < std::size(up); ++i) {
-    *up[i] = in.decel_up[i];
-    *down[i] = in.decel_down[i];
+  for (const InputPair& p : kInputPairs) out.*(p.api) = in.*(p.lift);
+  for (std::size_t i = 0; i < std::size(kDecelUp); ++i) {
+    out.*(kDecelUp[i]) = in.decel_up[i];
+    out.*(kDecelDown[i]) = in.decel_down[i];
   }
   return out;
 }

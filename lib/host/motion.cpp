@@ -66,7 +66,7 @@ std::string_view motion_phase(bool travelling, const RecordedTravel* running) {
   // unless it accelerates again (a DCP4 target extension), so a rounded ramp reads as one phase.
   std::string_view phase = "starting";
   double top = 0.0;
-  std::size_t before = 0;  // the newest speed at least kTrendWindow older than the current one
+  std::size_t before = 0;       // the newest speed at least kTrendWindow older than the current one
   std::size_t long_before = 0;  // ... and twice that
   for (std::size_t i = 0; i < track.speeds.size(); ++i) {
     const auto& [at, now] = track.speeds[i];
