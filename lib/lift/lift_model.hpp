@@ -54,10 +54,6 @@ class LiftModel {
   CallQueue& calls() noexcept { return calls_; }
   /// Destinations, read-only.
   const CallQueue& calls() const noexcept { return calls_; }
-  /// Queues a destination floor.
-  CallError add_call(std::size_t floor) noexcept { return calls_.add(floor, floors_.size()); }
-  /// Cancels a destination floor.
-  bool cancel_call(std::size_t floor) noexcept { return calls_.cancel(floor); }
 
  private:
   LiftConfig config_;

@@ -179,8 +179,8 @@ TEST(LiftModel, PublishesCurrentFloorAndNextPossibleStop) {
 TEST(LiftModel, NewFloorTableClearsCalls) {
   LiftModel model;
   ASSERT_TRUE(model.set_floors(kLevels));
-  EXPECT_EQ(model.add_call(2), CallError::None);
-  EXPECT_EQ(model.add_call(9), CallError::NoSuchFloor);
+  EXPECT_EQ(model.calls().add(2, model.floors().size()), CallError::None);
+  EXPECT_EQ(model.calls().add(9, model.floors().size()), CallError::NoSuchFloor);
   EXPECT_EQ(model.calls().size(), 1U);
   const std::vector<std::int64_t> two = {0, 4000};
   ASSERT_TRUE(model.set_floors(two));
