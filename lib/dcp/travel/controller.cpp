@@ -90,6 +90,11 @@ StartResult TravelController::start(const TravelRequest& request) noexcept {
       }
       [[fallthrough]];
     case TravelKind::Dcp3Crawl:
+      // A travel to a level the car stands at, as for DCP4 above (docs/api.md `travel`).
+      if (request.direction == Direction::None && last_.position_mm &&
+          distance_mm() <= static_cast<std::int64_t>(config_.level_tolerance_mm)) {
+        return StartResult::AlreadyThere;
+      }
       if (direction == Direction::None) return StartResult::NoDirection;
       if ((config_.dcp3_reference == Dcp3Reference::Position || request.by_position) &&
           !last_.position_mm) {

@@ -145,16 +145,21 @@ TEST(StartChecks, RequestsThatCannotRunAreRefused) {
   };
   TravelRequest vn_distance = dcp4_request(3000, Speed::VN);
   TravelRequest here = dcp4_request(2);
-  TravelRequest crawl_no_direction = dcp3_request(Speed::V0, Direction::None);
+  // The car stands at 0: a DCP3 travel to a floor (no direction given) at that level is
+  // refused as the DCP4 one is, whatever the dialect ("the car is already at that level").
   const std::vector<Case> cases = {
       {Protocol::Dcp3, dcp4_request(3000), StartResult::WrongProtocol},
       {Protocol::ComChan, dcp3_request(Speed::V4, Direction::Up), StartResult::WrongProtocol},
       {Protocol::Dcp4, vn_distance, StartResult::BadSpeed},
       {Protocol::Dcp4, here, StartResult::AlreadyThere},
-      {Protocol::Dcp3, crawl_no_direction, StartResult::NoDirection},
+      {Protocol::Dcp3, dcp3_request(Speed::V0, Direction::None, 2), StartResult::AlreadyThere},
+      {Protocol::Dcp3, dcp3_request(Speed::V4, Direction::None, 0), StartResult::AlreadyThere},
+      {Protocol::Dcp4, dcp3_request(Speed::V4, Direction::None, -2), StartResult::AlreadyThere},
+      {Protocol::Dcp3, dcp3_request(Speed::V4, Direction::Down, 0), StartResult::Accepted},
   };
   for (const auto& c : cases) {
     Rig rig(c.protocol);
+    rig.with_position = true;  // DCP3 by position, as the daemon's default lift
     rig.cycle();
     EXPECT_EQ(rig.controller.start(c.request), c.expected);
   }
@@ -162,6 +167,12 @@ TEST(StartChecks, RequestsThatCannotRunAreRefused) {
   rig.with_position = false;
   rig.cycle();
   EXPECT_EQ(rig.controller.start(dcp4_request(3000)), StartResult::NoPosition);
+  // Without a position only the request can give the direction.
+  Rig unplaced(Protocol::Dcp3);
+  unplaced.with_position = false;
+  unplaced.cycle();
+  EXPECT_EQ(unplaced.controller.start(dcp3_request(Speed::V0, Direction::None)),
+            StartResult::NoDirection);
   Rig busy(Protocol::Dcp4);
   busy.cycle();
   EXPECT_EQ(busy.controller.start(dcp4_request(3000)), StartResult::Accepted);
