@@ -118,6 +118,15 @@ int RtThread::start(const RtThreadOptions& options, std::function<void()> body) 
   }
   pthread_attr_destroy(&attr);
   if (err != 0) return err;
+  if (!options_.name.empty()) {
+    // Named here, before start() returns, not by the thread itself: whoever looks right after
+    // (ps -L, the daemon's readiness, a test reading /proc) sees the name with the pinning that
+    // the attributes already gave. The kernel keeps 15 characters (TASK_COMM_LEN 16); a longer
+    // name is refused (ERANGE).
+    char name[16] = {};
+    options_.name.copy(name, sizeof name - 1);
+    pthread_setname_np(thread_, name);
+  }
   status_.pinned = options.cpu >= 0 && status_.affinity_errno == 0;
   started_ = true;
   return 0;
@@ -131,12 +140,6 @@ void RtThread::join() noexcept {
 
 void* RtThread::trampoline(void* self) noexcept {
   auto* thread = static_cast<RtThread*>(self);
-  if (!thread->options_.name.empty()) {
-    // The kernel keeps 15 characters (TASK_COMM_LEN 16); a longer name is refused (ERANGE).
-    char name[16] = {};
-    thread->options_.name.copy(name, sizeof name - 1);
-    pthread_setname_np(pthread_self(), name);
-  }
   if (thread->options_.stack_prefault_bytes > 0) {
     prefault_recursive(thread->options_.stack_prefault_bytes);
   }

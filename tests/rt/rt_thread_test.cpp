@@ -6,6 +6,9 @@
 #include <sched.h>
 
 #include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <string>
 
 namespace liftd::rt {
 namespace {
@@ -33,6 +36,31 @@ TEST(RtThread, RunsBodyWithTheSchedulingItReports) {
     EXPECT_NE(t.status().sched_errno, 0);
     EXPECT_NE(t.status().describe().find("SCHED_FIFO refused"), std::string::npos);
   }
+}
+
+// The name is there when start() returns, whether or not the thread has run yet: the daemon
+// says it is ready right after starting its loops, and ps -L or a test may look at once.
+TEST(RtThread, IsNamedWhenStartReturns) {
+  RtThreadOptions o;
+  o.priority = 0;
+  o.lock_memory = false;
+  o.name = "rt-name-test-long";  // the kernel keeps the first 15 characters
+  std::atomic<bool> release{false};
+  RtThread t;
+  ASSERT_EQ(t.start(o,
+                    [&] {
+                      while (!release.load()) sched_yield();
+                    }),
+            0);
+  int named = 0;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::string comm;
+    std::getline(std::ifstream(task.path() / "comm"), comm);
+    if (comm == "rt-name-test-lo") ++named;
+  }
+  release = true;
+  t.join();
+  EXPECT_EQ(named, 1);
 }
 
 TEST(RtThread, FallsBackToNormalSchedulingWhenThePriorityIsRefused) {
