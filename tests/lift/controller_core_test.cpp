@@ -54,9 +54,11 @@ class StubTravel {
     events_.push({StubEvent::Type::Started, kind_, Direction::Up, floor, Cause::None, now});
     return Cause::None;
   }
-  void land(MonoTime now) noexcept {
-    current_floor_ = target_;
-    events_.push({StubEvent::Type::Finished, kind_, Direction::Up, target_, Cause::None, now});
+  void land(MonoTime now) noexcept { land_at(target_, now); }
+  /// Ends the travel at `floor`'s level, not necessarily its target (a stop at the next floor).
+  void land_at(std::size_t floor, MonoTime now) noexcept {
+    current_floor_ = floor;
+    events_.push({StubEvent::Type::Finished, kind_, Direction::Up, floor, Cause::None, now});
     kind_ = StubKind::None;
   }
   std::optional<std::size_t> landing_floor(const FloorTable&, const StubInput&) const noexcept {
@@ -186,6 +188,7 @@ class StubController : public ControllerCore<StubTypes> {
     publish_snapshot(s);
   }
   void land(MonoTime now) { travel_.land(now); }
+  void land_at(std::size_t floor, MonoTime now) { travel_.land_at(floor, now); }
   void abort(Cause cause, MonoTime now) { travel_.abort(cause, now); }
   void refuse_starts(Cause cause) { travel_.refuse_ = cause; }
   void drive_refuses(Cause cause) { travel_.drive_refuse_ = cause; }
@@ -301,6 +304,28 @@ TEST_F(ControllerCoreTest, CallsAreServedByTravelOrAtOnceWhenThere) {
   EXPECT_EQ(ev[1].kind, StubControllerEvent::Kind::CallServed);
   EXPECT_EQ(ev[1].floor, 2U);
   EXPECT_EQ(controller.snapshot().call_count, 0U);
+}
+
+// docs/api.md `calls`: a car that comes to rest at a queued floor serves it there, first in the
+// queue or not (issue #44: a car stopping at a floor that was queued sent no call_served, and the
+// dispatcher reassigned a call already reached).
+TEST_F(ControllerCoreTest, ATravelEndingAtAFloorQueuedLaterServesThatCall) {
+  good_inputs();
+  ASSERT_EQ(command(1, CallCommand::adding(3)).code, ReplyCode::Ok);
+  ASSERT_EQ(command(2, CallCommand::adding(1)).code, ReplyCode::Ok);
+  controller.step(now);
+  (void)events();  // the travel to 3 starts
+  ASSERT_EQ(controller.snapshot().target_floor, 3U);
+  controller.land_at(1, now);  // it ends at floor 1 instead (a stop at the next floor it could)
+  controller.step(now);
+  const std::vector<StubControllerEvent> ev = events();
+  ASSERT_EQ(ev.size(), 2U);
+  EXPECT_EQ(ev[0].kind, StubControllerEvent::Kind::Travel);
+  EXPECT_EQ(ev[1].kind, StubControllerEvent::Kind::CallServed);
+  EXPECT_EQ(ev[1].floor, 1U);
+  const StubSnapshot after = controller.snapshot();
+  ASSERT_EQ(after.call_count, 1U);  // floor 3 stays queued, the car goes there next
+  EXPECT_EQ(after.calls[0], 3U);
 }
 
 TEST_F(ControllerCoreTest, InputsGoStaleAndInspectionButtonsAreHeld) {
