@@ -183,13 +183,16 @@ int read_line_counts(int fd, LineCounts& out) noexcept {
 }
 
 SerialPort::SerialPort(SerialPort&& other) noexcept
-    : fd_(std::exchange(other.fd_, -1)), features_(other.features_) {}
+    : fd_(std::exchange(other.fd_, -1)),
+      features_(other.features_),
+      looks_(std::exchange(other.looks_, 0)) {}
 
 SerialPort& SerialPort::operator=(SerialPort&& other) noexcept {
   if (this != &other) {
     close();
     fd_ = std::exchange(other.fd_, -1);
     features_ = other.features_;
+    looks_ = std::exchange(other.looks_, 0);
   }
   return *this;
 }
@@ -372,6 +375,7 @@ IoResult SerialPort::wait_queued(MonoTime deadline, std::chrono::nanoseconds ste
   if (step.count() <= 0) step = std::chrono::microseconds(100);
   for (;;) {
     const IoResult queued = input_queued();
+    ++looks_;
     if (queued.status != IoStatus::Ok) return IoResult{queued.status, 0, queued.error_number};
     if (queued.bytes > 0) return IoResult{IoStatus::Ok, 0, 0};
     const MonoTime now = mono_now();
@@ -392,6 +396,7 @@ IoResult SerialPort::read_queued_until(std::span<std::uint8_t> buffer, MonoTime 
     // The time a look starts is the time its bytes are known to be there by.
     const MonoTime look = mono_now();
     const IoResult r = read_queued(buffer.subspan(got));
+    ++looks_;
     got += r.bytes;
     if (r.status != IoStatus::Ok) return IoResult{r.status, got, r.error_number};
     if (got == buffer.size()) {
@@ -401,7 +406,11 @@ IoResult SerialPort::read_queued_until(std::span<std::uint8_t> buffer, MonoTime 
     }
     if (r.bytes > 0) continue;  // more may be queued behind what the first look saw
     if (look >= deadline) return IoResult{IoStatus::Timeout, got, 0};
-    const timespec ts = to_timespec(std::min(deadline, look + step));
+    // The line carries at most one character per character time (`step`): the bytes still
+    // missing cannot all be there before that many character times from this look. A look
+    // earlier finds the buffer short, whatever the drive does; the deadline gets its own look.
+    const auto missing = static_cast<std::int64_t>(buffer.size() - got);
+    const timespec ts = to_timespec(std::min(deadline, look + step * missing));
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
     }
   }

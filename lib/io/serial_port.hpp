@@ -169,12 +169,18 @@ class SerialPort {
   /// (absolute sleeps; the last look is at the deadline). Ok, Timeout or DeviceLost.
   IoResult wait_queued(MonoTime deadline, std::chrono::nanoseconds step) noexcept;
 
-  /// read_until() through read_queued(): fills `buffer` from what the line discipline holds,
-  /// looking every `step` (absolute sleeps) until `deadline`. Ok when a look started by the
-  /// deadline completed it; Timeout otherwise, with the count (buffer.size() when it was complete
-  /// only at a look after the deadline: a late reply); DeviceLost on hang-up. When complete,
-  /// `complete_by` (if given) gets the start of the look that completed it: the bytes were there
-  /// by then, however long this thread was held up before it returned.
+  /// Looks at the line discipline wait_queued() and read_queued_until() made so far: each is a
+  /// wake-up of the calling thread (a cycle's cost on a small board, issue #43).
+  std::uint64_t looks() const noexcept { return looks_; }
+
+  /// read_until() through read_queued(): fills `buffer` from what the line discipline holds
+  /// until `deadline`, with absolute sleeps between looks. `step` is one character time: after
+  /// a look that left n bytes missing, the next is n character times later (no line delivers
+  /// them sooner), the last at the deadline. Ok when a look started by the deadline completed it;
+  /// Timeout otherwise, with the count (buffer.size() when it was complete only at a look after the
+  /// deadline: a late reply); DeviceLost on hang-up. When complete, `complete_by` (if given) gets
+  /// the start of the look that completed it: the bytes were there by then, however long this
+  /// thread was held up before it returned.
   IoResult read_queued_until(std::span<std::uint8_t> buffer, MonoTime deadline,
                              std::chrono::nanoseconds step,
                              MonoTime* complete_by = nullptr) noexcept;
@@ -216,6 +222,7 @@ class SerialPort {
 
   int fd_ = -1;
   PortFeatures features_{};
+  std::uint64_t looks_ = 0;  ///< looks of wait_queued() and read_queued_until() (one thread)
 };
 
 /// How long one character takes on the line: start bit, data bits, parity bit, stop bits at

@@ -333,6 +333,37 @@ TEST(IoSerialPort, AReplyOnlySeenAfterItsDeadlineIsATimeoutWithItsBytes) {
   EXPECT_EQ(none.bytes, 0U);
 }
 
+// A reply's bytes cannot arrive faster than one a character time: looking again before the
+// bytes still missing could all be there only costs a wake-up (issue #43: the cycle woke about a
+// thousand times a second). With nothing arriving, a 6-byte reply at a 1 ms character time is
+// looked for at 0, 6, 12 and 18 ms and at the deadline (20 ms): five looks, never more (a
+// thread woken late looks less often), where one a character time made 21.
+TEST(IoSerialPort, QueuedReadUntilLooksWhenTheMissingBytesCouldBeThere) {
+  PtyPair pty = make_pty();
+  auto port = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(port.ok());
+  std::array<std::uint8_t, 6> buf{};
+  const std::uint64_t before = port.value().looks();
+  const IoResult none =
+      port.value().read_queued_until(buf, mono_now() + milliseconds(20), milliseconds(1));
+  EXPECT_EQ(none.status, IoStatus::Timeout);
+  const std::uint64_t looks = port.value().looks() - before;
+  EXPECT_GE(looks, 2U);  // the first look and the one at the deadline
+  EXPECT_LE(looks, 5U);
+  // Three of six bytes there: the next look is three character times later, and the reply
+  // completed by then is taken whole.
+  const std::array<std::uint8_t, 6> reply{1, 2, 3, 4, 5, 6};
+  ASSERT_EQ(::write(pty.master_fd(), reply.data(), 3), 3);
+  ASSERT_TRUE(await_queued(port.value(), 3));
+  const int master = pty.master_fd();
+  std::thread rest([master, &reply] { (void)!::write(master, reply.data() + 3, 3); });
+  const IoResult whole =
+      port.value().read_queued_until(buf, mono_now() + milliseconds(2000), milliseconds(1));
+  rest.join();
+  EXPECT_EQ(whole.status, IoStatus::Ok);
+  EXPECT_EQ(buf, reply);
+}
+
 TEST(IoSerialPort, DrainQueuedReadsStrayBytesAwayAndCountsThem) {
   PtyPair pty = make_pty();
   auto port = SerialPort::open(pty.slave_path(), SerialSettings{});
