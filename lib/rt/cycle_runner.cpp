@@ -265,7 +265,8 @@ CycleRunner::Exchange CycleRunner::read_reply(io::SerialPort& port,
                                               MonoTime deadline) noexcept {
   // Never read(2) or poll(2) an empty tty: both wait for the flip-buffer worker, a
   // normal-priority kernel thread (docs/architecture.md, "What the cycle may wait for"). Look
-  // at what the line discipline holds every character time instead.
+  // at what the line discipline holds instead, each time the bytes still missing could all be
+  // there (SerialPort::read_queued_until: as many character times as bytes missing).
   Exchange x;
   const std::size_t size = std::min(engine_.reply_size(), kMaxReply);
   const std::size_t sent = std::min(frame.size(), kMaxReply);
