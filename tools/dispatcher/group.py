@@ -270,6 +270,7 @@ class Building:
         door = self.doors[car.name]
         owed = any(c.car == car.name for c in self.hall_calls.values()) or self.inside[car.name]
         free = (door.phase == "idle" and not door.holding and not owed
+                and (state.get("service") or {}).get("in_service")
                 and state.get("travel", {}).get("state") == "idle"
                 and not state.get("travel", {}).get("calls")
                 and state.get("car", {}).get("doors") == "locked"
@@ -281,7 +282,12 @@ class Building:
         if now - since >= PARK_AFTER_S:
             self.parking_since.pop(car.name, None)
             self.log(f"car {car.name}: parks at floor {self.park_floor}")
-            door.add_stop(self.park_floor)
+            try:
+                door.add_stop(self.park_floor)
+            except ApiError as error:
+                # Out of service since its last state event (a fault): it parks when it is
+                # back, as any car with nothing to do.
+                self.log(f"car {car.name}: not parked: {error}")
 
     def _requeue(self, car, now):
         """A car at rest with nothing queued but floors it owes (its travel was aborted, which
