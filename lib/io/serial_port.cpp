@@ -57,6 +57,13 @@ timespec to_timespec(std::chrono::nanoseconds d) noexcept {
   return timespec{static_cast<time_t>(ns / kNsPerS), static_cast<long>(ns % kNsPerS)};
 }
 
+// Absolute sleep on the monotonic clock (no drift from a wake-up's own lateness).
+void sleep_until(MonoTime t) noexcept {
+  const timespec ts = to_timespec(t);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+
 IoResult lost_or_error(int error_number, std::size_t bytes) noexcept {
   return IoResult{is_device_lost_errno(error_number) ? IoStatus::DeviceLost : IoStatus::Error,
                   bytes, error_number};
@@ -380,18 +387,16 @@ IoResult SerialPort::wait_queued(MonoTime deadline, std::chrono::nanoseconds ste
     if (queued.bytes > 0) return IoResult{IoStatus::Ok, 0, 0};
     const MonoTime now = mono_now();
     if (now >= deadline) return IoResult{IoStatus::Timeout, 0, 0};
-    const MonoTime next = std::min(deadline, now + step);
-    const timespec ts = to_timespec(next);
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-    }
+    sleep_until(std::min(deadline, now + step));
   }
 }
 
 IoResult SerialPort::read_queued_until(std::span<std::uint8_t> buffer, MonoTime deadline,
-                                       std::chrono::nanoseconds step,
-                                       MonoTime* complete_by) noexcept {
+                                       std::chrono::nanoseconds step, MonoTime* complete_by,
+                                       MonoTime first_look) noexcept {
   if (step.count() <= 0) step = std::chrono::microseconds(100);
   std::size_t got = 0;
+  if (first_look > mono_now()) sleep_until(std::min(deadline, first_look));
   for (;;) {
     // The time a look starts is the time its bytes are known to be there by.
     const MonoTime look = mono_now();
@@ -410,9 +415,7 @@ IoResult SerialPort::read_queued_until(std::span<std::uint8_t> buffer, MonoTime 
     // missing cannot all be there before that many character times from this look. A look
     // earlier finds the buffer short, whatever the drive does; the deadline gets its own look.
     const auto missing = static_cast<std::int64_t>(buffer.size() - got);
-    const timespec ts = to_timespec(std::min(deadline, look + step * missing));
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-    }
+    sleep_until(std::min(deadline, look + step * missing));
   }
 }
 

@@ -180,10 +180,12 @@ class SerialPort {
   /// Timeout otherwise, with the count (buffer.size() when it was complete only at a look after the
   /// deadline: a late reply); DeviceLost on hang-up. When complete, `complete_by` (if given) gets
   /// the start of the look that completed it: the bytes were there by then, however long this
-  /// thread was held up before it returned.
+  /// thread was held up before it returned. The first look is at `first_look` (or the
+  /// deadline, if sooner): before it the bytes cannot all be there (the cycle knows when a
+  /// reply can first be complete); the default looks at once.
   IoResult read_queued_until(std::span<std::uint8_t> buffer, MonoTime deadline,
-                             std::chrono::nanoseconds step,
-                             MonoTime* complete_by = nullptr) noexcept;
+                             std::chrono::nanoseconds step, MonoTime* complete_by = nullptr,
+                             MonoTime first_look = MonoTime{}) noexcept;
 
   /// Reads away everything the line discipline holds (stray bytes before a new request);
   /// `bytes` says how many. Unlike flush_input() no TCFLSH and no poll(2): bytes still in the

@@ -27,6 +27,10 @@ CycleRunner::CycleRunner(CycleConfig config, CycleEngine& engine)
       input_check_(config_.input_check_interval.count() > 0 ? config_.input_check_interval
                                                             : io::character_time(config_.serial)),
       echo_(config_.echo),
+      reply_watch_(config_.reply_earliest_start +
+                       input_check_ * static_cast<std::int64_t>(engine_.reply_size()),
+                   config_.reply_latest_start +
+                       input_check_ * static_cast<std::int64_t>(engine_.reply_size())),
       recorder_(recorder_capacity(config_), config_.recorder_bytes),
       port_keeper_(PortKeeperConfig{config_.device_path,
                                     config_.serial,
@@ -78,6 +82,7 @@ CycleStats CycleRunner::stats() const {
   s.counters.send_failures = get(counters_.send_failures);
   s.counters.stray_bytes = get(counters_.stray_bytes);
   s.counters.echo_collisions = get(counters_.echo_collisions);
+  s.counters.reply_looks = get(counters_.reply_looks);
   s.wake_lateness = wake_lateness_.copy();
   s.reply_latency = reply_latency_.copy();
   s.work_time = work_time_.copy();
@@ -170,6 +175,7 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
   io::SerialPort& port = port_keeper_.port();
   if (port_keeper_.adopt_offered_port()) {
     echo_.port_opened();  // another adapter may stand behind the name now
+    reply_watch_.forget();
     echo_state_.store(echo_.state(), std::memory_order_relaxed);
     engine_.on_port_ready(wake);
   }
@@ -194,7 +200,9 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
           recorder_.record(sent_at, Direction::Tx, record_flag::kSent, frame);
           const MonoTime deadline =
               std::min(sent_at + config_.reply_deadline, planned + config_.period);
-          const Exchange x = read_reply(port, frame, deadline);
+          const std::uint64_t looks_before = port.looks();
+          const Exchange x = read_reply(port, frame, sent_at, deadline);
+          bump(counters_.reply_looks, port.looks() - looks_before);
           const io::IoResult& got = x.got;
           const std::span<const std::uint8_t> reply = x.reply;
           const MonoTime complete_by = x.complete_by;
@@ -216,11 +224,13 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
             stray_possible_ = true;
             recorder_.record(now, Direction::Rx, record_flag::kReply | record_flag::kBad,
                              std::span<const std::uint8_t>(reply_.data(), got.bytes));
+            reply_watch_.note_no_reply();
             engine_.on_bad_reply(now);
           } else if (got.status == io::IoStatus::Ok && !seen_late) {
             // From the look that found it complete: a stall of this thread after it is not
             // the drive's latency (and would put an accepted reply past its deadline).
             reply_latency_.record(complete_by - sent_at);
+            reply_watch_.note_complete(complete_by - sent_at);
             const bool good = engine_.on_reply(reply, now);
             bump(good ? counters_.good_replies : counters_.bad_replies);
             if (good && echo_.good_reply_seen(x.echoed)) note_echo_decided(now);
@@ -243,6 +253,7 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
               flags |= record_flag::kPartial;
             }
             recorder_.record(now, Direction::Rx, flags, partial);
+            reply_watch_.note_no_reply();
             engine_.on_no_reply(now);
           }
         } else if (written.status == io::IoStatus::DeviceLost) {
@@ -261,26 +272,29 @@ void CycleRunner::run_one_cycle(MonoTime wake, MonoTime planned) noexcept {
 }
 
 CycleRunner::Exchange CycleRunner::read_reply(io::SerialPort& port,
-                                              std::span<const std::uint8_t> frame,
+                                              std::span<const std::uint8_t> frame, MonoTime sent_at,
                                               MonoTime deadline) noexcept {
   // Never read(2) or poll(2) an empty tty: both wait for the flip-buffer worker, a
   // normal-priority kernel thread (docs/architecture.md, "What the cycle may wait for"). Look
-  // at what the line discipline holds instead, each time the bytes still missing could all be
-  // there (SerialPort::read_queued_until: as many character times as bytes missing).
+  // at what the line discipline holds instead: first when this drive's replies are usually
+  // complete (never before DCP 7.2 lets one be, rt/reply_watch.hpp), then each time the bytes
+  // still missing could all be there (SerialPort::read_queued_until: as many character times
+  // as bytes missing). An echo of our frame comes back while we send, so it moves neither.
   Exchange x;
   const std::size_t size = std::min(engine_.reply_size(), kMaxReply);
   const std::size_t sent = std::min(frame.size(), kMaxReply);
+  const MonoTime first_look = sent_at + reply_watch_.first_look();
   if (!echo_.expected() && !echo_.undecided()) {
     // No echo: the first byte read is the reply's.
     const std::span<std::uint8_t> reply(reply_.data(), size);
-    x.got = port.read_queued_until(reply, deadline, input_check_, &x.complete_by);
+    x.got = port.read_queued_until(reply, deadline, input_check_, &x.complete_by, first_look);
     x.reply = reply.first(x.got.bytes);
     return x;
   }
   if (echo_.expected()) {
     // The echo, then the reply, both by the deadline (it counts from our frame's start).
     const std::span<std::uint8_t> all(reply_.data(), sent + size);
-    x.got = port.read_queued_until(all, deadline, input_check_, &x.complete_by);
+    x.got = port.read_queued_until(all, deadline, input_check_, &x.complete_by, first_look);
     const std::span<const std::uint8_t> read = all.first(x.got.bytes);
     x.collision = io::check_echo(frame.first(sent), read) == io::EchoCheck::Collision;
     x.echoed = true;
@@ -291,7 +305,7 @@ CycleRunner::Exchange CycleRunner::read_reply(io::SerialPort& port,
   // the reply (no echo). If it does, it is the copy, or the start of it, and the reply follows
   // (a copy alone is no reply: an echoing line with a silent drive gives just that).
   const std::span<std::uint8_t> first(reply_.data(), size);
-  x.got = port.read_queued_until(first, deadline, input_check_, &x.complete_by);
+  x.got = port.read_queued_until(first, deadline, input_check_, &x.complete_by, first_look);
   const std::span<const std::uint8_t> read = first.first(x.got.bytes);
   if (io::check_echo(frame.first(sent), read) == io::EchoCheck::Collision ||
       x.got.status != io::IoStatus::Ok) {

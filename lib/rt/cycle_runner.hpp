@@ -18,6 +18,7 @@
 #include "rt/flight_recorder.hpp"
 #include "rt/histogram.hpp"
 #include "rt/port_keeper.hpp"
+#include "rt/reply_watch.hpp"
 #include "rt/rt_thread.hpp"
 
 namespace liftd::rt {
@@ -57,6 +58,12 @@ struct CycleConfig {
   std::chrono::nanoseconds period = std::chrono::milliseconds(15);
   /// DCP 7.2: the drive's reply must be complete (its driver off) by 13.625 ms after our start.
   std::chrono::nanoseconds reply_deadline = std::chrono::microseconds(13625);
+  /// DCP 7.2: the drive may start its reply 2.0624 ms after our frame began (our driver off,
+  /// "Frühester Sendebeginn der Regelung") and starts it by 11.5625 ms ("Spätester
+  /// Sendebeginn"). With the reply's length on the line they bound when the cycle first looks
+  /// for a reply (rt/reply_watch.hpp).
+  std::chrono::nanoseconds reply_earliest_start = std::chrono::nanoseconds(2'062'400);
+  std::chrono::nanoseconds reply_latest_start = std::chrono::nanoseconds(11'562'500);
   /// Latest wake-up lateness at which we still send (a "late send" past kOnTimeBudget). DCP
   /// 7.2: the drive's reply ends by 13.625 ms and the next master frame starts at 15 ms, so a
   /// frame up to 15 - 13.625 = 1.375 ms late still cannot collide with the reply to it (its
@@ -132,6 +139,9 @@ struct CycleCounters {
   /// Exchanges whose frame came back changed on an echoing line (a bus collision); each is
   /// also one of the bad replies.
   std::uint64_t echo_collisions = 0;
+  /// Looks at the line for replies (SerialPort::looks()): each a wake-up of the cycle thread
+  /// besides the one a period.
+  std::uint64_t reply_looks = 0;
 };
 
 /// A copy of the cycle's statistics, taken on any thread.
@@ -198,7 +208,7 @@ class CycleRunner {
 
   void cycle_loop() noexcept;
   void run_one_cycle(MonoTime wake, MonoTime planned) noexcept;
-  Exchange read_reply(io::SerialPort& port, std::span<const std::uint8_t> frame,
+  Exchange read_reply(io::SerialPort& port, std::span<const std::uint8_t> frame, MonoTime sent_at,
                       MonoTime deadline) noexcept;
   void note_echo_decided(MonoTime now) noexcept;
   void lose_port(MonoTime now, int error_number) noexcept;
@@ -217,6 +227,7 @@ class CycleRunner {
   // Cycle thread state.
   std::array<std::uint8_t, 2 * kMaxReply> reply_{};  // the frame's echo, then the reply
   io::EchoDetector echo_;
+  ReplyWatch reply_watch_;       // when to look first for a reply
   bool stray_possible_ = false;  // the last reply was missing or bad: flush before sending
   // The current run of skipped cycles (between two sent cycles).
   bool in_skip_run_ = false;
@@ -234,7 +245,7 @@ class CycleRunner {
   struct Counters {
     std::atomic<std::uint64_t> cycles{0}, frames_sent{0}, good_replies{0}, bad_replies{0},
         missing_replies{0}, partial_replies{0}, late_sends{0}, overruns{0}, skipped_cycles{0},
-        late_replies{0}, send_failures{0}, stray_bytes{0}, echo_collisions{0};
+        late_replies{0}, send_failures{0}, stray_bytes{0}, echo_collisions{0}, reply_looks{0};
   } counters_;
   std::atomic<io::EchoState> echo_state_{io::EchoState::Unknown};
   // Lateness and work beyond a period are what matter most: 0..20 ms in 1 us bins (a period of

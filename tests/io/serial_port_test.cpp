@@ -364,6 +364,34 @@ TEST(IoSerialPort, QueuedReadUntilLooksWhenTheMissingBytesCouldBeThere) {
   EXPECT_EQ(buf, reply);
 }
 
+TEST(IoSerialPort, QueuedReadUntilLooksFirstAtTheTimeItIsGiven) {
+  PtyPair pty = make_pty();
+  auto port = SerialPort::open(pty.slave_path(), SerialSettings{});
+  ASSERT_TRUE(port.ok());
+  const std::array<std::uint8_t, 6> reply{1, 2, 3, 4, 5, 6};
+  ASSERT_EQ(::write(pty.master_fd(), reply.data(), reply.size()), 6);
+  ASSERT_TRUE(await_queued(port.value(), reply.size()));
+  // The reply is there already; the one look is no sooner than the first look asked for.
+  std::array<std::uint8_t, 6> buf{};
+  const MonoTime first_look = mono_now() + milliseconds(5);
+  MonoTime complete_by{};
+  const std::uint64_t before = port.value().looks();
+  const IoResult got = port.value().read_queued_until(buf, first_look + milliseconds(2000),
+                                                      milliseconds(1), &complete_by, first_look);
+  EXPECT_EQ(got.status, IoStatus::Ok);
+  EXPECT_EQ(buf, reply);
+  EXPECT_EQ(port.value().looks() - before, 1U);
+  EXPECT_GE(complete_by, first_look);
+  // A first look past the deadline is at the deadline: one look, too late for the reply.
+  ASSERT_EQ(::write(pty.master_fd(), reply.data(), reply.size()), 6);
+  ASSERT_TRUE(await_queued(port.value(), reply.size()));
+  const MonoTime deadline = mono_now() + milliseconds(3);
+  const IoResult late = port.value().read_queued_until(buf, deadline, milliseconds(1), &complete_by,
+                                                       deadline + milliseconds(50));
+  EXPECT_EQ(late.status, IoStatus::Timeout);
+  EXPECT_LT(complete_by, deadline + milliseconds(50));
+}
+
 TEST(IoSerialPort, DrainQueuedReadsStrayBytesAwayAndCountsThem) {
   PtyPair pty = make_pty();
   auto port = SerialPort::open(pty.slave_path(), SerialSettings{});

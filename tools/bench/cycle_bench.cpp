@@ -12,6 +12,8 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -292,11 +294,18 @@ struct Reference {
   std::atomic<std::uint64_t> done{0};
   std::atomic<std::int64_t> cpu_ns{0};
   std::atomic<std::uint64_t> beyond_window{0};  // wake-ups later than the cycle's send window
+  std::atomic<long long> wake_ups{0};           // voluntary context switches over its run
 };
+
+long long thread_voluntary_switches() noexcept {
+  rusage u{};
+  return getrusage(RUSAGE_THREAD, &u) == 0 ? u.ru_nvcsw : 0;
+}
 
 void reference_loop(Reference& ref, std::chrono::nanoseconds period,
                     std::chrono::nanoseconds send_window, std::uint64_t cycles) {
   const std::int64_t cpu_start = thread_cpu_ns();
+  const long long switches_start = thread_voluntary_switches();
   MonoTime next = mono_now() + period;
   for (std::uint64_t i = 0; i < cycles; ++i) {
     const auto ns = next.count();
@@ -311,9 +320,28 @@ void reference_loop(Reference& ref, std::chrono::nanoseconds period,
     next += period;
   }
   ref.cpu_ns.store(thread_cpu_ns() - cpu_start);
+  ref.wake_ups.store(thread_voluntary_switches() - switches_start);
 }
 
 // Percentiles beyond the bins' range print as "> 20000": the bins cannot tell more.
+// Voluntary context switches of this process's thread named `name` (/proc/self/task/*/status):
+// each is a sleep the thread woke from. -1 if there is no such thread.
+long long voluntary_switches(const std::string& name) {
+  std::error_code ec;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task", ec)) {
+    std::ifstream comm(task.path() / "comm");
+    std::string comm_name;
+    if (!std::getline(comm, comm_name) || comm_name != name) continue;
+    std::ifstream status(task.path() / "status");
+    for (std::string line; std::getline(status, line);) {
+      if (line.rfind("voluntary_ctxt_switches:", 0) == 0) {
+        return std::atoll(line.c_str() + std::strlen("voluntary_ctxt_switches:"));
+      }
+    }
+  }
+  return -1;
+}
+
 void print_row(const char* name, const rt::HistogramData& d) {
   std::printf("  %-24s %9s %9s %9s %9.1f %9.1f\n", name, d.percentile_text(0.5).c_str(),
               d.percentile_text(0.99).c_str(), d.percentile_text(0.999).c_str(), d.max_us(),
@@ -403,6 +431,7 @@ int main(int argc, char** argv) {
   rt::RtThread ref_thread;
   rt::RtThreadOptions ref_options = config.thread;
   ref_options.lock_memory = false;  // already locked for the whole process by the runner
+  ref_options.name = "bench-ref";   // as ps -L shows it
   const std::int64_t process_cpu_start = process_cpu_ns();
   if (const int err = runner.start(); err != 0) {
     std::fprintf(stderr, "cycle-bench: cannot start the cycle: %s\n", std::strerror(err));
@@ -415,6 +444,9 @@ int main(int argc, char** argv) {
     return 1;
   }
 
+  // The cycle thread is named before start() returns (RtThread).
+  const long long cycle_switches_start = voluntary_switches("liftd-cycle");
+  const std::uint64_t cycles_start = runner.stats().counters.cycles;
   std::printf(
       "cycle-bench: %llu cycles of %.1f ms on %s, %s, liftd cycle and reference loop in "
       "parallel\n",
@@ -430,6 +462,8 @@ int main(int argc, char** argv) {
     if (driver) driver->pump();
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
+  const long long cycle_switches = voluntary_switches("liftd-cycle") - cycle_switches_start;
+  const std::uint64_t cycles_counted = runner.stats().counters.cycles - cycles_start;
   runner.stop();
   ref_thread.join();
   const std::int64_t process_cpu = process_cpu_ns() - process_cpu_start;
@@ -479,6 +513,16 @@ int main(int argc, char** argv) {
       static_cast<unsigned long long>(s.counters.overruns),
       static_cast<unsigned long long>(s.counters.skipped_cycles),
       static_cast<unsigned long long>(ref.beyond_window.load()));
+  // Issue #43: each wake-up costs a small board's CPU. The reference loop wakes once a period.
+  const auto per_cycle = [](long long n, std::uint64_t cycles) {
+    return cycles > 0 ? static_cast<double>(n) / static_cast<double>(cycles) : 0.0;
+  };
+  std::printf(
+      "wake-ups per cycle (voluntary context switches): liftd cycle %.2f (looks for the reply "
+      "%.2f), reference loop %.2f\n",
+      per_cycle(cycle_switches, cycles_counted),
+      per_cycle(static_cast<long long>(s.counters.reply_looks), s.counters.cycles),
+      per_cycle(ref.wake_ups.load(), o.cycles));
   const auto& c = s.counters;
   std::printf(
       "counters: cycles %llu, sent %llu (late %llu), good %llu, bad %llu, missing %llu (partial "

@@ -103,6 +103,7 @@ api::StatsSnapshot DcpBackend::stats() {
   d["max_lateness_us"] = static_cast<std::uint64_t>(cycle.wake_lateness.max_us());
   d["lateness_p99_us"] = cycle.wake_lateness.percentile_us(0.99);
   d["reply_p99_us"] = cycle.reply_latency.percentile_us(0.99);
+  d["reply_looks"] = cycle.counters.reply_looks;
   d["max_work_us"] = static_cast<std::uint64_t>(cycle.work_time.max_us());
   add_serial_device(d);
   return out;
