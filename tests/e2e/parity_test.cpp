@@ -151,6 +151,20 @@ TEST_P(LiftParity, CallsAreAnsweredAsDocumentedAndServedInOrder) {
     EXPECT_TRUE(lift_->status()["travel"]["calls"].empty()) << lift_->status().dump();
     // The cancelled floor 0 is not served.
     EXPECT_FALSE(lift_->wait_travel("started", 2s).is_object()) << lift_->log();
+    // `travels` keeps each leg as a travel of its own, to its floor, the second starting after
+    // the first ended (issue #44: the hydraulic lift once kept a run of legs as one record).
+    const json kept = lift_->call({{"cmd", "travels"}, {"last", 16}});
+    ASSERT_TRUE(kept.value("ok", false)) << kept.dump();
+    const json* to_2 = nullptr;
+    const json* to_1 = nullptr;
+    for (const json& t : kept["result"]["travels"]) {
+      if (t["target_floor"] == 2 && t["cause"] == "arrived") to_2 = &t;
+      if (t["target_floor"] == 1 && t["cause"] == "arrived") to_1 = &t;
+    }
+    ASSERT_TRUE(to_2 != nullptr && to_1 != nullptr) << kept.dump();
+    ASSERT_TRUE((*to_2)["end"].is_string() && (*to_1)["start"].is_string()) << kept.dump();
+    EXPECT_LE((*to_2)["end"].get<std::string>(), (*to_1)["start"].get<std::string>())
+        << kept.dump();
   });
 }
 
