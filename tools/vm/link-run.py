@@ -491,8 +491,8 @@ def judge(folder, bound, names, echo_names, functional_names):
     """Every line: liftd stopped cleanly, the link came up, the echo found where the line echoes
     and only there, the serial device as the kernel has it (driver; a 16550's receive FIFO
     trigger; a USB adapter's latency timer 1 ms once liftd opened it). The timing judgement
-    (every travel arrived, no link fault, missing replies within the bound, reply p99 within DCP
-    7.2) for every line not named functional (a guest under software emulation: its timing is
+    (every travel arrived, no link fault, missing replies within the bound on the VM lines, reply
+    p99 within DCP 7.2) for every line not named functional (a guest under software emulation: its timing is
     the emulator's)."""
     failed = 0
     for name in names:
@@ -515,8 +515,11 @@ def judge(folder, bound, names, echo_names, functional_names):
         if name.startswith("16550a") and g["rx_trig"] is None:
             problems.append("no rx_trig_bytes reported for a 16550A")
         if name == "usb":
-            if g["latency_timer"] is None:
-                problems.append("no latency timer reported for the FTDI adapter")
+            if g["latency_timer"] != 1:
+                problems.append(f"liftd reports the adapter's latency timer {g['latency_timer']} ms, "
+                                "not the 1 ms it sets")
+            if not any("serial_latency_set" in line for line in g["lines"]):
+                problems.append("liftd did not say it set the latency timer (serial_latency_set)")
             if g["sysfs"].get("latency_timer") != "1":
                 problems.append(f"the adapter's latency timer is {g['sysfs'].get('latency_timer')} ms "
                                 "while liftd runs, not 1")
@@ -529,7 +532,9 @@ def judge(folder, bound, names, echo_names, functional_names):
             timing.append(f"{g['link_losses']} link faults (DCP 7.3)")
         if g["link"] != "up" or g["faults"]:
             timing.append(f"link {g['link']}, faults {g['faults']}")
-        if g["missing_per_1000"] is None or g["missing_per_1000"] > bound:
+        # The host pty line is the reference the VM lines are compared with: its missing
+        # replies are the host's own (reported, not bounded here; the default tests judge it).
+        if name != "pty" and (g["missing_per_1000"] is None or g["missing_per_1000"] > bound):
             timing.append(f"missing replies {fmt(g['missing_per_1000'], '{:.2f}')} per 1000 cycles "
                           f"(bound {bound})")
         if g["p99"] is None or g["p99"] > DEADLINE_US:
