@@ -44,7 +44,7 @@ echo "guest: $device: driver $(basename "$(readlink -f "$sys/device/driver")"),"
   "type $(cat "$sys/type" 2>/dev/null || echo -), uartclk $(cat "$sys/uartclk" 2>/dev/null || echo -)," \
   "rx_trig_bytes $(cat "$sys/rx_trig_bytes" 2>/dev/null || echo -)," \
   "latency_timer $(cat "$sys/device/latency_timer" 2>/dev/null || echo -) (before liftd)"
-[ "$line" != usb ] || grep -h . /sys/bus/usb/devices/*/product 2>/dev/null | sed 's/^/guest: usb product: /'
+[ "$line" != usb ] || grep -hv "Host Controller" /sys/bus/usb/devices/*/product 2>/dev/null | sed 's/^/guest: usb product: /'
 
 # The encoder's frames come in on the virtio serial port named "encoder" (no udev here to make
 # /dev/virtio-ports/encoder: the name is in sysfs).

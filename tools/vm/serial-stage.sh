@@ -95,15 +95,13 @@ if [ -z "$accel" ]; then
   fi
 fi
 if [ "$accel" = tcg ]; then
-  timing_skipped() {
+  {
     echo "############################################################################"
     echo "### SKIPPED: the real-UART stage's TIMING judgement of the VM lines: ${problem:-LIFTD_VM_ACCEL=tcg}."
     echo "### The guest runs under QEMU's software emulation (TCG): its drivers are the real"
     echo "### ones and are judged; its timing is an emulated CPU's and is only reported."
     echo "############################################################################"
-  }
-  timing_skipped
-  timing_skipped >&2
+  } >&2
   vm_seconds=${LIFTD_VM_SECONDS:-20}
 fi
 export LIFTD_VM_ACCEL=$accel
