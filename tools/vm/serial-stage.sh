@@ -212,7 +212,9 @@ done
 
 echo "=== serial-stage: the link as liftd reports it (VM lines: $accel; $(nproc) host CPUs) ==="
 echo "(reply: frame start to the cycle's look that found the reply complete; p99 from liftd's stats,"
-echo " p50 and max from its flight recorder; miss/1000: dcp.missing_replies per 1000 cycles;"
+echo " p50 and max from its flight recorder, whose reply record is written just after that look: a"
+echo " stall of the cycle thread in between shows in max, even beyond 13625 us, as a good reply;"
+echo " miss/1000: dcp.missing_replies per 1000 cycles;"
 echo " bad: checksum errors and echo collisions; wake/cyc: the liftd-cycle thread's voluntary"
 echo " context switches per cycle; lat ms: a USB adapter's latency timer after liftd's start)"
 python3 tools/vm/link-run.py table "$out" "${names[@]}"
