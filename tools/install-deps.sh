@@ -7,7 +7,11 @@
 #   tools/install-deps.sh --uml-systemd  what the systemd stage needs besides (user-mode Linux,
 #                                      its management console, kmod, mmdebstrap and e2fsprogs for
 #                                      the Debian 12 root file system and its ext4 image)
-#   tools/install-deps.sh --with-uml   all three at once (tools/test.sh: one apt-get run)
+#   tools/install-deps.sh --vm         what the real-UART stage needs besides (tools/vm: QEMU,
+#                                      busybox-static and cpio for its initramfs, kmod for depmod
+#                                      and modprobe of the fetched kernel's modules)
+#   tools/install-deps.sh --with-uml   the build and the three stages at once (tools/test.sh: one
+#                                      apt-get run)
 set -euo pipefail
 
 packages=(
@@ -19,10 +23,12 @@ packages=(
 )
 uml_can=(user-mode-linux kmod iproute2 can-utils)
 uml_systemd=(user-mode-linux uml-utilities kmod iproute2 mmdebstrap e2fsprogs python3)
+vm=(qemu-system-x86 busybox-static cpio kmod python3)
 case "${1:-}" in
   --uml-can) packages=("${uml_can[@]}") ;;
   --uml-systemd) packages=("${uml_systemd[@]}") ;;
-  --with-uml) packages+=("${uml_can[@]}" "${uml_systemd[@]}") ;;
+  --vm) packages=("${vm[@]}") ;;
+  --with-uml) packages+=("${uml_can[@]}" "${uml_systemd[@]}" "${vm[@]}") ;;
 esac
 
 missing=()

@@ -9,6 +9,8 @@
 #                            flake on a busy machine)
 #   LIFTD_SKIP_ASAN=1 ...    skip the sanitizer build (quicker local runs)
 #   LIFTD_SKIP_UML=1 ...     skip both user-mode Linux stages (real SocketCAN, systemd)
+#   LIFTD_SKIP_VM=1 ...      skip the real-UART stage (tools/vm/serial-stage.sh: liftd in a QEMU
+#                            guest on the 16550A and an FTDI USB adapter, 3 to 5 minutes)
 #   LIFTD_SKIP_SYSTEMD=1 ... skip the systemd stage (tests/systemd/stage.sh: the package on Debian
 #                            12 with systemd as PID 1 under user-mode Linux, 3 to 5 minutes)
 #   LIFTD_SKIP_FUZZ=1 ...    skip the fuzz targets
@@ -187,6 +189,15 @@ if [ "${LIFTD_SKIP_UML:-0}" != 1 ]; then
   echo "=== real SocketCAN: user-mode Linux with vcan0 (beside a one-job compile of the next"
   echo "    presets; its log: build/early-builds.log) ==="
   timed "uml can" tools/uml/can-stage.sh build
+fi
+if [ "${LIFTD_SKIP_VM:-0}" != 1 ]; then
+  # liftd on a real kernel's serial drivers (QEMU's 16550A and FTDI usb-serial) against the
+  # drive simulator on the host. The one-job compile pauses meanwhile (ninja goes on where it
+  # stopped): the guest's 15 ms cycle needs the CPUs the compiler would take.
+  stop_early_builds
+  echo "=== real UART: liftd in a QEMU guest on the 16550A and an FTDI USB adapter ==="
+  timed "vm serial" tools/vm/serial-stage.sh build
+  start_early_builds
 fi
 soak_seconds=${LIFTD_SOAK_SECONDS:-45}
 if [ "$soak_seconds" != 0 ]; then
