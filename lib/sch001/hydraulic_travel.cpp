@@ -1,6 +1,7 @@
 #include "sch001/hydraulic_travel.hpp"
 
 #include <chrono>
+#include <cstdlib>
 
 #include "lift/gate.hpp"
 #include "lift/learning_travel.hpp"
@@ -251,7 +252,41 @@ CommandBits HydraulicTravel::signals() const noexcept {
   return b;
 }
 
+void HydraulicTravel::measure_speed(const TickInput& in) noexcept {
+  if (!in.position_mm) {
+    last_position_mm_.reset();
+    period_travel_mm_ = 0;
+    return;
+  }
+  const auto elapsed = in.now - last_tick_;
+  // A speed needs a base of at least half a status period: the controller may step twice on one
+  // frame, microseconds apart, where a millimetre's step of the position would read as metres
+  // per second. Until then the last measure stands.
+  if (last_position_mm_ && elapsed < kStatusPeriod / 2) return;
+  period_travel_mm_ = 0;
+  if (last_position_mm_ && elapsed <= 2 * kStatusPeriod) {
+    // Over one or two status periods the distance is a speed; over longer it says nothing about
+    // the speed now (the car may have stopped and started again).
+    const auto moved = std::abs(*in.position_mm - *last_position_mm_);
+    period_travel_mm_ = moved * kStatusPeriod.count() /
+                        std::chrono::duration_cast<std::chrono::milliseconds>(elapsed).count();
+  }
+  last_position_mm_ = in.position_mm;
+  last_tick_ = in.now;
+}
+
+bool HydraulicTravel::slowdown_reached(std::int64_t remaining_mm) const noexcept {
+  // The speed signals can drop only in an answer to a status frame (3b, 3c): at the one nearest
+  // the slowdown point, i.e. now when the car is nearer the point than it would be past it at
+  // the next frame (half a period's travel). Waiting for the first frame past the point would
+  // put the slowdown anywhere up to a whole period's travel late (50 mm at 0.5 m/s), and the
+  // slow approach, at a tenth of the speed, ten times as long as that late: the travel time
+  // would vary by a second with the phase of the frames.
+  return remaining_mm - period_travel_mm_ / 2 <= static_cast<std::int64_t>(slowdown_mm());
+}
+
 TickOutput HydraulicTravel::tick(const lift::FloorTable& floors, const TickInput& in) noexcept {
+  measure_speed(in);
   if (kind_ != TravelKind::None) {
     if (const lift::Cause why = forbidding(kind_, in); why != lift::Cause::None) {
       end(TravelEvent::Type::Aborted, why, in.now);
@@ -265,9 +300,7 @@ TickOutput HydraulicTravel::tick(const lift::FloorTable& floors, const TickInput
   if (kind_ == TravelKind::Learn && phase_ != Phase::MotorStart && in.position_mm) {
     // Ended by position alone: the level zones are what the learning records, not stops.
     const std::int64_t remaining = lift::distance_ahead(*in.position_mm, target_mm_, direction_);
-    if (phase_ == Phase::Fast && remaining <= static_cast<std::int64_t>(slowdown_mm())) {
-      phase_ = Phase::Slow;
-    }
+    if (phase_ == Phase::Fast && slowdown_reached(remaining)) phase_ = Phase::Slow;
     if (remaining <= 0) {
       // 3c: the current floor is the one nearest where the leg ended.
       if (const auto nearest = floors.nearest(*in.position_mm)) current_floor_ = *nearest;
@@ -277,8 +310,8 @@ TickOutput HydraulicTravel::tick(const lift::FloorTable& floors, const TickInput
   if ((kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel) &&
       phase_ != Phase::MotorStart && in.position_mm) {
     const std::int64_t remaining = lift::distance_ahead(*in.position_mm, target_mm_, direction_);
-    if (phase_ == Phase::Fast && (remaining <= static_cast<std::int64_t>(slowdown_mm()) ||
-                                  in.inputs.decel_point(speed_number(speed_), direction_))) {
+    if (phase_ == Phase::Fast &&
+        (slowdown_reached(remaining) || in.inputs.decel_point(speed_number(speed_), direction_))) {
       phase_ = Phase::Slow;
     }
     if (phase_ == Phase::Slow &&

@@ -177,6 +177,8 @@ class HydraulicTravel {
   void end(TravelEvent::Type type, lift::Cause cause, MonoTime now) noexcept;
   void push(const TravelEvent& event) noexcept { events_.push(event); }
   std::uint32_t slowdown_mm() const noexcept;
+  bool slowdown_reached(std::int64_t remaining_mm) const noexcept;
+  void measure_speed(const TickInput& in) noexcept;
   CommandBits signals() const noexcept;
 
   HydraulicConfig config_;
@@ -191,6 +193,11 @@ class HydraulicTravel {
   MonoTime started_at_{};
   MonoTime motor_on_at_{};
   bool motor_on_ = false;
+  /// Where the car was at the last tick, and when: the distance it covers in one status period
+  /// (3b) is measured from it.
+  std::optional<std::int64_t> last_position_mm_;
+  MonoTime last_tick_{};
+  std::int64_t period_travel_mm_ = 0;  ///< the car's distance per status period, 0 when unknown
 
   lift::TravelEventQueue<TravelEvent> events_;
 };

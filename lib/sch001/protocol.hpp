@@ -4,6 +4,7 @@
 // 3a-f the frames. CAN 2.0A, 11-bit identifiers, 125 kbit/s (3a).
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -39,6 +40,9 @@ std::optional<Ids> ids_for(std::uint32_t p479, std::uint32_t p480, std::string* 
 inline constexpr std::uint8_t kStatusFrame = 0x61;
 /// The status frame is 2 bytes: 0x61 and the status byte (3b).
 inline constexpr std::uint8_t kStatusFrameLength = 2;
+/// The card sends its status frame every 100 ms (3b: "jede 100ms"); our signals reach it only in
+/// the answer (3c), so a change of signal takes effect at one of these moments.
+inline constexpr std::chrono::milliseconds kStatusPeriod{100};
 /// The card enables our 10 s timeout (3f).
 inline constexpr std::uint8_t kEnableTimeout = 0x52;
 /// The card disables our timeout (3f).

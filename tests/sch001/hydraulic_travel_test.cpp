@@ -122,6 +122,63 @@ TEST_F(HydraulicTest, FasterSpeedsWhereTheUnitHasThem) {
   }
 }
 
+// 3b/3c: the card takes our signals only in the answer to its status frame, every 100 ms; at
+// 0.5 m/s the car covers 50 mm between two. The slowdown comes at the frame nearest the point
+// (8500 for floor 3 at 9000), never more than half a period's travel (25 mm) before or after it,
+// whatever the frames' phase: the slow approach, at a tenth of the speed, would otherwise last
+// up to a second longer or shorter from travel to travel.
+TEST_F(HydraulicTest, TheSpeedSignalsDropAtTheStatusFrameNearestTheSlowdownPoint) {
+  struct Case {
+    std::int64_t phase_mm;      // where the car is at a frame, modulo 50 mm, below 8500
+    std::int64_t slow_from_mm;  // the first frame's position that gets the slow signals
+  };
+  for (const Case& c : {Case{0, 8500}, Case{1, 8501}, Case{24, 8524}, Case{25, 8475},
+                        Case{26, 8476}, Case{49, 8499}}) {
+    travel_ = HydraulicTravel(config_);
+    in_.now = MonoTime{};
+    in_.position_mm = 0;
+    ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), lift::Cause::None);
+    tick(0, 0);
+    int t = 1500;
+    for (std::int64_t p = 8000 + c.phase_mm; p <= 8600; p += 50, t += 100) {
+      const std::uint8_t expected = p >= c.slow_from_mm ? kUp | kSfy : kUp | kHsp | kSfy;
+      EXPECT_EQ(tick(t, p), expected) << "phase " << c.phase_mm << " at " << p << " mm";
+    }
+    travel_.abort(lift::Cause::StopRequested, milliseconds(t));
+  }
+}
+
+// The speed is measured over one status period: a position from longer ago (a car that stood,
+// a tick that came late) gives no lead, the slowdown point is then taken as it is.
+TEST_F(HydraulicTest, APositionFromLongAgoGivesNoLeadOnTheSlowdownPoint) {
+  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), lift::Cause::None);
+  tick(0, 0);
+  EXPECT_EQ(tick(1500, 8400), kUp | kHsp | kSfy);
+  EXPECT_EQ(tick(1801, 8499), kUp | kHsp | kSfy) << "301 ms since the last tick: no speed known";
+  EXPECT_EQ(tick(1901, 8500), kUp | kSfy);
+}
+
+// The controller may step twice on one status frame (faults, then calls), microseconds apart,
+// with the position a millimetre on: that is no speed of metres per second, and the slowdown
+// stays where the last frames' speed puts it.
+TEST_F(HydraulicTest, TwoStepsOnOneFrameMeasureNoSpeed) {
+  ASSERT_EQ(travel_.start_travel(floors_, 3, Speed::Fast, in_), lift::Cause::None);
+  tick(0, 0);
+  EXPECT_EQ(tick(1500, 7000), kUp | kHsp | kSfy);
+  EXPECT_EQ(tick(1600, 7050), kUp | kHsp | kSfy);
+  in_.now = milliseconds(1700);
+  in_.position_mm = 7100;
+  travel_.tick(floors_, in_);
+  in_.now += std::chrono::microseconds(20);
+  in_.position_mm = 7101;
+  EXPECT_EQ(travel_.tick(floors_, in_).bits.to_byte(), kUp | kHsp | kSfy)
+      << "1 mm in 20 us is no speed: 1399 mm from the level is far from the slowdown";
+  EXPECT_EQ(tick(1800, 7150), kUp | kHsp | kSfy);
+  EXPECT_EQ(tick(2900, 8420), kUp | kHsp | kSfy) << "1100 ms: no speed known, no lead";
+  EXPECT_EQ(tick(3000, 8476), kUp | kSfy)
+      << "524 mm from the level, 56 mm in the last 100 ms: this frame is the nearest";
+}
+
 TEST_F(HydraulicTest, EveryFaultEndsTheTravelAtOnceReportedOnce) {
   struct Case {
     const char* name;
