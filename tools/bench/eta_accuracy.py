@@ -14,11 +14,15 @@ Prints the error percentiles per kind and case and the issue's bounds beside the
 whatever they show (bench.sh prints the table).
 
   tools/bench/eta_accuracy.py [--bin build/bin] [--travels 16] [--seed 1] [--parallel]
+                              [--kinds dcp,sch001,uss] [--keep]
+
+Each car's folder (configuration, log, travel record) is removed at the end unless --keep.
 """
 import argparse
 import json
 import os
 import random
+import shutil
 import socket
 import subprocess
 import sys
@@ -189,6 +193,11 @@ def run_kind(kind, args, results):
     finally:
         proc.terminate()
         proc.wait(timeout=30)
+        log.close()
+        if args.keep:
+            print(f"{kind}: kept {tmp}", file=sys.stderr)
+        else:
+            shutil.rmtree(tmp, ignore_errors=True)
 
 
 def p95(values):
@@ -204,7 +213,15 @@ def main():
     ap.add_argument("--travels", type=int, default=16)
     ap.add_argument("--parallel", action="store_true", help="the kinds side by side (faster)")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--kinds", default=",".join(KINDS),
+                    help="the drive kinds to measure, comma-separated (default: all)")
+    ap.add_argument("--keep", action="store_true",
+                    help="keep each car's folder (log, travel record) and print where")
     args = ap.parse_args()
+    kinds = [k for k in args.kinds.split(",") if k]
+    unknown = [k for k in kinds if k not in KINDS]
+    if unknown:
+        ap.error(f"unknown kind {', '.join(unknown)}; known: {', '.join(KINDS)}")
     results = {}
     errors = []
 
@@ -216,7 +233,7 @@ def main():
 
     # One kind after another: three lifts with their simulators on a two-core machine delay each
     # other's real-time threads, and the errors would measure that.
-    for k in KINDS:
+    for k in kinds:
         if args.parallel:
             threading.Thread(target=guarded, args=(k,)).start()
         else:
