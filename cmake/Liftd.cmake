@@ -63,6 +63,16 @@ function(liftd_use_pch target host)
   endif()
 endfunction()
 
+# liftd_kind_libraries(<out> <part>): liftd::<kind>_<part> of every kind in LIFTD_DRIVE_KINDS
+# (part: config, commands, host), for the targets that put the kinds together.
+function(liftd_kind_libraries out part)
+  set(libs "")
+  foreach(kind IN LISTS LIFTD_DRIVE_KINDS)
+    list(APPEND libs liftd::${kind}_${part})
+  endforeach()
+  set(${out} ${libs} PARENT_SCOPE)
+endfunction()
+
 # liftd_library(<name> SOURCES ... [DEPS ...] [PCH]): a static library liftd_<name> with the
 # project's warnings, the lib/ folder as include root (#include "dcp/frame.hpp") and alias
 # liftd::<name>. PCH: it uses nlohmann-json or Asio and reuses their precompiled headers.

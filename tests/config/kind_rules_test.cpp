@@ -4,11 +4,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
 #include "config/config.hpp"
 #include "config/schema.hpp"
+#include "drive/drive.hpp"
 #include "kinds/config_schema.hpp"
 
 namespace liftd::config {
@@ -30,6 +32,22 @@ std::string uss_mismatch(std::string_view kind) {
              "position": {"source": "can"},
              "uss": {"slaves": [{"address": 0}], "polling_list": [4],
                      "speeds": {"V0": 5, "VN": 2, "VI": 30, "V3": 63, "V4": 200.5}}})";
+}
+
+// The top CMakeLists.txt's LIFTD_DRIVE_KINDS (what the registry, the API tests and the layer
+// check link and read) names the registry's kinds in its order: a kind in one and not the other
+// would be built without being run, or run without its libraries.
+TEST(KindRules, TheBuildsKindsAreTheRegistrysKinds) {
+  std::vector<std::string> registered;
+  for (const std::string_view kind : drive::kKindNames) registered.emplace_back(kind);
+  std::vector<std::string> built;
+  std::string list = LIFTD_DRIVE_KINDS;
+  for (std::size_t at = 0; at <= list.size();) {
+    const std::size_t comma = std::min(list.find(',', at), list.size());
+    built.push_back(list.substr(at, comma - at));
+    at = comma + 1;
+  }
+  EXPECT_EQ(built, registered);
 }
 
 TEST(KindRules, UssCrossCheckRunsOnlyForAUssLift) {

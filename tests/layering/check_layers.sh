@@ -2,10 +2,14 @@
 # The layers of lib/: which folders each folder's sources may include. A folder includes only
 # folders below it, so a drive kind's protocol never reaches the shared loops (lib/rt), the lift
 # rules (lib/lift) or the bus code (lib/can), and no drive kind includes another. The daemon,
-# the tools and the tests may include anything. Usage: check_layers.sh <source dir>; prints each
-# include that breaks the table and exits 1 if there is one.
+# the tools and the tests may include anything. Usage: check_layers.sh <source dir> <kind>...
+# (the drive kinds: LIFTD_DRIVE_KINDS of the top CMakeLists.txt); prints each include that
+# breaks the table and exits 1 if there is one.
 set -u
-src=${1:?usage: check_layers.sh <source dir>}
+src=${1:?usage: check_layers.sh <source dir> <kind>...}
+shift
+kinds=("$@")
+[[ ${#kinds[@]} -gt 0 ]] || { echo "usage: check_layers.sh <source dir> <kind>..."; exit 2; }
 
 # folder -> the folders it may include besides itself (lowest layer first).
 declare -A allowed=(
@@ -27,19 +31,21 @@ declare -A allowed=(
   # What every kind's lift shares on the daemon's io thread, below the kinds' own lifts
   # (lib/<kind>/host).
   [host]="common drive io log service can lift sim rt config api record"
-  [dcp]="common io log can drive lift sim rt config api host"
-  [sch001]="common io log can drive lift sim rt config api host"
-  [uss]="common io log can drive lift sim rt config api host"
-  # The drive kinds put together (the configuration schema, the lifts with their commands and
-  # `sim` actions): the one folder that knows them all, the registry the daemon reads.
-  [kinds]="common drive log config api host dcp sch001 uss"
 )
+# Each drive kind's folder sits on the shared parts and includes no other kind.
+for kind in "${kinds[@]}"; do
+  allowed[$kind]="common io log can drive lift sim rt config api host"
+done
+# The drive kinds put together (the configuration schema, the lifts with their commands and
+# `sim` actions): the one folder that knows them all, the registry the daemon reads.
+allowed[kinds]="common drive log config api host ${kinds[*]}"
 
 status=0
 for dir in "$src"/lib/*/; do
   folder=$(basename "$dir")
   if [[ ! -v allowed[$folder] ]]; then
-    echo "lib/$folder: not in the layer table of $0; add it with the folders it may include"
+    echo "lib/$folder: not in the layer table of $0; add it with the folders it may include" \
+         "(a drive kind: to LIFTD_DRIVE_KINDS of the top CMakeLists.txt)"
     status=1
     continue
   fi
