@@ -6,8 +6,8 @@
 #include <cstring>
 
 #include "daemon/reload.hpp"
+#include "kinds/commands.hpp"
 #include "kinds/config_schema.hpp"
-#include "kinds/lifts.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {

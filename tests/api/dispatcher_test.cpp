@@ -295,24 +295,20 @@ TEST_F(DispatcherTest, StatusOfADcpLiftHasItsFactsUnderDcpOnly) {
 }
 
 TEST_F(DispatcherTest, StatsPutTheKindsOwnCountersUnderItsName) {
-  struct Case {
-    drive::Kind kind;
-    const char* name;
-  };
-  for (const Case& c : {Case{drive::Kind::Dcp, "dcp"}, Case{drive::Kind::Sch001, "sch001"},
-                        Case{drive::Kind::Uss, "uss"}}) {
-    backend_.stats_snapshot.drive_kind = c.kind;
+  for (const std::string_view kind : drive::kKindNames) {  // every registered kind
+    const std::string name(kind);
+    backend_.stats_snapshot.drive_kind = *drive::parse_kind(kind);
     backend_.stats_snapshot.frames_sent = 7;
     backend_.stats_snapshot.cycles = 9;
     backend_.stats_snapshot.dropped_events = 1;
     backend_.stats_snapshot.dropped_travel_samples = 2;
     backend_.stats_snapshot.details = {{"own_counter", 3}};
     const json r = handle(R"({"cmd":"stats"})").at("result");
-    EXPECT_EQ(r.at("link"), (json{{"frames_sent", 7}})) << c.name;
+    EXPECT_EQ(r.at("link"), (json{{"frames_sent", 7}})) << name;
     EXPECT_EQ(r.at("cycle"),
               (json{{"cycles", 9}, {"dropped_events", 1}, {"dropped_travel_samples", 2}}))
-        << c.name;
-    EXPECT_EQ(r.at(c.name), (json{{"own_counter", 3}})) << c.name;
+        << name;
+    EXPECT_EQ(r.at(name), (json{{"own_counter", 3}})) << name;
     EXPECT_EQ(r.size(), 4U) << r.dump();  // and "api"
   }
 }

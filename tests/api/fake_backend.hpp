@@ -1,5 +1,6 @@
 // A scripted Backend for the API tests, the fuzz target and the benchmark: the common commands
-// and every drive kind's own (DCP's and USS's), so one fake serves a lift of any kind.
+// and every drive kind's own (DCP's and USS's: it implements each kind's command backend), so
+// one fake serves a lift of any kind. A kind with commands of its own adds its interface here.
 #pragma once
 
 #include <array>
@@ -12,10 +13,8 @@
 #include "api/commands.hpp"
 #include "api/dispatcher.hpp"
 #include "dcp/host/commands.hpp"
-#include "dcp/host/sim_actions.hpp"
-#include "sch001/host/sim_actions.hpp"
+#include "kinds/commands.hpp"
 #include "uss/host/commands.hpp"
-#include "uss/host/sim_actions.hpp"
 
 namespace liftd::api::testing {
 
@@ -156,13 +155,9 @@ class QuietSession : public SessionControl {
 };
 
 /// Every drive kind's own commands and `sim` on `dispatcher`, served by `backend`, as the
-/// daemon's registry of drive kinds (lib/kinds/lifts.cpp) adds them to a lift's server.
+/// daemon's registry of drive kinds adds them to a lift's server.
 inline void add_drive_kind_commands(Dispatcher& dispatcher, FakeBackend& backend) {
-  daemon::add_dcp_commands(dispatcher, backend);
-  daemon::add_uss_commands(dispatcher, backend);
-  const std::array<const KindSimActions*, 3> sim_actions = {
-      &daemon::kDcpSimActionTable, &daemon::kSch001SimActionTable, &daemon::kUssSimActionTable};
-  add_sim_command(dispatcher, backend, sim_actions);
+  kinds::add_drive_kind_commands(dispatcher, backend);
 }
 
 /// Every command of the daemon on `dispatcher`: the common ones and every drive kind's own.

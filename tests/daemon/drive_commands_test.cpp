@@ -10,7 +10,7 @@
 #include "api/commands.hpp"
 #include "api/dispatcher.hpp"
 #include "api/fake_backend.hpp"
-#include "kinds/lifts.hpp"
+#include "kinds/commands.hpp"
 
 namespace liftd::daemon {
 namespace {

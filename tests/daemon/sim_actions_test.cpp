@@ -17,7 +17,7 @@
 #include "config/config.hpp"
 #include "dcp/host/sim_actions.hpp"
 #include "host/lift_common.hpp"
-#include "kinds/lifts.hpp"
+#include "kinds/commands.hpp"
 #include "sch001/host/sim_actions.hpp"
 #include "uss/host/sim_actions.hpp"
 
