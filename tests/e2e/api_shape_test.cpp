@@ -26,52 +26,10 @@ Keys keys_of(const json& object) {
   return out;
 }
 
-struct ShapeCase {
-  const char* kind;  ///< drive.kind, also the name of the kind's object
-  json config;       ///< merged into the lift's config
-  Keys status_keys;  ///< status.<kind>
-  Keys stats_keys;   ///< stats.<kind>
-};
-
-void PrintTo(const ShapeCase& c, std::ostream* out) {
-  *out << c.kind;
-}
-
-// The floors of the hydraulic and USS cars: kThreeFloors (e2e/drive_cases.hpp).
-const ShapeCase kCases[] = {
-    {"dcp",
-     json::object(),
-     {"mode", "status", "extended", "handshake_problem", "line_echo"},
-     {"replies_good",  "checksum_errors",  "echo_collisions",   "missing_replies",
-      "repeats",       "link_losses",      "b7_sent",           "channel_resets",
-      "decode_errors", "request_timeouts", "longest_error_run", "late_sends",
-      "overruns",      "skipped_cycles",   "max_lateness_us",   "lateness_p99_us",
-      "reply_p99_us",  "reply_looks",      "max_work_us",       "serial"}},
-    {"sch001",
-     {{"drive", {{"kind", "sch001"}}},
-      {"floors", kThreeFloors},
-      {"sch001", {{"star_delta_ms", 500}, {"slowdown_up_mm", 300}, {"slowdown_down_mm", 350}}}},
-     {"card", "timeout_enabled", "commands", "current_floor", "destination_floor", "motor_on",
-      "phase", "send_failing", "foreign_sender"},
-     {"frames_received", "status_frames", "timeout_commands", "wrong_length", "unknown_first_byte",
-      "own_id_frames", "other_id_frames", "card_silences", "error_frames", "send_errors", "reopens",
-      "dropped_records", "overflowed_frames"}},
-    {"uss",
-     {{"drive", {{"kind", "uss"}}},
-      {"floors", kThreeFloors},
-      {"travel", {{"dcp3_decel_distance_mm", {{"V4", 700}, {"V3", 500}}}}},
-      {"uss", {{"speeds", {{"V0", 10}, {"VN", 3}, {"VI", 30}, {"V3", 63}, {"V4", 100}}}}}},
-     {"drive_address", "profile_state", "wish", "supervision", "control_word", "status_word",
-      "control_bits", "status_bits", "setpoint", "actual", "phase", "speed", "slaves", "line_echo"},
-     {"baud", "expected_cycle_time_us", "last_cycle_time_us", "cycle_time_p99_us", "replies_good",
-      "replies_rejected", "port_losses", "max_lateness_us", "lateness_p99_us", "reply_p99_us",
-      "line_errors", "echo_collisions", "receive", "slaves", "serial"}},
-};
-
-class ApiShapeTest : public ::testing::TestWithParam<ShapeCase> {
+class ApiShapeTest : public ::testing::TestWithParam<DriveCase> {
  protected:
   void SetUp() override {
-    lift_ = std::make_unique<Lift>(std::string("api-shape-") + GetParam().kind, 4, json::object(),
+    lift_ = std::make_unique<Lift>(std::string("api-shape-") + GetParam().name, 4, json::object(),
                                    std::vector<std::string>{}, GetParam().config);
     ASSERT_EQ(lift_->setup_error(), "") << lift_->log();
   }
@@ -82,7 +40,7 @@ class ApiShapeTest : public ::testing::TestWithParam<ShapeCase> {
 TEST_P(ApiShapeTest, HelloNamesTheCarItsDriveKindAndItsFloors) {
   json config = GetParam().config;
   config["api"] = {{"car_name", "B"}};
-  Lift named(std::string("api-shape-hello-") + GetParam().kind, 4, json::object(), {}, config);
+  Lift named(std::string("api-shape-hello-") + GetParam().name, 4, json::object(), {}, config);
   ASSERT_EQ(named.setup_error(), "") << named.log();
   Client client(named.socket());
   ASSERT_TRUE(client.call({{"cmd", "version"}}).value("ok", false));
@@ -91,7 +49,7 @@ TEST_P(ApiShapeTest, HelloNamesTheCarItsDriveKindAndItsFloors) {
   ASSERT_EQ(hello["event"], "hello") << hello.dump();
   const json& car = hello["data"]["car"];
   EXPECT_EQ(car["name"], "B") << hello.dump();
-  EXPECT_EQ(car["drive_kind"], GetParam().kind);
+  EXPECT_EQ(car["drive_kind"], GetParam().name);
   const json floors = config.contains("floors")
                           ? config["floors"]
                           : named.call({{"cmd", "config"}})["result"]["config"]["floors"];
@@ -103,7 +61,7 @@ TEST_P(ApiShapeTest, HelloNamesTheCarItsDriveKindAndItsFloors) {
 }
 
 TEST_P(ApiShapeTest, StatusHasTheNeutralKeysAndTheKindsObject) {
-  const std::string kind = GetParam().kind;
+  const std::string kind = GetParam().name;
   const json s = lift_->status();
   EXPECT_EQ(keys_of(s),
             (Keys{"drive", "link", "car", "travel", "faults", "service", "rt", "record", kind}))
@@ -120,11 +78,12 @@ TEST_P(ApiShapeTest, StatusHasTheNeutralKeysAndTheKindsObject) {
             (Keys{"state", "direction", "target_floor", "calls", "last_slip_mm"}));
   EXPECT_EQ(keys_of(s["rt"]), (Keys{"realtime", "policy", "priority", "memory_locked"}));
   EXPECT_EQ(keys_of(s["record"]), (Keys{"state", "path", "reason", "travels"})) << s.dump();
-  EXPECT_EQ(keys_of(s[kind]), GetParam().status_keys) << s.dump();
+  EXPECT_EQ(keys_of(s[kind]), Keys(GetParam().status_keys.begin(), GetParam().status_keys.end()))
+      << s.dump();
 }
 
 TEST_P(ApiShapeTest, StatsHaveTheNeutralCountersAndTheKindsOwnUnderItsName) {
-  const std::string kind = GetParam().kind;
+  const std::string kind = GetParam().name;
   // The link is up, so frames went out; a USS pass of the polling list may still be running.
   json stats;
   for (int i = 0; i < 50; ++i) {
@@ -138,19 +97,18 @@ TEST_P(ApiShapeTest, StatsHaveTheNeutralCountersAndTheKindsOwnUnderItsName) {
   EXPECT_EQ(keys_of(stats["link"]), (Keys{"frames_sent"})) << stats.dump();
   EXPECT_EQ(keys_of(stats["cycle"]), (Keys{"cycles", "dropped_events", "dropped_travel_samples"}))
       << stats.dump();
-  EXPECT_EQ(keys_of(stats[kind]), GetParam().stats_keys) << stats.dump();
+  EXPECT_EQ(keys_of(stats[kind]), Keys(GetParam().stats_keys.begin(), GetParam().stats_keys.end()))
+      << stats.dump();
   EXPECT_GT(stats["link"]["frames_sent"].get<long long>(), 0) << stats.dump();
   EXPECT_GT(stats["cycle"]["cycles"].get<long long>(), 0) << stats.dump();
 }
 
 TEST(ApiShapeCases, EveryRegisteredDriveKindHasItsCase) {
-  expect_a_case_for_every_kind(kCases, [](const ShapeCase& c) { return c.kind; });
+  expect_a_case_for_every_kind();
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryDriveKind, ApiShapeTest, ::testing::ValuesIn(kCases),
-                         [](const ::testing::TestParamInfo<ShapeCase>& param) {
-                           return std::string(param.param.kind);
-                         });
+INSTANTIATE_TEST_SUITE_P(EveryDriveKind, ApiShapeTest, ::testing::ValuesIn(drive_cases()),
+                         drive_case_name);
 
 }  // namespace
 }  // namespace liftd::e2e

@@ -1,80 +1,60 @@
-// The drive kinds the parity suites run every lift scenario against: each kind's `liftd
-// --simulate` configuration and what may differ between kinds (the refusal text of a drive that
-// is not ready, its journal line, whether its fault latches, the sim action that breaks its link).
+// The drive kinds the parity suites run every lift scenario against, one case per registered kind
+// (drive::kKindNames), each read from its kind's own test folder: tests/<kind>/e2e_case.json. A
+// kind added to the registry is run by every suite below without an edit here; until its file is
+// written `EveryRegisteredDriveKindHasItsCase` fails and names the file.
+//
+// The file's fields:
+//   config               merged into the lift's configuration for `liftd --simulate`
+//   refusal              what the message of a travel refused while the drive is not ready says
+//   journal              what the journal says of the drive not being ready ("" for nothing)
+//   fault_needs_reset    the drive latches its fault until `drive_reset` (USS C 5.2.1)
+//   far_floor            a floor far enough from floor 0 for a stop mid-travel
+//   link_fault           the `sim` request that breaks the drive's link at once (the DCP and USS
+//                        drives' replies stop: DCP 7.3 ten in a row, USS uss.telegram_failures;
+//                        the SCH001 card's CAN controller reports bus-off, so the card document's
+//                        3f does not wait its 10 s)
+//   learn_slow_mm_per_s  the simulated car's learning speed in the learning parity suite
+//   learn_config         merged after `config` for the learning travel (optional)
+//   status_keys          the keys of the kind's own object in `status` (any order)
+//   stats_keys           the keys of the kind's own object in `stats` (any order)
+// A key that starts with "_" is a note for the reader; any other key is refused.
 #pragma once
 
 #include <gtest/gtest.h>
 
-#include <cstddef>
 #include <ostream>
 #include <string>
 #include <vector>
 
-#include "drive/drive.hpp"
-
-#include "e2e/harness.hpp"
+#include <nlohmann/json.hpp>
 
 namespace liftd::e2e {
 
 struct DriveCase {
-  const char* name;        ///< the test's name: the drive kind (and its journal component)
-  json config;             ///< merged into the lift's config
-  const char* refusal;     ///< what the refused travel's message says
-  const char* journal;     ///< what the journal says of the drive not being ready ("" for nothing)
-  bool fault_needs_reset;  ///< the drive latches its fault until `drive_reset` (USS C 5.2.1)
-  int far_floor;           ///< a floor far enough for a stop mid-travel
-  /// The `sim` request that breaks the drive's link at once: the DCP drive's and the USS drive's
-  /// replies stop (DCP 7.3: ten in a row; USS: uss.telegram_failures), the SCH001 card's CAN
-  /// controller reports bus-off (card document 3f does not wait its 10 s then).
-  json link_fault;
+  std::string name;  ///< the drive kind (and its journal component), the test's name
+  nlohmann::json config;
+  std::string refusal;
+  std::string journal;
+  bool fault_needs_reset = false;
+  int far_floor = 0;
+  nlohmann::json link_fault;
+  int learn_slow_mm_per_s = 0;
+  nlohmann::json learn_config = nlohmann::json::object();
+  std::vector<std::string> status_keys;
+  std::vector<std::string> stats_keys;
 };
 
 inline void PrintTo(const DriveCase& c, std::ostream* out) {
   *out << c.name;
 }
 
-// Three floors 1200 mm apart for the hydraulic and USS cars, as in their own e2e tests.
-inline const json kThreeFloors = json::array({{{"name", "0"}, {"level_mm", 0}},
-                                              {{"name", "1"}, {"level_mm", 1200}},
-                                              {{"name", "2"}, {"level_mm", 2400}}});
+/// The case of every registered kind whose file reads well, in the registry's order.
+const std::vector<DriveCase>& drive_cases();
+/// What was wrong with the files (a missing file, a missing or mistyped field), one line each.
+const std::vector<std::string>& drive_case_problems();
 
-inline const json kNoReplies = {
-    {"cmd", "sim"}, {"action", "reply_fault"}, {"fault", "no_reply"}, {"frames", 200}};
-
-inline const DriveCase kDriveCases[] = {
-    {"dcp", json::object(), "drive not ready (S0 = 0)", "", false, 4, kNoReplies},
-    {"sch001",
-     {{"drive", {{"kind", "sch001"}}},
-      {"floors", kThreeFloors},
-      {"sch001", {{"star_delta_ms", 500}, {"slowdown_up_mm", 300}, {"slowdown_down_mm", 350}}}},
-     "RDY = 0",
-     "[event=card_fault relays=",
-     false,
-     2,
-     {{"cmd", "sim"}, {"action", "bus_off"}}},
-    {"uss",
-     {{"drive", {{"kind", "uss"}}},
-      {"floors", kThreeFloors},
-      {"travel", {{"dcp3_decel_distance_mm", {{"V4", 700}, {"V3", 500}}}}},
-      {"uss", {{"speeds", {{"V0", 10}, {"VN", 3}, {"VI", 30}, {"V3", 63}, {"V4", 100}}}}}},
-     "local control",
-     "in local control (status word bit 9 = 0): no travel starts",
-     true,
-     2,
-     kNoReplies},
-};
-
-/// Every registered drive kind (drive::kKindNames, the registry's order) has exactly one case in
-/// `cases`, named `name_of(case)`: a kind added to the registry fails here until its cases are
-/// written, instead of being skipped by every parametrised suite.
-template <typename Case, std::size_t N, typename NameOf>
-void expect_a_case_for_every_kind(const Case (&cases)[N], NameOf name_of) {
-  std::vector<std::string> named;
-  for (const Case& c : cases) named.emplace_back(name_of(c));
-  std::vector<std::string> registered;
-  for (const std::string_view kind : drive::kKindNames) registered.emplace_back(kind);
-  EXPECT_EQ(named, registered);
-}
+/// Fails the test unless every registered kind has its case.
+void expect_a_case_for_every_kind();
 
 /// The test's name of a case: its kind.
 inline std::string drive_case_name(const ::testing::TestParamInfo<DriveCase>& param) {

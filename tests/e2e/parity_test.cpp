@@ -412,7 +412,7 @@ TEST_P(LiftParity, TravelsReturnsTheTravelWithItsCurveToTheFloorsLevel) {
   });
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryDriveKind, LiftParity, ::testing::ValuesIn(kDriveCases),
+INSTANTIATE_TEST_SUITE_P(EveryDriveKind, LiftParity, ::testing::ValuesIn(drive_cases()),
                          drive_case_name);
 
 // ---- the learning travel on every kind ----
@@ -431,34 +431,31 @@ json learn_shaft(int slow_mm_per_s) {
       {"shaft_levels_mm", kLearnTrue}, {"level_zone_mm", 100}, {"slow_mm_per_s", slow_mm_per_s}};
 }
 
+/// The learning travel of a drive kind: its case's configuration on the learning shaft at its
+/// learning speed (`learn_slow_mm_per_s`, `learn_config`), and the configuration its travels
+/// run with afterwards (the same shaft, without what only made the learning brisk).
 struct LearnCase {
-  const char* name;
-  json config;
+  std::string name;
+  json config;         ///< for the learning travel, floors kLearnFloors
+  json travel_config;  ///< for the travels after it (floors to be set)
 };
 
 void PrintTo(const LearnCase& c, std::ostream* out) {
   *out << c.name;
 }
 
-const LearnCase kLearnCases[] = {
-    // DCP: V0 at 100 mm/s, 1.5 mm per 15 ms cycle: each edge lies within 0.75 mm of a sample
-    // even with the encoder's whole millimetres, well inside the 2 mm (a cycle that wakes late
-    // widens one gap, not the others).
-    {"dcp", {{"floors", kLearnFloors}, {"sim", learn_shaft(100)}}},
-    // SCH001: the slow speed at 120 mm/s, 1.2 mm per 10 ms tick.
-    {"sch001",
-     {{"drive", {{"kind", "sch001"}}},
-      {"floors", kLearnFloors},
-      {"sch001", {{"star_delta_ms", 500}, {"slowdown_up_mm", 300}, {"slowdown_down_mm", 350}}},
-      {"sim", learn_shaft(120)}}},
-    // USS: V0 30 % of the simulated drive's 0.78 m/s, 1.6 mm per 7 ms exchange.
-    {"uss",
-     {{"drive", {{"kind", "uss"}}},
-      {"floors", kLearnFloors},
-      {"travel", {{"dcp3_decel_distance_mm", {{"V4", 700}, {"V3", 500}}}}},
-      {"uss", {{"speeds", {{"V0", 30}, {"VN", 3}, {"VI", 30}, {"V3", 63}, {"V4", 100}}}}},
-      {"sim", learn_shaft(200)}}},
-};
+std::vector<LearnCase> learn_cases() {
+  std::vector<LearnCase> out;
+  for (const DriveCase& c : drive_cases()) {
+    json travel = c.config;
+    travel.merge_patch({{"sim", learn_shaft(c.learn_slow_mm_per_s)}});
+    json learn = travel;
+    learn.merge_patch(c.learn_config);
+    learn["floors"] = kLearnFloors;
+    out.push_back({c.name, learn, travel});
+  }
+  return out;
+}
 
 class LearnParity : public ::testing::TestWithParam<LearnCase> {};
 
@@ -535,13 +532,10 @@ TEST_P(LearnParity, LearnsTheSimulatedShaftWithinTwoMillimetres) {
     learned.push_back(
         {{"name", std::to_string(i)}, {"level_mm", result["floors"][i]["learned_mm"]}});
   }
-  json applied = GetParam().config;
+  // Without `learn_config`: the USS crawl back at the parity travels' V0, 30 % was for a brisk
+  // learning, and a car that crawls onto its level at 0.23 m/s lands some 45 mm past it.
+  json applied = GetParam().travel_config;
   applied["floors"] = learned;
-  if (applied.contains("uss")) {
-    // The USS crawl back at the parity travels' V0 (kCases): 30 % was for a brisk learning; a
-    // car that crawls onto its level at 0.23 m/s lands some 45 mm past it on the drive's ramp.
-    applied["uss"]["speeds"]["V0"] = 10;
-  }
   Lift next(std::string("learn-applied-") + GetParam().name, 4, json::object(),
             std::vector<std::string>{}, applied);
   ASSERT_EQ(next.setup_error(), "") << next.log();
@@ -575,14 +569,13 @@ TEST_P(LearnParity, RefusesAShaftWithAMissingZone) {
   EXPECT_EQ(lift.call({{"cmd", "config"}})["result"]["config"]["floors"], kLearnFloors);
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryDriveKind, LearnParity, ::testing::ValuesIn(kLearnCases),
+INSTANTIATE_TEST_SUITE_P(EveryDriveKind, LearnParity, ::testing::ValuesIn(learn_cases()),
                          [](const ::testing::TestParamInfo<LearnCase>& param) {
-                           return std::string(param.param.name);
+                           return param.param.name;
                          });
 
 TEST(ParityCases, EveryRegisteredDriveKindHasItsCases) {
-  expect_a_case_for_every_kind(kDriveCases, [](const DriveCase& c) { return c.name; });
-  expect_a_case_for_every_kind(kLearnCases, [](const LearnCase& c) { return c.name; });
+  expect_a_case_for_every_kind();
 }
 
 }  // namespace

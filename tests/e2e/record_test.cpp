@@ -195,11 +195,11 @@ TEST_P(RecordParity, ARecordThatCannotBeWrittenIsOffAndTheLiftGoesOn) {
   });
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryDriveKind, RecordParity, ::testing::ValuesIn(kDriveCases),
+INSTANTIATE_TEST_SUITE_P(EveryDriveKind, RecordParity, ::testing::ValuesIn(drive_cases()),
                          drive_case_name);
 
 TEST(RecordParityCases, EveryRegisteredDriveKindHasItsCases) {
-  expect_a_case_for_every_kind(kDriveCases, [](const DriveCase& c) { return c.name; });
+  expect_a_case_for_every_kind();
 }
 
 /// `PRAGMA integrity_check` of a record file and its `travels` rows.

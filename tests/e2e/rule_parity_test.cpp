@@ -550,7 +550,7 @@ TEST_P(RuleParity, EtaLearnsEachPairFromTheCarsOwnTravels) {
   });
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryDriveKind, RuleParity, ::testing::ValuesIn(kDriveCases),
+INSTANTIATE_TEST_SUITE_P(EveryDriveKind, RuleParity, ::testing::ValuesIn(drive_cases()),
                          drive_case_name);
 
 }  // namespace
