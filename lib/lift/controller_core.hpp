@@ -42,6 +42,7 @@
 #include "common/snapshot_box.hpp"
 #include "common/spsc_queue.hpp"
 #include "lift/calls.hpp"
+#include "lift/car_snapshot.hpp"
 #include "lift/cause.hpp"
 #include "lift/faults.hpp"
 #include "lift/floors.hpp"
@@ -96,7 +97,6 @@ struct Refusal {
   std::string_view detail;  ///< a static string
 };
 
-inline constexpr std::size_t kMaxSnapshotCalls = 64;
 inline constexpr std::size_t kCommandQueueSize = 64;
 inline constexpr std::size_t kReplyQueueSize = 64;
 inline constexpr std::size_t kEventQueueSize = 256;

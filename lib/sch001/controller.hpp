@@ -109,9 +109,9 @@ inline constexpr std::uint32_t kSendFailuresForFault = 3;
 
 using lift::kMaxSnapshotCalls;
 
-/// The state published after every step.
-struct ControllerSnapshot {
-  MonoTime at{};
+/// The state published after every step: the lift's (lift::CarSnapshot; quiesced: shutting
+/// down, no travel, no signal in the last answer) and the card's.
+struct ControllerSnapshot : lift::CarSnapshot {
   std::uint64_t steps = 0;
   bool endpoint_up = false;     ///< the CAN endpoint is open and working
   bool heard = false;           ///< the card was heard on the current endpoint
@@ -131,23 +131,8 @@ struct ControllerSnapshot {
   std::uint8_t current_floor_sent = 0;
   std::uint8_t destination_floor_sent = 0;
   bool motor_on = false;
-  std::optional<std::int64_t> position_mm;
-  std::optional<std::size_t> floor;
   TravelKind travel_kind = TravelKind::None;
   Phase phase = Phase::Idle;
-  lift::Direction direction = lift::Direction::None;
-  std::optional<std::size_t> target_floor;
-  std::optional<std::size_t> next_possible_stop;  ///< a moving travel's: where a stop now lands
-  lift::Inputs inputs{};
-  std::array<std::uint8_t, kMaxSnapshotCalls> calls{};
-  std::size_t call_count = 0;
-  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults{};
-  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
-  bool shutting_down = false;
-  bool learning = false;  ///< a learning travel runs (status service.reason)
-  bool quiesced = false;  ///< shutting down, no travel, no signal in the last answer
-  /// The card lets a travel start now (HydraulicTravel::drive_forbidding(): status drive.state).
-  bool drive_allows_travel = false;
 };
 
 using lift::kCommandQueueSize;

@@ -156,10 +156,12 @@ struct ControllerEvent {
 /// Bound on queued calls shown in the snapshot.
 using lift::kMaxSnapshotCalls;
 
-/// The state published after every cycle.
-struct ControllerSnapshot {
+/// The state published after every cycle: the lift's (lift::CarSnapshot; quiesced: shutting
+/// down and at rest, no travel, S1 = 0, and at least one DCP 7.3 supervision window of frames
+/// without B0/B1/B2 gone out; drive_allows_travel: travel::CommandGate::drive_forbidding() of
+/// the link and status as published) and the drive's.
+struct ControllerSnapshot : lift::CarSnapshot {
   std::uint64_t cycle = 0;
-  MonoTime at{};
   dcp::LinkState link = dcp::LinkState::Down;
   std::optional<dcp::Protocol> protocol;
   std::optional<dcp::InitReply> drive_info;
@@ -167,37 +169,19 @@ struct ControllerSnapshot {
   std::optional<dcp::ExtendedStatus> extended;
   std::optional<std::uint32_t> decel_distance_mm;
   dcp::PowerReply power_mode{};
-  std::optional<std::int64_t> position_mm;
-  std::optional<std::size_t> floor;
-  std::optional<std::size_t> next_possible_stop;
   travel::TravelKind travel_kind = travel::TravelKind::None;
-  lift::Direction direction = lift::Direction::None;
-  std::optional<std::size_t> target_floor;
   bool fast_start_armed = false;
   bool brake_open = false;     ///< mechanical brake output, follows S6 (DCP 9.1.7)
   bool contactors_on = false;  ///< motor contactors output
   std::uint8_t command = 0;    ///< B0..B6 of the last frame's process data
   std::uint16_t data_word = 0;
-  lift::Inputs inputs{};  ///< effective inputs (provider + API inspection)
-  std::array<std::uint8_t, kMaxSnapshotCalls> calls{};
-  std::size_t call_count = 0;
   std::array<std::array<std::uint8_t, dcp::kDisplayColumns>, dcp::kDisplayRows> display{};
   std::uint32_t display_version = 0;
   dcp::LinkCounters link_counters{};
-  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults{};
-  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
   std::optional<std::int64_t> last_travel_measured_mm;  ///< I9 extended reply (rope slip)
   std::optional<std::int64_t> last_travel_slip_mm;      ///< measured minus commanded distance
   /// Why the handshake has not completed (empty when it has, DCP 5.12.2).
   std::string_view handshake_problem;
-  bool shutting_down = false;  ///< ShutdownCommand received
-  bool learning = false;       ///< a learning travel runs (status service.reason)
-  /// Shutting down and at rest: no travel, S1 = 0, and at least one DCP 7.3 supervision window
-  /// of frames without B0/B1/B2 has gone out.
-  bool quiesced = false;
-  /// The drive lets a travel start now: travel::CommandGate::drive_forbidding() of the link and
-  /// status as published, the check a travel command passes (status `drive.state`).
-  bool drive_allows_travel = false;
 };
 
 using lift::kCommandQueueSize;

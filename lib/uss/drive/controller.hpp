@@ -158,9 +158,9 @@ struct SlaveSnapshot {
 using lift::kMaxSnapshotCalls;
 inline constexpr std::size_t kMaxSnapshotSlaves = kMaxSlaveAddress + 1;
 
-/// The state published after every step.
-struct ControllerSnapshot {
-  MonoTime at{};
+/// The state published after every step: the lift's (lift::CarSnapshot; quiesced: shutting
+/// down, no run, OFF1 (or OFF2) sent, brake and contactors off) and the drive's.
+struct ControllerSnapshot : lift::CarSnapshot {
   std::uint64_t steps = 0;
   bool port_up = false;
   std::array<SlaveSnapshot, kMaxSnapshotSlaves> slaves{};  ///< configured ones, by address
@@ -184,24 +184,9 @@ struct ControllerSnapshot {
   std::uint64_t cycles = 0;
   std::chrono::nanoseconds expected_cycle_time{0};
   std::chrono::nanoseconds last_cycle_time{0};
-  std::optional<std::int64_t> position_mm;
-  std::optional<std::size_t> floor;
   TravelKind travel_kind = TravelKind::None;
   Phase phase = Phase::Idle;
-  lift::Direction direction = lift::Direction::None;
-  std::optional<std::size_t> target_floor;
-  std::optional<std::size_t> next_possible_stop;  ///< a moving travel's: where a stop now lands
   SpeedName speed = SpeedName::V4;
-  lift::Inputs inputs{};
-  std::array<std::uint8_t, kMaxSnapshotCalls> calls{};
-  std::size_t call_count = 0;
-  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults{};
-  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
-  bool shutting_down = false;
-  bool learning = false;  ///< a learning travel runs (status service.reason)
-  bool quiesced = false;  ///< shutting down, no run, OFF1 (or OFF2) sent, brake and contactors off
-  /// The drive lets a travel start now (LiftTravel::drive_forbidding(): status drive.state).
-  bool drive_allows_travel = false;
 };
 
 using lift::kCommandQueueSize;
