@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <stdexcept>
 #include <utility>
 
 namespace liftd::daemon {
@@ -31,12 +32,20 @@ double TravelTimes::Window::median() const {
 }
 
 TravelTimes::TravelTimes(std::vector<std::int64_t> levels_mm, EtaDefaults defaults)
-    : levels_mm_(std::move(levels_mm)),
-      defaults_(defaults),
-      pairs_(levels_mm_.size() * levels_mm_.size()) {}
+    : defaults_(defaults) {
+  (void)floors_.assign(levels_mm);  // the configuration's floors: ascending, at most kMaxFloors
+  pairs_.resize(floors_.size() * floors_.size());
+}
+
+std::int64_t TravelTimes::level_mm(int floor) const {
+  if (floor < 0 || static_cast<std::size_t>(floor) >= floors_.size()) {
+    throw std::out_of_range("eta: floor " + std::to_string(floor) + " is not in the table");
+  }
+  return floors_.level_mm(static_cast<std::size_t>(floor));
+}
 
 void TravelTimes::travel(const MeasuredTravel& t) {
-  const auto n = static_cast<int>(levels_mm_.size());
+  const auto n = static_cast<int>(floors_.size());
   if (t.from < 0 || t.to < 0 || t.from >= n || t.to >= n || t.from == t.to) return;
   if (!(t.duration_s > 0.0)) return;
   pairs_[static_cast<std::size_t>(t.from * n + t.to)].add(t.duration_s);
@@ -99,7 +108,7 @@ double TravelTimes::profile_s(double distance_mm, bool up) const {
 }
 
 bool TravelTimes::learned(int from, int to) const {
-  const auto n = static_cast<int>(levels_mm_.size());
+  const auto n = static_cast<int>(floors_.size());
   if (from < 0 || to < 0 || from >= n || to >= n) return false;
   return !pairs_[static_cast<std::size_t>(from * n + to)].empty();
 }
@@ -112,8 +121,7 @@ double TravelTimes::leg_s(int from, int to, bool* learned_out) const {
   const bool known = learned(from, to);
   if (learned_out) *learned_out = known;
   if (known) {
-    return pairs_[static_cast<std::size_t>(from * static_cast<int>(levels_mm_.size()) + to)]
-        .median();
+    return pairs_[static_cast<std::size_t>(from * static_cast<int>(floors_.size()) + to)].median();
   }
   return profile_s(std::abs(static_cast<double>(level_mm(to) - level_mm(from))),
                    level_mm(to) > level_mm(from));
@@ -150,16 +158,6 @@ struct Start {
   bool arrives = false;  ///< a running travel ends at `floor`: the car stops there first
 };
 
-int nearest_floor(const TravelTimes& times, std::int64_t position_mm) {
-  int best = 0;
-  for (int f = 1; f < static_cast<int>(times.floor_count()); ++f) {
-    if (std::llabs(times.level_mm(f) - position_mm) <
-        std::llabs(times.level_mm(best) - position_mm))
-      best = f;
-  }
-  return best;
-}
-
 Start start_of(const TravelTimes& times, const EtaCar& car) {
   Start s;
   if (car.travelling && car.target) {
@@ -186,7 +184,7 @@ Start start_of(const TravelTimes& times, const EtaCar& car) {
   if (car.floor) {
     s.floor = *car.floor;
   } else if (car.position_mm) {
-    s.floor = nearest_floor(times, *car.position_mm);
+    s.floor = times.nearest_floor(*car.position_mm);
     s.learned = false;
   }
   return s;

@@ -16,6 +16,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lift/floors.hpp"
+
 namespace liftd::daemon {
 
 /// The profile used before the car made a travel of its own (`eta.*`).
@@ -80,8 +82,13 @@ class TravelTimes {
   /// Whether the pair `from`, `to` was measured.
   bool learned(int from, int to) const;
 
-  std::size_t floor_count() const noexcept { return levels_mm_.size(); }
-  std::int64_t level_mm(int floor) const { return levels_mm_.at(static_cast<std::size_t>(floor)); }
+  std::size_t floor_count() const noexcept { return floors_.size(); }
+  /// The level of `floor`; throws std::out_of_range for a floor the table does not have.
+  std::int64_t level_mm(int floor) const;
+  /// The floor nearest `position_mm` (ties: the lower), 0 without floors.
+  int nearest_floor(std::int64_t position_mm) const {
+    return static_cast<int>(floors_.nearest(position_mm).value_or(0));
+  }
   /// `basis` of the answer: the profile in use and how many measurements it rests on.
   nlohmann::json basis_json() const;
 
@@ -104,7 +111,7 @@ class TravelTimes {
   double overhead_s(bool up) const;
   static double motion_s(double distance_mm, double speed, double acceleration);
 
-  std::vector<std::int64_t> levels_mm_;
+  lift::FloorTable floors_;  ///< empty when the levels given were not a valid table
   EtaDefaults defaults_;
   std::vector<Window> pairs_;  ///< [from * floors + to]
   std::array<Window, 2> top_speed_;
