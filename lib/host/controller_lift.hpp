@@ -438,19 +438,11 @@ class ControllerBackend : public api::Backend {
     m.from = *from;
     m.to = static_cast<int>(*t.target_floor);
     m.duration_s = std::chrono::duration<double>(t.end - t.start).count();
-    // The speed is the position's change over a few cycles, noisy by a few per cent: the top
-    // speed is the fastest tenth's slowest, not the single fastest sample.
     std::vector<double> speeds;
     for (const auto& sample : t.samples) {
-      if (sample.speed_known && sample.speed_mm_s != 0) {
-        speeds.push_back(std::abs(static_cast<double>(sample.speed_mm_s)));
-      }
+      if (sample.speed_known) speeds.push_back(static_cast<double>(sample.speed_mm_s));
     }
-    if (!speeds.empty()) {
-      const auto tenth = speeds.begin() + static_cast<std::ptrdiff_t>(speeds.size() / 10);
-      std::nth_element(speeds.begin(), tenth, speeds.end(), std::greater<>());
-      m.top_speed_mm_s = *tenth;
-    }
+    m.top_speed_mm_s = cruise_speed_mm_s(std::move(speeds));
     std::optional<MonoTime> moving_from;
     for (const auto& sample : t.samples) {
       if (!sample.speed_known) continue;

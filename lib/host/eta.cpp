@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <stdexcept>
 #include <utility>
 
@@ -29,6 +30,19 @@ double TravelTimes::Window::median() const {
   std::array<double, kKept> sorted = values;
   std::sort(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(n));
   return n % 2 == 1 ? sorted[n / 2] : (sorted[n / 2 - 1] + sorted[n / 2]) / 2.0;
+}
+
+double cruise_speed_mm_s(std::vector<double> speeds) {
+  std::erase(speeds, 0.0);
+  for (double& v : speeds) v = std::abs(v);
+  if (speeds.empty()) return 0.0;
+  const auto tenth = speeds.begin() + static_cast<std::ptrdiff_t>(speeds.size() / 10);
+  std::nth_element(speeds.begin(), tenth, speeds.end(), std::greater<>());
+  const double band = 0.9 * *tenth;
+  std::erase_if(speeds, [band](double v) { return v < band; });
+  const auto middle = speeds.begin() + static_cast<std::ptrdiff_t>(speeds.size() / 2);
+  std::nth_element(speeds.begin(), middle, speeds.end());
+  return *middle;
 }
 
 TravelTimes::TravelTimes(std::vector<std::int64_t> levels_mm, EtaDefaults defaults)

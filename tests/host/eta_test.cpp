@@ -27,6 +27,22 @@ EtaCar at_rest(int floor) {
   return car;
 }
 
+// A hydraulic travel's samples: 1 s up the ramp to 500 mm/s, 10 s at speed with the position's
+// noise (+-25 mm/s), 0.9 s down to the slow speed, 5 s at 50 mm/s. Its speed is the run at speed,
+// 500, where the fastest tenth's slowest read 525 (the noise's top).
+TEST(EtaProfile, TheTravelsSpeedIsItsRunAtSpeedNotItsNoisiestSamples) {
+  std::vector<double> speeds;
+  for (int i = 1; i <= 10; ++i) speeds.push_back(50.0 * i);  // the ramp, 100 ms apart
+  for (int i = 0; i < 100; ++i) speeds.push_back(500.0 + ((i % 5) - 2) * 12.5);  // -25..+25
+  for (int i = 1; i <= 9; ++i) speeds.push_back(500.0 - 50.0 * i);  // down to the slow speed
+  for (int i = 0; i < 50; ++i) speeds.push_back(-50.0 + 0.0 * i);   // any sign is a speed
+  speeds.push_back(0.0);                                            // at rest: no speed
+  EXPECT_DOUBLE_EQ(cruise_speed_mm_s(speeds), 500.0);
+  EXPECT_DOUBLE_EQ(cruise_speed_mm_s({}), 0.0);
+  EXPECT_DOUBLE_EQ(cruise_speed_mm_s({0.0, 0.0}), 0.0);
+  EXPECT_DOUBLE_EQ(cruise_speed_mm_s({-800.0}), 800.0);
+}
+
 TEST(EtaProfile, TrapezoidAndTriangleFromTheConfiguredProfile) {
   const TravelTimes t = six_floors();
   struct Case {
