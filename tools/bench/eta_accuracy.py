@@ -14,7 +14,7 @@ Prints the error percentiles per kind and case and the issue's bounds beside the
 whatever they show (bench.sh prints the table).
 
   tools/bench/eta_accuracy.py [--bin build/bin] [--travels 16] [--seed 1] [--parallel]
-                              [--kinds dcp,sch001,uss] [--keep]
+                              [--kinds dcp,sch001,uss] [--keep] [--verbose]
 
 Each car's folder (configuration, log, travel record) is removed at the end unless --keep.
 """
@@ -185,6 +185,10 @@ def run_kind(kind, args, results):
                         raise RuntimeError(f"no arrival at queued floor {f} of {plan} from "
                                            f"{here}; last events {tail}")
                     seen = arrived
+                    if args.verbose:
+                        print(f"{kind}: queue {plan} from {here}, stop {n + 1} at {f}: "
+                              f"seen {arrived - asked:.3f} s, predicted {stops[n] if n < len(stops) else None}",
+                              file=sys.stderr)
                     if n in (1, 2) and n < len(stops) and stops[n]["floor"] == f:
                         key = "queue, 2nd stop" if n == 1 else "queue, 3rd stop"
                         out[key].append(abs((arrived - asked) - stops[n]["s"]))
@@ -215,6 +219,8 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--kinds", default=",".join(KINDS),
                     help="the drive kinds to measure, comma-separated (default: all)")
+    ap.add_argument("--verbose", action="store_true",
+                    help="print each queue's predicted and seen stops (stderr)")
     ap.add_argument("--keep", action="store_true",
                     help="keep each car's folder (log, travel record) and print where")
     args = ap.parse_args()
