@@ -77,7 +77,7 @@ void TravelTimes::travel(const MeasuredTravel& t) {
       acceleration_[d].add(0.9 * t.top_speed_mm_s / *t.acceleration_time_s);
     }
   }
-  overhead_[d].add(t.duration_s - motion_s(distance, speed_mm_s(up), acceleration_mm_s2(up)));
+  runs_[d].add(distance, t.duration_s);
 }
 
 void TravelTimes::stop(double s) {
@@ -101,8 +101,17 @@ double TravelTimes::acceleration_mm_s2(bool up) const {
   return w.empty() ? defaults_.acceleration_mm_s2 : w.median();
 }
 double TravelTimes::overhead_s(bool up) const {
-  const Window& w = of(overhead_, up);
-  return w.empty() ? defaults_.overhead_s : std::max(0.0, w.median());
+  // This direction's travels, else the other's (as of()), each fitted with that direction's
+  // profile: what each took beyond its motion, the median of it.
+  const bool way = runs_[up ? 1 : 0].empty() ? !up : up;
+  const Runs& r = runs_[way ? 1 : 0];
+  if (r.empty()) return defaults_.overhead_s;
+  Window beyond;
+  for (std::size_t i = 0; i < std::min(r.count, kKept); ++i) {
+    beyond.add(r.duration_s[i] -
+               motion_s(r.distance_mm[i], speed_mm_s(way), acceleration_mm_s2(way)));
+  }
+  return std::max(0.0, beyond.median());
 }
 double TravelTimes::stop_s() const {
   return stop_.empty() ? defaults_.stop_s : stop_.median();
@@ -148,7 +157,7 @@ nlohmann::json TravelTimes::basis_json() const {
     return nlohmann::json{{"speed_mm_s", std::round(speed_mm_s(up))},
                           {"acceleration_mm_s2", std::round(acceleration_mm_s2(up))},
                           {"overhead_s", seconds(overhead_s(up))},
-                          {"travels_measured", overhead_[up ? 1 : 0].count}};
+                          {"travels_measured", runs_[up ? 1 : 0].count}};
   };
   return {{"up", direction(true)},       {"down", direction(false)},
           {"stop_s", seconds(stop_s())}, {"start_s", seconds(start_s())},

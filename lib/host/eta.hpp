@@ -109,6 +109,19 @@ class TravelTimes {
     bool empty() const noexcept { return count == 0; }
     double median() const;
   };
+  /// The newest kKept travels of one direction, their distance and duration: the overhead is
+  /// fitted to them with the profile's speed and acceleration as they stand when asked, not as
+  /// they stood when each travel came (the first travels meet the configured profile).
+  struct Runs {
+    std::array<double, kKept> distance_mm{};
+    std::array<double, kKept> duration_s{};
+    std::size_t count = 0;  ///< travels taken in all
+    void add(double distance, double duration) noexcept {
+      distance_mm[count % kKept] = distance;
+      duration_s[count++ % kKept] = duration;
+    }
+    bool empty() const noexcept { return count == 0; }
+  };
   /// Each direction's profile (index 1: up): a hydraulic car goes down on its valve, at a speed
   /// of its own. A direction not measured yet takes the other's, then the configured one.
   const Window& of(const std::array<Window, 2>& w, bool up) const {
@@ -124,7 +137,7 @@ class TravelTimes {
   std::vector<Window> pairs_;  ///< [from * floors + to]
   std::array<Window, 2> top_speed_;
   std::array<Window, 2> acceleration_;
-  std::array<Window, 2> overhead_;
+  std::array<Runs, 2> runs_;
   Window stop_;
   Window start_;
 };

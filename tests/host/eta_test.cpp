@@ -91,6 +91,20 @@ TEST(Eta, AMeasuredPairIsTakenAsMeasuredAndTheProfileFittedToIt) {
   EXPECT_FALSE(t.learned(1, 2));
 }
 
+// A car at 1.5 m/s and 0.675 m/s^2 with 3 s beyond its motion on every travel. Its first travel
+// told no speed (the configured 1 m/s and 0.5 m/s^2 stand then); the second did. The overhead is
+// fitted to both with the profile as it stands now: 3 s, so a pair never travelled comes out
+// right, where the first travel's overhead fixed against the configured profile (1.22 s) put the
+// median at 2.11 s and a 12 m travel 0.89 s short.
+TEST(Eta, TheOverheadIsFittedWithTheProfileAsItStandsNow) {
+  TravelTimes t = six_floors();
+  const double ramp = 1500.0 / 675.0;  // accelerating and decelerating, at 675 mm/s^2
+  t.travel({0, 2, 6000.0 / 1500.0 + ramp + 3.0, 0.0, std::nullopt});
+  t.travel({0, 3, 9000.0 / 1500.0 + ramp + 3.0, 1500.0, 2.0});  // a = 0.9 * 1500 / 2 = 675
+  EXPECT_NEAR(t.profile_s(12000.0), 12000.0 / 1500.0 + ramp + 3.0, 1e-9);
+  EXPECT_NEAR(t.basis_json().at("up").at("overhead_s").get<double>(), 3.0, 1e-3);
+}
+
 TEST(Eta, EachDirectionHasItsOwnProfileOnceMeasured) {
   // A hydraulic car: up on its pump at 0.6 m/s, down on its valve at 0.3 m/s.
   TravelTimes t = six_floors();
