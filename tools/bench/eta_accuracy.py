@@ -175,8 +175,12 @@ def run_kind(kind, args, results):
                     if r.get("detail"):  # "already queued": the queue holds each floor once
                         plan = plan[:n]
                         break
-                stops = c.call("eta")["stops"]
+                answer = c.call("eta")
+                stops = answer["stops"]
                 asked = time.monotonic()
+                if args.verbose:  # the profile the pairs never travelled rest on, then
+                    print(f"{kind}: queue {plan} from {here}: basis {json.dumps(answer['basis'])}",
+                          file=sys.stderr)
                 seen = t0
                 for n, f in enumerate(plan):
                     arrived = c.wait_event(served(f), seen, 90)
