@@ -64,15 +64,33 @@ class UssTest : public ::testing::Test {
     ASSERT_EQ(lift_->setup_error(), "") << lift_->log();
   }
 
-  void travel_to(int floor) {
+  /// Travels to `floor` and checks where the car stands; false (the failure reported) when the
+  /// travel was refused or did not arrive.
+  bool travel_to(int floor) {
     const json r = lift_->call({{"cmd", "travel"}, {"floor", floor}});
-    ASSERT_TRUE(r.value("ok", false)) << r.dump();
+    if (!r.value("ok", false)) {
+      ADD_FAILURE() << r.dump();
+      return false;
+    }
     const json end = lift_->wait_travel_end(40s);
-    ASSERT_TRUE(end.is_object()) << "no end of travel to " << floor << "\n" << lift_->log();
-    ASSERT_EQ(end["data"]["event"], "finished") << end.dump();
+    if (!end.is_object() || end["data"]["event"] != "finished") {
+      ADD_FAILURE() << "the travel to " << floor << " did not arrive: " << end.dump() << "\n"
+                    << lift_->log();
+      return false;
+    }
     const json s = lift_->status();
     EXPECT_EQ(s["car"]["floor"], floor) << s.dump();
     EXPECT_NEAR(s["car"]["position_mm"].get<double>(), level(floor), 5.0);
+    return true;
+  }
+  /// A fresh daemon, for another try of a scenario (judged_unless_stalled).
+  void restart(int attempt) {
+    lift_.reset();
+    misses_before_ = witness_misses();
+    const std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    lift_ = std::make_unique<Lift>("uss-" + name + "-" + std::to_string(attempt), 4, json::object(),
+                                   std::vector<std::string>{}, kUss);
+    ASSERT_EQ(lift_->setup_error(), "") << lift_->log();
   }
 
   void start_long_travel() {
@@ -114,15 +132,22 @@ class UssTest : public ::testing::Test {
   std::uint64_t misses_before_ = 0;  // the machine witness's count when the lift started
 };
 
+// Six travels in real time. A stall of the machine long enough for the drive's link to fail on
+// its own supervision (the witness beside it sees it) is the machine's: that try is not judged
+// and a fresh daemon tries again (e2e/witness.hpp); a failure of the code comes back.
 TEST_F(UssTest, EveryFloorToEveryFloorUpAndDown) {
-  for (int floor : {1, 2, 0, 2, 1, 0}) {
-    travel_to(floor);
-    if (HasFatalFailure()) return;
-  }
-  EXPECT_EQ(lift_->status()["drive"]["state"], "ready");
-  const json s = lift_->call({{"cmd", "sim"}, {"action", "clear_reply_faults"}});
-  ASSERT_TRUE(s.value("ok", false)) << s.dump();
-  EXPECT_EQ(s["result"]["violations"], 0) << "a simulated slave saw a violation:\n" << lift_->log();
+  int attempt = 0;
+  judged_unless_stalled([&] {
+    if (++attempt > 1) restart(attempt);
+    for (int floor : {1, 2, 0, 2, 1, 0}) {
+      if (!travel_to(floor)) return;
+    }
+    EXPECT_EQ(lift_->status()["drive"]["state"], "ready");
+    const json s = lift_->call({{"cmd", "sim"}, {"action", "clear_reply_faults"}});
+    ASSERT_TRUE(s.value("ok", false)) << s.dump();
+    EXPECT_EQ(s["result"]["violations"], 0) << "a simulated slave saw a violation:\n"
+                                            << lift_->log();
+  });
 }
 
 TEST_F(UssTest, StatusCarriesTheUssObjectAndParametersAreReachable) {
