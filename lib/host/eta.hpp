@@ -81,7 +81,8 @@ class TravelTimes {
   /// Seconds from a travel's start at `from` to the car at `to`'s level; `learned` tells whether
   /// this pair was measured.
   double leg_s(int from, int to, bool* learned = nullptr) const;
-  /// Seconds the car stands at a queued stop before it travels on.
+  /// Seconds the car stands at a queued stop before it travels on: measured, else the
+  /// configured time or the start time, whichever is longer.
   double stop_s() const;
   /// Seconds from a request to travel, the car at rest, to the run's start (0 until measured).
   double start_s() const;

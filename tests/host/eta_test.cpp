@@ -220,6 +220,20 @@ TEST(Eta, TheStopTimeIsTheMeasuredMedian) {
   EXPECT_DOUBLE_EQ(t.stop_s(), 1.4);
 }
 
+TEST(Eta, AStopNotMeasuredYetLastsAtLeastTheStartTime) {
+  // The next travel of a queue is asked for at the arrival at the earliest, so the car cannot
+  // stand shorter than a request takes to its run's start. The configured 3.0 s holds until a
+  // start time longer than it is measured; a measured stop wins over both.
+  TravelTimes t = six_floors();
+  t.start(1.0);
+  EXPECT_DOUBLE_EQ(t.stop_s(), 3.0);
+  t.start(4.5);
+  t.start(4.5);
+  EXPECT_DOUBLE_EQ(t.stop_s(), 4.5);
+  t.stop(2.0);
+  EXPECT_DOUBLE_EQ(t.stop_s(), 2.0);
+}
+
 TEST(EtaKinds, OnlyFloorToFloorTravelsAreLearned) {
   for (const char* kind : {"distance", "speed", "hydraulic"}) {
     EXPECT_TRUE(eta_floor_to_floor(kind)) << kind;
