@@ -14,7 +14,6 @@
 #include <sstream>
 
 #include "can/socket.hpp"
-#include "dcp/sim/serial_runner.hpp"
 #include "e2e/harness.hpp"
 #include "io/pty.hpp"
 

@@ -24,7 +24,6 @@
 #include <sstream>
 
 #include "can/socket.hpp"
-#include "dcp/sim/serial_runner.hpp"
 #include "e2e/harness.hpp"
 #include "io/pty.hpp"
 #include "vcan_harness.hpp"

@@ -43,99 +43,107 @@ bool checksum_ok(const rt::FrameRecord& r) {
 }
 
 TEST(LiveLink, HandshakeThousandsOfCleanCyclesAndADcp4TravelLandsWithin2mm) {
-  io::PtyPair pty = make_pty();
-  auto drive = serve(pty.master_fd(), drive_config());
-  LiveMaster m(pty.slave_path());
-  m.position.attach(drive.get());
-  liftd::testing::ReferenceLink reference;
-  ASSERT_EQ(start_reference(reference), 0);
-  ASSERT_EQ(m.start(), 0);
+  // A machine stall long enough to fault the link (the reference link or the cycle's own
+  // records see it) makes a try that cannot be judged: it runs again (at most three tries).
+  liftd::testing::judged_unless_machine_stalled([](liftd::testing::StallVerdict& verdict) {
+    io::PtyPair pty = make_pty();
+    auto drive = serve(pty.master_fd(), drive_config());
+    LiveMaster m(pty.slave_path());
+    m.position.attach(drive.get());
+    liftd::testing::ReferenceLink reference;
+    const MonoTime began = mono_now();
+    const liftd::testing::StallWitnessScope witness(
+        verdict, [&] { return link_stall_verdict(m, reference, began); });
+    ASSERT_EQ(start_reference(reference), 0);
+    ASSERT_EQ(m.start(), 0);
 
-  // The handshake (STX ETX, I0, I1, I3) completes within a few hundred cycles.
-  ASSERT_TRUE(ready_within(m, reference, 5000ms))
-      << "reference link: " << reference.missing() << " of " << reference.exchanges()
-      << " missed, at most " << reference.longest_miss_run() << " in a row\n"
-      << tail_of_trace(m.runner);
-  const auto up = m.controller.snapshot();
-  EXPECT_EQ(up.protocol, dcp::Protocol::Dcp4);
-  ASSERT_TRUE(up.drive_info.has_value());
-  EXPECT_TRUE(drive->status().initialised);
+    // The handshake (STX ETX, I0, I1, I3) completes within a few hundred cycles.
+    ASSERT_TRUE(ready_within(m, reference, 5000ms))
+        << "reference link: " << reference.missing() << " of " << reference.exchanges()
+        << " missed, at most " << reference.longest_miss_run() << " in a row\n"
+        << tail_of_trace(m.runner);
+    const auto up = m.controller.snapshot();
+    EXPECT_EQ(up.protocol, dcp::Protocol::Dcp4);
+    ASSERT_TRUE(up.drive_info.has_value());
+    EXPECT_TRUE(drive->status().initialised);
 
-  // DCP4 travel over the pty, floor 0 -> 3 (9000 mm) at V4.
-  m.run_for(300ms);
-  const CommandReply r = m.command(TravelCommand{3, dcp::Speed::V4, std::nullopt, false});
-  ASSERT_EQ(r.code, ReplyCode::Ok) << r.detail;
-  ASSERT_TRUE(m.wait_until(
-      [&] { return m.travel_events(travel::Event::Type::Finished) >= 1 && m.idle(); }, 40000ms))
-      << tail_of_trace(m.runner);
-  EXPECT_NEAR(drive->position_mm(), 9000.0, 2.0);
-  EXPECT_EQ(m.controller.snapshot().floor, 3U);
-  EXPECT_EQ(m.travel_events(travel::Event::Type::Aborted), 0U);
+    // DCP4 travel over the pty, floor 0 -> 3 (9000 mm) at V4.
+    m.run_for(300ms);
+    const CommandReply r = m.command(TravelCommand{3, dcp::Speed::V4, std::nullopt, false});
+    ASSERT_EQ(r.code, ReplyCode::Ok) << r.detail;
+    ASSERT_TRUE(m.wait_until(
+        [&] { return m.travel_events(travel::Event::Type::Finished) >= 1 && m.idle(); }, 40000ms))
+        << tail_of_trace(m.runner);
+    EXPECT_NEAR(drive->position_mm(), 9000.0, 2.0);
+    EXPECT_EQ(m.controller.snapshot().floor, 3U);
+    EXPECT_EQ(m.travel_events(travel::Event::Type::Aborted), 0U);
 
-  // Keep going to a few thousand cycles.
-  constexpr std::uint64_t kCycles = 2000;
-  ASSERT_TRUE(m.wait_until([&] { return m.runner.stats().counters.cycles >= kCycles; },
-                           std::chrono::milliseconds(kCycles * 15 * 3)));
-  m.runner.stop();
-  m.pump();
-  drive->stop();
-  reference.stop();
+    // Keep going to a few thousand cycles.
+    constexpr std::uint64_t kCycles = 2000;
+    ASSERT_TRUE(m.wait_until([&] { return m.runner.stats().counters.cycles >= kCycles; },
+                             std::chrono::milliseconds(kCycles * 15 * 3)));
+    m.runner.stop();
+    m.pump();
+    drive->stop();
+    reference.stop();
 
-  const rt::CycleCounters c = m.runner.stats().counters;
-  const dcp::LinkCounters lc = m.controller.snapshot().link_counters;
-  // Nothing is ever corrupted on a pty and no cycle is skipped.
-  EXPECT_EQ(c.bad_replies, 0U);
-  EXPECT_EQ(lc.bad_checksum, 0U);
-  EXPECT_EQ(lc.s7_seen, 0U);
-  EXPECT_EQ(lc.b7_sent, 0U);
-  // An I-message whose reply went missing arrives incomplete (DCP 5.1: the channel bytes of a
-  // lost reply are lost with it): a decode error, or a channel frame the parser drops as
-  // malformed, needs a missing reply to explain it.
-  EXPECT_LE(lc.decode_errors, c.missing_replies);
-  EXPECT_EQ(lc.data_word_errors, 0U);
-  EXPECT_LE(lc.channel_errors, c.missing_replies);
-  EXPECT_EQ(lc.link_faults, 0U);
-  EXPECT_EQ(c.port_losses, 0U);
-  EXPECT_EQ(drive->status().sim.bad_frames, 0U);
-  // Zero missing replies is the expectation; a stalled shared machine can delay a reply past
-  // 13.625 ms now and then: at most 1 % beyond twice what the bare reference link lost over
-  // the same time (the drive's side passes a second pty worker), never 10 in a row (the link
-  // never faulted).
-  EXPECT_LE(c.missing_replies, c.cycles / 100 + 2 * reference.missing())
-      << "missing " << c.missing_replies << ", reference link " << reference.missing();
-  EXPECT_GE(c.frames_sent + c.skipped_cycles + 2, c.cycles);
-  EXPECT_EQ(m.link_events_to(dcp::LinkState::Fault), 0U);
+    const rt::CycleCounters c = m.runner.stats().counters;
+    const dcp::LinkCounters lc = m.controller.snapshot().link_counters;
+    // Nothing is ever corrupted on a pty and no cycle is skipped.
+    EXPECT_EQ(c.bad_replies, 0U);
+    EXPECT_EQ(lc.bad_checksum, 0U);
+    EXPECT_EQ(lc.s7_seen, 0U);
+    EXPECT_EQ(lc.b7_sent, 0U);
+    // An I-message whose reply went missing arrives incomplete (DCP 5.1: the channel bytes of a
+    // lost reply are lost with it): a decode error, or a channel frame the parser drops as
+    // malformed, needs a missing reply to explain it.
+    EXPECT_LE(lc.decode_errors, c.missing_replies);
+    EXPECT_EQ(lc.data_word_errors, 0U);
+    EXPECT_LE(lc.channel_errors, c.missing_replies);
+    EXPECT_EQ(lc.link_faults, 0U);
+    EXPECT_EQ(c.port_losses, 0U);
+    EXPECT_EQ(drive->status().sim.bad_frames, 0U);
+    // Zero missing replies is the expectation; a stalled shared machine can delay a reply past
+    // 13.625 ms now and then: at most 1 % beyond twice what the bare reference link lost over
+    // the same time (the drive's side passes a second pty worker), never 10 in a row (the link
+    // never faulted).
+    EXPECT_LE(c.missing_replies, c.cycles / 100 + 2 * reference.missing())
+        << "missing " << c.missing_replies << ", reference link " << reference.missing();
+    EXPECT_GE(c.frames_sent + c.skipped_cycles + 2, c.cycles);
+    EXPECT_EQ(m.link_events_to(dcp::LinkState::Fault), 0U);
 
-  // Frame spacing: DCP 7.2 one frame every 15 ms. What the cycle decides is the schedule: it
-  // wakes at absolute times, sends within the window or skips (DCP 7.2), and never drifts.
-  // How many single wake-ups the machine made late is the machine's, not the code's: the
-  // benchmarks measure it (tools/bench/api_load_bench, the soak), this test only prints it.
-  std::vector<MonoTime> sends;
-  for (const auto& rec : m.runner.recorder().copy()) {
-    if (rec.direction == rt::Direction::Tx) sends.push_back(rec.time);
-  }
-  ASSERT_GE(sends.size(), 1000U);
-  // A cycle the machine woke too late for is skipped, not sent late (DCP 7.2): a gap of k
-  // periods is k scheduled cycles. Over scheduled cycles the mean must be the period exactly,
-  // however loaded the machine is, or the schedule drifts.
-  double scheduled = 0;
-  std::size_t near_period = 0;
-  for (std::size_t i = 1; i < sends.size(); ++i) {
-    const auto gap = sends[i] - sends[i - 1];
-    const double gap_ms = std::chrono::duration<double, std::milli>(gap).count();
-    scheduled += std::max(1.0, std::round(gap_ms / 15.0));
-    near_period += gap > 12ms && gap < 18ms ? 1U : 0U;
-  }
-  const double mean_ms =
-      std::chrono::duration<double, std::milli>(sends.back() - sends.front()).count() / scheduled;
-  EXPECT_NEAR(mean_ms, 15.0, 0.2);
-  std::printf(
-      "[ info     ] %llu cycles, %llu missing (reference link %llu of %llu), %llu skipped, mean "
-      "spacing %.3f ms, %zu of %zu gaps 12..18 ms\n",
-      static_cast<unsigned long long>(c.cycles), static_cast<unsigned long long>(c.missing_replies),
-      static_cast<unsigned long long>(reference.missing()),
-      static_cast<unsigned long long>(reference.exchanges()),
-      static_cast<unsigned long long>(c.skipped_cycles), mean_ms, near_period, sends.size() - 1);
+    // Frame spacing: DCP 7.2 one frame every 15 ms. What the cycle decides is the schedule: it
+    // wakes at absolute times, sends within the window or skips (DCP 7.2), and never drifts.
+    // How many single wake-ups the machine made late is the machine's, not the code's: the
+    // benchmarks measure it (tools/bench/api_load_bench, the soak), this test only prints it.
+    std::vector<MonoTime> sends;
+    for (const auto& rec : m.runner.recorder().copy()) {
+      if (rec.direction == rt::Direction::Tx) sends.push_back(rec.time);
+    }
+    ASSERT_GE(sends.size(), 1000U);
+    // A cycle the machine woke too late for is skipped, not sent late (DCP 7.2): a gap of k
+    // periods is k scheduled cycles. Over scheduled cycles the mean must be the period exactly,
+    // however loaded the machine is, or the schedule drifts.
+    double scheduled = 0;
+    std::size_t near_period = 0;
+    for (std::size_t i = 1; i < sends.size(); ++i) {
+      const auto gap = sends[i] - sends[i - 1];
+      const double gap_ms = std::chrono::duration<double, std::milli>(gap).count();
+      scheduled += std::max(1.0, std::round(gap_ms / 15.0));
+      near_period += gap > 12ms && gap < 18ms ? 1U : 0U;
+    }
+    const double mean_ms =
+        std::chrono::duration<double, std::milli>(sends.back() - sends.front()).count() / scheduled;
+    EXPECT_NEAR(mean_ms, 15.0, 0.2);
+    std::printf(
+        "[ info     ] %llu cycles, %llu missing (reference link %llu of %llu), %llu skipped, mean "
+        "spacing %.3f ms, %zu of %zu gaps 12..18 ms\n",
+        static_cast<unsigned long long>(c.cycles),
+        static_cast<unsigned long long>(c.missing_replies),
+        static_cast<unsigned long long>(reference.missing()),
+        static_cast<unsigned long long>(reference.exchanges()),
+        static_cast<unsigned long long>(c.skipped_cycles), mean_ms, near_period, sends.size() - 1);
+  });
 }
 
 // Issue #43: a line that echoes (the simulator stands for the transceiver and gives the master
@@ -552,13 +560,8 @@ TEST(LiveLink, TenLostRepliesFaultTheLinkStopTheTravelThenItRecoversAndReinitial
 
   // And the lift works again: to the top floor, on the level.
   m.run_for(300ms);
-  const std::size_t finished = m.travel_events(travel::Event::Type::Finished);
-  const CommandReply again = m.command(TravelCommand{5, dcp::Speed::V4, std::nullopt, false});
-  ASSERT_EQ(again.code, ReplyCode::Ok) << again.detail;
-  ASSERT_TRUE(m.wait_until(
-      [&] { return m.travel_events(travel::Event::Type::Finished) > finished && m.idle(); },
-      40000ms))
-      << tail_of_trace(m.runner, 80);
+  // (Run once more only after a witnessed machine stall.)
+  ASSERT_TRUE(travel_lands(m, reference, 5));
   EXPECT_NEAR(link.drive->position_mm(), 15000.0, 2.0);
 }
 

@@ -14,6 +14,7 @@
 #include "dcp/trace.hpp"
 #include "live_rig.hpp"
 #include "support/reference_link.hpp"
+#include "support/stall_judge.hpp"
 
 namespace liftd::integration {
 
@@ -105,6 +106,17 @@ inline bool cycle_stalled(const LiveMaster& m, MonoTime since) {
     last = rec.time;
   }
   return false;
+}
+
+/// A live link try's verdict (tests/support/stall_judge.hpp): the reference link or the
+/// master's own cycle saw the machine stall since `since`.
+inline liftd::testing::StallVerdict link_stall_verdict(
+    const LiveMaster& m, const liftd::testing::ReferenceLink& reference, MonoTime since) {
+  const bool cycle = cycle_stalled(m, since);
+  const bool link = machine_stalled(reference);
+  return {cycle || link, "reference link: at most " + std::to_string(reference.longest_miss_run()) +
+                             " missed in a row; the cycle " + (cycle ? "was" : "was not") +
+                             " held up"};
 }
 
 /// Sends a V4 travel to `floor` and waits until it finished and the car is idle. A travel a

@@ -14,8 +14,8 @@
 #include "can/socket.hpp"
 #include "dcp/sim/serial_runner.hpp"
 #include "e2e/harness.hpp"
+#include "e2e/vcan_harness.hpp"
 #include "io/pty.hpp"
-#include "vcan_harness.hpp"
 
 namespace liftd::e2e {
 namespace {
