@@ -54,4 +54,8 @@ void add_drive_kind_commands(api::Dispatcher& dispatcher, api::Backend& backend)
   api::add_sim_command(dispatcher, backend, sim_actions);
 }
 
+const api::KindSimActions& sim_actions_of(drive::Kind kind) noexcept {
+  return *kKindCommands.at(static_cast<std::size_t>(kind)).sim_actions;
+}
+
 }  // namespace liftd::kinds

@@ -6,6 +6,8 @@
 
 #include "api/backend.hpp"
 #include "api/dispatcher.hpp"
+#include "api/sim.hpp"
+#include "drive/drive.hpp"
 
 namespace liftd::kinds {
 
@@ -13,5 +15,8 @@ namespace liftd::kinds {
 /// served by `backend`, the others' only known, so that the dispatcher answers them
 /// `not_offered` as on every lift; and `sim` with every kind's simulator actions.
 void add_drive_kind_commands(api::Dispatcher& dispatcher, api::Backend& backend);
+
+/// The `sim` actions the simulator of `kind` takes (lib/<kind>/host/sim_actions.*).
+const api::KindSimActions& sim_actions_of(drive::Kind kind) noexcept;
 
 }  // namespace liftd::kinds

@@ -15,11 +15,9 @@
 #include "api/fake_backend.hpp"
 #include "common/mono_time.hpp"
 #include "config/config.hpp"
-#include "dcp/host/sim_actions.hpp"
+#include "e2e/drive_cases.hpp"
 #include "host/lift_common.hpp"
 #include "kinds/commands.hpp"
-#include "sch001/host/sim_actions.hpp"
-#include "uss/host/sim_actions.hpp"
 
 namespace liftd::daemon {
 namespace {
@@ -38,43 +36,11 @@ const std::vector<std::string> kDocumentedActions = {
 const std::set<std::string> kBoardActions = {"safety_chain_open", "door_reversal", "open_doors",
                                              "close_doors", "obstruct_doors"};
 
-/// Which handler of a simulator each action of each kind must reach; an action missing here is
-/// refused as another kind's.
-struct KindExpectation {
-  drive::Kind kind;
-  std::string lift_name;
-  std::set<std::string> shared;  ///< to the simulator's shared handler
-  std::set<std::string> own;     ///< to the simulator's own handler
-};
-
-const std::vector<KindExpectation> kExpected = {
-    {drive::Kind::Dcp,
-     "DCP",
-     {"general_fault", "advance_warning", "not_ready", "reply_fault", "clear_reply_faults",
-      "drift"},
-     {"channel_fault", "refuse_target"}},
-    {drive::Kind::Sch001,
-     "SCH001 (hydraulic)",
-     {"general_fault", "not_ready", "drift"},
-     {"oil_temperature", "pressure", "overpressure", "card_silence", "bus_off", "cold_oil", "sink",
-      "card_reconnect"}},
-    {drive::Kind::Uss,
-     "USS",
-     {"general_fault", "advance_warning", "not_ready", "reply_fault", "clear_reply_faults",
-      "drift"},
-     {}},
-};
-
-const api::KindSimActions& table_of(drive::Kind kind) {
-  switch (kind) {
-    case drive::Kind::Dcp:
-      return kDcpSimActionTable;
-    case drive::Kind::Sch001:
-      return kSch001SimActionTable;
-    case drive::Kind::Uss:
-      break;
-  }
-  return kUssSimActionTable;
+/// Every registered kind (tests/<kind>/e2e_case.json says which actions its simulator takes).
+std::vector<drive::Kind> every_kind() {
+  std::vector<drive::Kind> kinds;
+  for (const std::string_view name : drive::kKindNames) kinds.push_back(*drive::parse_kind(name));
+  return kinds;
 }
 
 /// A simulated lift of one kind whose simulator only records which handler an action reached.
@@ -91,11 +57,11 @@ class RecordingSimBackend : public api::testing::FakeBackend {
       return std::nullopt;
     };
     const auto own = [&](std::size_t index) -> std::optional<api::Result> {
-      reached.push_back("own " + std::string(table_of(drive_kind()).own[index]));
+      reached.push_back("own " + std::string(kinds::sim_actions_of(drive_kind()).own[index]));
       return std::nullopt;
     };
-    if (auto refused =
-            apply_sim(table_of(drive_kind()), request, board_, mono_now(), shared, own)) {
+    if (auto refused = apply_sim(kinds::sim_actions_of(drive_kind()), request, board_, mono_now(),
+                                 shared, own)) {
       done(std::move(*refused));
       return;
     }
@@ -128,7 +94,7 @@ json sim_request(const std::string& action) {
 }
 
 TEST(SimActions, TheSimCommandListsEveryKindsActionsOnceInTheDocumentedOrder) {
-  for (const drive::Kind kind : {drive::Kind::Dcp, drive::Kind::Sch001, drive::Kind::Uss}) {
+  for (const drive::Kind kind : every_kind()) {
     api::testing::FakeBackend backend;
     backend.status_snapshot.drive_kind = kind;
     api::Dispatcher dispatcher;
@@ -148,19 +114,22 @@ TEST(SimActions, TheSimCommandListsEveryKindsActionsOnceInTheDocumentedOrder) {
 }
 
 TEST(SimActions, AnActionReachesOnlyTheSimulatorOfAKindThatDeclaredIt) {
-  for (const KindExpectation& expected : kExpected) {
-    RecordingSimBackend backend(expected.kind);
+  e2e::expect_a_case_for_every_kind();
+  for (const e2e::DriveCase& expected : e2e::drive_cases()) {
+    const std::set<std::string> shared(expected.sim_shared.begin(), expected.sim_shared.end());
+    const std::set<std::string> own(expected.sim_own.begin(), expected.sim_own.end());
+    RecordingSimBackend backend(*drive::parse_kind(expected.name));
     api::Dispatcher dispatcher;
     api::add_builtin_commands(dispatcher, backend);
     kinds::add_drive_kind_commands(dispatcher, backend);
     for (const std::string& action : kDocumentedActions) {
-      SCOPED_TRACE(std::string(drive::to_string(expected.kind)) + " " + action);
+      SCOPED_TRACE(expected.name + " " + action);
       backend.reached.clear();
       const json reply = handle_sim(dispatcher, sim_request(action));
-      if (expected.shared.count(action) != 0) {
+      if (shared.count(action) != 0) {
         EXPECT_TRUE(reply.value("ok", false)) << reply.dump();
         EXPECT_EQ(backend.reached, std::vector<std::string>{"shared " + action});
-      } else if (expected.own.count(action) != 0) {
+      } else if (own.count(action) != 0) {
         EXPECT_TRUE(reply.value("ok", false)) << reply.dump();
         EXPECT_EQ(backend.reached, std::vector<std::string>{"own " + action});
       } else if (kBoardActions.count(action) != 0) {
@@ -172,14 +141,14 @@ TEST(SimActions, AnActionReachesOnlyTheSimulatorOfAKindThatDeclaredIt) {
         EXPECT_EQ(reply.at("error").at("code"), "bad_request");
         EXPECT_EQ(reply.at("error").at("message"),
                   "\"" + action + "\" is for the simulator of another drive kind; this lift is " +
-                      expected.lift_name);
+                      expected.sim_lift_name);
       }
     }
   }
 }
 
 TEST(SimActions, AKindsOwnArgumentIsCheckedOnEveryLift) {
-  for (const drive::Kind kind : {drive::Kind::Dcp, drive::Kind::Sch001, drive::Kind::Uss}) {
+  for (const drive::Kind kind : every_kind()) {
     RecordingSimBackend backend(kind);
     api::Dispatcher dispatcher;
     api::add_builtin_commands(dispatcher, backend);

@@ -60,7 +60,8 @@ Loaded load() {
                                                       "learn_slow_mm_per_s",
                                                       "learn_config",
                                                       "status_keys",
-                                                      "stats_keys"};
+                                                      "stats_keys",
+                                                      "sim_actions"};
       // A key that starts with "_" is a note for the reader (JSON has no comments).
       if (!key.starts_with('_') && std::find(kKnown.begin(), kKnown.end(), key) == kKnown.end()) {
         out.problems.push_back(where + ": unknown field \"" + key + "\"");
@@ -79,6 +80,11 @@ Loaded load() {
     ok &= take(j, "learn_config", c.learn_config, where, out.problems, false);
     ok &= take(j, "status_keys", c.status_keys, where, out.problems);
     ok &= take(j, "stats_keys", c.stats_keys, where, out.problems);
+    json sim;
+    ok &= take(j, "sim_actions", sim, where, out.problems);
+    ok &= take(sim, "lift_name", c.sim_lift_name, where + " sim_actions", out.problems);
+    ok &= take(sim, "shared", c.sim_shared, where + " sim_actions", out.problems);
+    ok &= take(sim, "own", c.sim_own, where + " sim_actions", out.problems);
     if (ok) out.cases.push_back(std::move(c));
   }
   return out;

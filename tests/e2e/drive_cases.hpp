@@ -42,6 +42,11 @@ struct DriveCase {
   nlohmann::json learn_config = nlohmann::json::object();
   std::vector<std::string> status_keys;
   std::vector<std::string> stats_keys;
+  /// The `sim` actions its simulator takes (tests/daemon/sim_actions_test.cpp): the shared
+  /// ones, its own, and how the refusal of another kind's action names this lift.
+  std::vector<std::string> sim_shared;
+  std::vector<std::string> sim_own;
+  std::string sim_lift_name;
 };
 
 inline void PrintTo(const DriveCase& c, std::ostream* out) {
