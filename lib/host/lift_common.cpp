@@ -10,10 +10,22 @@
 #include <stdexcept>
 #include <vector>
 
+#include "api/commands.hpp"
+#include "lift/calls.hpp"
+#include "lift/floors.hpp"
 #include "log/log.hpp"
 #include "service/notify.hpp"
 
 namespace liftd::daemon {
+
+// The API's limits are the lift's (lib/api sits below lib/lift and cannot name them): a `calls`
+// request never holds more floors than lift::CallQueue stores, nor names a floor the floor table
+// cannot have.
+static_assert(api::kMaxCallsQueued == static_cast<std::int64_t>(lift::kMaxFloors),
+              "api::kMaxCallsQueued is lift::CallQueue's capacity");
+static_assert(api::kMaxFloorIndex < static_cast<std::int64_t>(lift::kMaxFloors),
+              "api::kMaxFloorIndex names a floor lift::FloorTable can hold");
+
 namespace {
 
 // The API socket systemd passed (socket activation, FileDescriptorName=api), or -1 when systemd

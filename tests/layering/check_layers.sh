@@ -2,7 +2,8 @@
 # The layers of lib/: which folders each folder's sources may include. A folder includes only
 # folders below it, so a drive kind's protocol never reaches the shared loops (lib/rt), the lift
 # rules (lib/lift) or the bus code (lib/can), and no drive kind includes another. The daemon,
-# the tools and the tests may include anything. Usage: check_layers.sh <source dir> <kind>...
+# the tools and the tests may include any shared folder, and a kind's only from that kind's own
+# tests and tools (the second check below). Usage: check_layers.sh <source dir> <kind>...
 # (the drive kinds: LIFTD_DRIVE_KINDS of the top CMakeLists.txt); prints each include that
 # breaks the table and exits 1 if there is one.
 set -u
@@ -62,4 +63,32 @@ for dir in "$src"/lib/*/; do
              | sed -E 's/^([^:]+):[0-9]*:?/\1:/')
 done
 [[ $status == 0 ]] && echo "layers ok: every lib/ folder includes only the folders below it"
+
+# Outside lib/, a kind's headers are its own tests' (tests/<kind>/), its tools' (tools/<kind>-*)
+# and its benchmarks' (tools/bench/<kind>/); the daemon and every shared test reach a kind through
+# the registry (lib/kinds). The exceptions, each with its reason:
+declare -A crossing=(
+  # The API tests' scripted lift implements each kind's command interface, so that one fake
+  # serves a lift of any kind (a kind with commands of its own adds its interface there).
+  [tests/api/fake_backend.hpp]="dcp uss"
+  # The cycle's and a USS bus's wake-ups under API load, measured side by side in one run.
+  [tools/bench/api_load_bench.cpp]="dcp uss"
+)
+own_status=0
+for kind in "${kinds[@]}"; do
+  while IFS= read -r file; do
+    rel=${file#"$src"/}
+    case $rel in
+      lib/* | tests/"$kind"/* | tools/"$kind"-* | tools/bench/"$kind"/*) continue ;;
+    esac
+    [[ " ${crossing[$rel]:-} " == *" $kind "* ]] && continue
+    echo "$rel: includes lib/$kind outside the kind's own folders (tests/$kind, tools/$kind-*," \
+         "tools/bench/$kind); reach the kind through lib/kinds"
+    own_status=1
+  done < <(grep -rlE "^#include \"$kind/" "$src"/daemon "$src"/tests "$src"/tools \
+             --include='*.hpp' --include='*.cpp' 2>/dev/null)
+done
+[[ $own_status == 0 ]] && echo "kinds ok: a kind's headers are included outside lib/ by its own tests and tools only"
+[[ $own_status == 0 ]] || status=1
+
 exit $status

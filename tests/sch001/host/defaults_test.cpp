@@ -1,0 +1,39 @@
+// One set of defaults for the hydraulic (SCH001) lift: a default configuration file gives its
+// controller exactly the settings a test gets from the default-constructed structs (both read
+// the kind's defaults), so a test that builds the controller directly runs the lift the daemon
+// runs.
+#include <gtest/gtest.h>
+
+#include "sch001/host/hydraulic_lift.hpp"
+
+namespace liftd::daemon {
+namespace {
+
+TEST(Defaults, ADefaultConfigGivesTheSch001ControllersOwnDefaults) {
+  const sch001::ControllerConfig daemon = sch001_controller_config(config::Config{});
+  const sch001::ControllerConfig direct{};
+  const sch001::HydraulicConfig& a = daemon.hydraulic;
+  const sch001::HydraulicConfig& b = direct.hydraulic;
+  EXPECT_EQ(a.has_v3, b.has_v3);
+  EXPECT_EQ(a.has_v4, b.has_v4);
+  EXPECT_EQ(a.fast_down, b.fast_down);
+  EXPECT_EQ(a.star_delta_ms, b.star_delta_ms);
+  EXPECT_EQ(a.slowdown_up_mm, b.slowdown_up_mm);
+  EXPECT_EQ(a.slowdown_down_mm, b.slowdown_down_mm);
+  EXPECT_EQ(a.slowdown_v3_mm, b.slowdown_v3_mm);
+  EXPECT_EQ(a.slowdown_v4_mm, b.slowdown_v4_mm);
+  EXPECT_EQ(a.stop_tolerance_mm, b.stop_tolerance_mm);
+  EXPECT_EQ(a.relevel_start_mm, b.relevel_start_mm);
+  EXPECT_EQ(a.max_travel_ms, b.max_travel_ms);
+  EXPECT_EQ(a.relevel_doors_open, b.relevel_doors_open);
+  EXPECT_EQ(daemon.link.single_unit, direct.link.single_unit);
+  EXPECT_EQ(daemon.link.ids.to_card, direct.link.ids.to_card);
+  EXPECT_EQ(daemon.link.ids.from_card, direct.link.ids.from_card);
+  EXPECT_EQ(daemon.auto_relevel, direct.auto_relevel);
+  EXPECT_EQ(daemon.lift.level_tolerance_mm, direct.lift.level_tolerance_mm);
+  EXPECT_EQ(daemon.inputs_timeout, direct.inputs_timeout);
+  EXPECT_EQ(daemon.inspection_hold, direct.inspection_hold);
+}
+
+}  // namespace
+}  // namespace liftd::daemon
