@@ -200,3 +200,24 @@ function(liftd_fuzzer name)
   add_test(NAME ${name} COMMAND ${name} ${args} ${work} ${seeds})
   set_tests_properties(${name} PROPERTIES LABELS "fuzz;unit;${ARG_LABELS}" TIMEOUT 600)
 endfunction()
+
+# liftd_write_drive_kinds(<file> <kind>...): the X-macro lib/drive/drive.hpp makes drive::Kind
+# and drive::kKindNames from, one row per kind in the list's order: X(Dcp, "dcp"). Rewritten only
+# when the list changes, so a configure run rebuilds nothing otherwise.
+function(liftd_write_drive_kinds file)
+  set(rows "")
+  foreach(kind IN LISTS ARGN)
+    if(NOT kind MATCHES "^[a-z][a-z0-9]*$")
+      message(FATAL_ERROR "LIFTD_DRIVE_KINDS: \"${kind}\" is not a folder name of lower-case "
+                          "letters and digits beginning with a letter")
+    endif()
+    string(SUBSTRING ${kind} 0 1 first)
+    string(TOUPPER ${first} first)
+    string(SUBSTRING ${kind} 1 -1 rest)
+    string(APPEND rows " \\\n  X(${first}${rest}, \"${kind}\")")
+  endforeach()
+  set(text "// Made by liftd_write_drive_kinds (cmake/Liftd.cmake) from LIFTD_DRIVE_KINDS of the top\n")
+  string(APPEND text "// CMakeLists.txt; lib/drive/drive.hpp includes it. Not to be edited.\n")
+  string(APPEND text "#define LIFTD_FOR_EACH_DRIVE_KIND(X)${rows}\n")
+  file(CONFIGURE OUTPUT ${file} CONTENT "${text}" @ONLY)
+endfunction()

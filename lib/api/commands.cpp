@@ -217,7 +217,6 @@ void add_inputs_command(Dispatcher& dispatcher, Backend* b) {
 void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                           std::function<nlohmann::json()> api_stats) {
   Backend* b = &backend;
-  dispatcher.set_drive_kind(backend.drive_kind());
   add_state_commands(dispatcher, b, api_stats);
   add_info_commands(dispatcher, b);
   add_drive_reset_command(dispatcher, b);

@@ -52,9 +52,9 @@ inline constexpr std::int64_t kMaxSimDriftMm = 1000;
 void add_sim_command(Dispatcher& dispatcher, Backend& backend,
                      std::span<const KindSimActions* const> kinds);
 
-/// Adds every built-in command to `dispatcher`, served by `backend`, and sets the dispatcher's
-/// drive kind to the backend's. A drive kind's own commands, and `sim` with every kind's
-/// simulator actions, come from the registry of drive kinds (add_sim_command). `api_stats`
+/// Adds every built-in command to `dispatcher`, served by `backend`. A drive kind's own
+/// commands, `sim` with every kind's simulator actions and what the backend's kind offers
+/// (Dispatcher::set_drive_kind) come from the registry of drive kinds (lib/kinds). `api_stats`
 /// supplies the server's own counters for `stats` ("api" object); it may be empty.
 void add_builtin_commands(Dispatcher& dispatcher, Backend& backend,
                           std::function<nlohmann::json()> api_stats = {});

@@ -196,7 +196,7 @@ void Dispatcher::handle_line(std::string_view line, const Peer& peer, SessionCon
              std::to_string(peer.uid) + " is not in that group");
     return;
   }
-  if (spec->needs && drive_kind_ && !drive::capabilities_of(*drive_kind_).has(*spec->needs)) {
+  if (spec->needs && drive_kind_ && !offers_.has(*spec->needs)) {
     // Before the arguments: no argument could make the command exist on this lift.
     fail(id, ErrorCode::NotOffered,
          "\"" + name + "\" is not offered by drive kind \"" +

@@ -127,9 +127,13 @@ class Dispatcher {
   const CommandSpec* find(std::string_view name) const;
   /// Every command name, sorted.
   std::vector<std::string> names() const;
-  /// The lift's drive kind: commands that need a capability the kind lacks are answered with
-  /// `not_offered`. Until it is set every command is offered.
-  void set_drive_kind(drive::Kind kind) { drive_kind_ = kind; }
+  /// The lift's drive kind and what it offers beyond the common commands (its row of the
+  /// registry, lib/kinds, sets both): commands that need a capability the kind lacks are
+  /// answered with `not_offered`. Until it is set every command is offered.
+  void set_drive_kind(drive::Kind kind, drive::Capabilities offers) {
+    drive_kind_ = kind;
+    offers_ = offers;
+  }
 
   /// Handles one request line (without its '\n'). `send` is called exactly once with the reply
   /// line, either before this returns or later when an asynchronous handler completes.
@@ -139,6 +143,7 @@ class Dispatcher {
  private:
   DispatchLimits limits_;
   std::optional<drive::Kind> drive_kind_;
+  drive::Capabilities offers_ = drive::Capabilities::all();
   std::map<std::string, CommandSpec, std::less<>> commands_;
 };
 

@@ -54,23 +54,4 @@ std::string_view to_string(Capability capability) noexcept {
   return "unknown";
 }
 
-Capabilities capabilities_of(Kind kind) noexcept {
-  switch (kind) {
-    case Kind::Dcp: {
-      Capabilities dcp;
-      for (unsigned c = 0; c < static_cast<unsigned>(Capability::kCount); ++c) {
-        if (static_cast<Capability>(c) != Capability::Parameters) {
-          dcp.add(static_cast<Capability>(c));
-        }
-      }
-      return dcp;
-    }
-    case Kind::Sch001:
-      return {};
-    case Kind::Uss:
-      return Capabilities{}.add(Capability::Parameters).add(Capability::DriveReset);
-  }
-  return {};
-}
-
 }  // namespace liftd::drive

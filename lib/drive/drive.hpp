@@ -1,6 +1,7 @@
 // What every drive kind shares with the lift core and the API: which kind of drive the lift
-// has, the drive state a dispatcher reads, and which drive-specific commands the kind offers.
-// Knows no protocol: lib/dcp (and later lib/sch001, lib/uss) map their own states onto these.
+// has, the drive state a dispatcher reads, and the drive-specific commands a kind may offer (each
+// kind says which in its row of the registry, lib/kinds). Knows no protocol: each kind maps its
+// own states onto these.
 #pragma once
 
 #include <array>
@@ -8,17 +9,25 @@
 #include <optional>
 #include <string_view>
 
+#include "drive/kinds.inc"
+
 namespace liftd::drive {
 
-/// The drive kinds liftd knows (config `drive.kind`).
+/// The drive kinds of this build (config `drive.kind`): one per folder of LIFTD_DRIVE_KINDS in the
+/// top CMakeLists.txt, in its order (drive/kinds.inc is made from that list). What each kind is
+/// and offers is the kind's own (lib/<kind>/, its row in the registry lib/kinds).
 enum class Kind : std::uint8_t {
-  Dcp,     ///< a lift drive speaking DCP3/DCP4 over RS485
-  Sch001,  ///< a hydraulic power unit with the SCH001 card on CAN
-  Uss,     ///< a drive speaking Siemens USS over RS485
+#define LIFTD_DRIVE_KIND_ENUMERATOR(name, wire) name,
+  LIFTD_FOR_EACH_DRIVE_KIND(LIFTD_DRIVE_KIND_ENUMERATOR)
+#undef LIFTD_DRIVE_KIND_ENUMERATOR
 };
 /// Wire names of Kind, in enum order (config `drive.kind`, status `drive.kind`).
-inline constexpr std::array<std::string_view, 3> kKindNames = {"dcp", "sch001", "uss"};
-/// "dcp", "sch001", "uss".
+inline constexpr std::array kKindNames = {
+#define LIFTD_DRIVE_KIND_WIRE_NAME(name, wire) std::string_view(wire),
+    LIFTD_FOR_EACH_DRIVE_KIND(LIFTD_DRIVE_KIND_WIRE_NAME)
+#undef LIFTD_DRIVE_KIND_WIRE_NAME
+};
+/// The wire name of `kind` ("dcp", ...).
 std::string_view to_string(Kind kind) noexcept;
 /// The kind of a wire name, nullopt for an unknown one.
 std::optional<Kind> parse_kind(std::string_view name) noexcept;
@@ -94,11 +103,5 @@ class Capabilities {
  private:
   std::uint32_t bits_ = 0;
 };
-
-/// What a drive kind offers beyond the common commands.
-/// DCP: all but `parameters`. SCH001: none (the card's CAN frames carry travel signals and
-/// floors only, and its status frame has no keypad, display, supply or load). USS: parameters
-/// (the PKW channel, USS C 4) and drive_reset (fault acknowledge by STW bit 7, USS C 5.2.1).
-Capabilities capabilities_of(Kind kind) noexcept;
 
 }  // namespace liftd::drive

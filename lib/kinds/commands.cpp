@@ -24,13 +24,17 @@ struct KindCommandsEntry {
   void (*add_commands)(api::Dispatcher& dispatcher, api::Backend& backend);
   /// The shared `sim` actions its simulator takes and its own.
   const api::KindSimActions* sim_actions;
+  /// The commands beyond the common ones its lift offers (api::Dispatcher refuses the others).
+  drive::Capabilities offers;
 };
 
 /// Every drive kind, in the order of drive::Kind.
 constexpr std::array kKindCommands = {
-    KindCommandsEntry{drive::Kind::Dcp, add_dcp_commands, &kDcpSimActionTable},
-    KindCommandsEntry{drive::Kind::Sch001, nullptr, &kSch001SimActionTable},
-    KindCommandsEntry{drive::Kind::Uss, add_uss_commands, &kUssSimActionTable},
+    KindCommandsEntry{drive::Kind::Dcp, add_dcp_commands, &kDcpSimActionTable, kDcpOffers},
+    // The SCH001 card's frames carry travel signals and floors only; its status frame has no
+    // keypad, display, supply or load: nothing beyond the common commands.
+    KindCommandsEntry{drive::Kind::Sch001, nullptr, &kSch001SimActionTable, {}},
+    KindCommandsEntry{drive::Kind::Uss, add_uss_commands, &kUssSimActionTable, kUssOffers},
 };
 
 constexpr bool in_kind_order() {
@@ -46,6 +50,9 @@ static_assert(in_kind_order(), "kKindCommands follows the order of drive::Kind")
 }  // namespace
 
 void add_drive_kind_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
+  dispatcher.set_drive_kind(
+      backend.drive_kind(),
+      kKindCommands.at(static_cast<std::size_t>(backend.drive_kind())).offers);
   std::vector<const api::KindSimActions*> sim_actions;
   for (const auto& entry : kKindCommands) {
     if (entry.add_commands != nullptr) entry.add_commands(dispatcher, backend);

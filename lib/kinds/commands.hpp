@@ -13,7 +13,8 @@ namespace liftd::kinds {
 
 /// Adds every drive kind's own API commands to `dispatcher`: those of backend.drive_kind()
 /// served by `backend`, the others' only known, so that the dispatcher answers them
-/// `not_offered` as on every lift; and `sim` with every kind's simulator actions.
+/// `not_offered` as on every lift (it is told what the kind offers); and `sim` with every
+/// kind's simulator actions.
 void add_drive_kind_commands(api::Dispatcher& dispatcher, api::Backend& backend);
 
 /// The `sim` actions the simulator of `kind` takes (lib/<kind>/host/sim_actions.*).

@@ -12,6 +12,7 @@
 #include "api/backend.hpp"
 #include "api/dispatcher.hpp"
 #include "api/result.hpp"
+#include "drive/drive.hpp"
 
 namespace liftd::daemon {
 
@@ -52,6 +53,17 @@ class DcpCommandBackend {
   virtual void fast_start(const std::string& action, const api::TravelArgs& args,
                           api::Responder done) = 0;
 };
+
+/// What the DCP lift offers beyond the common commands: its own below and `drive_reset` (I2
+/// 'R'), not the USS parameter channel.
+inline constexpr drive::Capabilities kDcpOffers = drive::Capabilities{}
+                                                      .add(drive::Capability::Keypad)
+                                                      .add(drive::Capability::Display)
+                                                      .add(drive::Capability::Power)
+                                                      .add(drive::Capability::Load)
+                                                      .add(drive::Capability::DriveReset)
+                                                      .add(drive::Capability::FastStart)
+                                                      .add(drive::Capability::FastStop);
 
 /// Adds display, key, power, load, fast_stop and fast_start to `dispatcher`. They are served by
 /// `backend` when it is a DcpCommandBackend (the DCP lift); on another kind's lift the
