@@ -3,10 +3,12 @@
 // put together by lib/kinds). Exceptions are used only while loading; the result is plain data.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -53,18 +55,6 @@ struct DriveConfig {
   std::string device = "/dev/ttyS1";       ///< drive.device
   Rs485Mode rs485 = Rs485Mode::automatic;  ///< drive.rs485
   EchoMode echo = EchoMode::automatic;     ///< drive.echo
-};
-
-/// `dcp.*`
-struct DcpConfig {
-  /// dcp.manufacturer, sent in I0 (DCP 5.12.2.3); "LD" is in no company's row of that table.
-  std::string manufacturer = "LD";
-  std::string language = "EN";  ///< dcp.language, sent in I0
-  char data_info_type = '0';    ///< dcp.data_info_type, set with I1 (DCP 4.2)
-  bool extended_position = defaults::kExtendedPosition;    ///< dcp.extended_position
-  int link_fault_frames = defaults::kLinkFaultFrames;      ///< dcp.link_fault_frames (DCP 7.3)
-  int link_recover_frames = defaults::kLinkRecoverFrames;  ///< dcp.link_recover_frames (DCP 7.3)
-  int request_timeout_ms = defaults::kRequestTimeoutMs;    ///< dcp.request_timeout_ms
 };
 
 /// `rt.*`
@@ -167,63 +157,6 @@ struct CanConfig {
   std::string interface = "can0";
 };
 
-/// Which signal is the SCH001 unit's fast speed down (card parameters P435 / P453).
-enum class FastDown : std::uint8_t { hsp, sp3 };
-
-/// `sch001.*`: the SCH001 card and the hydraulic unit behind it.
-struct Sch001Config {
-  int base = 0;                        ///< sch001.base: card parameter P479 (0 = 0x550)
-  int controller_node = 49;            ///< sch001.controller_node: card parameter P480
-  bool single_unit = true;             ///< sch001.single_unit: one power unit (AVV, PNP2 valid)
-  FastDown fast_down = FastDown::hsp;  ///< sch001.fast_down
-  bool has_v3 = false;                 ///< sch001.has_v3
-  bool has_v4 = false;                 ///< sch001.has_v4
-  int star_delta_ms = defaults::kStarDeltaMs;           ///< sch001.star_delta_ms
-  int slowdown_up_mm = defaults::kSlowdownUpMm;         ///< sch001.slowdown_up_mm
-  int slowdown_down_mm = defaults::kSlowdownDownMm;     ///< sch001.slowdown_down_mm
-  int slowdown_v3_mm = defaults::kSlowdownV3Mm;         ///< sch001.slowdown_v3_mm
-  int slowdown_v4_mm = defaults::kSlowdownV4Mm;         ///< sch001.slowdown_v4_mm
-  int stop_tolerance_mm = defaults::kStopToleranceMm;   ///< sch001.stop_tolerance_mm
-  int relevel_start_mm = defaults::kRelevelStartMm;     ///< sch001.relevel_start_mm
-  int max_travel_ms = defaults::kMaxTravelMs;           ///< sch001.max_travel_ms
-  bool auto_relevel = defaults::kHydraulicAutoRelevel;  ///< sch001.auto_relevel
-};
-
-/// Length of a USS slave's PKW area (USS C 4.1): none, 3 or 4 words, or variable.
-enum class UssPkw : std::uint8_t { none, three, four, variable };
-
-/// One USS slave besides the drive on the same bus (e.g. a door operator): `uss.slaves[]`.
-struct UssSlave {
-  int address = 0;            ///< 0..31 (USS A 4.3)
-  UssPkw pkw = UssPkw::four;  ///< its PKW area
-  int pzd_words = 2;          ///< 0..16 PZD words (USS C 5.1)
-  friend bool operator==(const UssSlave&, const UssSlave&) = default;
-};
-
-/// `uss.*`: the USS bus and the drive on it.
-struct UssConfig {
-  int baud = defaults::kUssBaud;    ///< uss.baud
-  int drive_address = 0;            ///< uss.drive_address
-  UssPkw drive_pkw = UssPkw::four;  ///< uss.drive_pkw
-  int drive_pzd_words = 2;          ///< uss.drive_pzd_words (STW/ZSW, HSW/HIW at least)
-  std::vector<UssSlave> slaves;     ///< uss.slaves: other slaves on the bus
-  std::vector<int> polling_list;    ///< uss.polling_list; empty: drive, then each slave
-  int reply_delay_ms = defaults::kUssReplyDelayMs;          ///< uss.reply_delay_ms
-  int cycle_time_ms = 0;                                    ///< uss.cycle_time_ms, 0 = none
-  int telegram_failures = defaults::kUssTelegramFailures;   ///< uss.telegram_failures
-  int pkw_repeat_limit = defaults::kUssPkwRepeatLimit;      ///< uss.pkw_repeat_limit
-  bool mirror_at_start = true;                              ///< uss.mirror_at_start
-  int full_scale_raw = defaults::kUssFullScaleRaw;          ///< uss.full_scale_raw
-  int full_scale = defaults::kUssFullScale;                 ///< uss.full_scale
-  int profile_timeout_ms = defaults::kUssProfileTimeoutMs;  ///< uss.profile_timeout_ms
-  /// uss.speeds: speed name -> main setpoint in the drive's unit (uss.full_scale).
-  std::map<std::string, double> speeds = {{"V0", defaults::kUssSpeedV0Percent},
-                                          {"VN", defaults::kUssSpeedVnPercent},
-                                          {"VI", defaults::kUssSpeedViPercent},
-                                          {"V3", defaults::kUssSpeedV3Percent},
-                                          {"V4", defaults::kUssSpeedV4Percent}};
-};
-
 /// `sim.*`
 struct SimConfig {
   int dcp = 4;  ///< sim.dcp: the simulated drive speaks DCP3 or DCP4
@@ -240,12 +173,69 @@ struct SimConfig {
   int slow_mm_per_s = 50;
 };
 
+/// Each drive kind's own section of the file (`dcp.*`, `sch001.*`, ...): its struct lives in
+/// the kind's folder (lib/<kind>/config/section.hpp) and names its kind (`kKind`), so this
+/// folder knows none of them. Holds one of each kind set so far; a kind's section never set
+/// reads as its defaults (the struct's member initialisers). Copies are deep, as of a struct.
+class KindSections {
+ public:
+  KindSections() = default;
+  KindSections(const KindSections& other) {
+    for (std::size_t i = 0; i < slots_.size(); ++i) {
+      const Slot& from = other.slots_[i];
+      if (from.value) slots_[i] = Slot{from.copy(from.value.get()), from.copy};
+    }
+  }
+  KindSections(KindSections&&) noexcept = default;
+  KindSections& operator=(const KindSections& other) {
+    if (this != &other) *this = KindSections(other);
+    return *this;
+  }
+  KindSections& operator=(KindSections&&) noexcept = default;
+  ~KindSections() = default;
+
+  /// The section of `Section::kKind`: as set, or its defaults.
+  template <class Section>
+  const Section& get() const {
+    const Slot& slot = slots_[index<Section>()];
+    if (!slot.value) {
+      static const Section kDefaults{};
+      return kDefaults;
+    }
+    return *static_cast<const Section*>(slot.value.get());
+  }
+  /// The section of `Section::kKind` to change (its defaults until then).
+  template <class Section>
+  Section& get() {
+    Slot& slot = slots_[index<Section>()];
+    if (!slot.value) {
+      slot.value = std::make_shared<Section>();
+      slot.copy = [](const void* from) -> std::shared_ptr<void> {
+        return std::make_shared<Section>(*static_cast<const Section*>(from));
+      };
+    }
+    return *static_cast<Section*>(slot.value.get());
+  }
+
+ private:
+  struct Slot {
+    std::shared_ptr<void> value;                           ///< the Section, never shared by copies
+    std::shared_ptr<void> (*copy)(const void*) = nullptr;  ///< a copy of the Section
+  };
+  template <class Section>
+  static constexpr std::size_t index() {
+    static_assert(static_cast<std::size_t>(Section::kKind) < drive::kKindNames.size(),
+                  "a section names its drive kind: static constexpr drive::Kind kKind");
+    return static_cast<std::size_t>(Section::kKind);
+  }
+  std::array<Slot, drive::kKindNames.size()> slots_{};
+};
+
 /// The whole configuration; every member mirrors a key of the JSON file. The member
 /// initialisers are the defaults (the schema's keys read them from a default Config).
 struct Config {
   LogConfig log;                                 ///< log.*
   DriveConfig drive;                             ///< drive.*
-  DcpConfig dcp;                                 ///< dcp.*
   RtConfig rt;                                   ///< rt.*
   ApiConfig api;                                 ///< api.*
   InputsConfig inputs;                           ///< inputs.*
@@ -255,8 +245,7 @@ struct Config {
   PositionConfig position;                       ///< position.*
   TravelConfig travel;                           ///< travel.*
   CanConfig can;                                 ///< can.*
-  Sch001Config sch001;                           ///< sch001.*
-  UssConfig uss;                                 ///< uss.*
+  KindSections kinds;                            ///< each drive kind's own section
   SimConfig sim;                                 ///< sim.*
 };
 

@@ -153,10 +153,35 @@ std::string absolute_path_rule(const std::string& text);
 
 // --- Typed key builders: one call per key. ---------------------------------------------------
 
-/// An integer key min..max stored in `config.*section.*member`.
-template <class Section, class T>
+/// Where a drive kind's section is (Config::kinds): the `section` of a key of that section,
+/// `kind_section<Sch001Config>`, as `&Config::travel` is of a shared one.
+template <class Section>
+struct KindSection {};
+template <class Section>
+inline constexpr KindSection<Section> kind_section{};
+
+/// The section a key's `section` names in `c`.
+template <class Section>
+Section& section_in(Config& c, Section Config::*section) {
+  return c.*section;
+}
+template <class Section>
+const Section& section_in(const Config& c, Section Config::*section) {
+  return c.*section;
+}
+template <class Section>
+Section& section_in(Config& c, KindSection<Section>) {
+  return c.kinds.get<Section>();
+}
+template <class Section>
+const Section& section_in(const Config& c, KindSection<Section>) {
+  return c.kinds.get<Section>();
+}
+
+/// An integer key min..max stored in `member` of the section `section` names.
+template <class Where, class Section, class T>
 Key int_key(std::string path, std::int64_t min, std::int64_t max, std::string description,
-            Section Config::*section, T Section::*member) {
+            Where section, T Section::*member) {
   Key key;
   key.path = std::move(path);
   key.type = Type::integer;
@@ -164,32 +189,35 @@ Key int_key(std::string path, std::int64_t min, std::int64_t max, std::string de
   key.max = max;
   key.description = std::move(description);
   key.set = [section, member](Config& c, const nlohmann::json& v) {
-    c.*section.*member = static_cast<T>(v.get<std::int64_t>());
+    section_in(c, section).*member = static_cast<T>(v.get<std::int64_t>());
   };
-  key.get = [section, member](const Config& c) { return nlohmann::json(c.*section.*member); };
+  key.get = [section, member](const Config& c) {
+    return nlohmann::json(section_in(c, section).*member);
+  };
   return key;
 }
 
-/// A boolean key stored in `config.*section.*member`.
-template <class Section>
-Key bool_key(std::string path, std::string description, Section Config::*section,
-             bool Section::*member) {
+/// A boolean key stored in `member` of the section `section` names.
+template <class Where, class Section>
+Key bool_key(std::string path, std::string description, Where section, bool Section::*member) {
   Key key;
   key.path = std::move(path);
   key.type = Type::boolean;
   key.description = std::move(description);
   key.set = [section, member](Config& c, const nlohmann::json& v) {
-    c.*section.*member = v.get<bool>();
+    section_in(c, section).*member = v.get<bool>();
   };
-  key.get = [section, member](const Config& c) { return nlohmann::json(c.*section.*member); };
+  key.get = [section, member](const Config& c) {
+    return nlohmann::json(section_in(c, section).*member);
+  };
   return key;
 }
 
 /// A string key of min_length..max_length bytes that passes `check` (may be empty).
-template <class Section>
+template <class Where, class Section>
 Key string_key(std::string path, std::int64_t min_length, std::int64_t max_length,
                std::string allowed_text, std::function<std::string(const std::string&)> check,
-               std::string description, Section Config::*section, std::string Section::*member) {
+               std::string description, Where section, std::string Section::*member) {
   Key key;
   key.path = std::move(path);
   key.type = Type::string;
@@ -199,26 +227,28 @@ Key string_key(std::string path, std::int64_t min_length, std::int64_t max_lengt
   key.check = std::move(check);
   key.description = std::move(description);
   key.set = [section, member](Config& c, const nlohmann::json& v) {
-    c.*section.*member = v.get<std::string>();
+    section_in(c, section).*member = v.get<std::string>();
   };
-  key.get = [section, member](const Config& c) { return nlohmann::json(c.*section.*member); };
+  key.get = [section, member](const Config& c) {
+    return nlohmann::json(section_in(c, section).*member);
+  };
   return key;
 }
 
 /// A key naming an enum value; `names` (enum order) must outlive the key.
-template <class Section, class E, std::size_t N>
+template <class Where, class Section, class E, std::size_t N>
 Key enum_key(std::string path, const std::array<std::string_view, N>& names,
-             std::string description, Section Config::*section, E Section::*member) {
+             std::string description, Where section, E Section::*member) {
   Key key;
   key.path = std::move(path);
   key.type = Type::choice;
   for (auto name : names) key.choices.emplace_back(name);
   key.description = std::move(description);
   key.set = [section, member, &names](Config& c, const nlohmann::json& v) {
-    c.*section.*member = *enum_from<E>(v.get<std::string>(), names);
+    section_in(c, section).*member = *enum_from<E>(v.get<std::string>(), names);
   };
   key.get = [section, member, &names](const Config& c) {
-    return nlohmann::json(std::string(enum_name(c.*section.*member, names)));
+    return nlohmann::json(std::string(enum_name(section_in(c, section).*member, names)));
   };
   return key;
 }

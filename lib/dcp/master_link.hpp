@@ -21,6 +21,7 @@
 #include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
 #include "dcp/channel.hpp"
+#include "dcp/defaults.hpp"
 #include "dcp/display.hpp"
 #include "dcp/frame.hpp"
 #include "dcp/messages.hpp"

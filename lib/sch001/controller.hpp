@@ -29,6 +29,7 @@
 #include "lift/lift_model.hpp"
 #include "rt/can_runner.hpp"
 #include "sch001/card_link.hpp"
+#include "sch001/defaults.hpp"
 #include "sch001/hydraulic_travel.hpp"
 
 namespace liftd::sch001 {

@@ -25,6 +25,7 @@
 #include "lift/floors.hpp"
 #include "lift/inputs.hpp"
 #include "lift/travel_event.hpp"
+#include "sch001/defaults.hpp"
 #include "sch001/protocol.hpp"
 
 namespace liftd::sch001 {

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "dcp/charset.hpp"
+#include "dcp/config/section.hpp"
 
 namespace liftd::dcp {
 namespace {
@@ -76,9 +77,9 @@ std::string dcp_summary(const config::Config& cfg) {
   std::ostringstream out;
   out << "drive:    " << drive::to_string(cfg.drive.kind) << " on " << cfg.drive.device
       << " (rs485 " << config::to_string(cfg.drive.rs485) << ")\n";
-  out << "dcp:      maker " << cfg.dcp.manufacturer << ", language " << cfg.dcp.language
-      << ", data-information-type " << cfg.dcp.data_info_type << ", link fault after "
-      << cfg.dcp.link_fault_frames << " frames\n";
+  out << "dcp:      maker " << dcp_section(cfg).manufacturer << ", language "
+      << dcp_section(cfg).language << ", data-information-type " << dcp_section(cfg).data_info_type
+      << ", link fault after " << dcp_section(cfg).link_fault_frames << " frames\n";
   return out.str();
 }
 
@@ -88,36 +89,39 @@ std::vector<config::Key> dcp_keys() {
   std::vector<config::Key> t;
   t.push_back(config::string_key(
       "dcp.manufacturer", 2, 2, "two capital letters A-Z, not a code of the DCP 5.12.2.3 table",
-      maker_code_rule, "lift-controller maker code sent in I0 (DCP 5.12.2.3)", &Config::dcp,
-      &DcpConfig::manufacturer));
+      maker_code_rule, "lift-controller maker code sent in I0 (DCP 5.12.2.3)",
+      config::kind_section<config::DcpConfig>, &DcpConfig::manufacturer));
   t.push_back(config::string_key("dcp.language", 2, 2, "two capital letters A-Z (ISO 639)",
                                  two_capitals_rule,
                                  "language code sent in I0; the drive falls back to English "
                                  "(DCP 5.12.2)",
-                                 &Config::dcp, &DcpConfig::language));
+                                 config::kind_section<config::DcpConfig>, &DcpConfig::language));
   config::Key k;
   k.path = "dcp.data_info_type";
   k.type = config::Type::choice;
   for (auto name : kDataInfoTypeNames) k.choices.emplace_back(name);
   k.description =
       "data-information-type set with I1: what the drive's data bytes carry (DCP 5.12.3)";
-  k.set = [](Config& c, const json& v) { c.dcp.data_info_type = v.get<std::string>()[0]; };
-  k.get = [](const Config& c) { return json(std::string(1, c.dcp.data_info_type)); };
+  k.set = [](Config& c, const json& v) { dcp_section(c).data_info_type = v.get<std::string>()[0]; };
+  k.get = [](const Config& c) { return json(std::string(1, dcp_section(c).data_info_type)); };
   t.push_back(std::move(k));
   t.push_back(config::bool_key("dcp.extended_position",
                                "ask for the extended I9 reply with the measured travel distance "
                                "(DCP 5.12.9)",
-                               &Config::dcp, &DcpConfig::extended_position));
+                               config::kind_section<config::DcpConfig>,
+                               &DcpConfig::extended_position));
   t.push_back(
       config::int_key("dcp.link_fault_frames", 1, 100,
                       "consecutive bad or missing replies that make a link fault (DCP 7.3: 10)",
-                      &Config::dcp, &DcpConfig::link_fault_frames));
+                      config::kind_section<config::DcpConfig>, &DcpConfig::link_fault_frames));
   t.push_back(config::int_key("dcp.link_recover_frames", 1, 100,
                               "consecutive good replies that end a link fault (DCP 7.3: 10)",
-                              &Config::dcp, &DcpConfig::link_recover_frames));
+                              config::kind_section<config::DcpConfig>,
+                              &DcpConfig::link_recover_frames));
   t.push_back(config::int_key("dcp.request_timeout_ms", 100, 10000,
                               "how long to wait for the drive's reply to an I-message",
-                              &Config::dcp, &DcpConfig::request_timeout_ms));
+                              config::kind_section<config::DcpConfig>,
+                              &DcpConfig::request_timeout_ms));
   return t;
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "dcp/charset.hpp"
+#include "dcp/config/section.hpp"
 #include "dcp/host/dcp_lift.hpp"
 #include "dcp/trace.hpp"
 
@@ -56,7 +57,7 @@ DcpBackend::DcpBackend(const config::Config& config, const config::Schema& schem
             // The decoded column of the protocol the drive speaks now (DCP 3.5).
             dcp::TraceOptions options;
             options.protocol = controller.snapshot().protocol.value_or(dcp::Protocol::Dcp4);
-            options.data_info = *dcp::data_info_type_from_char(config.dcp.data_info_type);
+            options.data_info = *dcp::data_info_type_from_char(dcp_section(config).data_info_type);
             return dcp::trace_decoder(options);
           }) {}
 

@@ -8,6 +8,7 @@
 
 #include "common/version.hpp"
 #include "dcp/charset.hpp"
+#include "dcp/config/section.hpp"
 #include "dcp/messages.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
@@ -26,13 +27,13 @@ dcp::Code2 code2(const std::string& s) {
 
 control::ControllerConfig dcp_controller_config(const config::Config& c) {
   control::ControllerConfig out;
-  out.link.data_info_type = *dcp::data_info_type_from_char(c.dcp.data_info_type);
-  out.link.extended_position = c.dcp.extended_position;
-  out.link.fault_after_bad_frames = c.dcp.link_fault_frames;
-  out.link.recover_after_good_frames = c.dcp.link_recover_frames;
-  out.link.maker = code2(c.dcp.manufacturer);
-  out.link.language = code2(c.dcp.language);
-  out.link.request_timeout = std::chrono::milliseconds(c.dcp.request_timeout_ms);
+  out.link.data_info_type = *dcp::data_info_type_from_char(dcp_section(c).data_info_type);
+  out.link.extended_position = dcp_section(c).extended_position;
+  out.link.fault_after_bad_frames = dcp_section(c).link_fault_frames;
+  out.link.recover_after_good_frames = dcp_section(c).link_recover_frames;
+  out.link.maker = code2(dcp_section(c).manufacturer);
+  out.link.language = code2(dcp_section(c).language);
+  out.link.request_timeout = std::chrono::milliseconds(dcp_section(c).request_timeout_ms);
   {
     // I0 carries our version as four digits (DCP 5.12.2.1): 0.1.0 -> 00.10.
     int major = 0, minor = 0, patch = 0;

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "sch001/config/section.hpp"
 #include "sch001/protocol.hpp"
 
 namespace liftd::sch001 {
@@ -30,17 +31,18 @@ void check_sch001(const Config& cfg, const json& /*document*/, Problems& problem
 std::string sch001_summary(const Config& cfg) {
   std::ostringstream out;
   // Card document 1.6 and 2: base P479 (0 = 0x550), our node base + P480.
-  const int base = cfg.sch001.base == 0 ? static_cast<int>(kDefaultBase) : cfg.sch001.base;
+  const int base =
+      sch001_section(cfg).base == 0 ? static_cast<int>(kDefaultBase) : sch001_section(cfg).base;
   char ids[64];
   std::snprintf(ids, sizeof ids, "card receives on 0x%03X, sends to 0x%03X", base + 1,
-                base + cfg.sch001.controller_node);
+                base + sch001_section(cfg).controller_node);
   out << "drive:    sch001 on CAN " << cfg.can.interface << " (" << ids << ")\n";
-  out << "sch001:   " << (cfg.sch001.single_unit ? "single unit" : "several units")
-      << ", fast down by " << (cfg.sch001.fast_down == FastDown::sp3 ? "SP3" : "HSP")
-      << (cfg.sch001.has_v4   ? ", V3 and V4"
-          : cfg.sch001.has_v3 ? ", V3"
-                              : "")
-      << ", star-delta " << cfg.sch001.star_delta_ms << " ms\n";
+  out << "sch001:   " << (sch001_section(cfg).single_unit ? "single unit" : "several units")
+      << ", fast down by " << (sch001_section(cfg).fast_down == FastDown::sp3 ? "SP3" : "HSP")
+      << (sch001_section(cfg).has_v4   ? ", V3 and V4"
+          : sch001_section(cfg).has_v3 ? ", V3"
+                                       : "")
+      << ", star-delta " << sch001_section(cfg).star_delta_ms << " ms\n";
   return out.str();
 }
 
@@ -51,50 +53,53 @@ std::vector<Key> sch001_keys() {
       config::int_key("sch001.base", 0, 0x7A0,
                       "card parameter P479: base of the card's 96 CAN identifiers; 0 = 0x550 "
                       "(card document 2.1)",
-                      &Config::sch001, &Sch001Config::base));
+                      config::kind_section<config::Sch001Config>, &Sch001Config::base));
   t.push_back(
       config::int_key("sch001.controller_node", 2, 95,
                       "card parameter P480: our node is base + this (49: 0x581; card document "
                       "1.6, 2.2)",
-                      &Config::sch001, &Sch001Config::controller_node));
+                      config::kind_section<config::Sch001Config>, &Sch001Config::controller_node));
   t.push_back(config::bool_key(
       "sch001.single_unit", "one power unit: the card's AVV and PNP2 are valid (card document 3b)",
-      &Config::sch001, &Sch001Config::single_unit));
+      config::kind_section<config::Sch001Config>, &Sch001Config::single_unit));
   t.push_back(
       config::enum_key("sch001.fast_down", kFastDownNames,
                        "the fast speed down: hsp when card P435 = 0, sp3 when card P453 = 1",
-                       &Config::sch001, &Sch001Config::fast_down));
+                       config::kind_section<config::Sch001Config>, &Sch001Config::fast_down));
   t.push_back(config::bool_key("sch001.has_v3", "the unit has speed V3 (HSP + SP1)",
-                               &Config::sch001, &Sch001Config::has_v3));
+                               config::kind_section<config::Sch001Config>, &Sch001Config::has_v3));
   t.push_back(config::bool_key("sch001.has_v4", "the unit has speed V4 (HSP + SP2)",
-                               &Config::sch001, &Sch001Config::has_v4));
-  t.push_back(config::int_key("sch001.star_delta_ms", 0, 10000,
-                              "motor start (star-delta) before SFY and the up signals",
-                              &Config::sch001, &Sch001Config::star_delta_ms));
-  t.push_back(config::int_key("sch001.slowdown_up_mm", 10, 5000,
-                              "fast speed up ends this far below the level", &Config::sch001,
-                              &Sch001Config::slowdown_up_mm));
-  t.push_back(config::int_key("sch001.slowdown_down_mm", 10, 5000,
-                              "fast speed down ends this far above the level", &Config::sch001,
-                              &Sch001Config::slowdown_down_mm));
-  t.push_back(config::int_key("sch001.slowdown_v3_mm", 10, 5000,
-                              "V3 up ends this far below the level", &Config::sch001,
-                              &Sch001Config::slowdown_v3_mm));
-  t.push_back(config::int_key("sch001.slowdown_v4_mm", 10, 5000,
-                              "V4 up ends this far below the level", &Config::sch001,
-                              &Sch001Config::slowdown_v4_mm));
+                               config::kind_section<config::Sch001Config>, &Sch001Config::has_v4));
+  t.push_back(config::int_key(
+      "sch001.star_delta_ms", 0, 10000, "motor start (star-delta) before SFY and the up signals",
+      config::kind_section<config::Sch001Config>, &Sch001Config::star_delta_ms));
+  t.push_back(config::int_key(
+      "sch001.slowdown_up_mm", 10, 5000, "fast speed up ends this far below the level",
+      config::kind_section<config::Sch001Config>, &Sch001Config::slowdown_up_mm));
+  t.push_back(config::int_key(
+      "sch001.slowdown_down_mm", 10, 5000, "fast speed down ends this far above the level",
+      config::kind_section<config::Sch001Config>, &Sch001Config::slowdown_down_mm));
+  t.push_back(
+      config::int_key("sch001.slowdown_v3_mm", 10, 5000, "V3 up ends this far below the level",
+                      config::kind_section<config::Sch001Config>, &Sch001Config::slowdown_v3_mm));
+  t.push_back(
+      config::int_key("sch001.slowdown_v4_mm", 10, 5000, "V4 up ends this far below the level",
+                      config::kind_section<config::Sch001Config>, &Sch001Config::slowdown_v4_mm));
   t.push_back(config::int_key("sch001.stop_tolerance_mm", 1, 50,
                               "the slow approach drops every signal within this of the level",
-                              &Config::sch001, &Sch001Config::stop_tolerance_mm));
+                              config::kind_section<config::Sch001Config>,
+                              &Sch001Config::stop_tolerance_mm));
   t.push_back(config::int_key("sch001.relevel_start_mm", 2, 100,
                               "relevel when the car at rest is further than this from its level",
-                              &Config::sch001, &Sch001Config::relevel_start_mm));
+                              config::kind_section<config::Sch001Config>,
+                              &Sch001Config::relevel_start_mm));
   t.push_back(config::int_key("sch001.max_travel_ms", 5000, 300000,
                               "motor run-time limiter: a travel longer than this ends",
-                              &Config::sch001, &Sch001Config::max_travel_ms));
-  t.push_back(config::bool_key("sch001.auto_relevel",
-                               "relevel by itself when the car at rest sinks out of the level zone",
-                               &Config::sch001, &Sch001Config::auto_relevel));
+                              config::kind_section<config::Sch001Config>,
+                              &Sch001Config::max_travel_ms));
+  t.push_back(config::bool_key(
+      "sch001.auto_relevel", "relevel by itself when the car at rest sinks out of the level zone",
+      config::kind_section<config::Sch001Config>, &Sch001Config::auto_relevel));
   return t;
 }
 

@@ -18,6 +18,7 @@
 #include "can/interface_info.hpp"
 #include "host/lift_common.hpp"
 #include "log/log.hpp"
+#include "sch001/config/section.hpp"
 #include "sch001/host/sim_actions.hpp"
 
 namespace liftd::daemon {
@@ -37,28 +38,29 @@ constexpr double kSinkMmPerS = 2.0;  // `sim sink`: a leaking valve or cooling o
 sch001::ControllerConfig sch001_controller_config(const config::Config& c) {
   sch001::ControllerConfig out;
   std::string why;
-  const auto ids = sch001::ids_for(static_cast<std::uint32_t>(c.sch001.base),
-                                   static_cast<std::uint32_t>(c.sch001.controller_node), &why);
+  const auto ids =
+      sch001::ids_for(static_cast<std::uint32_t>(sch001_section(c).base),
+                      static_cast<std::uint32_t>(sch001_section(c).controller_node), &why);
   if (!ids) throw std::invalid_argument("sch001: " + why);
   out.link.ids = *ids;
-  out.link.single_unit = c.sch001.single_unit;
+  out.link.single_unit = sch001_section(c).single_unit;
   sch001::HydraulicConfig& h = out.hydraulic;
-  h.has_v3 = c.sch001.has_v3;
-  h.has_v4 = c.sch001.has_v4;
-  h.fast_down =
-      c.sch001.fast_down == config::FastDown::sp3 ? sch001::FastDown::Sp3 : sch001::FastDown::Hsp;
-  h.star_delta_ms = static_cast<std::uint32_t>(c.sch001.star_delta_ms);
-  h.slowdown_up_mm = static_cast<std::uint32_t>(c.sch001.slowdown_up_mm);
-  h.slowdown_down_mm = static_cast<std::uint32_t>(c.sch001.slowdown_down_mm);
-  h.slowdown_v3_mm = static_cast<std::uint32_t>(c.sch001.slowdown_v3_mm);
-  h.slowdown_v4_mm = static_cast<std::uint32_t>(c.sch001.slowdown_v4_mm);
-  h.stop_tolerance_mm = static_cast<std::uint32_t>(c.sch001.stop_tolerance_mm);
-  h.relevel_start_mm = static_cast<std::uint32_t>(c.sch001.relevel_start_mm);
-  h.max_travel_ms = static_cast<std::uint32_t>(c.sch001.max_travel_ms);
+  h.has_v3 = sch001_section(c).has_v3;
+  h.has_v4 = sch001_section(c).has_v4;
+  h.fast_down = sch001_section(c).fast_down == config::FastDown::sp3 ? sch001::FastDown::Sp3
+                                                                     : sch001::FastDown::Hsp;
+  h.star_delta_ms = static_cast<std::uint32_t>(sch001_section(c).star_delta_ms);
+  h.slowdown_up_mm = static_cast<std::uint32_t>(sch001_section(c).slowdown_up_mm);
+  h.slowdown_down_mm = static_cast<std::uint32_t>(sch001_section(c).slowdown_down_mm);
+  h.slowdown_v3_mm = static_cast<std::uint32_t>(sch001_section(c).slowdown_v3_mm);
+  h.slowdown_v4_mm = static_cast<std::uint32_t>(sch001_section(c).slowdown_v4_mm);
+  h.stop_tolerance_mm = static_cast<std::uint32_t>(sch001_section(c).stop_tolerance_mm);
+  h.relevel_start_mm = static_cast<std::uint32_t>(sch001_section(c).relevel_start_mm);
+  h.max_travel_ms = static_cast<std::uint32_t>(sch001_section(c).max_travel_ms);
   h.relevel_doors_open = c.travel.relevel_with_doors == config::RelevelDoors::open ||
                          c.travel.relevel_with_doors == config::RelevelDoors::both;
   out.auto_relevel =
-      c.sch001.auto_relevel && c.travel.relevel_with_doors != config::RelevelDoors::never;
+      sch001_section(c).auto_relevel && c.travel.relevel_with_doors != config::RelevelDoors::never;
   out.lift = lift_config(c);
   for (const auto& f : c.floors) out.floors_mm.push_back(f.level_mm);
   out.inputs_timeout = std::chrono::milliseconds(c.inputs.timeout_ms);
@@ -130,9 +132,9 @@ namespace {
 
 sch001::sim::CardSimConfig card_sim_config(const config::Config& c) {
   sch001::sim::CardSimConfig out;
-  out.ids = *sch001::ids_for(static_cast<std::uint32_t>(c.sch001.base),
-                             static_cast<std::uint32_t>(c.sch001.controller_node));
-  out.fast_down_sp3 = c.sch001.fast_down == config::FastDown::sp3;
+  out.ids = *sch001::ids_for(static_cast<std::uint32_t>(sch001_section(c).base),
+                             static_cast<std::uint32_t>(sch001_section(c).controller_node));
+  out.fast_down_sp3 = sch001_section(c).fast_down == config::FastDown::sp3;
   if (!c.floors.empty()) {
     out.start_mm = static_cast<double>(c.floors.front().level_mm);
     out.bottom_mm = shaft_bottom_mm(c);

@@ -25,6 +25,7 @@
 #include "log/throttle.hpp"
 #include "rt/can_runner.hpp"
 #include "rt/encoder_tap.hpp"
+#include "sch001/config/section.hpp"
 #include "sch001/controller.hpp"
 #include "sch001/sim/sch001_card_sim.hpp"
 #include "sim/sim_io.hpp"
@@ -97,7 +98,7 @@ struct Sch001Drive {
   static TravelBitNames travel_bit_names();
   /// A learning leg's limit is the motor run-time limiter's plus the slow run's allowance.
   static std::uint32_t learn_leg_base_ms(const config::Config& config) {
-    return static_cast<std::uint32_t>(config.sch001.max_travel_ms);
+    return static_cast<std::uint32_t>(sch001_section(config).max_travel_ms);
   }
 };
 

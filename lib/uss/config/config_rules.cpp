@@ -4,6 +4,7 @@
 #include <array>
 #include <sstream>
 
+#include "uss/config/section.hpp"
 #include "uss/telegram.hpp"
 
 namespace liftd::uss {
@@ -48,7 +49,7 @@ void apply_uss_baud(const json& value, const std::string& where, Config& cfg, Pr
         {where, show(value) + " is not a USS rate: use one of " + allowed + " (USS B 2.4)"});
     return;
   }
-  cfg.uss.baud = static_cast<int>(value.get<std::int64_t>());
+  uss_section(cfg).baud = static_cast<int>(value.get<std::int64_t>());
 }
 
 std::optional<UssPkw> uss_pkw_from(const json& value) {
@@ -123,7 +124,7 @@ void apply_uss_slaves(const json& value, const std::string& where, Config& cfg,
     }
     slaves.push_back(slave);
   }
-  if (good) cfg.uss.slaves = std::move(slaves);
+  if (good) uss_section(cfg).slaves = std::move(slaves);
 }
 
 void apply_polling_list(const json& value, const std::string& where, Config& cfg,
@@ -143,7 +144,7 @@ void apply_polling_list(const json& value, const std::string& where, Config& cfg
       good = false;
     }
   }
-  if (good) cfg.uss.polling_list = std::move(list);
+  if (good) uss_section(cfg).polling_list = std::move(list);
 }
 
 void apply_uss_speeds(const json& value, const std::string& where, Config& cfg,
@@ -177,12 +178,12 @@ void apply_uss_speeds(const json& value, const std::string& where, Config& cfg,
     }
     speeds[name] = setpoint.get<double>();
   }
-  if (good) cfg.uss.speeds = std::move(speeds);
+  if (good) uss_section(cfg).speeds = std::move(speeds);
 }
 
 // The uss.* keys that must agree with each other (only for a USS lift).
 void check_uss(const Config& cfg, const json& /*document*/, Problems& problems) {
-  const UssConfig& uss = cfg.uss;
+  const UssConfig& uss = uss_section(cfg);
   // The CAN encoder needs a CAN runner of its own; the USS lift has none in this version.
   if (cfg.position.source == PositionSource::can) {
     problems.push_back({"position.source",
@@ -237,20 +238,21 @@ void check_uss(const Config& cfg, const json& /*document*/, Problems& problems) 
 
 std::string uss_summary(const Config& cfg) {
   std::ostringstream out;
-  out << "drive:    uss on " << cfg.drive.device << " at " << cfg.uss.baud << " baud 8E1 (rs485 "
-      << config::to_string(cfg.drive.rs485) << "), drive address " << cfg.uss.drive_address
-      << ", PKW " << enum_name(cfg.uss.drive_pkw, kUssPkwNames) << ", PZD "
-      << cfg.uss.drive_pzd_words << " words\n";
-  out << "uss:      " << cfg.uss.slaves.size() << " other slave(s), polling list "
-      << (cfg.uss.polling_list.empty() ? std::string("drive then each slave")
-                                       : json(cfg.uss.polling_list).dump())
-      << ", reply delay " << cfg.uss.reply_delay_ms << " ms\n";
+  out << "drive:    uss on " << cfg.drive.device << " at " << uss_section(cfg).baud
+      << " baud 8E1 (rs485 " << config::to_string(cfg.drive.rs485) << "), drive address "
+      << uss_section(cfg).drive_address << ", PKW "
+      << enum_name(uss_section(cfg).drive_pkw, kUssPkwNames) << ", PZD "
+      << uss_section(cfg).drive_pzd_words << " words\n";
+  out << "uss:      " << uss_section(cfg).slaves.size() << " other slave(s), polling list "
+      << (uss_section(cfg).polling_list.empty() ? std::string("drive then each slave")
+                                                : json(uss_section(cfg).polling_list).dump())
+      << ", reply delay " << uss_section(cfg).reply_delay_ms << " ms\n";
   return out.str();
 }
 
 json slaves_json(const Config& cfg) {
   json out = json::array();
-  for (const auto& slave : cfg.uss.slaves) {
+  for (const auto& slave : uss_section(cfg).slaves) {
     out.push_back({{"address", slave.address},
                    {"pkw", std::string(enum_name(slave.pkw, kUssPkwNames))},
                    {"pzd_words", slave.pzd_words}});
@@ -264,17 +266,18 @@ std::vector<Key> uss_keys() {
       "uss.baud", "integer",
       "300, 600, 1200, 2400, 4800, 9600, 19200, 38400, 57600, 76800, 93750, 115200, 187500",
       "USS bus rate in baud; 8E1 characters (USS B 2.4, B 3.2)", apply_uss_baud,
-      [](const Config& c) { return json(c.uss.baud); }));
+      [](const Config& c) { return json(uss_section(c).baud); }));
   t.push_back(config::int_key("uss.drive_address", 0, kMaxAddress,
                               "USS address of the lift drive (ADR bits 0..4, USS A 4.3)",
-                              &Config::uss, &UssConfig::drive_address));
+                              config::kind_section<config::UssConfig>, &UssConfig::drive_address));
   t.push_back(config::enum_key("uss.drive_pkw", kUssPkwNames,
                                "the drive's PKW area: none, 3 or 4 words, or variable (USS C 4.1); "
                                "set the drive's own PKW parameter alike",
-                               &Config::uss, &UssConfig::drive_pkw));
+                               config::kind_section<config::UssConfig>, &UssConfig::drive_pkw));
   t.push_back(config::int_key("uss.drive_pzd_words", 2, kMaxPzd,
                               "PZD words of the drive (USS C 5.1): STW/ZSW and HSW/HIW at least",
-                              &Config::uss, &UssConfig::drive_pzd_words));
+                              config::kind_section<config::UssConfig>,
+                              &UssConfig::drive_pzd_words));
   t.push_back(config::custom_key(
       "uss.slaves", "array of {address, pkw, pzd_words}",
       "at most 31 slaves besides the drive, addresses 0..31 unique, pkw \"0\" \"3\" \"4\" "
@@ -287,49 +290,50 @@ std::vector<Key> uss_keys() {
       "at most 64 addresses of the drive and uss.slaves, any order, repeats allowed, the drive "
       "at least once; [] = the drive, then each slave",
       "the order in which the master polls the slaves (USS A 2.1)", apply_polling_list,
-      [](const Config& c) { return json(c.uss.polling_list); }));
+      [](const Config& c) { return json(uss_section(c).polling_list); }));
   t.push_back(config::int_key("uss.reply_delay_ms", 1, 20,
                               "longest wait for the start of a reply; never below the start pause "
                               "(USS A 5.2.1.1: at most 20 ms)",
-                              &Config::uss, &UssConfig::reply_delay_ms));
+                              config::kind_section<config::UssConfig>, &UssConfig::reply_delay_ms));
   t.push_back(config::int_key("uss.cycle_time_ms", 0, 6500,
                               "fixed time of one pass through the polling list; 0 = as fast as the "
                               "bus allows (USS A 5.1.1)",
-                              &Config::uss, &UssConfig::cycle_time_ms));
+                              config::kind_section<config::UssConfig>, &UssConfig::cycle_time_ms));
   t.push_back(
       config::int_key("uss.telegram_failures", 1, 100,
                       "consecutive failed telegrams of the drive that end a travel (like a DCP "
                       "link fault)",
-                      &Config::uss, &UssConfig::telegram_failures));
+                      config::kind_section<config::UssConfig>, &UssConfig::telegram_failures));
   t.push_back(config::int_key("uss.pkw_repeat_limit", 1, 1000,
                               "polls a parameter request is repeated without its reply before it "
                               "fails (USS C 4)",
-                              &Config::uss, &UssConfig::pkw_repeat_limit));
+                              config::kind_section<config::UssConfig>,
+                              &UssConfig::pkw_repeat_limit));
   t.push_back(
       config::bool_key("uss.mirror_at_start",
                        "send each slave a mirror telegram as a link test at start (USS A 5.3)",
-                       &Config::uss, &UssConfig::mirror_at_start));
+                       config::kind_section<config::UssConfig>, &UssConfig::mirror_at_start));
   t.push_back(config::int_key("uss.full_scale_raw", 1, 32767,
                               "main setpoint / actual value word that stands for uss.full_scale "
                               "(USS C 5.2.2: 0x4000 = 16384 = 100 %)",
-                              &Config::uss, &UssConfig::full_scale_raw));
+                              config::kind_section<config::UssConfig>, &UssConfig::full_scale_raw));
   t.push_back(
       config::int_key("uss.full_scale", 1, 100000,
                       "the drive's unit at uss.full_scale_raw (100 for percent, 50 for Hz of a "
                       "50 Hz motor, ...)",
-                      &Config::uss, &UssConfig::full_scale));
+                      config::kind_section<config::UssConfig>, &UssConfig::full_scale));
   t.push_back(
       config::int_key("uss.profile_timeout_ms", 100, 30000,
                       "the drive reaches the state asked for in its status word within this, "
                       "or it is a drive fault (USS C 5.2.1)",
-                      &Config::uss, &UssConfig::profile_timeout_ms));
+                      config::kind_section<config::UssConfig>, &UssConfig::profile_timeout_ms));
   t.push_back(config::custom_key(
       "uss.speeds", "object: speed -> setpoint",
       "V0 (crawl), VN (relevelling), VI (inspection) and every travelling speed of "
       "travel.dcp3_speed_count, each > 0 in uss.full_scale units and within a signed word once "
       "scaled",
       "main setpoint (HSW) of each speed, in the drive's unit", apply_uss_speeds,
-      [](const Config& c) { return json(c.uss.speeds); }));
+      [](const Config& c) { return json(uss_section(c).speeds); }));
   return t;
 }
 

@@ -24,6 +24,7 @@
 
 #include "common/defaults.hpp"
 #include "common/mono_time.hpp"
+#include "uss/defaults.hpp"
 #include "uss/pzd.hpp"
 
 namespace liftd::uss {

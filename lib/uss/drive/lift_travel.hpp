@@ -42,6 +42,7 @@
 #include "lift/floors.hpp"
 #include "lift/inputs.hpp"
 #include "lift/travel_event.hpp"
+#include "uss/defaults.hpp"
 #include "uss/drive/drive_profile.hpp"
 
 namespace liftd::uss {

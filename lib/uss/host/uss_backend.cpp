@@ -1,4 +1,5 @@
 // The USS lift's API backend: status, stats, trace, travels and the USS commands (PKW, mirror).
+#include "uss/config/section.hpp"
 #include "uss/host/uss_lift.hpp"
 
 #include <algorithm>
@@ -95,7 +96,7 @@ api::StatsSnapshot UssBackend::stats() {
   };
   // The bus's own figures (docs/api.md `stats`); a reply timeout and a BCC error are counted in
   // `receive` (USS A 5.2.3), not twice.
-  out.details = {{"baud", config_.uss.baud},
+  out.details = {{"baud", uss_section(config_).baud},
                  {"expected_cycle_time_us", us(s.expected_cycle_time)},
                  {"last_cycle_time_us", us(s.last_cycle_time)},
                  {"cycle_time_p99_us", r.cycle_time.percentile_us(0.99)},
@@ -159,7 +160,7 @@ api::Result UssBackend::parameter_result(const ParameterContext& context,
     case uss::PkwResult::Outcome::Unanswered:
       return Result::fail(api::ErrorCode::NotReady,
                           "no matching reply from " + slave + " after " +
-                              std::to_string(config_.uss.pkw_repeat_limit) +
+                              std::to_string(uss_section(config_).pkw_repeat_limit) +
                               " polls (uss.pkw_repeat_limit)");
   }
   const uss::Pkw& reply = r.reply;
@@ -195,7 +196,7 @@ void UssBackend::travel(const api::TravelArgs& args, api::Responder done) {
   cmd.floor = static_cast<std::size_t>(args.floor);
   if (args.speed) {
     const auto speed = uss::parse_speed(*args.speed);
-    if (!speed || config_.uss.speeds.count(*args.speed) == 0) {
+    if (!speed || uss_section(config_).speeds.count(*args.speed) == 0) {
       done(Result::fail(api::ErrorCode::BadRequest,
                         "speed " + *args.speed + " has no setpoint in uss.speeds", "speed"));
       return;
@@ -225,7 +226,8 @@ void UssBackend::drive_reset(api::Responder done) {
 }
 
 void UssBackend::parameter(const ParameterArgs& args, api::Responder done) {
-  const auto address = static_cast<std::uint8_t>(args.address.value_or(config_.uss.drive_address));
+  const auto address =
+      static_cast<std::uint8_t>(args.address.value_or(uss_section(config_).drive_address));
   const auto length = pkw_length(address);
   if (!length) {
     done(Result::fail(api::ErrorCode::BadRequest,
@@ -281,7 +283,7 @@ void UssBackend::parameter(const ParameterArgs& args, api::Responder done) {
 }
 
 void UssBackend::mirror(std::optional<int> address, api::Responder done) {
-  const auto a = static_cast<std::uint8_t>(address.value_or(config_.uss.drive_address));
+  const auto a = static_cast<std::uint8_t>(address.value_or(uss_section(config_).drive_address));
   if (!pkw_length(a)) {
     done(Result::fail(api::ErrorCode::BadRequest,
                       "slave " + std::to_string(a) +

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "config/config.hpp"
+#include "uss/config/section.hpp"
 #include "uss/pkw.hpp"
 
 namespace liftd::daemon {
@@ -25,8 +26,9 @@ inline uss::PkwLength pkw_length_of(config::UssPkw pkw) {
 /// Every slave on the bus, the drive first.
 inline std::vector<config::UssSlave> bus_slaves(const config::Config& c) {
   std::vector<config::UssSlave> out;
-  out.push_back({c.uss.drive_address, c.uss.drive_pkw, c.uss.drive_pzd_words});
-  for (const auto& s : c.uss.slaves) out.push_back(s);
+  out.push_back(
+      {uss_section(c).drive_address, uss_section(c).drive_pkw, uss_section(c).drive_pzd_words});
+  for (const auto& s : uss_section(c).slaves) out.push_back(s);
   return out;
 }
 

@@ -14,6 +14,7 @@
 
 #include "api/commands.hpp"
 #include "log/log.hpp"
+#include "uss/config/section.hpp"
 #include "uss/host/sim_actions.hpp"
 #include "uss/host/uss_bus_slaves.hpp"
 #include "uss/timing.hpp"
@@ -22,7 +23,7 @@ namespace liftd::daemon {
 
 uss::MasterConfig uss_master_config(const config::Config& c) {
   uss::MasterConfig out;
-  out.baud = static_cast<std::uint32_t>(c.uss.baud);
+  out.baud = static_cast<std::uint32_t>(uss_section(c).baud);
   for (const auto& s : bus_slaves(c)) {
     uss::SlaveConfig slave;
     slave.address = static_cast<std::uint8_t>(s.address);
@@ -31,30 +32,32 @@ uss::MasterConfig uss_master_config(const config::Config& c) {
     out.slaves.push_back(slave);
   }
   // USS A 2.1: an empty list polls every slave once per pass, the drive first.
-  if (c.uss.polling_list.empty()) {
+  if (uss_section(c).polling_list.empty()) {
     for (const auto& s : out.slaves) out.polling_list.push_back(s.address);
   } else {
-    for (int a : c.uss.polling_list) out.polling_list.push_back(static_cast<std::uint8_t>(a));
+    for (int a : uss_section(c).polling_list)
+      out.polling_list.push_back(static_cast<std::uint8_t>(a));
   }
-  out.reply_delay = std::chrono::milliseconds(c.uss.reply_delay_ms);
-  if (c.uss.cycle_time_ms > 0) out.cycle_time = std::chrono::milliseconds(c.uss.cycle_time_ms);
-  out.pkw_repeat_limit = static_cast<std::uint32_t>(c.uss.pkw_repeat_limit);
-  out.mirror_at_start = c.uss.mirror_at_start;
+  out.reply_delay = std::chrono::milliseconds(uss_section(c).reply_delay_ms);
+  if (uss_section(c).cycle_time_ms > 0)
+    out.cycle_time = std::chrono::milliseconds(uss_section(c).cycle_time_ms);
+  out.pkw_repeat_limit = static_cast<std::uint32_t>(uss_section(c).pkw_repeat_limit);
+  out.mirror_at_start = uss_section(c).mirror_at_start;
   return out;
 }
 
 uss::UssControllerConfig uss_controller_config(const config::Config& c) {
   uss::UssControllerConfig out;
-  out.drive_address = static_cast<std::uint8_t>(c.uss.drive_address);
-  out.drive_pzd_words = static_cast<std::uint8_t>(c.uss.drive_pzd_words);
+  out.drive_address = static_cast<std::uint8_t>(uss_section(c).drive_address);
+  out.drive_pzd_words = static_cast<std::uint8_t>(uss_section(c).drive_pzd_words);
   // The controller thinks in percent of the drive's full scale (USS C 5.2.2: 0x4000 = 100 %).
-  out.normalisation.raw_full_scale = c.uss.full_scale_raw;
+  out.normalisation.raw_full_scale = uss_section(c).full_scale_raw;
   out.normalisation.full_scale = 100.0;
   uss::LiftTravelConfig& t = out.travel;
   t.speed_percent.fill(0.0);
-  for (const auto& [name, setpoint] : c.uss.speeds) {
+  for (const auto& [name, setpoint] : uss_section(c).speeds) {
     if (const auto speed = uss::parse_speed(name)) {
-      t.speed_percent[uss::speed_index(*speed)] = setpoint * 100.0 / c.uss.full_scale;
+      t.speed_percent[uss::speed_index(*speed)] = setpoint * 100.0 / uss_section(c).full_scale;
     }
   }
   t.slowdown_mm.fill(0);
@@ -70,8 +73,8 @@ uss::UssControllerConfig uss_controller_config(const config::Config& c) {
   t.level_tolerance_mm = static_cast<std::uint32_t>(c.travel.level_tolerance_mm);
   t.relevel_doors_open = c.travel.relevel_with_doors == config::RelevelDoors::open ||
                          c.travel.relevel_with_doors == config::RelevelDoors::both;
-  t.profile.switch_on_timeout_ms = static_cast<std::uint32_t>(c.uss.profile_timeout_ms);
-  out.link_fault_replies = static_cast<std::uint32_t>(c.uss.telegram_failures);
+  t.profile.switch_on_timeout_ms = static_cast<std::uint32_t>(uss_section(c).profile_timeout_ms);
+  out.link_fault_replies = static_cast<std::uint32_t>(uss_section(c).telegram_failures);
   out.lift = lift_config(c);
   for (const auto& f : c.floors) out.floors_mm.push_back(f.level_mm);
   out.inputs_timeout = std::chrono::milliseconds(c.inputs.timeout_ms);
@@ -95,7 +98,7 @@ UssLift::UssLift(Host& daemon, const config::Config& config, bool simulate)
     : ControllerLift(daemon, config, simulate, {"actual"}) {
   uss::UssRunnerConfig rc;
   rc.device_path = config.drive.device;
-  rc.serial = uss::uss_serial_settings(static_cast<std::uint32_t>(config.uss.baud));
+  rc.serial = uss::uss_serial_settings(static_cast<std::uint32_t>(uss_section(config).baud));
   rc.serial.rs485 = config.drive.rs485 == config::Rs485Mode::required ? io::Rs485Mode::Required
                     : config.drive.rs485 == config::Rs485Mode::off    ? io::Rs485Mode::Off
                                                                       : io::Rs485Mode::Auto;
@@ -138,10 +141,10 @@ void UssLift::journal_started() {
       std::chrono::duration_cast<std::chrono::microseconds>(master_->expected_cycle_time()).count();
   log::event(log::Level::info, "uss", "uss_started",
              {{"device", runner_->config().device_path},
-              {"baud", std::to_string(config_.uss.baud)},
+              {"baud", std::to_string(uss_section(config_).baud)},
               {"expected_cycle_us", std::to_string(expected)}},
              "USS master running on " + runner_->config().device_path + " at " +
-                 std::to_string(config_.uss.baud) + " baud 8E1, " +
+                 std::to_string(uss_section(config_).baud) + " baud 8E1, " +
                  std::to_string(master_->config().polling_list.size()) +
                  " telegram(s) per pass: expected cycle time " + std::to_string(expected) +
                  " us (start pauses, telegrams, reply delays)");
@@ -153,7 +156,7 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
     case Kind::Link: {
       const bool up = event.link.responding;
       const std::string address = std::to_string(event.link.address);
-      const bool drive = event.link.address == config_.uss.drive_address;
+      const bool drive = event.link.address == uss_section(config_).drive_address;
       const std::string text =
           up ? "USS slave " + address + " answers" + (drive ? " (the drive)" : "")
              : "USS slave " + address + " does not send (no good reply in time, USS A 5.2.1.1)" +
@@ -219,7 +222,7 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
                  fault ? "uss_slave_fault" : "drive_state",
                  {{"state", std::string(uss::to_string(event.drive_state))},
                   {"control", event.plc_control ? "plc" : "local"},
-                  {"address", std::to_string(config_.uss.drive_address)},
+                  {"address", std::to_string(uss_section(config_).drive_address)},
                   {"status_word", std::to_string(event.zsw)}},
                  "USS drive: " + std::string(uss::to_string(event.drive_state)) +
                      (event.plc_control ? ""

@@ -1,4 +1,5 @@
 // The USS lift's simulated bus: the simulated slaves on a pseudo-terminal, on their own thread.
+#include "uss/config/section.hpp"
 #include "uss/host/uss_lift.hpp"
 
 #include <pthread.h>
@@ -36,8 +37,8 @@ constexpr double kSimCrawlApproachM = 0.1;
 
 SimulatedUssBus::SimulatedUssBus(const config::Config& config)
     : SimulatorThread(config),
-      baud_(static_cast<std::uint32_t>(config.uss.baud)),
-      drive_address_(static_cast<std::uint8_t>(config.uss.drive_address)),
+      baud_(static_cast<std::uint32_t>(uss_section(config).baud)),
+      drive_address_(static_cast<std::uint8_t>(uss_section(config).drive_address)),
       priority_(std::max(1, config.rt.priority - 1)) {
   auto pair = io::PtyPair::create(uss::uss_serial_settings(baud_), true);
   if (!pair) throw std::runtime_error("simulated USS bus: " + pair.error().message());
@@ -46,11 +47,12 @@ SimulatedUssBus::SimulatedUssBus(const config::Config& config)
   // v^2 = 2 a d: the fastest speed brakes from its deceleration point down to the crawl.
   const std::string fastest = config::dcp3_speeds(config.travel.dcp3_speed_count).front();
   const auto decel = config.travel.dcp3_decel_distance_mm.find(fastest);
-  const auto setpoint = config.uss.speeds.find(fastest);
+  const auto setpoint = uss_section(config).speeds.find(fastest);
   double nominal_mps = 1.0;
-  if (decel != config.travel.dcp3_decel_distance_mm.end() && setpoint != config.uss.speeds.end()) {
+  if (decel != config.travel.dcp3_decel_distance_mm.end() &&
+      setpoint != uss_section(config).speeds.end()) {
     const double braking_m = std::max(0.2, decel->second / 1000.0 - kSimCrawlApproachM);
-    const double fraction = setpoint->second / config.uss.full_scale;
+    const double fraction = setpoint->second / uss_section(config).full_scale;
     nominal_mps = std::sqrt(2.0 * kSimRampMps2 * braking_m) / std::max(0.05, fraction);
   }
   std::vector<uss::sim::UssSlaveConfig> slaves;

@@ -82,6 +82,7 @@
 #include "common/defaults.hpp"
 #include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
+#include "uss/defaults.hpp"
 #include "uss/line.hpp"
 #include "uss/pkw.hpp"
 #include "uss/pzd.hpp"

@@ -4,7 +4,16 @@
 // runs.
 #include <gtest/gtest.h>
 
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "dcp/config/section.hpp"
 #include "dcp/host/dcp_lift.hpp"
+#include "kinds/config_schema.hpp"
 
 namespace liftd::daemon {
 namespace {
@@ -36,6 +45,45 @@ TEST(Defaults, ADefaultConfigGivesTheDcpControllersOwnDefaults) {
   // The lift model and the travels agree on when the car is level (status car.floor and the
   // "already at that level" answer of travel).
   EXPECT_EQ(a.level_tolerance_mm, daemon.lift.level_tolerance_mm);
+}
+
+TEST(DcpSection, AnEmptyFileGivesTheDocumentedDefaults) {
+  // Legend: key path -> its default (docs/config.md); every key of `dcp.*` is in the table.
+  const std::vector<std::pair<std::string, nlohmann::json>> expected = {
+      {"/dcp/manufacturer", "LD"},  // DCP 5.12.2.3: a code no company holds in the table
+      {"/dcp/language", "EN"},          {"/dcp/data_info_type", "0"},
+      {"/dcp/extended_position", true}, {"/dcp/link_fault_frames", 10},
+      {"/dcp/link_recover_frames", 10}, {"/dcp/request_timeout_ms", 2000},
+  };
+  const config::LoadResult result = kinds::parse_config("{}", "test");
+  ASSERT_TRUE(result.ok());
+  const nlohmann::json dumped = config::to_json(result.config, kinds::config_schema());
+  for (const auto& [pointer, value] : expected) {
+    EXPECT_EQ(dumped.at(nlohmann::json::json_pointer(pointer)), value) << pointer;
+  }
+  std::size_t keys = 0;
+  for (const auto& path : config::key_paths(kinds::config_schema())) {
+    keys += path.rfind("dcp.", 0) == 0 ? 1U : 0U;
+  }
+  EXPECT_EQ(keys, expected.size());
+}
+
+TEST(DcpSection, EveryKeyReachesTheTypedStruct) {
+  const config::LoadResult r =
+      kinds::parse_config(R"({"dcp": {"manufacturer": "QX", "language": "DE", "data_info_type": "3",
+                  "extended_position": false, "link_fault_frames": 20,
+                  "link_recover_frames": 5, "request_timeout_ms": 100}})",
+                          "test");
+  ASSERT_TRUE(r.ok());
+  const config::Config& c = r.config;
+  using config::dcp_section;
+  EXPECT_EQ(dcp_section(c).manufacturer, "QX");
+  EXPECT_EQ(dcp_section(c).language, "DE");
+  EXPECT_EQ(dcp_section(c).data_info_type, '3');
+  EXPECT_FALSE(dcp_section(c).extended_position);
+  EXPECT_EQ(dcp_section(c).link_fault_frames, 20);
+  EXPECT_EQ(dcp_section(c).link_recover_frames, 5);
+  EXPECT_EQ(dcp_section(c).request_timeout_ms, 100);
 }
 
 }  // namespace

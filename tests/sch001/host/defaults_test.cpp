@@ -4,6 +4,15 @@
 // runs.
 #include <gtest/gtest.h>
 
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "kinds/config_schema.hpp"
+#include "sch001/config/section.hpp"
 #include "sch001/host/hydraulic_lift.hpp"
 
 namespace liftd::daemon {
@@ -33,6 +42,38 @@ TEST(Defaults, ADefaultConfigGivesTheSch001ControllersOwnDefaults) {
   EXPECT_EQ(daemon.lift.level_tolerance_mm, direct.lift.level_tolerance_mm);
   EXPECT_EQ(daemon.inputs_timeout, direct.inputs_timeout);
   EXPECT_EQ(daemon.inspection_hold, direct.inspection_hold);
+}
+
+TEST(Sch001Section, AnEmptyFileGivesTheDocumentedDefaults) {
+  // Legend: key path -> its default (docs/config.md); every key of `sch001.*` is in the table.
+  const std::vector<std::pair<std::string, nlohmann::json>> expected = {
+      {"/sch001/base", 0},
+      {"/sch001/controller_node", 49},
+      {"/sch001/single_unit", true},
+      {"/sch001/fast_down", "hsp"},
+      {"/sch001/has_v3", false},
+      {"/sch001/has_v4", false},
+      {"/sch001/star_delta_ms", 1500},
+      {"/sch001/slowdown_up_mm", 500},
+      {"/sch001/slowdown_down_mm", 700},
+      {"/sch001/slowdown_v3_mm", 1000},
+      {"/sch001/slowdown_v4_mm", 1500},
+      {"/sch001/stop_tolerance_mm", 3},
+      {"/sch001/relevel_start_mm", 10},
+      {"/sch001/max_travel_ms", 45000},
+      {"/sch001/auto_relevel", true},
+  };
+  const config::LoadResult result = kinds::parse_config("{}", "test");
+  ASSERT_TRUE(result.ok());
+  const nlohmann::json dumped = config::to_json(result.config, kinds::config_schema());
+  for (const auto& [pointer, value] : expected) {
+    EXPECT_EQ(dumped.at(nlohmann::json::json_pointer(pointer)), value) << pointer;
+  }
+  std::size_t keys = 0;
+  for (const auto& path : config::key_paths(kinds::config_schema())) {
+    keys += path.rfind("sch001.", 0) == 0 ? 1U : 0U;
+  }
+  EXPECT_EQ(keys, expected.size());
 }
 
 }  // namespace

@@ -4,6 +4,15 @@
 // runs.
 #include <gtest/gtest.h>
 
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "kinds/config_schema.hpp"
+#include "uss/config/section.hpp"
 #include "uss/host/uss_lift.hpp"
 
 namespace liftd::daemon {
@@ -42,6 +51,71 @@ TEST(Defaults, ADefaultConfigGivesTheUssControllersOwnDefaults) {
   EXPECT_EQ(master.pkw_repeat_limit, master_direct.pkw_repeat_limit);
   EXPECT_EQ(master.mirror_at_start, master_direct.mirror_at_start);
   EXPECT_EQ(master.cycle_time, master_direct.cycle_time);
+}
+
+TEST(UssSection, AnEmptyFileGivesTheDocumentedDefaults) {
+  // Legend: key path -> its default (docs/config.md); every key of `uss.*` is in the table.
+  const std::vector<std::pair<std::string, nlohmann::json>> expected = {
+      {"/uss/baud", 38400},
+      {"/uss/drive_address", 0},
+      {"/uss/drive_pkw", "4"},
+      {"/uss/drive_pzd_words", 2},
+      {"/uss/slaves", nlohmann::json::array()},
+      {"/uss/polling_list", nlohmann::json::array()},
+      {"/uss/reply_delay_ms", 20},
+      {"/uss/cycle_time_ms", 0},
+      {"/uss/telegram_failures", 3},
+      {"/uss/pkw_repeat_limit", 10},
+      {"/uss/mirror_at_start", true},
+      {"/uss/full_scale_raw", 16384},
+      {"/uss/full_scale", 100},
+      {"/uss/profile_timeout_ms", 2000},
+      {"/uss/speeds", {{"V0", 5}, {"VN", 3}, {"VI", 30}, {"V3", 60}, {"V4", 100}}},
+  };
+  const config::LoadResult result = kinds::parse_config("{}", "test");
+  ASSERT_TRUE(result.ok());
+  const nlohmann::json dumped = config::to_json(result.config, kinds::config_schema());
+  for (const auto& [pointer, value] : expected) {
+    EXPECT_EQ(dumped.at(nlohmann::json::json_pointer(pointer)), value) << pointer;
+  }
+  std::size_t keys = 0;
+  for (const auto& path : config::key_paths(kinds::config_schema())) {
+    keys += path.rfind("uss.", 0) == 0 ? 1U : 0U;
+  }
+  EXPECT_EQ(keys, expected.size());
+}
+
+TEST(UssSection, EveryKeyReachesTheTypedStruct) {
+  const config::LoadResult r = kinds::parse_config(R"({"drive": {"kind": "uss"},
+        "uss": {"baud": 187500, "drive_address": 7, "drive_pkw": "variable",
+                "drive_pzd_words": 4,
+                "slaves": [{"address": 12, "pkw": "3", "pzd_words": 0}, {"address": 31}],
+                "polling_list": [7, 12, 7, 31], "reply_delay_ms": 5, "cycle_time_ms": 100,
+                "telegram_failures": 7, "pkw_repeat_limit": 50, "mirror_at_start": false,
+                "full_scale_raw": 8192, "full_scale": 50, "profile_timeout_ms": 500,
+                "speeds": {"V0": 2.5, "VN": 1, "VI": 15, "V2": 20, "V3": 40, "V4": 99.9}}})",
+                                                   "test");
+  ASSERT_TRUE(r.ok());
+  const config::Config& c = r.config;
+  using config::uss_section;
+  EXPECT_EQ(uss_section(c).baud, 187500);
+  EXPECT_EQ(uss_section(c).drive_address, 7);
+  EXPECT_EQ(uss_section(c).drive_pkw, config::UssPkw::variable);
+  EXPECT_EQ(uss_section(c).drive_pzd_words, 4);
+  EXPECT_EQ(uss_section(c).slaves, (std::vector<config::UssSlave>{{12, config::UssPkw::three, 0},
+                                                                  {31, config::UssPkw::four, 2}}));
+  EXPECT_EQ(uss_section(c).polling_list, (std::vector<int>{7, 12, 7, 31}));
+  EXPECT_EQ(uss_section(c).reply_delay_ms, 5);
+  EXPECT_EQ(uss_section(c).cycle_time_ms, 100);
+  EXPECT_EQ(uss_section(c).telegram_failures, 7);
+  EXPECT_EQ(uss_section(c).pkw_repeat_limit, 50);
+  EXPECT_FALSE(uss_section(c).mirror_at_start);
+  EXPECT_EQ(uss_section(c).full_scale_raw, 8192);
+  EXPECT_EQ(uss_section(c).full_scale, 50);
+  EXPECT_EQ(uss_section(c).profile_timeout_ms, 500);
+  EXPECT_EQ(uss_section(c).speeds,
+            (std::map<std::string, double>{
+                {"V0", 2.5}, {"VN", 1}, {"VI", 15}, {"V2", 20}, {"V3", 40}, {"V4", 99.9}}));
 }
 
 }  // namespace
