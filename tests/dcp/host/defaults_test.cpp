@@ -14,6 +14,7 @@
 #include "dcp/config/section.hpp"
 #include "dcp/host/dcp_lift.hpp"
 #include "kinds/config_schema.hpp"
+#include "support/section_defaults.hpp"
 
 namespace liftd::daemon {
 namespace {
@@ -49,23 +50,13 @@ TEST(Defaults, ADefaultConfigGivesTheDcpControllersOwnDefaults) {
 
 TEST(DcpSection, AnEmptyFileGivesTheDocumentedDefaults) {
   // Legend: key path -> its default (docs/config.md); every key of `dcp.*` is in the table.
-  const std::vector<std::pair<std::string, nlohmann::json>> expected = {
+  const liftd::testing::SectionDefaults expected = {
       {"/dcp/manufacturer", "LD"},  // DCP 5.12.2.3: a code no company holds in the table
       {"/dcp/language", "EN"},          {"/dcp/data_info_type", "0"},
       {"/dcp/extended_position", true}, {"/dcp/link_fault_frames", 10},
       {"/dcp/link_recover_frames", 10}, {"/dcp/request_timeout_ms", 2000},
   };
-  const config::LoadResult result = kinds::parse_config("{}", "test");
-  ASSERT_TRUE(result.ok());
-  const nlohmann::json dumped = config::to_json(result.config, kinds::config_schema());
-  for (const auto& [pointer, value] : expected) {
-    EXPECT_EQ(dumped.at(nlohmann::json::json_pointer(pointer)), value) << pointer;
-  }
-  std::size_t keys = 0;
-  for (const auto& path : config::key_paths(kinds::config_schema())) {
-    keys += path.rfind("dcp.", 0) == 0 ? 1U : 0U;
-  }
-  EXPECT_EQ(keys, expected.size());
+  liftd::testing::expect_section_defaults("dcp", expected);
 }
 
 TEST(DcpSection, EveryKeyReachesTheTypedStruct) {

@@ -14,6 +14,7 @@
 #include "kinds/config_schema.hpp"
 #include "sch001/config/section.hpp"
 #include "sch001/host/hydraulic_lift.hpp"
+#include "support/section_defaults.hpp"
 
 namespace liftd::daemon {
 namespace {
@@ -46,7 +47,7 @@ TEST(Defaults, ADefaultConfigGivesTheSch001ControllersOwnDefaults) {
 
 TEST(Sch001Section, AnEmptyFileGivesTheDocumentedDefaults) {
   // Legend: key path -> its default (docs/config.md); every key of `sch001.*` is in the table.
-  const std::vector<std::pair<std::string, nlohmann::json>> expected = {
+  const liftd::testing::SectionDefaults expected = {
       {"/sch001/base", 0},
       {"/sch001/controller_node", 49},
       {"/sch001/single_unit", true},
@@ -63,17 +64,7 @@ TEST(Sch001Section, AnEmptyFileGivesTheDocumentedDefaults) {
       {"/sch001/max_travel_ms", 45000},
       {"/sch001/auto_relevel", true},
   };
-  const config::LoadResult result = kinds::parse_config("{}", "test");
-  ASSERT_TRUE(result.ok());
-  const nlohmann::json dumped = config::to_json(result.config, kinds::config_schema());
-  for (const auto& [pointer, value] : expected) {
-    EXPECT_EQ(dumped.at(nlohmann::json::json_pointer(pointer)), value) << pointer;
-  }
-  std::size_t keys = 0;
-  for (const auto& path : config::key_paths(kinds::config_schema())) {
-    keys += path.rfind("sch001.", 0) == 0 ? 1U : 0U;
-  }
-  EXPECT_EQ(keys, expected.size());
+  liftd::testing::expect_section_defaults("sch001", expected);
 }
 
 }  // namespace

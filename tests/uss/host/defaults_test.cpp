@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "kinds/config_schema.hpp"
+#include "support/section_defaults.hpp"
 #include "uss/config/section.hpp"
 #include "uss/host/uss_lift.hpp"
 
@@ -55,7 +56,7 @@ TEST(Defaults, ADefaultConfigGivesTheUssControllersOwnDefaults) {
 
 TEST(UssSection, AnEmptyFileGivesTheDocumentedDefaults) {
   // Legend: key path -> its default (docs/config.md); every key of `uss.*` is in the table.
-  const std::vector<std::pair<std::string, nlohmann::json>> expected = {
+  const liftd::testing::SectionDefaults expected = {
       {"/uss/baud", 38400},
       {"/uss/drive_address", 0},
       {"/uss/drive_pkw", "4"},
@@ -72,17 +73,7 @@ TEST(UssSection, AnEmptyFileGivesTheDocumentedDefaults) {
       {"/uss/profile_timeout_ms", 2000},
       {"/uss/speeds", {{"V0", 5}, {"VN", 3}, {"VI", 30}, {"V3", 60}, {"V4", 100}}},
   };
-  const config::LoadResult result = kinds::parse_config("{}", "test");
-  ASSERT_TRUE(result.ok());
-  const nlohmann::json dumped = config::to_json(result.config, kinds::config_schema());
-  for (const auto& [pointer, value] : expected) {
-    EXPECT_EQ(dumped.at(nlohmann::json::json_pointer(pointer)), value) << pointer;
-  }
-  std::size_t keys = 0;
-  for (const auto& path : config::key_paths(kinds::config_schema())) {
-    keys += path.rfind("uss.", 0) == 0 ? 1U : 0U;
-  }
-  EXPECT_EQ(keys, expected.size());
+  liftd::testing::expect_section_defaults("uss", expected);
 }
 
 TEST(UssSection, EveryKeyReachesTheTypedStruct) {
