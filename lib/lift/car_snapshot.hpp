@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "common/mono_time.hpp"
+#include "lift/calls.hpp"
 #include "lift/faults.hpp"
 #include "lift/inputs.hpp"
 
@@ -38,6 +39,12 @@ struct CarSnapshot {
   /// The drive lets a travel start now: the travel's drive_forbidding(), the check every travel
   /// start makes first (status `drive.state`).
   bool drive_allows_travel = false;
+
+  /// The first kMaxSnapshotCalls floors of `queue`, in order, and how many there are.
+  void set_calls(const CallQueue& queue) noexcept {
+    call_count = queue.size() < kMaxSnapshotCalls ? queue.size() : kMaxSnapshotCalls;
+    for (std::size_t i = 0; i < call_count; ++i) calls[i] = static_cast<std::uint8_t>(queue.at(i));
+  }
 };
 
 }  // namespace liftd::lift

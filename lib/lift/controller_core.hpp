@@ -176,6 +176,14 @@ struct ControllerCoreConfig {
   const LevelZoneSource* level_zone_source = nullptr;
 };
 
+/// The core's part of a kind's controller configuration: every kind's has these members (the
+/// lift, the floor levels, the inputs' timeout, the inspection hold, the level zone source).
+template <class KindConfig>
+ControllerCoreConfig core_config_of(const KindConfig& config, MonoTime start = MonoTime{}) {
+  return {config.lift, config.floors_mm,        config.inputs_timeout, config.inspection_hold,
+          start,       config.level_zone_source};
+}
+
 template <typename Types>
 class ControllerCore {
  public:
@@ -716,10 +724,7 @@ class ControllerCore {
     s.direction = travel_.direction();
     s.target_floor = travel_.target();
     s.inputs = inputs;
-    s.call_count = std::min(lift_.calls().size(), kMaxSnapshotCalls);
-    for (std::size_t i = 0; i < s.call_count; ++i) {
-      s.calls[i] = static_cast<std::uint8_t>(lift_.calls().at(i));
-    }
+    s.set_calls(lift_.calls());
     s.faults = faults_.active_all();
     s.fault_since = faults_.since_all();
     s.shutting_down = shutting_down_;

@@ -5,14 +5,6 @@
 #include <type_traits>
 
 namespace liftd::sch001 {
-namespace {
-
-lift::ControllerCoreConfig core_config(const ControllerConfig& config, MonoTime start) {
-  return {config.lift, config.floors_mm,        config.inputs_timeout, config.inspection_hold,
-          start,       config.level_zone_source};
-}
-
-}  // namespace
 
 std::string_view fault_text(FaultCode code) noexcept {
   switch (code) {
@@ -38,7 +30,7 @@ std::string_view fault_text(FaultCode code) noexcept {
 
 Sch001Controller::Sch001Controller(const ControllerConfig& config, const PositionSource& position,
                                    MonoTime start)
-    : ControllerCore(core_config(config, start), config.hydraulic),
+    : ControllerCore(lift::core_config_of(config, start), config.hydraulic),
       config_(config),
       position_(position),
       link_(config.link, start) {

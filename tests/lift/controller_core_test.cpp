@@ -9,6 +9,7 @@
 #include <variant>
 #include <vector>
 
+#include "lift/car_snapshot.hpp"
 #include "lift/controller_core.hpp"
 #include "lift/gate.hpp"
 #include "lift/travel_event.hpp"
@@ -96,24 +97,11 @@ struct StubControllerEvent {
   Cause cause = Cause::None;
 };
 
-struct StubSnapshot {
-  MonoTime at{};
+/// What every lift's snapshot has (CarSnapshot), and the stub travel's kind and phase.
+struct StubSnapshot : CarSnapshot {
   std::uint64_t steps = 0;
-  std::optional<std::int64_t> position_mm;
-  std::optional<std::size_t> floor;
   StubKind travel_kind = StubKind::None;
   StubPhase phase = StubPhase::Idle;
-  Direction direction = Direction::None;
-  std::optional<std::size_t> target_floor;
-  std::optional<std::size_t> next_possible_stop;  ///< a moving travel's: where a stop now lands
-  Inputs inputs{};
-  std::array<std::uint8_t, kMaxSnapshotCalls> calls{};
-  std::size_t call_count = 0;
-  std::array<bool, static_cast<std::size_t>(FaultCode::kCount)> faults{};
-  std::array<MonoTime, static_cast<std::size_t>(FaultCode::kCount)> fault_since{};
-  bool shutting_down = false;
-  bool learning = false;
-  bool drive_allows_travel = false;
 };
 
 using StubTravelCommand = BasicTravelCommand<StubSpeed>;

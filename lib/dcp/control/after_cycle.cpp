@@ -177,10 +177,7 @@ void DcpController::publish(MonoTime now) noexcept {
   s.command = last_output_.command;
   s.data_word = last_output_.data_word;
   s.inputs = last_input_.inputs;
-  const lift::CallQueue& calls = lift_.calls();
-  s.call_count = calls.size() < kMaxSnapshotCalls ? calls.size() : kMaxSnapshotCalls;
-  for (std::size_t i = 0; i < s.call_count; ++i)
-    s.calls[i] = static_cast<std::uint8_t>(calls.at(i));
+  s.set_calls(lift_.calls());
   for (std::size_t r = 0; r < dcp::kDisplayRows; ++r) {
     const auto row = link_.display().row(r);
     std::copy(row.begin(), row.end(), s.display[r].begin());

@@ -53,22 +53,9 @@ std::string_view fault_text(FaultCode code) noexcept {
 
 // ---- construction ----
 
-namespace {
-
-lift::ControllerCoreConfig core_config(const ControllerConfig& config) {
-  lift::ControllerCoreConfig core;
-  core.lift = config.lift;
-  core.floors_mm = config.floors_mm;
-  core.inputs_timeout = config.inputs_timeout;
-  core.inspection_hold = config.inspection_hold;
-  core.level_zone_source = config.level_zone_source;
-  return core;  // the start grace counts from the first cycle (frame_to_send)
-}
-
-}  // namespace
-
 DcpController::DcpController(const ControllerConfig& config, const PositionSource& position)
-    : ControllerCore(core_config(config), config.travel),
+    // The start grace counts from the first cycle (frame_to_send), not from here.
+    : ControllerCore(lift::core_config_of(config), config.travel),
       config_(config),
       position_(position),
       link_(config.link) {

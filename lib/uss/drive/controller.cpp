@@ -9,14 +9,6 @@
 #include "drive/drive.hpp"
 
 namespace liftd::uss {
-namespace {
-
-lift::ControllerCoreConfig core_config(const UssControllerConfig& config, MonoTime start) {
-  return {config.lift, config.floors_mm,        config.inputs_timeout, config.inspection_hold,
-          start,       config.level_zone_source};
-}
-
-}  // namespace
 
 std::string_view fault_text(FaultCode code) noexcept {
   switch (code) {
@@ -42,7 +34,7 @@ std::string_view fault_text(FaultCode code) noexcept {
 
 UssController::UssController(const UssControllerConfig& config, Master& master,
                              const PositionSource& position, MonoTime start)
-    : ControllerCore(core_config(config, start), config.travel),
+    : ControllerCore(lift::core_config_of(config, start), config.travel),
       config_(config),
       master_(master),
       position_(position) {
