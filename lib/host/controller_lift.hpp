@@ -7,15 +7,14 @@
 // stats and trace) stays in the kind's lift (lib/dcp/host/dcp_lift.*,
 // lib/sch001/host/hydraulic_lift.*, lib/uss/host/uss_lift.*).
 //
-// `Drive` names the parts of one drive kind (see Sch001Drive, UssDrive):
-//   Controller, Runner, Simulator, Snapshot, Command, CommandReply, Event, TravelKind,
-//   StopCommand, RelevelCommand, InspectionCommand, CallCommand, InputsCommand, ShutdownCommand;
-//   LearnCommand; kKind, kName (drive.kind, journal and daemon component), kThread (as the
-//   journal names the thread), kStartFailedEvent, kReplyGrace, kShutdownGrace, fault_text(),
-//   travel_bit_names() (the names of the drive's bits in a travel's curve), learn_leg_base_ms()
-//   (the run-time limit a learning leg's allowance is added to); where the car can move with no
-//   travel of the controller's running (a drive that still reports travel active), also
-//   car_moving(snapshot).
+// `Drive` names the parts of one drive kind (see DcpDrive, Sch001Drive, UssDrive):
+//   Controller (a lift::ControllerCore: its CoreTypes give the Command, Reply, Event, Snapshot
+//   and TravelKind; the commands every kind takes are lift's), Runner, Simulator; kKind, kName
+//   (drive.kind, journal and daemon component), kThread (as the journal names the thread),
+//   kStartFailedEvent, kReplyGrace, kShutdownGrace, fault_text(), travel_bit_names() (the names of
+//   the drive's bits in a travel's curve), learn_leg_base_ms() (the run-time limit a learning leg's
+//   allowance is added to); where the car can move with no travel of the controller's running (a
+//   drive that still reports travel active), also car_moving(snapshot).
 #pragma once
 
 #include <algorithm>
@@ -46,10 +45,15 @@
 #include "host/serial_device_report.hpp"
 #include "host/trace_files.hpp"
 #include "host/travel_log.hpp"
+#include "lift/controller_core.hpp"
 #include "lift/learning_travel.hpp"
 #include "log/log.hpp"
 
 namespace liftd::daemon {
+
+/// The types the controller of `Drive` works on (lift::ControllerCore::CoreTypes).
+template <class Drive>
+using CoreOf = typename Drive::Controller::CoreTypes;
 
 /// api::Backend over a controller on a real-time thread: what every such drive answers alike.
 /// A drive's backend adds status(), stats(), trace(), travel() and drive_reset().
@@ -87,12 +91,10 @@ class ControllerBackend : public api::Backend {
   void update_inputs(const api::InputUpdate& update, api::Responder done) override {
     done(inputs_.take(update, [this](const lift::Inputs& now) { send_inputs(now); }));
   }
-  void stop(api::Responder done) override { send(typename Drive::StopCommand{}, std::move(done)); }
-  void relevel(api::Responder done) override {
-    send(typename Drive::RelevelCommand{}, std::move(done));
-  }
+  void stop(api::Responder done) override { send(lift::StopCommand{}, std::move(done)); }
+  void relevel(api::Responder done) override { send(lift::RelevelCommand{}, std::move(done)); }
   void inspection(bool on, const std::string& direction, api::Responder done) override {
-    typename Drive::InspectionCommand cmd;
+    lift::InspectionCommand cmd;
     cmd.on = on;
     cmd.direction = direction_of(direction);
     send(cmd, std::move(done));
@@ -126,7 +128,7 @@ class ControllerBackend : public api::Backend {
     for (std::size_t i = 0; i < cmd.count; ++i) {
       cmd.floors[i] = static_cast<std::uint8_t>(args.floors[i]);
     }
-    send(typename Drive::CallCommand{cmd}, std::move(done));
+    send(lift::CallCommand{cmd}, std::move(done));
   }
   void sim(const api::SimRequest& request, api::Responder done) override {
     if (sim_ == nullptr) {
@@ -135,7 +137,7 @@ class ControllerBackend : public api::Backend {
     }
     done(sim_->apply(request, mono_now()));
   }
-  /// The learning travel (Drive::LearnCommand), answered when it ends: within the run-time
+  /// The learning travel (lift::LearnCommand), answered when it ends: within the run-time
   /// limits of both legs through the whole shaft (lift::learn_longest from
   /// Drive::learn_leg_base_ms), and the grace of every reply.
   void learn(api::Responder done) override {
@@ -146,9 +148,9 @@ class ControllerBackend : public api::Backend {
       top_mm = config_.floors.back().level_mm;
     }
     const auto longest = lift::learn_longest(Drive::learn_leg_base_ms(config_), bottom_mm, top_mm);
-    (void)post_command<typename Drive::Command>(
-        controller_, pending_, typename Drive::LearnCommand{}, std::move(done),
-        longest + Drive::kReplyGrace, Drive::kThread, [this](const typename Drive::CommandReply&) {
+    (void)post_command<typename CoreOf<Drive>::Command>(
+        controller_, pending_, lift::LearnCommand{}, std::move(done), longest + Drive::kReplyGrace,
+        Drive::kThread, [this](const typename CoreOf<Drive>::Reply&) {
           record_.learning_travel(mono_now());
           nlohmann::json result = learn_result_json(config_, controller_.learn_record());
           if (learn_listener_) learn_listener_(result);
@@ -254,7 +256,7 @@ class ControllerBackend : public api::Backend {
   /// Io thread: replies to their clients, requests the controller's thread never answered time
   /// out.
   virtual void poll(MonoTime now) {
-    typename Drive::CommandReply r;
+    typename CoreOf<Drive>::Reply r;
     while (controller_.poll_reply(r)) pending_.answer(r);
     travel_log_.drain(controller_);  // before the events: a travel's end finds its samples
     expire_unanswered(now);
@@ -267,7 +269,7 @@ class ControllerBackend : public api::Backend {
     inputs_.take_sample(sample, [this](const lift::Inputs& now) { send_inputs(now); });
   }
   bool send_shutdown(bool force) {
-    return controller_.post(typename Drive::Command{0, typename Drive::ShutdownCommand{force}});
+    return controller_.post(typename CoreOf<Drive>::Command{0, lift::ShutdownCommand{force}});
   }
   std::chrono::system_clock::time_point wall_time(MonoTime at) const {
     return wall_at_start_ +
@@ -288,13 +290,13 @@ class ControllerBackend : public api::Backend {
     done(api::Result::fail(api::ErrorCode::NotOffered,
                            "not offered by drive kind \"" + std::string(Drive::kName) + "\""));
   }
-  using Pending = PendingReplies<typename Drive::CommandReply>;
+  using Pending = PendingReplies<typename CoreOf<Drive>::Reply>;
   /// Posts a command; an ok reply answers through `complete` (none: reply_result).
   template <typename Body>
   void send(Body&& body, api::Responder done, typename Pending::Completion complete = {}) {
-    (void)post_command<typename Drive::Command>(controller_, pending_, std::forward<Body>(body),
-                                                std::move(done), Drive::kReplyGrace, Drive::kThread,
-                                                std::move(complete));
+    (void)post_command<typename CoreOf<Drive>::Command>(
+        controller_, pending_, std::forward<Body>(body), std::move(done), Drive::kReplyGrace,
+        Drive::kThread, std::move(complete));
   }
   /// Fails the requests the controller's thread did not answer in Drive::kReplyGrace.
   void expire_unanswered(MonoTime now) {
@@ -303,8 +305,9 @@ class ControllerBackend : public api::Backend {
   }
   /// The drive-neutral fields of `status` from the controller's snapshot, with the link as the
   /// drive reads it: faults and drive state, where the car is, the travel, the calls, status.rt.
-  api::StatusSnapshot neutral_status(const typename Drive::Snapshot& s, api::LinkState link) const {
-    using TravelKind = typename Drive::TravelKind;
+  api::StatusSnapshot neutral_status(const typename CoreOf<Drive>::Snapshot& s,
+                                     api::LinkState link) const {
+    using TravelKind = typename CoreOf<Drive>::TravelKind;
     api::StatusSnapshot out;
     out.drive_kind = Drive::kKind;
     out.link = link;
@@ -457,7 +460,7 @@ class ControllerBackend : public api::Backend {
   }
 
   void send_inputs(const lift::Inputs& inputs) {
-    (void)controller_.post(typename Drive::Command{0, typename Drive::InputsCommand{inputs}});
+    (void)controller_.post(typename CoreOf<Drive>::Command{0, lift::InputsCommand{inputs}});
   }
 
   TravelTimes eta_times_;  ///< `eta`'s measured travel and stop times
@@ -555,7 +558,7 @@ class ControllerLift : public LiftRunner {
   /// Journals the thread's link once it runs.
   virtual void journal_started() = 0;
   /// An event of the controller; the drive-neutral ones go to report_lift_event().
-  virtual void handle_event(const typename Drive::Event& event) = 0;
+  virtual void handle_event(const typename CoreOf<Drive>::Event& event) = 0;
   /// Every poll, after the controller's events: what only this drive watches.
   virtual void after_events(MonoTime) {}
   /// An event of the runner's own (its port, its timing), where it has them.
@@ -566,13 +569,13 @@ class ControllerLift : public LiftRunner {
   /// the drive fault (the SCH001 card's ERR, the USS status word's fault), with the travel that
   /// runs, if any.
   void report_drive_fault_edge(bool raised) {
-    using TravelEvent = decltype(std::declval<typename Drive::Event>().travel);
+    using TravelEvent = decltype(std::declval<typename CoreOf<Drive>::Event>().travel);
     if constexpr (!requires(const TravelEvent& t) { t.target_mm; }) {
       const auto s = controller_->snapshot();
       const auto floors = controller_->floors_mm();
       std::optional<std::int64_t> target_mm;
       if (s.target_floor && *s.target_floor < floors.size()) target_mm = floors[*s.target_floor];
-      const bool running = s.travel_kind != typename Drive::TravelKind{};
+      const bool running = s.travel_kind != typename CoreOf<Drive>::TravelKind{};
       report_travel(*server_, raised ? "drive_fault" : "drive_fault_cleared",
                     running ? to_string(s.travel_kind) : "none",
                     raised ? lift::Cause::DriveFault : lift::Cause::None, false, target_mm,
@@ -581,8 +584,8 @@ class ControllerLift : public LiftRunner {
   }
   /// Journals and publishes the events every such controller reports alike: a travel, a fault
   /// raised or cleared, a served call.
-  void report_lift_event(const typename Drive::Event& event) {
-    using Kind = typename Drive::Event::Kind;
+  void report_lift_event(const typename CoreOf<Drive>::Event& event) {
+    using Kind = typename CoreOf<Drive>::Event::Kind;
     switch (event.kind) {
       case Kind::Travel:
         backend_->record_travel_event(event.travel, event.at);
@@ -665,11 +668,11 @@ class ControllerLift : public LiftRunner {
       rt::CycleEvent cycle_event;
       while (runner_->poll_event(cycle_event)) handle_runner_event(cycle_event);
     }
-    typename Drive::Event event;
+    typename CoreOf<Drive>::Event event;
     while (controller_->poll_event(event)) handle_event(event);
     after_events(now);
     publisher_.publish(*server_, backend_->status(), now);
-    const typename Drive::Snapshot rest = controller_->snapshot();
+    const typename CoreOf<Drive>::Snapshot rest = controller_->snapshot();
     wind_down_.check({rest.shutting_down, rest.quiesced, rest.floor, rest.position_mm}, now);
   }
 
@@ -678,8 +681,8 @@ class ControllerLift : public LiftRunner {
       done();
       return;
     }
-    const typename Drive::Snapshot s = controller_->snapshot();
-    bool moving = s.travel_kind != Drive::TravelKind::None;
+    const typename CoreOf<Drive>::Snapshot s = controller_->snapshot();
+    bool moving = s.travel_kind != CoreOf<Drive>::TravelKind::None;
     if constexpr (requires { Drive::car_moving(s); }) moving = Drive::car_moving(s);
     // Every client, watching or not, hears that liftd is going and why: the last line before
     // the connection closes (docs/api.md `stopping`).

@@ -64,6 +64,10 @@ struct BasicTravelCommand {
 };
 struct StopCommand {};
 struct RelevelCommand {};
+/// The learning travel (lift/learning_travel.hpp on the hydraulic and USS lifts; DCP's crawls
+/// through the level zones as DCP 10.3 allows): answered when it ends, with the record in the
+/// controller's learn_record().
+struct LearnCommand {};
 struct InspectionCommand {
   bool on = false;
   Direction direction = Direction::None;
@@ -187,6 +191,10 @@ ControllerCoreConfig core_config_of(const KindConfig& config, MonoTime start = M
 template <typename Types>
 class ControllerCore {
  public:
+  /// The types the controller works on (its Command, Reply, Event, Snapshot, TravelKind, ...):
+  /// the io-side template (host/controller_lift.hpp) takes them from here.
+  using CoreTypes = Types;
+
   // ---- io thread ----
   /// Queues a command; false (nothing queued) when the queue is full or when kReplyQueueSize
   /// replies are owed already: every command with a tag gets exactly one reply, so the replies

@@ -59,11 +59,9 @@ using lift::InspectionCommand;
 using lift::RelevelCommand;
 /// The service is stopping: no new travel, the running one lands as `stop` does; `force`
 /// drops every signal at once.
+using lift::LearnCommand;
 using lift::ShutdownCommand;
 using lift::StopCommand;
-/// The learning travel (lift/learning_travel.hpp): legs at the unit's slow speed, ended by
-/// position; answered when it ends (the record in learn_record()).
-struct LearnCommand {};
 using CommandBody = std::variant<TravelCommand, StopCommand, RelevelCommand, InspectionCommand,
                                  CallCommand, InputsCommand, ShutdownCommand, LearnCommand>;
 /// A command with the caller's tag (the frame's command bits are `Command` in protocol.hpp).

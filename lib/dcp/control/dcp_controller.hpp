@@ -91,9 +91,7 @@ struct LinkCommand {
 struct ClockCommand {
   dcp::CivilTime time;
 };
-/// The learning travel: to below the bottom level, then up through every level zone at crawl;
-/// answered when it ends (the record in DcpController::learn_record()).
-struct LearnCommand {};
+using lift::LearnCommand;
 
 using CommandBody = std::variant<TravelCommand, StopCommand, FastStopCommand, RelevelCommand,
                                  InspectionCommand, FastStartCommand, CallCommand, InputsCommand,

@@ -88,9 +88,7 @@ struct ParameterCommand {
 struct MirrorCommand {
   std::uint8_t address = 0;
 };
-/// The learning travel (lift/learning_travel.hpp): legs at the crawl setpoint V0 ended by
-/// position; answered when it ends (the record in learn_record()).
-struct LearnCommand {};
+using lift::LearnCommand;
 using CommandBody = std::variant<TravelCommand, StopCommand, RelevelCommand, InspectionCommand,
                                  CallCommand, InputsCommand, ShutdownCommand, DriveResetCommand,
                                  ParameterCommand, MirrorCommand, LearnCommand>;
