@@ -9,16 +9,17 @@
 //
 // `Drive` names the parts of one drive kind (see DcpDrive, Sch001Drive, UssDrive):
 //   Controller (a lift::ControllerCore: its CoreTypes give the Command, Reply, Event, Snapshot
-//   and TravelKind; the commands every kind takes are lift's), Runner, Simulator; kKind, kName
-//   (drive.kind, journal and daemon component), kThread (as the journal names the thread),
-//   kStartFailedEvent, kReplyGrace, kShutdownGrace, fault_text(), travel_bit_names() (the names of
-//   the drive's bits in a travel's curve), learn_leg_base_ms() (the run-time limit a learning leg's
-//   allowance is added to); where the car can move with no travel of the controller's running (a
-//   drive that still reports travel active), also car_moving(snapshot).
+//   and TravelKind; the commands every kind takes are lift's), Runner, Simulator; kFacts (a
+//   DriveFacts), travel_bit_names() (the names of the drive's bits in a travel's curve),
+//   learn_leg_base_ms(config) (the run-time limit a learning leg's allowance is added to); where
+//   the car can move with no travel of the controller's running (a drive that still reports travel
+//   active), also car_moving(snapshot).
 #pragma once
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
+#include <cstddef>
 #include <cstring>
 #include <functional>
 #include <memory>
@@ -51,6 +52,33 @@
 
 namespace liftd::daemon {
 
+/// What the io side needs to know of a drive kind's lift besides its types.
+struct DriveFacts {
+  drive::Kind kind = drive::Kind::Dcp;
+  /// The real-time thread as the journal and a failed reply name it ("cycle", "CAN").
+  std::string_view thread;
+  /// A command its thread has not answered this long after it was sent (a learning's longest
+  /// run added) is failed: the thread stalled.
+  std::chrono::nanoseconds reply_grace{};
+  /// After a service stop forced the travel's end, how long the thread goes on sending the
+  /// drive its stopped state before it is stopped.
+  std::chrono::nanoseconds shutdown_grace{};
+  /// A fault code's text by the kind's own table.
+  std::string_view (*fault_text)(lift::FaultCode) noexcept = nullptr;
+
+  /// drive.kind, the journal's component and the daemon's component name ("dcp").
+  constexpr std::string_view name() const noexcept {
+    return drive::kKindNames[static_cast<std::size_t>(kind)];
+  }
+  /// The journal's event when the thread cannot start ("cycle_start_failed").
+  std::string start_failed_event() const {
+    std::string event(thread);
+    std::transform(event.begin(), event.end(), event.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return event + "_start_failed";
+  }
+};
+
 /// The types the controller of `Drive` works on (lift::ControllerCore::CoreTypes).
 template <class Drive>
 using CoreOf = typename Drive::Controller::CoreTypes;
@@ -76,7 +104,7 @@ class ControllerBackend : public api::Backend {
         inputs_(config, position_feed, sim != nullptr),
         flight_recorder_(runner.recorder(), default_runtime_dir(config),
                          static_cast<std::size_t>(config.rt.trace_files_kept),
-                         std::string(Drive::kName), std::move(decoder)),
+                         std::string(Drive::kFacts.name()), std::move(decoder)),
         travel_log_(Drive::travel_bit_names(), floor_levels_mm(config)),
         record_(config, sim != nullptr, mono_now()),
         eta_times_(floor_levels_mm(config), eta_defaults(config)),
@@ -86,7 +114,7 @@ class ControllerBackend : public api::Backend {
     preload_eta();
   }
 
-  drive::Kind drive_kind() const override { return Drive::kKind; }
+  drive::Kind drive_kind() const override { return Drive::kFacts.kind; }
   nlohmann::json config() override { return config::to_json(config_, schema_); }
   void update_inputs(const api::InputUpdate& update, api::Responder done) override {
     done(inputs_.take(update, [this](const lift::Inputs& now) { send_inputs(now); }));
@@ -149,8 +177,9 @@ class ControllerBackend : public api::Backend {
     }
     const auto longest = lift::learn_longest(Drive::learn_leg_base_ms(config_), bottom_mm, top_mm);
     (void)post_command<typename CoreOf<Drive>::Command>(
-        controller_, pending_, lift::LearnCommand{}, std::move(done), longest + Drive::kReplyGrace,
-        Drive::kThread, [this](const typename CoreOf<Drive>::Reply&) {
+        controller_, pending_, lift::LearnCommand{}, std::move(done),
+        longest + Drive::kFacts.reply_grace, Drive::kFacts.thread,
+        [this](const typename CoreOf<Drive>::Reply&) {
           record_.learning_travel(mono_now());
           nlohmann::json result = learn_result_json(config_, controller_.learn_record());
           if (learn_listener_) learn_listener_(result);
@@ -287,21 +316,22 @@ class ControllerBackend : public api::Backend {
     if (!s.target_floor && s.call_count == 0 && !running) asked_at_ = mono_now();
   }
   static void not_offered(api::Responder& done) {
-    done(api::Result::fail(api::ErrorCode::NotOffered,
-                           "not offered by drive kind \"" + std::string(Drive::kName) + "\""));
+    done(api::Result::fail(
+        api::ErrorCode::NotOffered,
+        "not offered by drive kind \"" + std::string(Drive::kFacts.name()) + "\""));
   }
   using Pending = PendingReplies<typename CoreOf<Drive>::Reply>;
   /// Posts a command; an ok reply answers through `complete` (none: reply_result).
   template <typename Body>
   void send(Body&& body, api::Responder done, typename Pending::Completion complete = {}) {
     (void)post_command<typename CoreOf<Drive>::Command>(
-        controller_, pending_, std::forward<Body>(body), std::move(done), Drive::kReplyGrace,
-        Drive::kThread, std::move(complete));
+        controller_, pending_, std::forward<Body>(body), std::move(done), Drive::kFacts.reply_grace,
+        Drive::kFacts.thread, std::move(complete));
   }
-  /// Fails the requests the controller's thread did not answer in Drive::kReplyGrace.
+  /// Fails the requests the controller's thread did not answer in Drive::kFacts.reply_grace.
   void expire_unanswered(MonoTime now) {
-    pending_.expire(
-        now, "the " + std::string(Drive::kThread) + " thread did not answer; see the journal");
+    pending_.expire(now, "the " + std::string(Drive::kFacts.thread) +
+                             " thread did not answer; see the journal");
   }
   /// The drive-neutral fields of `status` from the controller's snapshot, with the link as the
   /// drive reads it: faults and drive state, where the car is, the travel, the calls, status.rt.
@@ -309,10 +339,11 @@ class ControllerBackend : public api::Backend {
                                      api::LinkState link) const {
     using TravelKind = typename CoreOf<Drive>::TravelKind;
     api::StatusSnapshot out;
-    out.drive_kind = Drive::kKind;
+    out.drive_kind = Drive::kFacts.kind;
     out.link = link;
     out.faults = active_faults(
-        s.faults, s.fault_since, [](lift::FaultCode code) { return Drive::fault_text(code); },
+        s.faults, s.fault_since,
+        [](lift::FaultCode code) { return Drive::kFacts.fault_text(code); },
         [this](MonoTime at) { return wall_time(at); });
     out.drive_state =
         drive::state_of(out.link == api::LinkState::Up, s.travel_kind != TravelKind::None,
@@ -325,7 +356,7 @@ class ControllerBackend : public api::Backend {
     } else if (s.next_possible_stop) {  // where a stop now would land the moving car
       out.next_possible_stop = static_cast<int>(*s.next_possible_stop);
     }
-    out.travel_state = std::string(to_string(s.travel_kind));
+    out.travel_state = std::string(CoreOf<Drive>::Travel::kind_name(s.travel_kind));
     out.travel_direction = direction_name(s.direction);
     if (s.target_floor) out.target_floor = static_cast<int>(*s.target_floor);
     for (std::size_t i = 0; i < s.call_count; ++i) out.calls.push_back(s.calls[i]);
@@ -344,7 +375,7 @@ class ControllerBackend : public api::Backend {
   /// thread made, and what the controller's queues dropped; the kind adds its `details`.
   api::StatsSnapshot neutral_stats(std::uint64_t frames_sent, std::uint64_t cycles) const {
     api::StatsSnapshot out;
-    out.drive_kind = Drive::kKind;
+    out.drive_kind = Drive::kFacts.kind;
     out.frames_sent = frames_sent;
     out.cycles = cycles;
     out.dropped_events = controller_.dropped_events();
@@ -496,7 +527,7 @@ class ControllerLift : public LiftRunner {
         publisher_(config.api.state_rate_hz, std::move(continuous)),
         wind_down_(
             daemon, [this](bool force) { return backend_->send_shutdown(force); },
-            kShutdownDeadline, Drive::kShutdownGrace) {}
+            kShutdownDeadline, Drive::kFacts.shutdown_grace) {}
 
   /// The position the API's `inputs` carry (position.source "api"), made as the car's position.
   const PositionSource& make_position_feed() {
@@ -510,9 +541,11 @@ class ControllerLift : public LiftRunner {
   }
 
   /// Once the simulator, the controller and the runner are made: the API server over `backend`,
-  /// the daemon's components (the simulator, the thread as Drive::kName, the API), the watchdog
-  /// probe and the status line while running.
-  void register_parts(std::unique_ptr<Backend> backend, const std::string& running_status) {
+  /// the daemon's components (the simulator, the thread as Drive::kFacts.name(), the API), the
+  /// watchdog probe and the status line while running: "simulated `lift` running; API on ..."
+  /// under --simulate, else "`link` starting on `endpoint`".
+  void register_parts(std::unique_ptr<Backend> backend, std::string_view lift,
+                      std::string_view link, std::string_view endpoint) {
     backend_ = std::move(backend);
     runner_->set_notify_fd(wake_.fd());  // its news wakes poll() at once
     server_ = std::make_unique<api::Server>(daemon_.io(), *backend_, api_server_config(config_),
@@ -523,13 +556,15 @@ class ControllerLift : public LiftRunner {
     if (sim_) {
       daemon_.add_component({"sim", [this] { return sim_->start(); }, [this] { sim_->stop(); }});
     }
-    daemon_.add_component({std::string(Drive::kName), [this] { return start_runner(); },
+    daemon_.add_component({std::string(Drive::kFacts.name()), [this] { return start_runner(); },
                            [this] { stop_runner(); },
                            [this](std::function<void()> done) { wind_down(std::move(done)); }});
     register_api(daemon_, *server_, socket_path_);
     daemon_.set_dump_handler([this] { (void)backend_->write_flight_recorder("SIGUSR1"); });
     daemon_.set_progress_probe(progress_probe([this] { return runner_->progress(); }));
-    daemon_.set_running_status(running_status);
+    daemon_.set_running_status(
+        simulate_ ? "simulated " + std::string(lift) + " running; API on " + socket_path_
+                  : std::string(link) + " starting on " + std::string(endpoint));
   }
 
   /// Stops the API, the thread (journalling its last events) and the simulator, and frees the
@@ -552,8 +587,9 @@ class ControllerLift : public LiftRunner {
   /// adapter's latency timer set to 1 ms where liftd may (not under --simulate: a pty), and
   /// handed to the backend for `stats`.
   void prepare_serial_device(const std::string& device) {
-    backend_->set_serial_device(simulate_ ? io::query_serial_device(device)
-                                          : daemon::prepare_serial_device(device, Drive::kName));
+    backend_->set_serial_device(simulate_
+                                    ? io::query_serial_device(device)
+                                    : daemon::prepare_serial_device(device, Drive::kFacts.name()));
   }
   /// Journals the thread's link once it runs.
   virtual void journal_started() = 0;
@@ -577,7 +613,7 @@ class ControllerLift : public LiftRunner {
       if (s.target_floor && *s.target_floor < floors.size()) target_mm = floors[*s.target_floor];
       const bool running = s.travel_kind != typename CoreOf<Drive>::TravelKind{};
       report_travel(*server_, raised ? "drive_fault" : "drive_fault_cleared",
-                    running ? to_string(s.travel_kind) : "none",
+                    running ? CoreOf<Drive>::Travel::kind_name(s.travel_kind) : "none",
                     raised ? lift::Cause::DriveFault : lift::Cause::None, false, target_mm,
                     s.position_mm);
     }
@@ -593,7 +629,7 @@ class ControllerLift : public LiftRunner {
         break;
       case Kind::FaultRaised:
       case Kind::FaultCleared:
-        report_fault(*server_, event.fault, Drive::fault_text(event.fault),
+        report_fault(*server_, event.fault, Drive::kFacts.fault_text(event.fault),
                      event.kind == Kind::FaultRaised);
         // The frames that led to a link fault are what a technician needs first: the recorder
         // goes to a file at once, on every kind (docs/operations.md "The flight recorder").
@@ -631,13 +667,13 @@ class ControllerLift : public LiftRunner {
     before_start();
     const int error = runner_->start();
     if (error != 0) {
-      log::event(
-          log::Level::error, Drive::kName, Drive::kStartFailedEvent,
-          {{"errno", std::to_string(error)}},
-          "cannot start the " + std::string(Drive::kThread) + " thread: " + std::strerror(error));
+      log::event(log::Level::error, Drive::kFacts.name(), Drive::kFacts.start_failed_event(),
+                 {{"errno", std::to_string(error)}},
+                 "cannot start the " + std::string(Drive::kFacts.thread) +
+                     " thread: " + std::strerror(error));
       return false;
     }
-    if (!accept_rt_thread(config_, runner_->thread_status(), simulate_, Drive::kThread)) {
+    if (!accept_rt_thread(config_, runner_->thread_status(), simulate_, Drive::kFacts.thread)) {
       runner_->stop();
       return false;
     }

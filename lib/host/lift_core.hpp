@@ -314,8 +314,8 @@ void report_travel(api::Server& server, const TravelEvent& t, Controller& contro
     const std::optional<std::int64_t> target_mm =
         t.target && *t.target < floors.size() ? std::optional<std::int64_t>(floors[*t.target])
                                               : std::nullopt;
-    report_travel(server, type, to_string(t.kind), t.cause, aborted, target_mm,
-                  controller.snapshot().position_mm);
+    report_travel(server, type, Controller::CoreTypes::Travel::kind_name(t.kind), t.cause, aborted,
+                  target_mm, controller.snapshot().position_mm);
   }
 }
 /// Journals and publishes a served call.

@@ -16,11 +16,13 @@
 //
 // A kind whose travels run through the core (SCH001, USS) steps them with step_lift(), one order
 // for every such kind, and supplies what only it knows through these members (ControllerCore is
-// its friend): build_input(now), handle(command, in), inspect_run(direction, in),
-// start_call_travel(floor, in), start_relevel_run(floor, direction, in) -> Cause,
-// run_travel(in), start_learn_leg(target_mm, direction, in) -> bool,
-// drive_learn_refusal(in) -> optional<Answer>, update_faults(in, now), relevel_policy(), and the
-// static refusal(cause) of its travels' causes (refusal_for over its own table).
+// its friend): build_input(now), handle(command, in) (its own commands; every lift's through
+// handle_lift), drive_travel_refusal(travel command) -> optional<Refusal>,
+// inspect_run(direction, in), start_call_travel(floor, in),
+// start_relevel_run(floor, direction, in) -> Cause, run_travel(in),
+// start_learn_leg(target_mm, direction, in) -> bool, drive_learn_refusal(in) -> optional<Answer>,
+// update_faults(in, now), relevel_policy(), and the static refusal(cause) of its travels' causes
+// (refusal_for over its own table).
 //
 // Threads: the real-time thread calls the protected members; ONE other thread (the daemon's io
 // thread) calls post(), poll_reply(), poll_event(), snapshot() and dropped_events().
@@ -36,6 +38,7 @@
 #include <span>
 #include <stdexcept>
 #include <string_view>
+#include <type_traits>
 
 #include "common/level_zone_source.hpp"
 #include "common/mono_time.hpp"
@@ -107,6 +110,23 @@ inline constexpr std::size_t kEventQueueSize = 256;
 /// Travel samples between two io-thread polls: the io thread wakes after every step, so 512
 /// holds 7.6 s of 15 ms DCP cycles should it stall.
 inline constexpr std::size_t kTravelSampleQueueSize = 512;
+
+/// The types a kind's controller works on, named once per kind: its command variant, reply,
+/// event and snapshot, its travel sequencer with that sequencer's event, kind and command, and
+/// the input of one step.
+template <typename CommandT, typename ReplyT, typename EventT, typename SnapshotT, typename TravelT,
+          typename TravelEventT, typename TravelKindT, typename TravelCommandT, typename InputT>
+struct CoreTypes {
+  using Command = CommandT;
+  using Reply = ReplyT;
+  using Event = EventT;
+  using Snapshot = SnapshotT;
+  using Travel = TravelT;
+  using TravelEvent = TravelEventT;
+  using TravelKind = TravelKindT;
+  using TravelCommand = TravelCommandT;
+  using Input = InputT;
+};
 
 /// The reply code of a refusal for a cause both drives' travels know; NotReady for the others.
 constexpr ReplyCode shared_cause_code(Cause cause) noexcept {
@@ -375,6 +395,31 @@ class ControllerCore {
     if (shutting_down_) return !refuse(tag, ReplyCode::NotReady, "the service is stopping");
     if (travel_.busy()) return !refuse(tag, ReplyCode::Busy, "a travel is running");
     return false;
+  }
+
+  /// A command every lift takes, for a kind whose travels run through the core (SCH001, USS):
+  /// travel (the gates of handle_travel, then its travel's start_travel), relevel, learn and the
+  /// shared ones. The kind's parts: drive_travel_refusal(command) (a travel it cannot make, e.g.
+  /// a speed without setpoint), refusal(cause), and those of handle_relevel and learn_gate.
+  template <typename Kind, typename Body>
+  void handle_lift(std::uint32_t tag, const Body& body, typename Types::Input& in,
+                   Kind& kind) noexcept {
+    if constexpr (std::is_same_v<Body, typename Types::TravelCommand>) {
+      (void)handle_travel(
+          tag, body, in, [&] { return kind.drive_travel_refusal(body); },
+          [&] { return travel_.start_travel(lift_.floors(), body.floor, body.speed, in); },
+          [](Cause cause) { return Kind::refusal(cause); });
+    } else if constexpr (std::is_same_v<Body, RelevelCommand>) {
+      handle_relevel(tag, in, kind);
+    } else if constexpr (std::is_same_v<Body, LearnCommand>) {
+      handle_learn(
+          tag, in.position_mm, level_tolerance_mm_, [&] { return learn_gate(in, kind); },
+          [&](std::int64_t target_mm, Direction direction) {
+            return kind.start_learn_leg(target_mm, direction, in);
+          });
+    } else {
+      handle_shared(tag, body, in);
+    }
   }
 
   // ---- the learning travel (lift/learning_travel.hpp) ----

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <string_view>
 
 #include "common/fixed_queue.hpp"
 #include "common/mono_time.hpp"
@@ -13,6 +14,33 @@
 #include "lift/inputs.hpp"
 
 namespace liftd::lift {
+
+/// What the SCH001 or USS travel sequencer runs.
+enum class TravelKind : std::uint8_t {
+  None,
+  Travel,  ///< to a floor (a call or the travel command)
+  Relevel,
+  Inspection,
+  Learn,  ///< a leg of the learning travel (lift/learning_travel.hpp): ends by position
+};
+/// "idle", `travel_name` (the kind's name of a travel to a floor: "hydraulic", "speed"),
+/// "relevel", "inspection", "learn" (status travel.state, travel events, the travel log).
+constexpr std::string_view travel_kind_name(TravelKind kind,
+                                            std::string_view travel_name) noexcept {
+  switch (kind) {
+    case TravelKind::None:
+      return "idle";
+    case TravelKind::Travel:
+      return travel_name;
+    case TravelKind::Relevel:
+      return "relevel";
+    case TravelKind::Inspection:
+      return "inspection";
+    case TravelKind::Learn:
+      return "learn";
+  }
+  return "idle";
+}
 
 /// One event of a run of kind `Kind` (the travel's TravelKind), an abort with its `cause`.
 template <typename Kind>

@@ -154,8 +154,8 @@ void Sch001Controller::step(MonoTime now) noexcept {
   lift::DriveBits bits;
   bits.command = last_output_.bits.to_byte();  // 3c: the command byte of our answer
   bits.status = link_.status() ? link_.status()->to_byte() : 0;  // 3b: the card's status byte
-  sample_travel(now, travel_.kind() != TravelKind::None, to_string(travel_.kind()), in.position_mm,
-                travel_.target(), bits);
+  sample_travel(now, travel_.kind() != TravelKind::None, HydraulicTravel::kind_name(travel_.kind()),
+                in.position_mm, travel_.target(), bits);
   publish(now);
 }
 
@@ -180,29 +180,12 @@ lift::Refusal Sch001Controller::refusal(lift::Cause cause) noexcept {
 }
 
 void Sch001Controller::handle(const ControllerCommand& command, TickInput& in) noexcept {
-  const std::uint32_t tag = command.tag;
-  std::visit(
-      [&](const auto& body) {
-        using T = std::decay_t<decltype(body)>;
-        if constexpr (std::is_same_v<T, TravelCommand>) {
-          (void)handle_travel(
-              tag, body, in, [] { return std::optional<lift::Refusal>(); },
-              [&] { return travel_.start_travel(lift_.floors(), body.floor, body.speed, in); },
-              refusal);
-        } else if constexpr (std::is_same_v<T, RelevelCommand>) {
-          handle_relevel(tag, in, *this);
-        } else if constexpr (std::is_same_v<T, LearnCommand>) {
-          handle_learn(
-              tag, in.position_mm, config_.lift.level_tolerance_mm,
-              [&] { return learn_gate(in, *this); },
-              [&](std::int64_t target_mm, lift::Direction direction) {
-                return start_learn_leg(target_mm, direction, in);
-              });
-        } else {
-          handle_shared(tag, body, in);
-        }
-      },
-      command.body);
+  // Every command the hydraulic lift takes is every lift's.
+  std::visit([&](const auto& body) { handle_lift(command.tag, body, in, *this); }, command.body);
+}
+
+std::optional<lift::Refusal> Sch001Controller::drive_travel_refusal(const TravelCommand&) noexcept {
+  return std::nullopt;  // the unit has its two speeds on every installation (card document 3c)
 }
 
 // ---- what only the hydraulic lift knows (ControllerCore::step_lift) ----

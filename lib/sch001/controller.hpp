@@ -134,22 +134,10 @@ struct ControllerSnapshot : lift::CarSnapshot {
   Phase phase = Phase::Idle;
 };
 
-using lift::kCommandQueueSize;
-using lift::kEventQueueSize;
-using lift::kReplyQueueSize;
-
 /// The types the shared command handling works on.
-struct Sch001CoreTypes {
-  using Command = ControllerCommand;
-  using Reply = CommandReply;
-  using Event = ControllerEvent;
-  using Snapshot = ControllerSnapshot;
-  using Travel = HydraulicTravel;
-  using TravelEvent = sch001::TravelEvent;
-  using TravelKind = sch001::TravelKind;
-  using TravelCommand = sch001::TravelCommand;
-  using Input = TickInput;
-};
+using Sch001CoreTypes =
+    lift::CoreTypes<ControllerCommand, CommandReply, ControllerEvent, ControllerSnapshot,
+                    HydraulicTravel, TravelEvent, TravelKind, TravelCommand, TickInput>;
 
 class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore<Sch001CoreTypes> {
  public:
@@ -178,6 +166,7 @@ class Sch001Controller final : public rt::CanEngine, public lift::ControllerCore
   void update_faults(const TickInput& in, MonoTime now) noexcept;
   // What only the hydraulic lift knows, for ControllerCore::step_lift.
   friend class lift::ControllerCore<Sch001CoreTypes>;
+  static std::optional<lift::Refusal> drive_travel_refusal(const TravelCommand& command) noexcept;
   void inspect_run(lift::Direction direction, const TickInput& in) noexcept;
   void start_call_travel(std::size_t floor, const TickInput& in) noexcept;
   lift::Cause start_relevel_run(std::size_t floor, lift::Direction direction,

@@ -26,22 +26,6 @@ int speed_number(Speed speed) noexcept {
 
 }  // namespace
 
-std::string_view to_string(TravelKind kind) noexcept {
-  switch (kind) {
-    case TravelKind::None:
-      return "idle";
-    case TravelKind::Travel:
-      return "hydraulic";
-    case TravelKind::Relevel:
-      return "relevel";
-    case TravelKind::Inspection:
-      return "inspection";
-    case TravelKind::Learn:
-      return "learn";
-  }
-  return "idle";
-}
-
 std::string_view to_string(Phase phase) noexcept {
   switch (phase) {
     case Phase::Idle:

@@ -58,15 +58,7 @@ struct HydraulicConfig {
 enum class Speed : std::uint8_t { Fast, V3, V4 };
 
 /// What runs.
-enum class TravelKind : std::uint8_t {
-  None,
-  Travel,
-  Relevel,
-  Inspection,
-  Learn,  ///< a leg of the learning travel (lift/learning_travel.hpp): ends by position
-};
-/// "idle", "hydraulic", "relevel", "inspection", "learn" (status travel.state, travel events).
-std::string_view to_string(TravelKind kind) noexcept;
+using lift::TravelKind;
 
 /// Where a travel is.
 enum class Phase : std::uint8_t {
@@ -105,6 +97,12 @@ using TravelEvent = lift::BasicTravelEvent<TravelKind>;
 class HydraulicTravel {
  public:
   explicit HydraulicTravel(const HydraulicConfig& config) noexcept : config_(config) {}
+
+  /// What a run of `kind` is called (status travel.state, travel events): a travel to a floor is
+  /// "hydraulic" (lift::travel_kind_name).
+  static constexpr std::string_view kind_name(TravelKind kind) noexcept {
+    return lift::travel_kind_name(kind, "hydraulic");
+  }
 
   /// Starts a travel to `floor` at `speed` (V3/V4 fall back to fast where the unit lacks them).
   /// lift::Cause::None when it started; else why not (conditions of `in`).

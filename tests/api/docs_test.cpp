@@ -285,10 +285,12 @@ const std::vector<std::string> kTravelKinds = {"distance", "relevel_distance", "
 TEST(ApiDocs, TravelKindsMatchTheTravelLibrary) {
   std::set<std::string> named =
       returned_names("lib/dcp/travel/types.cpp", "to_string(TravelKind kind)", {"none"});
+  // The SCH001 and USS travels' kinds: lift's, and each travel's own name of a travel to a floor.
   named.merge(
-      returned_names("lib/sch001/hydraulic_travel.cpp", "to_string(TravelKind kind)", {"idle"}));
-  named.merge(
-      returned_names("lib/uss/drive/lift_travel.cpp", "to_string(TravelKind kind)", {"idle"}));
+      returned_names("lib/lift/travel_event.hpp", "std::string_view travel_kind_name(", {"idle"}));
+  for (const char* travel : {"lib/sch001/hydraulic_travel.hpp", "lib/uss/drive/lift_travel.hpp"}) {
+    named.merge(matches(read_source(travel), R"re(travel_kind_name\(kind, "([^"]+)"\))re"));
+  }
   EXPECT_EQ(named, as_set(kTravelKinds));
   expect_table_rows(kTravelKinds, "travel kind");
   const auto schema = read_schema();

@@ -182,22 +182,10 @@ struct ControllerSnapshot : lift::CarSnapshot {
   std::string_view handshake_problem;
 };
 
-using lift::kCommandQueueSize;
-using lift::kEventQueueSize;
-using lift::kReplyQueueSize;
-
 /// The types lift::ControllerCore works on for a DCP lift.
-struct DcpCoreTypes {
-  using Command = control::Command;
-  using Reply = CommandReply;
-  using Event = ControllerEvent;
-  using Snapshot = ControllerSnapshot;
-  using Travel = travel::TravelController;
-  using TravelEvent = travel::Event;
-  using TravelKind = travel::TravelKind;
-  using TravelCommand = control::TravelCommand;
-  using Input = travel::CycleInput;
-};
+using DcpCoreTypes = lift::CoreTypes<Command, CommandReply, ControllerEvent, ControllerSnapshot,
+                                     travel::TravelController, travel::Event, travel::TravelKind,
+                                     TravelCommand, travel::CycleInput>;
 
 /// The DCP side of one lift, run by an rt::CycleRunner.
 class DcpController final : public rt::CycleEngine, public lift::ControllerCore<DcpCoreTypes> {
@@ -277,7 +265,7 @@ class DcpController final : public rt::CycleEngine, public lift::ControllerCore<
   const PositionSource& position_;
   dcp::MasterLink link_;
 
-  std::array<Command, kCommandQueueSize> deferred_{};  ///< this cycle's commands after inputs
+  std::array<Command, lift::kCommandQueueSize> deferred_{};  ///< this cycle's commands after inputs
 
   // Cycle-thread state.
   dcp::FrameBytes frame_{};

@@ -21,12 +21,13 @@ nlohmann::json to_json(const PowerSetting& p) {
   return {{"supply", p.emergency ? "emergency" : "mains"}, {"saving", p.saving}};
 }
 
+using api::Access;
+using api::arg_or;
+using api::Call;
+using api::Responder;
+using api::Result;
+
 void add_dcp_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
-  using api::Access;
-  using api::arg_or;
-  using api::Call;
-  using api::Responder;
-  using api::Result;
   DcpCommandBackend* const dcp = dynamic_cast<DcpCommandBackend*>(&backend);
   // The answer on a dispatcher without a drive kind (see api::served_by).
   const std::string kNotDcpRefusal = "this lift's drive does not speak DCP";

@@ -141,8 +141,7 @@ DcpLift::DcpLift(Host& daemon, const config::Config& config, bool simulate)
   runner_ = std::make_unique<rt::CycleRunner>(cycle_config(config, device), *controller_);
   register_parts(std::make_unique<DcpBackend>(config, daemon.config_schema(), *controller_,
                                               *runner_, api_position_feed(), sim_.get()),
-                 simulate_ ? "simulated lift running; API on " + socket_path()
-                           : "drive link starting on " + device);
+                 "lift", "drive link", device);
 }
 
 DcpLift::~DcpLift() {

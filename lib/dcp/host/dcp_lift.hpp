@@ -37,18 +37,11 @@ struct DcpDrive {
   using Controller = control::DcpController;
   using Runner = rt::CycleRunner;
   using Simulator = SimulatedLift;
-  static constexpr drive::Kind kKind = drive::Kind::Dcp;
-  static constexpr std::string_view kName = "dcp";
-  static constexpr std::string_view kThread = "cycle";
-  static constexpr std::string_view kStartFailedEvent = "cycle_start_failed";
   /// The cycle answers a travel command within a cycle and an I-message within
-  /// dcp.request_timeout_ms; this catches a cycle that stopped.
-  static constexpr std::chrono::nanoseconds kReplyGrace = std::chrono::seconds(3);
-  /// After a forced end: one DCP 7.3 supervision window (10 x 15 ms) of frames without B0.
-  static constexpr std::chrono::nanoseconds kShutdownGrace = std::chrono::milliseconds(500);
-  static std::string_view fault_text(lift::FaultCode code) noexcept {
-    return control::fault_text(code);
-  }
+  /// dcp.request_timeout_ms: 3 s catches a cycle that stopped. After a forced end it sends
+  /// frames without B0 for more than one DCP 7.3 supervision window (10 x 15 ms).
+  static constexpr DriveFacts kFacts{drive::Kind::Dcp, "cycle", std::chrono::seconds(3),
+                                     std::chrono::milliseconds(500), &control::fault_text};
   /// The command bits B0..B7 and status bits S0..S7 (DCP 4.1).
   static TravelBitNames travel_bit_names();
   /// A learning leg crawls (DCP 10.3) within the crawl limit.

@@ -22,6 +22,9 @@ class TravelController {
   /// A controller with the given tunables.
   explicit TravelController(const TravelConfig& config = {}) noexcept : config_(config) {}
 
+  /// What a run of `kind` is called (status travel.state, travel events; to_string).
+  static std::string_view kind_name(TravelKind kind) noexcept { return to_string(kind); }
+
   /// Queues a travel; it starts in the next step(). Validated against the last cycle's input.
   StartResult start(const TravelRequest& request) noexcept;
   /// Controlled stop of the running travel (stop message, wait for S6 and S1).

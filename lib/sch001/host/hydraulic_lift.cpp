@@ -444,8 +444,7 @@ HydraulicLift::HydraulicLift(Host& daemon, const config::Config& config, bool si
   runner_ = std::make_unique<rt::CanRunner>(rc, *engine);
   register_parts(std::make_unique<Sch001Backend>(config, daemon.config_schema(), *controller_,
                                                  *runner_, api_position_feed(), sim_.get()),
-                 simulate_ ? "simulated hydraulic lift running; API on " + socket_path()
-                           : "SCH001 card link starting on " + config.can.interface);
+                 "hydraulic lift", "SCH001 card link", config.can.interface);
 }
 
 HydraulicLift::~HydraulicLift() {

@@ -71,17 +71,10 @@ struct Sch001Drive {
   using Controller = sch001::Sch001Controller;
   using Runner = rt::CanRunner;
   using Simulator = SimulatedCard;
-  static constexpr drive::Kind kKind = drive::Kind::Sch001;
-  static constexpr std::string_view kName = "sch001";
-  static constexpr std::string_view kThread = "CAN";
-  static constexpr std::string_view kStartFailedEvent = "can_start_failed";
-  /// The CAN thread answers within a tick; this catches a stall.
-  static constexpr std::chrono::nanoseconds kReplyGrace = std::chrono::seconds(3);
-  /// After a forced end: three answers without a signal.
-  static constexpr std::chrono::nanoseconds kShutdownGrace = std::chrono::milliseconds(300);
-  static std::string_view fault_text(lift::FaultCode code) noexcept {
-    return sch001::fault_text(code);
-  }
+  /// The CAN thread answers within a tick: 3 s catches a stall. After a forced end it sends the
+  /// card three answers without a signal (100 ms apart, card document 3b).
+  static constexpr DriveFacts kFacts{drive::Kind::Sch001, "CAN", std::chrono::seconds(3),
+                                     std::chrono::milliseconds(300), &sch001::fault_text};
   /// The command byte's bits (3c) and the card status byte's (3b), as status names them.
   static TravelBitNames travel_bit_names();
   /// A learning leg's limit is the motor run-time limiter's plus the slow run's allowance.

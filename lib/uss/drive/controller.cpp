@@ -139,7 +139,7 @@ void UssController::step(MonoTime now) noexcept {
     lift::DriveBits bits;
     bits.command = last_output_.stw;  // C 5.1: the control word sent
     bits.status = in.zsw;             // C 5.1: the drive's status word
-    sample_travel(now, travel_.kind() != TravelKind::None, to_string(travel_.kind()),
+    sample_travel(now, travel_.kind() != TravelKind::None, LiftTravel::kind_name(travel_.kind()),
                   in.position_mm, travel_.target(), bits);
   }
   publish(now);
@@ -220,21 +220,7 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
   std::visit(
       [&](const auto& body) {
         using T = std::decay_t<decltype(body)>;
-        if constexpr (std::is_same_v<T, TravelCommand>) {
-          const auto speed_refusal = [&]() -> std::optional<lift::Refusal> {
-            if (speed_number(body.speed) == 0 || !travel_.speed_available(body.speed)) {
-              return lift::Refusal{ReplyCode::BadRequest,
-                                   refusal(lift::Cause::SpeedNotConfigured).detail};
-            }
-            return std::nullopt;
-          };
-          (void)handle_travel(
-              tag, body, in, speed_refusal,
-              [&] { return travel_.start_travel(lift_.floors(), body.floor, body.speed, in); },
-              refusal);
-        } else if constexpr (std::is_same_v<T, RelevelCommand>) {
-          handle_relevel(tag, in, *this);
-        } else if constexpr (std::is_same_v<T, DriveResetCommand>) {
+        if constexpr (std::is_same_v<T, DriveResetCommand>) {
           if (travel_.busy()) {
             return reply(tag, ReplyCode::Busy, "a travel is running: no drive reset during travel");
           }
@@ -259,18 +245,19 @@ void UssController::handle(const ControllerCommand& command, DriveInput& in) noe
           if (!master_.request_mirror(body.address, tag)) {
             return reply(tag, ReplyCode::Busy, "a mirror to that slave is still pending");
           }
-        } else if constexpr (std::is_same_v<T, LearnCommand>) {
-          handle_learn(
-              tag, in.position_mm, config_.travel.level_tolerance_mm,
-              [&] { return learn_gate(in, *this); },
-              [&](std::int64_t target_mm, lift::Direction direction) {
-                return start_learn_leg(target_mm, direction, in);
-              });
         } else {
-          handle_shared(tag, body, in);
+          handle_lift(tag, body, in, *this);  // every lift's commands
         }
       },
       command.body);
+}
+
+std::optional<lift::Refusal> UssController::drive_travel_refusal(
+    const TravelCommand& command) const noexcept {
+  if (speed_number(command.speed) == 0 || !travel_.speed_available(command.speed)) {
+    return lift::Refusal{ReplyCode::BadRequest, refusal(lift::Cause::SpeedNotConfigured).detail};
+  }
+  return std::nullopt;
 }
 
 std::optional<lift::Answer> UssController::drive_learn_refusal(const DriveInput&) const noexcept {

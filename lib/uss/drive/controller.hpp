@@ -187,22 +187,10 @@ struct ControllerSnapshot : lift::CarSnapshot {
   SpeedName speed = SpeedName::V4;
 };
 
-using lift::kCommandQueueSize;
-using lift::kEventQueueSize;
-using lift::kReplyQueueSize;
-
 /// The types the shared command handling works on.
-struct UssCoreTypes {
-  using Command = ControllerCommand;
-  using Reply = CommandReply;
-  using Event = ControllerEvent;
-  using Snapshot = ControllerSnapshot;
-  using Travel = LiftTravel;
-  using TravelEvent = uss::TravelEvent;
-  using TravelKind = uss::TravelKind;
-  using TravelCommand = uss::TravelCommand;
-  using Input = DriveInput;
-};
+using UssCoreTypes =
+    lift::CoreTypes<ControllerCommand, CommandReply, ControllerEvent, ControllerSnapshot,
+                    LiftTravel, TravelEvent, TravelKind, TravelCommand, DriveInput>;
 
 class UssController final : public uss::UssHooks, public lift::ControllerCore<UssCoreTypes> {
  public:
@@ -228,6 +216,7 @@ class UssController final : public uss::UssHooks, public lift::ControllerCore<Us
   SpeedName fastest_speed() const noexcept;
   // What only the USS lift knows, for ControllerCore::step_lift.
   friend class lift::ControllerCore<UssCoreTypes>;
+  std::optional<lift::Refusal> drive_travel_refusal(const TravelCommand& command) const noexcept;
   void inspect_run(lift::Direction direction, const DriveInput& in) noexcept;
   void start_call_travel(std::size_t floor, const DriveInput& in) noexcept;
   lift::Cause start_relevel_run(std::size_t floor, lift::Direction direction,

@@ -101,22 +101,6 @@ std::optional<std::string_view> validate(const LiftTravelConfig& c) noexcept {
   return std::nullopt;
 }
 
-std::string_view to_string(TravelKind kind) noexcept {
-  switch (kind) {
-    case TravelKind::None:
-      return "idle";
-    case TravelKind::Travel:
-      return "speed";
-    case TravelKind::Relevel:
-      return "relevel";
-    case TravelKind::Inspection:
-      return "inspection";
-    case TravelKind::Learn:
-      return "learn";
-  }
-  return "idle";
-}
-
 std::string_view to_string(Phase phase) noexcept {
   switch (phase) {
     case Phase::Idle:

@@ -133,15 +133,7 @@ struct LiftTravelConfig {
 std::optional<std::string_view> validate(const LiftTravelConfig& config) noexcept;
 
 /// What runs.
-enum class TravelKind : std::uint8_t {
-  None,
-  Travel,
-  Relevel,
-  Inspection,
-  Learn,  ///< a leg of the learning travel (lift/learning_travel.hpp): ends by position
-};
-/// "idle", "speed", "relevel", "inspection", "learn".
-std::string_view to_string(TravelKind kind) noexcept;
+using lift::TravelKind;
 
 /// Where a run is.
 enum class Phase : std::uint8_t {
@@ -194,6 +186,12 @@ class LiftTravel {
  public:
   explicit LiftTravel(const LiftTravelConfig& config) noexcept
       : config_(config), profile_(config.profile) {}
+
+  /// What a run of `kind` is called (status travel.state, travel events): a travel to a floor is
+  /// "speed" (lift::travel_kind_name).
+  static constexpr std::string_view kind_name(TravelKind kind) noexcept {
+    return lift::travel_kind_name(kind, "speed");
+  }
 
   /// Starts a travel to `floor` at `speed` (one of V1..V7 with a setpoint; else
   /// SpeedNotConfigured). lift::Cause::None when it started; else why not (conditions of `in`). The

@@ -32,11 +32,12 @@ ParameterArgs parameter_args(const nlohmann::json& request) {
 
 }  // namespace
 
+using api::Access;
+using api::Call;
+using api::Responder;
+using api::Result;
+
 void add_uss_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
-  using api::Access;
-  using api::Call;
-  using api::Responder;
-  using api::Result;
   UssCommandBackend* const uss = dynamic_cast<UssCommandBackend*>(&backend);
   // The answer on a dispatcher without a drive kind (see api::served_by).
   const std::string kNotUssRefusal = "this lift's drive has no parameter channel";

@@ -123,8 +123,7 @@ UssLift::UssLift(Host& daemon, const config::Config& config, bool simulate)
   runner_ = std::make_unique<uss::UssRunner>(rc, *master_, *controller_);
   register_parts(std::make_unique<UssBackend>(config, daemon.config_schema(), *controller_,
                                               *runner_, *master_, api_position_feed(), sim_.get()),
-                 simulate_ ? "simulated USS lift running; API on " + socket_path()
-                           : "USS master starting on " + config.drive.device);
+                 "USS lift", "USS master", config.drive.device);
 }
 
 UssLift::~UssLift() {

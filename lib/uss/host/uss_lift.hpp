@@ -79,18 +79,10 @@ struct UssDrive {
   using Controller = uss::UssController;
   using Runner = uss::UssRunner;
   using Simulator = SimulatedUssBus;
-  static constexpr drive::Kind kKind = drive::Kind::Uss;
-  static constexpr std::string_view kName = "uss";
-  static constexpr std::string_view kThread = "USS";
-  static constexpr std::string_view kStartFailedEvent = "uss_start_failed";
-  /// A parameter request may wait uss.pkw_repeat_limit polls of a long polling list; this only
-  /// catches a stalled USS thread.
-  static constexpr std::chrono::nanoseconds kReplyGrace = std::chrono::seconds(30);
-  /// After a forced end: telegrams with OFF2 go out.
-  static constexpr std::chrono::nanoseconds kShutdownGrace = std::chrono::milliseconds(300);
-  static std::string_view fault_text(lift::FaultCode code) noexcept {
-    return uss::fault_text(code);
-  }
+  /// A parameter request may wait uss.pkw_repeat_limit polls of a long polling list: 30 s only
+  /// catches a stalled USS thread. After a forced end, telegrams with OFF2 go out for 300 ms.
+  static constexpr DriveFacts kFacts{drive::Kind::Uss, "USS", std::chrono::seconds(30),
+                                     std::chrono::milliseconds(300), &uss::fault_text};
   /// The control and status words' bits (C 5.1), as status names them.
   static TravelBitNames travel_bit_names();
   /// A learning leg's limit is the run-time limiter's (the longer of the two a leg has) plus the
