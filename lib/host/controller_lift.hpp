@@ -593,7 +593,7 @@ class ControllerLift : public LiftRunner {
   }
   /// Journals the thread's link once it runs.
   virtual void journal_started() = 0;
-  /// An event of the controller; the drive-neutral ones go to report_lift_event().
+  /// An event only this drive kind reports (report_lift_event() took every lift's already).
   virtual void handle_event(const typename CoreOf<Drive>::Event& event) = 0;
   /// Every poll, after the controller's events: what only this drive watches.
   virtual void after_events(MonoTime) {}
@@ -619,8 +619,8 @@ class ControllerLift : public LiftRunner {
     }
   }
   /// Journals and publishes the events every such controller reports alike: a travel, a fault
-  /// raised or cleared, a served call.
-  void report_lift_event(const typename CoreOf<Drive>::Event& event) {
+  /// raised or cleared, a served call, dropped calls. False for a kind's own event.
+  bool report_lift_event(const typename CoreOf<Drive>::Event& event) {
     using Kind = typename CoreOf<Drive>::Event::Kind;
     switch (event.kind) {
       case Kind::Travel:
@@ -648,8 +648,9 @@ class ControllerLift : public LiftRunner {
         report_calls_dropped(*server_, event.dropped, event.cause);
         break;
       default:  // the drive's own events: handle_event()
-        break;
+        return false;
     }
+    return true;
   }
 
   Host& daemon_;
@@ -705,7 +706,9 @@ class ControllerLift : public LiftRunner {
       while (runner_->poll_event(cycle_event)) handle_runner_event(cycle_event);
     }
     typename CoreOf<Drive>::Event event;
-    while (controller_->poll_event(event)) handle_event(event);
+    while (controller_->poll_event(event)) {
+      if (!report_lift_event(event)) handle_event(event);
+    }
     after_events(now);
     publisher_.publish(*server_, backend_->status(), now);
     const typename CoreOf<Drive>::Snapshot rest = controller_->snapshot();

@@ -26,6 +26,19 @@ enum class FaultCode : std::uint8_t {
 /// snake_case code for the API and the journal ("link_fault", ...); "internal" for kCount.
 std::string_view fault_code_name(FaultCode code) noexcept;
 
+/// The technician's text of a fault of the machine's inputs, alike on every drive kind
+/// (SafetyChain, InputsLost); "internal" for a fault the drive kind words itself.
+constexpr std::string_view machine_fault_text(FaultCode code) noexcept {
+  switch (code) {
+    case FaultCode::SafetyChain:
+      return "safety chain open; drive enable is off";
+    case FaultCode::InputsLost:
+      return "no input update from the I/O provider within inputs.timeout_ms";
+    default:
+      return "internal";
+  }
+}
+
 /// The faults a controller stands in, when each began, and what it still owes the io thread:
 /// every raise and every clear is told once and in order. When telling fails (the event queue is
 /// full) it stays owed and is told at a later set() of that fault: never lost, and repeats missed

@@ -76,4 +76,44 @@ class TravelEventQueue {
   FixedQueue<Event, 16> events_;
 };
 
+/// What a SCH001 or USS travel sequencer tells of its run and keeps for it: the kind, the
+/// sequencer's own `Phase` (its Idle at rest), direction, target, the floor the car last stopped
+/// at, and the run's events until the controller polls them.
+template <typename Phase>
+class RunState {
+ public:
+  using Event = BasicTravelEvent<TravelKind>;
+
+  TravelKind kind() const noexcept { return kind_; }
+  Phase phase() const noexcept { return phase_; }
+  Direction direction() const noexcept { return direction_; }
+  /// The floor a travel or relevelling runs to; none for inspection or a learning leg.
+  std::optional<std::size_t> target() const noexcept {
+    return kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel
+               ? std::optional<std::size_t>(target_)
+               : std::nullopt;
+  }
+  /// The floor the car last stopped at.
+  std::size_t current_floor() const noexcept { return current_floor_; }
+  /// Where the car stands at start (the floor nearest the position).
+  void set_current_floor(std::size_t floor) noexcept { current_floor_ = floor; }
+  /// The next event, if any.
+  bool poll_event(Event& out) noexcept { return events_.poll(out); }
+  /// Events lost because the queue was full.
+  std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
+
+ protected:
+  RunState() = default;
+  ~RunState() = default;
+
+  TravelKind kind_ = TravelKind::None;
+  Phase phase_ = Phase::Idle;
+  Direction direction_ = Direction::None;
+  std::size_t target_ = 0;
+  std::int64_t target_mm_ = 0;  ///< where the run ends by position (the floor's level, the leg's)
+  std::size_t current_floor_ = 0;
+  MonoTime started_at_{};
+  TravelEventQueue<Event> events_;
+};
+
 }  // namespace liftd::lift

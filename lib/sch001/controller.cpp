@@ -15,17 +15,12 @@ std::string_view fault_text(FaultCode code) noexcept {
              "command goes out";
     case FaultCode::DriveFault:
       return "the SCH001 card reports ERR: no travel command may go out (card document 3d)";
-    case FaultCode::SafetyChain:
-      return "safety chain open";
-    case FaultCode::InputsLost:
-      return "no input update from the I/O provider within inputs.timeout_ms";
     case FaultCode::PositionLost:
       return "the car position is unknown or stale: no travel possible";
-    case FaultCode::AdvanceWarning:  // the card has no advance warning
-    case FaultCode::kCount:
+    default:  // the card has no advance warning
       break;
   }
-  return "internal";
+  return lift::machine_fault_text(code);
 }
 
 Sch001Controller::Sch001Controller(const ControllerConfig& config, const PositionSource& position,

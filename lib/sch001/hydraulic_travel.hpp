@@ -94,7 +94,7 @@ using TravelEvent = lift::BasicTravelEvent<TravelKind>;
 
 /// The sequencer. Floors are the installation's; the car's current floor is the last one it
 /// stopped at (3c: "updated each time the stop contact is reached").
-class HydraulicTravel {
+class HydraulicTravel : public lift::RunState<Phase> {
  public:
   explicit HydraulicTravel(const HydraulicConfig& config) noexcept : config_(config) {}
 
@@ -146,26 +146,9 @@ class HydraulicTravel {
   /// `drive.state` is `ready` only when it is None.
   lift::Cause drive_forbidding(const TickInput& in) const noexcept;
 
-  TravelKind kind() const noexcept { return kind_; }
   /// Something runs: no new run may start.
   bool busy() const noexcept { return kind_ != TravelKind::None; }
-  Phase phase() const noexcept { return phase_; }
-  lift::Direction direction() const noexcept { return direction_; }
-  std::optional<std::size_t> target() const noexcept {
-    return kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel
-               ? std::optional<std::size_t>(target_)
-               : std::nullopt;
-  }
-  /// The floor the car last stopped at.
-  std::size_t current_floor() const noexcept { return current_floor_; }
-  /// Tells the sequencer where the car stands at start (the floor nearest the position).
-  void set_current_floor(std::size_t floor) noexcept { current_floor_ = floor; }
   const HydraulicConfig& config() const noexcept { return config_; }
-
-  /// The next event, if any.
-  bool poll_event(TravelEvent& out) noexcept { return events_.poll(out); }
-  /// Events lost because the queue was full.
-  std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
 
  private:
   lift::Cause begin(TravelKind kind, const lift::FloorTable& floors, std::size_t floor,
@@ -181,15 +164,8 @@ class HydraulicTravel {
   CommandBits signals() const noexcept;
 
   HydraulicConfig config_;
-  TravelKind kind_ = TravelKind::None;
-  Phase phase_ = Phase::Idle;
-  lift::Direction direction_ = lift::Direction::None;
   Speed speed_ = Speed::Fast;
-  std::size_t target_ = 0;
-  std::int64_t target_mm_ = 0;  ///< where the run ends (the target floor's level, or the leg's)
-  std::size_t current_floor_ = 0;
   std::uint32_t limit_ms_ = 0;  ///< the run-time limiter of this run
-  MonoTime started_at_{};
   MonoTime motor_on_at_{};
   bool motor_on_ = false;
   /// Where the car was at the last tick, and when: the distance it covers in one status period
@@ -197,8 +173,6 @@ class HydraulicTravel {
   std::optional<std::int64_t> last_position_mm_;
   MonoTime last_tick_{};
   std::int64_t period_travel_mm_ = 0;  ///< the car's distance per status period, 0 when unknown
-
-  lift::TravelEventQueue<TravelEvent> events_;
 };
 
 }  // namespace liftd::sch001

@@ -37,18 +37,14 @@ std::string_view fault_text(FaultCode code) noexcept {
              "drive enable is off";
     case FaultCode::DriveFault:
       return "drive reports a general fault (S3); drive enable is off until it clears";
-    case FaultCode::SafetyChain:
-      return "safety chain open; drive enable is off";
-    case FaultCode::InputsLost:
-      return "no input update from the I/O provider within inputs.timeout_ms";
     case FaultCode::PositionLost:
       return "absolute car position invalid or stale; no DCP4 travel possible";
     case FaultCode::AdvanceWarning:
       return "drive advance warning (S2): no new travel until it clears (DCP 9.1.5)";
-    case FaultCode::kCount:
+    default:
       break;
   }
-  return "internal";
+  return lift::machine_fault_text(code);
 }
 
 // ---- construction ----

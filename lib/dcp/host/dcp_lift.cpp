@@ -222,12 +222,7 @@ void DcpLift::handle_event(const control::ControllerEvent& event) {
               {"at", api::format_utc(backend_->wall_time(event.at))}};
       break;
     }
-    case Kind::Travel:  // as on every lift, with the DCP's own travel events (DCP 4.1, 12, 9.1.6)
-    case Kind::FaultRaised:
-    case Kind::FaultCleared:  // as on every lift: the recorder written on a link fault
-    case Kind::CallServed:
-    case Kind::CallsDropped:
-      report_lift_event(event);
+    default:  // every lift's events (with the DCP's own travel kinds): report_lift_event()
       return;
   }
   // What only a DCP drive tells: its link and its error texts (DCP 5.11).

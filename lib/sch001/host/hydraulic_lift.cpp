@@ -633,12 +633,7 @@ void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
     case Kind::Endpoint:
       journal_endpoint(event.endpoint_up, event.at);
       break;
-    case Kind::Travel:
-    case Kind::FaultRaised:
-    case Kind::FaultCleared:
-    case Kind::CallServed:
-    case Kind::CallsDropped:
-      report_lift_event(event);
+    default:  // every lift's events: report_lift_event()
       break;
   }
 }

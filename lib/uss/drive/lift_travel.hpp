@@ -182,7 +182,7 @@ struct DriveOutput {
 using TravelEvent = lift::BasicTravelEvent<TravelKind>;
 
 /// The sequencer. The car's current floor is the one it last stopped at.
-class LiftTravel {
+class LiftTravel : public lift::RunState<Phase> {
  public:
   explicit LiftTravel(const LiftTravelConfig& config) noexcept
       : config_(config), profile_(config.profile) {}
@@ -249,26 +249,13 @@ class LiftTravel {
     return config_.speed_percent[speed_index(speed)] > 0.0;
   }
 
-  TravelKind kind() const noexcept { return kind_; }
-  Phase phase() const noexcept { return phase_; }
-  lift::Direction direction() const noexcept { return direction_; }
   SpeedName speed() const noexcept { return speed_; }
   /// A run (or its halt tail) is in progress: no new one may start.
   bool busy() const noexcept { return phase_ != Phase::Idle; }
-  std::optional<std::size_t> target() const noexcept {
-    return kind_ == TravelKind::Travel || kind_ == TravelKind::Relevel
-               ? std::optional<std::size_t>(target_)
-               : std::nullopt;
-  }
-  std::size_t current_floor() const noexcept { return current_floor_; }
-  void set_current_floor(std::size_t floor) noexcept { current_floor_ = floor; }
   const DriveProfile& profile() const noexcept { return profile_; }
   const LiftTravelConfig& config() const noexcept { return config_; }
   /// The output of the last tick.
   const DriveOutput& output() const noexcept { return out_; }
-
-  bool poll_event(TravelEvent& out) noexcept { return events_.poll(out); }
-  std::uint64_t dropped_events() const noexcept { return events_.dropped(); }
 
  private:
   /// The nearest floor ahead at least this speed's slowdown distance away (by position).
@@ -289,25 +276,15 @@ class LiftTravel {
 
   LiftTravelConfig config_;
   DriveProfile profile_;
-  TravelKind kind_ = TravelKind::None;
-  Phase phase_ = Phase::Idle;
-  lift::Direction direction_ = lift::Direction::None;
   SpeedName speed_ = SpeedName::V4;
-  std::size_t target_ = 0;
-  std::int64_t target_mm_ =
-      0;  ///< where the run ends by position (the floor's level, or the leg's)
-  std::size_t current_floor_ = 0;
   std::uint32_t run_limit_ms_ = 0;    ///< the run-time limiter of this run
   std::uint32_t crawl_limit_ms_ = 0;  ///< the longest crawl of this run
-  MonoTime started_at_{};
   MonoTime entered_at_{};
   ProfileWish halt_wish_ = ProfileWish::Stop;
   bool halt_brake_ = false;    ///< the brake may stay open during the halt (OFF1/OFF3 ramp)
   bool inspect_stop_ = false;  ///< inspection: released, stopping
   bool coast_hold_ = false;    ///< OFF2 held until a reply shows ZSW bit 2 = 0
   DriveOutput out_{};
-
-  lift::TravelEventQueue<TravelEvent> events_;
 };
 
 }  // namespace liftd::uss

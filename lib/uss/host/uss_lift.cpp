@@ -231,12 +231,7 @@ void UssLift::handle_event(const uss::ControllerEvent& event) {
                  fault ? std::optional(log::Catalogued::UssSlaveFault) : std::nullopt);
       break;
     }
-    case Kind::Travel:
-    case Kind::FaultRaised:
-    case Kind::FaultCleared:
-    case Kind::CallServed:
-    case Kind::CallsDropped:
-      report_lift_event(event);
+    default:  // every lift's events: report_lift_event()
       break;
   }
 }
