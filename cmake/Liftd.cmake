@@ -202,8 +202,9 @@ function(liftd_fuzzer name)
 endfunction()
 
 # liftd_write_drive_kinds(<file> <kind>...): the X-macro lib/drive/drive.hpp makes drive::Kind
-# and drive::kKindNames from, one row per kind in the list's order: X(Dcp, "dcp"). Rewritten only
-# when the list changes, so a configure run rebuilds nothing otherwise.
+# and drive::kKindNames from, one row per kind in the list's order: X(Dcp, "dcp"); and beside it
+# kinds.txt, a kind a line, for the scripts (tools/test.sh soaks each). Rewritten only when the
+# list changes, so a configure run rebuilds nothing otherwise.
 function(liftd_write_drive_kinds file)
   set(rows "")
   foreach(kind IN LISTS ARGN)
@@ -220,4 +221,7 @@ function(liftd_write_drive_kinds file)
   string(APPEND text "// CMakeLists.txt; lib/drive/drive.hpp includes it. Not to be edited.\n")
   string(APPEND text "#define LIFTD_FOR_EACH_DRIVE_KIND(X)${rows}\n")
   file(CONFIGURE OUTPUT ${file} CONTENT "${text}" @ONLY)
+  get_filename_component(dir ${file} DIRECTORY)
+  list(JOIN ARGN "\n" lines)
+  file(CONFIGURE OUTPUT ${dir}/kinds.txt CONTENT "${lines}\n" @ONLY)
 endfunction()

@@ -14,7 +14,7 @@
 #   LIFTD_SKIP_SYSTEMD=1 ... skip the systemd stage (tests/systemd/stage.sh: the package on Debian
 #                            12 with systemd as PID 1 under user-mode Linux, 3 to 5 minutes)
 #   LIFTD_SKIP_FUZZ=1 ...    skip the fuzz targets
-#   LIFTD_SOAK_SECONDS=N     fault soak length after the default tests (default 45; 0 skips)
+#   LIFTD_SOAK_SECONDS=N     each drive kind's soak after the default tests (default 45; 0 skips)
 #   LIFTD_JOBS=N, LIFTD_TEST_JOBS=M   build with N jobs (default: cores), run M tests at once
 #                            (default: 3 N; N + 1 under load)
 set -euo pipefail
@@ -201,14 +201,13 @@ if [ "${LIFTD_SKIP_VM:-0}" != 1 ]; then
 fi
 soak_seconds=${LIFTD_SOAK_SECONDS:-45}
 if [ "$soak_seconds" != 0 ]; then
-  echo "=== fault soak: $soak_seconds s ==="
-  timed "soak" tools/soak --seconds "$soak_seconds" --seed 1
-  # The hydraulic and USS lifts under attack (floods, card reconnects, fault flaps): shorter,
-  # each scenario still runs several times.
-  controller_seconds=$(( soak_seconds * 2 / 3 ))
-  echo "=== attack soak, hydraulic and USS: $controller_seconds s each ==="
-  timed "soak sch001" tools/soak --kind sch001 --seconds "$controller_seconds" --seed 1
-  timed "soak uss" tools/soak --kind uss --seconds "$controller_seconds" --seed 1
+  # Every drive kind the build registered (LIFTD_DRIVE_KINDS, written to kinds.txt by the
+  # configure run): DCP under the fault soak, the others under attack (floods, card reconnects,
+  # fault flaps), each scenario several times. A kind without scenarios fails here, named.
+  while read -r kind; do
+    echo "=== soak $kind: $soak_seconds s ==="
+    timed "soak $kind" tools/soak --kind "$kind" --seconds "$soak_seconds" --seed 1
+  done <build/generated/drive/kinds.txt
 fi
 stop_early_builds
 [ "${LIFTD_SKIP_ASAN:-0}" = 1 ] || run_preset asan "$asan_test_jobs" -LE 'slow|vcan'

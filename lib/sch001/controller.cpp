@@ -103,11 +103,7 @@ void Sch001Controller::on_endpoint(bool up, MonoTime now) noexcept {
   } else {
     endpoint_lost_ = true;
   }
-  ControllerEvent e;
-  e.kind = ControllerEvent::Kind::Endpoint;
-  e.at = now;
-  e.endpoint_up = up;
-  push_event(e);
+  push_event({.kind = ControllerEvent::Kind::Endpoint, .at = now, .endpoint_up = up});
   step(now);
 }
 

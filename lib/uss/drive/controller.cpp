@@ -67,11 +67,7 @@ void UssController::on_port(bool up, MonoTime now) noexcept {
   // A lost port stays a link fault until the drive answers on the reopened one (update_faults):
   // one episode, one raise and one clear, however often the port is reopened meanwhile.
   if (!up) port_failed_ = true;
-  ControllerEvent e;
-  e.kind = ControllerEvent::Kind::Port;
-  e.at = now;
-  e.port_up = up;
-  push_event(e);
+  push_event({.kind = ControllerEvent::Kind::Port, .at = now, .port_up = up});
   step(now);
 }
 
