@@ -9,11 +9,11 @@
 //
 // `Drive` names the parts of one drive kind (see DcpDrive, Sch001Drive, UssDrive):
 //   Controller (a lift::ControllerCore: its CoreTypes give the Command, Reply, Event, Snapshot
-//   and TravelKind; the commands every kind takes are lift's), Runner, Simulator; kFacts (a
-//   DriveFacts), travel_bit_names() (the names of the drive's bits in a travel's curve),
-//   learn_leg_base_ms(config) (the run-time limit a learning leg's allowance is added to); where
-//   the car can move with no travel of the controller's running (a drive that still reports travel
-//   active), also car_moving(snapshot).
+//   and TravelKind; the commands every kind takes are lift's), Runner, Simulator (as DriveParts
+//   names them); kFacts (a DriveFacts), travel_bit_names() (the names of the drive's bits in a
+//   travel's curve), learn_leg_base_ms(config) (the run-time limit a learning leg's allowance is
+//   added to); where the car can move with no travel of the controller's running (a drive that
+//   still reports travel active), also car_moving(snapshot).
 #pragma once
 
 #include <algorithm>
@@ -51,6 +51,15 @@
 #include "log/log.hpp"
 
 namespace liftd::daemon {
+
+/// A drive kind's controller, the runner of its real-time thread and its simulator: the types a
+/// Drive description names first.
+template <typename ControllerT, typename RunnerT, typename SimulatorT>
+struct DriveParts {
+  using Controller = ControllerT;
+  using Runner = RunnerT;
+  using Simulator = SimulatorT;
+};
 
 /// What the io side needs to know of a drive kind's lift besides its types.
 struct DriveFacts {

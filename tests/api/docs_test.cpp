@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <optional>
 #include <regex>
@@ -285,11 +286,14 @@ const std::vector<std::string> kTravelKinds = {"distance", "relevel_distance", "
 TEST(ApiDocs, TravelKindsMatchTheTravelLibrary) {
   std::set<std::string> named =
       returned_names("lib/dcp/travel/types.cpp", "to_string(TravelKind kind)", {"none"});
-  // The SCH001 and USS travels' kinds: lift's, and each travel's own name of a travel to a floor.
+  // The kinds of the travels that run through the lift core: lift's, and each sequencer's own
+  // name of a travel to a floor, wherever in lib/ it gives one.
   named.merge(
       returned_names("lib/lift/travel_event.hpp", "std::string_view travel_kind_name(", {"idle"}));
-  for (const char* travel : {"lib/sch001/hydraulic_travel.hpp", "lib/uss/drive/lift_travel.hpp"}) {
-    named.merge(matches(read_source(travel), R"re(travel_kind_name\(kind, "([^"]+)"\))re"));
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(source_root() + "lib")) {
+    if (entry.path().extension() != ".hpp") continue;
+    const std::string relative = entry.path().string().substr(source_root().size());
+    named.merge(matches(read_source(relative), R"re(travel_kind_name\(kind, "([^"]+)"\))re"));
   }
   EXPECT_EQ(named, as_set(kTravelKinds));
   expect_table_rows(kTravelKinds, "travel kind");

@@ -33,10 +33,7 @@ namespace liftd::daemon {
 control::ControllerConfig dcp_controller_config(const config::Config& config);
 
 /// The DCP drive's lift as controller_lift.hpp names its parts.
-struct DcpDrive {
-  using Controller = control::DcpController;
-  using Runner = rt::CycleRunner;
-  using Simulator = SimulatedLift;
+struct DcpDrive : DriveParts<control::DcpController, rt::CycleRunner, SimulatedLift> {
   /// The cycle answers a travel command within a cycle and an I-message within
   /// dcp.request_timeout_ms: 3 s catches a cycle that stopped. After a forced end it sends
   /// frames without B0 for more than one DCP 7.3 supervision window (10 x 15 ms).

@@ -67,10 +67,7 @@ class SimulatedCard final : public SimulatorThread {
 };
 
 /// The SCH001 card's lift as controller_lift.hpp names its parts.
-struct Sch001Drive {
-  using Controller = sch001::Sch001Controller;
-  using Runner = rt::CanRunner;
-  using Simulator = SimulatedCard;
+struct Sch001Drive : DriveParts<sch001::Sch001Controller, rt::CanRunner, SimulatedCard> {
   /// The CAN thread answers within a tick: 3 s catches a stall. After a forced end it sends the
   /// card three answers without a signal (100 ms apart, card document 3b).
   static constexpr DriveFacts kFacts{drive::Kind::Sch001, "CAN", std::chrono::seconds(3),

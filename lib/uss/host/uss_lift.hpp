@@ -75,10 +75,7 @@ class SimulatedUssBus final : public SimulatorThread {
 };
 
 /// The USS lift as controller_lift.hpp names its parts.
-struct UssDrive {
-  using Controller = uss::UssController;
-  using Runner = uss::UssRunner;
-  using Simulator = SimulatedUssBus;
+struct UssDrive : DriveParts<uss::UssController, uss::UssRunner, SimulatedUssBus> {
   /// A parameter request may wait uss.pkw_repeat_limit polls of a long polling list: 30 s only
   /// catches a stalled USS thread. After a forced end, telegrams with OFF2 go out for 300 ms.
   static constexpr DriveFacts kFacts{drive::Kind::Uss, "USS", std::chrono::seconds(30),
