@@ -108,17 +108,9 @@ using StubTravelCommand = BasicTravelCommand<StubSpeed>;
 using StubBody = std::variant<StubTravelCommand, StopCommand, InspectionCommand, CallCommand,
                               InputsCommand, ShutdownCommand>;
 
-struct StubTypes {
-  using Command = TaggedCommand<StubBody>;
-  using Reply = CommandReply;
-  using Event = StubControllerEvent;
-  using Snapshot = StubSnapshot;
-  using Travel = StubTravel;
-  using TravelEvent = StubEvent;
-  using TravelKind = StubKind;
-  using TravelCommand = StubTravelCommand;
-  using Input = StubInput;
-};
+using StubTypes =
+    CoreTypes<TaggedCommand<StubBody>, CommandReply, StubControllerEvent, StubSnapshot, StubTravel,
+              StubEvent, StubKind, StubTravelCommand, StubInput>;
 
 const std::vector<std::int64_t> kLevels = {0, 3000, 6000, 9000};
 constexpr MonoTime kInputsTimeout = milliseconds(500);
