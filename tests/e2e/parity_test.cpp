@@ -111,6 +111,12 @@ TEST_P(LiftParity, ATravelEndedByAFaultIsOneWarningAndEmptiesTheCallsQueue) {
     EXPECT_NE(aborted.find("[event=travel_aborted kind="), std::string::npos) << aborted;
     EXPECT_NE(aborted.find(" cause="), std::string::npos) << aborted;
     EXPECT_NE(aborted.find(" position_mm="), std::string::npos) << aborted;
+    // The machine's fault is worded alike on every kind (lift::machine_fault_text).
+    const json status = lift_->status();
+    const auto chain = std::find_if(status["faults"].begin(), status["faults"].end(),
+                                    [](const json& f) { return f["code"] == "safety_chain_open"; });
+    ASSERT_NE(chain, status["faults"].end()) << status.dump();
+    EXPECT_EQ((*chain)["text"], "safety chain open; drive enable is off") << status.dump();
 
     // The chain closes again: the car stays where it is, the dropped calls start nothing.
     ASSERT_TRUE(lift_->call({{"cmd", "sim"}, {"action", "safety_chain_open"}, {"on", false}})
