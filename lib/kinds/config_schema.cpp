@@ -1,8 +1,6 @@
 #include "kinds/config_schema.hpp"
 
-#include "dcp/config/config_rules.hpp"
-#include "sch001/config/config_rules.hpp"
-#include "uss/config/config_rules.hpp"
+#include "kinds/registry.hpp"
 
 namespace liftd::kinds {
 
@@ -11,20 +9,17 @@ const config::Schema& config_schema() {
     config::Schema s;
     s.add(config::log_keys());
     s.add(config::drive_keys());
-    s.add(dcp::config_rules());
+    // Each kind's section after drive.kind, which picks one of them.
+    for_each_entry(Registry{}, [&s](auto entry) { s.add(decltype(entry)::config_rules()); });
     s.add(config::rt_keys());
     s.add(config::api_keys());
     s.add(config::inputs_keys());
     s.add(config::record_keys());
     s.add(config::eta_keys());
-    // Floor names and levels follow the DCP display (appendix A) and I9 (DCP 5.12.9) for every
-    // kind, so a building's floors stay valid when its drive changes.
-    s.add(config::floors_keys(dcp::floor_rules()));
+    s.add(config::floors_keys(FloorRulesOf::floor_rules()));
     s.add(config::position_keys());
     s.add(config::travel_keys());
     s.add(config::can_keys());
-    s.add(sch001::config_rules());
-    s.add(uss::config_rules());
     s.add(config::sim_keys());
     return s;
   }();

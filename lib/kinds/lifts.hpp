@@ -1,10 +1,8 @@
-// The registry of drive kinds: drive.kind -> the daemon's lift, each in its kind's folder (the DCP
-// lift lib/dcp/host/dcp_lift.*, the hydraulic SCH001 lift lib/sch001/host/hydraulic_lift.*, the
-// USS lift lib/uss/host/uss_lift.*). Each builds its controller, its runner, its API backend and,
-// with --simulate, its simulated drive, and registers them with the daemon (lib/host/host.hpp).
-// With commands.cpp (each kind's own API commands and `sim` actions) and config_schema.cpp (each
-// kind's configuration section) this folder is the one registry of drive kinds: daemon/ includes
-// no kind's header.
+// The registry's lifts: drive.kind -> the daemon's lift, each in its kind's folder (the DCP lift
+// lib/dcp/host/dcp_lift.*, the hydraulic SCH001 lift lib/sch001/host/hydraulic_lift.*, the USS
+// lift lib/uss/host/uss_lift.*), made by its registry entry (registry.hpp). Each builds its
+// controller, its runner, its API backend and, with --simulate, its simulated drive, and
+// registers them with the daemon (lib/host/host.hpp). daemon/ includes no kind's header.
 #pragma once
 
 #include <memory>

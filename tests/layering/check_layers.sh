@@ -64,6 +64,23 @@ for dir in "$src"/lib/*/; do
 done
 [[ $status == 0 ]] && echo "layers ok: every lib/ folder includes only the folders below it"
 
+# Within lib/kinds, one file names the kinds: the registry (every kind's registry_entry.hpp).
+registry_status=0
+for kind in "${kinds[@]}"; do
+  while IFS= read -r hit; do
+    rel=${hit#"$src"/}
+    [[ ${rel%%:*} == lib/kinds/registry.hpp && $rel == *"\"$kind/registry_entry.hpp\""* ]] && continue
+    echo "$rel: lib/kinds reaches a kind through registry.hpp and the kind's registry_entry.hpp only"
+    registry_status=1
+  done < <(grep -rHE "^#include \"$kind/" "$src"/lib/kinds)
+  grep -q "^#include \"$kind/registry_entry.hpp\"" "$src"/lib/kinds/registry.hpp || {
+    echo "lib/kinds/registry.hpp: no entry for the drive kind $kind (lib/$kind/registry_entry.hpp)"
+    registry_status=1
+  }
+done
+[[ $registry_status == 0 ]] && echo "registry ok: lib/kinds names each kind in registry.hpp only"
+[[ $registry_status == 0 ]] || status=1
+
 # Outside lib/, a kind's headers are its own tests' (tests/<kind>/), its tools' (tools/<kind>-*)
 # and its benchmarks' (tools/bench/<kind>/); the daemon and every shared test reach a kind through
 # the registry (lib/kinds). The exceptions, each with its reason:

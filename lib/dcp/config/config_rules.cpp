@@ -1,4 +1,4 @@
-#include "dcp/config/config_rules.hpp"
+#include "dcp/registry_entry.hpp"
 
 #include <algorithm>
 #include <array>
@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "dcp/charset.hpp"
+#include "config/schema.hpp"
 #include "dcp/config/section.hpp"
 
 namespace liftd::dcp {
@@ -127,7 +128,7 @@ std::vector<config::Key> dcp_keys() {
 
 }  // namespace
 
-config::KindRules config_rules() {
+config::KindRules RegistryEntry::config_rules() {
   config::KindRules rules;
   rules.kind = drive::Kind::Dcp;
   rules.keys = dcp_keys();
@@ -135,7 +136,7 @@ config::KindRules config_rules() {
   return rules;
 }
 
-config::FloorRules floor_rules() {
+config::FloorRules RegistryEntry::floor_rules() {
   config::FloorRules rules;
   rules.charset_name = "the DCP display character set";
   rules.charset_details =

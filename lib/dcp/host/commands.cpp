@@ -5,6 +5,7 @@
 
 #include "api/commands.hpp"
 #include "api/schema.hpp"
+#include "dcp/registry_entry.hpp"
 #include "drive/drive.hpp"
 
 namespace liftd::daemon {
@@ -26,6 +27,8 @@ using api::arg_or;
 using api::Call;
 using api::Responder;
 using api::Result;
+
+namespace {
 
 void add_dcp_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
   DcpCommandBackend* const dcp = dynamic_cast<DcpCommandBackend*>(&backend);
@@ -110,4 +113,13 @@ void add_dcp_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
                   drive::Capability::FastStart});
 }
 
+}  // namespace
 }  // namespace liftd::daemon
+
+namespace liftd::dcp {
+
+void RegistryEntry::add_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
+  daemon::add_dcp_commands(dispatcher, backend);
+}
+
+}  // namespace liftd::dcp

@@ -1,6 +1,8 @@
 // The API commands only the DCP lift offers: the drive's remote keypad and display, the power
-// supply mode, the car load, fast start and fast stop. The dispatcher knows them on every lift
-// and answers them `not_offered` on a drive kind without the capability (CommandSpec::needs).
+// supply mode, the car load, fast start and fast stop; what its backend serves of them. The
+// registry adds them (dcp::RegistryEntry::add_commands, lib/dcp/registry_entry.hpp); the
+// dispatcher knows them on every lift and answers them `not_offered` on a drive kind without
+// the capability (CommandSpec::needs).
 #pragma once
 
 #include <optional>
@@ -53,21 +55,5 @@ class DcpCommandBackend {
   virtual void fast_start(const std::string& action, const api::TravelArgs& args,
                           api::Responder done) = 0;
 };
-
-/// What the DCP lift offers beyond the common commands: its own below and `drive_reset` (I2
-/// 'R'), not the USS parameter channel.
-inline constexpr drive::Capabilities kDcpOffers = drive::Capabilities{}
-                                                      .add(drive::Capability::Keypad)
-                                                      .add(drive::Capability::Display)
-                                                      .add(drive::Capability::Power)
-                                                      .add(drive::Capability::Load)
-                                                      .add(drive::Capability::DriveReset)
-                                                      .add(drive::Capability::FastStart)
-                                                      .add(drive::Capability::FastStop);
-
-/// Adds display, key, power, load, fast_stop and fast_start to `dispatcher`. They are served by
-/// `backend` when it is a DcpCommandBackend (the DCP lift); on another kind's lift the
-/// dispatcher refuses them as `not_offered` before they reach a handler.
-void add_dcp_commands(api::Dispatcher& dispatcher, api::Backend& backend);
 
 }  // namespace liftd::daemon

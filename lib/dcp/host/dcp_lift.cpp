@@ -10,6 +10,7 @@
 #include "dcp/charset.hpp"
 #include "dcp/config/section.hpp"
 #include "dcp/messages.hpp"
+#include "dcp/registry_entry.hpp"
 #include "host/lift_common.hpp"
 #include "host/lift_core.hpp"
 #include "log/log.hpp"
@@ -231,3 +232,13 @@ void DcpLift::handle_event(const control::ControllerEvent& event) {
 }
 
 }  // namespace liftd::daemon
+
+namespace liftd::dcp {
+
+std::unique_ptr<daemon::LiftRunner> RegistryEntry::make_lift(daemon::Host& host,
+                                                             const config::Config& config,
+                                                             bool simulate) {
+  return std::make_unique<daemon::DcpLift>(host, config, simulate);
+}
+
+}  // namespace liftd::dcp

@@ -1,5 +1,7 @@
 #include "dcp/host/sim_actions.hpp"
 
+#include "dcp/registry_entry.hpp"
+
 #include <optional>
 #include <string>
 
@@ -40,3 +42,9 @@ const api::KindSimActions kDcpSimActionTable = {drive::Kind::Dcp,     "DCP",
                                                 dcp_sim_args,         check_dcp_sim_request};
 
 }  // namespace liftd::daemon
+
+namespace liftd::dcp {
+
+const api::KindSimActions& RegistryEntry::sim_actions() noexcept { return daemon::kDcpSimActionTable; }
+
+}  // namespace liftd::dcp

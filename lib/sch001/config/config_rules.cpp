@@ -1,9 +1,10 @@
-#include "sch001/config/config_rules.hpp"
+#include "sch001/registry_entry.hpp"
 
 #include <array>
 #include <cstdio>
 #include <sstream>
 
+#include "config/schema.hpp"
 #include "sch001/config/section.hpp"
 #include "sch001/protocol.hpp"
 
@@ -105,7 +106,7 @@ std::vector<Key> sch001_keys() {
 
 }  // namespace
 
-config::KindRules config_rules() {
+config::KindRules RegistryEntry::config_rules() {
   config::KindRules rules;
   rules.kind = drive::Kind::Sch001;
   rules.keys = sch001_keys();

@@ -20,6 +20,7 @@
 #include "log/log.hpp"
 #include "sch001/config/section.hpp"
 #include "sch001/host/sim_actions.hpp"
+#include "sch001/registry_entry.hpp"
 
 namespace liftd::daemon {
 namespace {
@@ -639,3 +640,13 @@ void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
 }
 
 }  // namespace liftd::daemon
+
+namespace liftd::sch001 {
+
+std::unique_ptr<daemon::LiftRunner> RegistryEntry::make_lift(daemon::Host& host,
+                                                             const config::Config& config,
+                                                             bool simulate) {
+  return std::make_unique<daemon::HydraulicLift>(host, config, simulate);
+}
+
+}  // namespace liftd::sch001

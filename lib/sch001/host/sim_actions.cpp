@@ -1,5 +1,7 @@
 #include "sch001/host/sim_actions.hpp"
 
+#include "sch001/registry_entry.hpp"
+
 namespace liftd::daemon {
 
 // The simulated card and hydraulic unit take no reply faults and no advance warning.
@@ -14,3 +16,9 @@ const api::KindSimActions kSch001SimActionTable = {
     nullptr};
 
 }  // namespace liftd::daemon
+
+namespace liftd::sch001 {
+
+const api::KindSimActions& RegistryEntry::sim_actions() noexcept { return daemon::kSch001SimActionTable; }
+
+}  // namespace liftd::sch001

@@ -1,9 +1,10 @@
-#include "uss/config/config_rules.hpp"
+#include "uss/registry_entry.hpp"
 
 #include <algorithm>
 #include <array>
 #include <sstream>
 
+#include "config/schema.hpp"
 #include "uss/config/section.hpp"
 #include "uss/telegram.hpp"
 
@@ -339,7 +340,7 @@ std::vector<Key> uss_keys() {
 
 }  // namespace
 
-config::KindRules config_rules() {
+config::KindRules RegistryEntry::config_rules() {
   config::KindRules rules;
   rules.kind = drive::Kind::Uss;
   rules.keys = uss_keys();

@@ -7,6 +7,7 @@
 #include "api/schema.hpp"
 #include "drive/drive.hpp"
 #include "uss/pkw.hpp"
+#include "uss/registry_entry.hpp"
 #include "uss/telegram.hpp"
 
 namespace liftd::daemon {
@@ -36,6 +37,8 @@ using api::Access;
 using api::Call;
 using api::Responder;
 using api::Result;
+
+namespace {
 
 void add_uss_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
   UssCommandBackend* const uss = dynamic_cast<UssCommandBackend*>(&backend);
@@ -107,4 +110,13 @@ void add_uss_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
                   drive::Capability::Parameters});
 }
 
+}  // namespace
 }  // namespace liftd::daemon
+
+namespace liftd::uss {
+
+void RegistryEntry::add_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
+  daemon::add_uss_commands(dispatcher, backend);
+}
+
+}  // namespace liftd::uss

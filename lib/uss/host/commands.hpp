@@ -45,14 +45,4 @@ class UssCommandBackend {
   virtual void mirror(std::optional<int> address, api::Responder done) = 0;
 };
 
-/// What the USS lift offers beyond the common commands: the parameter channel (PKW, USS C 4)
-/// and `drive_reset` (fault acknowledge by STW bit 7, USS C 5.2.1).
-inline constexpr drive::Capabilities kUssOffers =
-    drive::Capabilities{}.add(drive::Capability::Parameters).add(drive::Capability::DriveReset);
-
-/// Adds uss_read, uss_write and uss_mirror to `dispatcher`. They are served by `backend` when it
-/// is a UssCommandBackend (the USS lift); on another kind's lift the dispatcher refuses them as
-/// `not_offered` before they reach a handler.
-void add_uss_commands(api::Dispatcher& dispatcher, api::Backend& backend);
-
 }  // namespace liftd::daemon

@@ -17,6 +17,7 @@
 #include "uss/config/section.hpp"
 #include "uss/host/sim_actions.hpp"
 #include "uss/host/uss_bus_slaves.hpp"
+#include "uss/registry_entry.hpp"
 #include "uss/timing.hpp"
 
 namespace liftd::daemon {
@@ -254,3 +255,13 @@ void UssLift::after_events(MonoTime now) {
 }
 
 }  // namespace liftd::daemon
+
+namespace liftd::uss {
+
+std::unique_ptr<daemon::LiftRunner> RegistryEntry::make_lift(daemon::Host& host,
+                                                             const config::Config& config,
+                                                             bool simulate) {
+  return std::make_unique<daemon::UssLift>(host, config, simulate);
+}
+
+}  // namespace liftd::uss

@@ -1,0 +1,49 @@
+// The SCH001 drive kind's entry in the registry of drive kinds (lib/kinds/registry.hpp): what the
+// daemon, the configuration and the API need of the kind. Each part is declared here and defined
+// in the library that builds it, so that a user of one part links that part only.
+#pragma once
+
+#include <memory>
+
+#include "drive/drive.hpp"
+
+namespace liftd::config {
+struct Config;
+struct KindRules;
+}  // namespace liftd::config
+namespace liftd::api {
+class Backend;
+class Dispatcher;
+struct KindSimActions;
+}  // namespace liftd::api
+namespace liftd::daemon {
+class Host;
+class LiftRunner;
+}  // namespace liftd::daemon
+
+namespace liftd::sch001 {
+
+struct RegistryEntry {
+  static constexpr drive::Kind kKind = drive::Kind::Sch001;
+
+  // ---- liftd::sch001_config (lib/sch001/config/config_rules.cpp) ----
+  /// The sch001.* keys, the checks a SCH001 lift needs (the floor count its frames carry) and
+  /// the summary of a SCH001 card. The CAN endpoint (can.*) is shared: the CAN encoder uses it.
+  static config::KindRules config_rules();
+
+  // ---- liftd::sch001_commands (lib/sch001/host/sim_actions.cpp) ----
+  /// The card's frames carry travel signals and floors only; its status frame has no keypad,
+  /// display, supply or load: nothing beyond the common commands, and no commands of its own.
+  static constexpr drive::Capabilities kOffers{};
+  static void add_commands(api::Dispatcher&, api::Backend&) {}
+  /// The `sim` actions the simulated card and hydraulic unit take.
+  static const api::KindSimActions& sim_actions() noexcept;
+
+  // ---- liftd::sch001_host (lib/sch001/host/hydraulic_lift.cpp) ----
+  /// The hydraulic lift (daemon::HydraulicLift). Throws as its constructor does.
+  static std::unique_ptr<daemon::LiftRunner> make_lift(daemon::Host& host,
+                                                       const config::Config& config,
+                                                       bool simulate);
+};
+
+}  // namespace liftd::sch001
