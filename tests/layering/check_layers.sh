@@ -68,9 +68,6 @@ done
 # and its benchmarks' (tools/bench/<kind>/); the daemon and every shared test reach a kind through
 # the registry (lib/kinds). The exceptions, each with its reason:
 declare -A crossing=(
-  # The API tests' scripted lift implements each kind's command interface, so that one fake
-  # serves a lift of any kind (a kind with commands of its own adds its interface there).
-  [tests/api/fake_backend.hpp]="dcp uss"
   # The cycle's and a USS bus's wake-ups under API load, measured side by side in one run.
   [tools/bench/api_load_bench.cpp]="dcp uss"
 )
