@@ -99,6 +99,17 @@ class DispatcherFixture : public ::testing::Test {
     }
   }
 
+  /// On this lift `own` (a command of the lift's kind) reaches the backend, noted there as `seen`,
+  /// and `other` (another kind's) is refused `not_offered` before it: how the registry
+  /// (lib/kinds) serves a lift's own kind's commands.
+  void expect_only_own_kind_served(std::string_view own, std::string_view other,
+                                   std::string_view seen) {
+    EXPECT_TRUE(is_ok(handle(own))) << own;
+    EXPECT_EQ(code_of(handle(other)), "not_offered") << other;
+    ASSERT_EQ(backend_.requests_seen.size(), 1U);
+    EXPECT_EQ(backend_.requests_seen[0], seen);
+  }
+
   nlohmann::json reply_;  // declared first: outlives the responders the backend may still hold
   Fake backend_;
   Dispatcher dispatcher_;

@@ -58,4 +58,14 @@ inline void expect_one_reply(const Dispatcher& dispatcher, FakeBackend& backend,
   backend.requests_seen.clear();
 }
 
+/// A fuzz target's whole input step for a lift served by `Fake` (a kind's fake): its static lift
+/// takes the input as one request line (expect_one_reply).
+template <typename Fake>
+int fuzz_one_request(const std::uint8_t* data, std::size_t size) {
+  static Fake backend;
+  static const Dispatcher dispatcher = every_command_dispatcher(backend);
+  expect_one_reply(dispatcher, backend, data, size);
+  return 0;
+}
+
 }  // namespace liftd::api::testing

@@ -8,9 +8,5 @@
 #include "dcp/api/fake_dcp_backend.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static liftd::api::testing::FakeDcpBackend backend;
-  static const liftd::api::Dispatcher dispatcher =
-      liftd::api::testing::every_command_dispatcher(backend);
-  liftd::api::testing::expect_one_reply(dispatcher, backend, data, size);
-  return 0;
+  return liftd::api::testing::fuzz_one_request<liftd::api::testing::FakeDcpBackend>(data, size);
 }

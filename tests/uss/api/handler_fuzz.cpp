@@ -8,9 +8,5 @@
 #include "uss/api/fake_uss_backend.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static liftd::api::testing::FakeUssBackend backend;
-  static const liftd::api::Dispatcher dispatcher =
-      liftd::api::testing::every_command_dispatcher(backend);
-  liftd::api::testing::expect_one_reply(dispatcher, backend, data, size);
-  return 0;
+  return liftd::api::testing::fuzz_one_request<liftd::api::testing::FakeUssBackend>(data, size);
 }
