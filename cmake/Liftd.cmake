@@ -169,9 +169,20 @@ function(liftd_test_library name)
   liftd_use_pch(${name} liftd_pch_tests)
 endfunction()
 
+# liftd_test_runs_liftctl(<name>): the test binary <name> runs the liftctl program: built before
+# it, its path in LIFTCTL_PATH (tests/api/test_support.hpp's LiftctlFixture).
+function(liftd_test_runs_liftctl name)
+  if(NOT TARGET ${name})
+    return()
+  endif()
+  add_dependencies(${name} liftctl)
+  target_compile_definitions(${name} PRIVATE LIFTCTL_PATH="$<TARGET_FILE:liftctl>")
+endfunction()
+
 # liftd_fuzzer(<name> SOURCES ... [DEPS ...] [LABELS ...]): a libFuzzer target, built only with
 # LIFTD_FUZZ, run for LIFTD_FUZZ_SECONDS under ctest with the labels "fuzz", "unit" (in-process,
-# no clock) and those given (its kind). Its committed seed corpus is
+# no clock) and those given (its kind); tests/ is an include root, as for the tests (the API
+# targets share tests/api/handler_fuzz.hpp and the fakes). Its committed seed corpus is
 # tests/fuzz/corpus/<name>/ (required: replayed first on every run, so a crash input kept there
 # is a regression test) and its dictionary tests/fuzz/dict/<name>.dict (optional). New inputs go
 # to <build>/fuzz/corpus/<name>/, never into the source tree; tools/fuzz.sh runs campaigns.
@@ -188,6 +199,7 @@ function(liftd_fuzzer name)
   endif()
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS})
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
   target_link_options(${name} PRIVATE -fsanitize=fuzzer)
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/fuzz)
   add_dependencies(fuzzers ${name})

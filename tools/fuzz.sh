@@ -91,6 +91,7 @@ if [ "$coverage" = 1 ]; then
     [api_line_fuzz]="lib/api/dispatcher.cpp lib/api/result.cpp"
     [config_fuzz]="lib/config/load.cpp lib/config/schema.cpp lib/config/sections_service.cpp lib/config/sections_shaft.cpp lib/dcp/config/config_rules.cpp lib/uss/config/config_rules.cpp lib/sch001/config/config_rules.cpp"
     [config_file_fuzz]="lib/config/load.cpp"
+    [dcp_api_handler_fuzz]="lib/dcp/host/commands.cpp"
     [dcp_channel_fuzz]="lib/dcp/channel.cpp lib/dcp/display.cpp"
     [dcp_frame_fuzz]="lib/dcp/frame.cpp"
     [dcp_master_link_fuzz]="lib/dcp/master_link.cpp"
@@ -99,6 +100,7 @@ if [ "$coverage" = 1 ]; then
     [sim_drive_fuzz]="lib/dcp/sim/drive_sim.cpp lib/dcp/sim/drive_sim_travel.cpp lib/dcp/sim/drive_sim_channel.cpp"
     [sch001_link_fuzz]="lib/sch001/protocol.cpp lib/sch001/card_link.cpp"
     [travel_controller_fuzz]="lib/dcp/travel/controller.cpp lib/dcp/travel/dcp3_travel.cpp lib/dcp/travel/dcp4_travel.cpp lib/dcp/travel/gate.cpp"
+    [uss_api_handler_fuzz]="lib/uss/host/commands.cpp"
     [uss_receiver_fuzz]="lib/uss/receiver.cpp lib/uss/telegram.cpp lib/uss/line.cpp"
   )
   llvm_bin=/usr/lib/llvm-16/bin

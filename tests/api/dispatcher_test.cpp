@@ -7,6 +7,7 @@
 
 #include "api/commands.hpp"
 #include "api/dispatcher.hpp"
+#include "api/dispatcher_fixture.hpp"
 #include "api/fake_backend.hpp"
 #include "common/version.hpp"
 
@@ -15,45 +16,12 @@ namespace {
 
 using nlohmann::json;
 using testing::FakeBackend;
+using testing::RefusedRequest;
 
-class FakeSession : public SessionControl {
- public:
-  void set_watching(bool enable) override { watching_ = enable; }
-  bool watching() const override { return watching_; }
-  void send_event(std::string line) override { events.push_back(std::move(line)); }
-  std::size_t requests_in_flight() const override { return in_flight; }
-  std::vector<std::string> events;
-  std::size_t in_flight = 1;
-
- private:
-  bool watching_ = false;
-};
-
-class DispatcherTest : public ::testing::Test {
- protected:
-  DispatcherTest() { add_every_command(dispatcher_, backend_); }
-
-  /// Handles `line` as `access` and returns the parsed reply (null if none was sent yet).
-  json handle(std::string_view line, AccessSet access = {true, true, true}) {
-    Peer peer;
-    peer.uid = 1000;
-    peer.access = access;
-    // The reply lands in a member: a deferred responder may answer after handle() returned.
-    reply_ = nullptr;
-    dispatcher_.handle_line(line, peer, session_, [this](std::string text, bool ok) {
-      EXPECT_EQ(text.back(), '\n');
-      reply_ = json::parse(text);
-      EXPECT_EQ(reply_.at("ok").get<bool>(), ok);
-    });
-    return reply_;
-  }
-  static std::string code_of(const json& reply) { return reply.at("error").at("code"); }
-
-  json reply_;  // declared first: outlives the responders the backend may still hold
-  FakeBackend backend_;
-  Dispatcher dispatcher_;
-  FakeSession session_;
-};
+/// The dispatcher with every command of the daemon, served by the shared fake: the common
+/// commands' arguments, access and replies, and every kind's commands known. A kind's own
+/// commands served: tests/<kind>/api/dispatcher_test.cpp.
+class DispatcherTest : public testing::DispatcherFixture<FakeBackend> {};
 
 TEST_F(DispatcherTest, EchoesIdsOfEveryJsonType) {
   // Legend: the id given in the request, and what the reply's id must be.
@@ -81,13 +49,9 @@ TEST_F(DispatcherTest, VersionReportsDaemonAndApiVersion) {
 }
 
 TEST_F(DispatcherTest, RejectsMalformedRequestsWithTheRightCode) {
-  // Legend: request line, expected error code, expected field named ("" = none).
-  struct Case {
-    const char* line;
-    const char* code;
-    const char* field;
-  };
-  const Case cases[] = {
+  // Legend: request line, expected error code, expected field named ("" = none). The DCP
+  // commands' arguments: tests/dcp/api/dispatcher_test.cpp.
+  const RefusedRequest cases[] = {
       {"{", "bad_json", ""},                                             // truncated object
       {"cmd=status", "bad_json", ""},                                    // not JSON at all
       {"{\"cmd\":\"status\"} x", "bad_json", ""},                        // trailing garbage
@@ -100,15 +64,10 @@ TEST_F(DispatcherTest, RejectsMalformedRequestsWithTheRightCode) {
       {R"({"cmd":"status","verbose":true})", "bad_request", "verbose"},  // unknown field
       {R"({"cmd":"watch"})", "bad_request", "enable"},                   // missing required field
       {R"({"cmd":"watch","enable":1})", "bad_request", "enable"},        // int for bool
-      {R"({"cmd":"load","percent":"50"})", "bad_request", "percent"},    // string for int
-      {R"({"cmd":"load","percent":50.5})", "bad_request", "percent"},    // fraction
-      {R"({"cmd":"load","percent":1000})", "bad_request", "percent"},    // above 999
-      {R"({"cmd":"load","percent":-1})", "bad_request", "percent"},      // below 0
-      {R"({"cmd":"load","percent":18446744073709551615})", "bad_request", "percent"},
-      {R"({"cmd":"key","key":0})", "bad_request", "key"},  // buttons are 1..5
-      {R"({"cmd":"key","key":6})", "bad_request", "key"},
-      {R"({"cmd":"power","supply":"battery"})", "bad_request", "supply"},  // not a choice
-      {R"({"cmd":"power","supply":"mains","saving":3})", "bad_request", "saving"},
+      {R"({"cmd":"trace","count":"50"})", "bad_request", "count"},       // string for int
+      {R"({"cmd":"trace","count":50.5})", "bad_request", "count"},       // fraction
+      {R"({"cmd":"trace","count":18446744073709551615})", "bad_request", "count"},
+      {R"({"cmd":"inspection","mode":"sideways"})", "bad_request", "mode"},  // not a choice
       {R"({"cmd":"trace","count":0})", "bad_request", "count"},
       {R"({"cmd":"trace","count":1001})", "bad_request", "count"},
       {R"({"cmd":"travels","last":0})", "bad_request", "last"},
@@ -118,26 +77,14 @@ TEST_F(DispatcherTest, RejectsMalformedRequestsWithTheRightCode) {
       {R"({"cmd":"inputs","safety_chain":"yes"})", "bad_request", "safety_chain"},
       {R"({"cmd":"inputs","position_mm":1000000})", "bad_request", "position_mm"},
   };
-  for (const auto& c : cases) {
-    const json reply = handle(c.line);
-    ASSERT_FALSE(reply.is_null()) << c.line;
-    EXPECT_FALSE(reply.at("ok").get<bool>()) << c.line;
-    EXPECT_EQ(code_of(reply), c.code) << c.line;
-    if (*c.field != '\0') {
-      EXPECT_EQ(reply.at("error").at("field"), c.field) << c.line;
-    }
-    if (*c.field != '\0' && std::string(c.code) == "bad_request") {
-      EXPECT_NE(reply.at("error").at("message").get<std::string>().find(c.field), std::string::npos)
-          << "message must name the field: " << c.line;
-    }
-  }
+  expect_refused(cases);
 }
 
 TEST_F(DispatcherTest, BadRequestMessageSaysWhatIsAllowed) {
-  EXPECT_EQ(handle(R"({"cmd":"load","percent":1000})").at("error").at("message"),
-            "field \"percent\" must be an integer 0..999");
-  EXPECT_EQ(handle(R"({"cmd":"power","supply":"x"})").at("error").at("message"),
-            "field \"supply\" must be one of \"mains\", \"emergency\"");
+  EXPECT_EQ(handle(R"({"cmd":"trace","count":1001})").at("error").at("message"),
+            "field \"count\" must be an integer 1..1000");
+  EXPECT_EQ(handle(R"({"cmd":"inspection","mode":"x"})").at("error").at("message"),
+            "field \"mode\" must be one of \"on\", \"off\"");
   EXPECT_EQ(handle(R"({"cmd":"status","x":1})").at("error").at("message"),
             "unknown field \"x\" (this command takes no arguments)");
 }
@@ -151,37 +98,24 @@ TEST_F(DispatcherTest, RejectsNestingDeeperThanTheLimit) {
 }
 
 TEST_F(DispatcherTest, ChecksAccessPerCommandLevel) {
-  // Legend: command line, access level it needs.
-  const std::vector<std::pair<std::string, Access>> cases = {
+  // Legend: command line, access level it needs. The DCP commands':
+  // tests/dcp/api/dispatcher_test.cpp.
+  expect_access_levels({
       {R"({"cmd":"status"})", Access::Read},
       {R"({"cmd":"watch","enable":false})", Access::Read},
       {R"({"cmd":"stats"})", Access::Read},
       {R"({"cmd":"trace"})", Access::Read},
       {R"({"cmd":"travels"})", Access::Read},
-      {R"({"cmd":"display"})", Access::Read},
       {R"({"cmd":"config"})", Access::Read},
       {R"({"cmd":"version"})", Access::Read},
-      {R"({"cmd":"key","key":1})", Access::Control},
       {R"({"cmd":"drive_reset"})", Access::Control},
-      {R"({"cmd":"power","supply":"mains"})", Access::Control},
-      {R"({"cmd":"load","percent":10})", Access::Control},
       {R"({"cmd":"inputs","safety_chain":true})", Access::Inputs},
-  };
-  const AccessSet only_read{true, false, false};
-  const AccessSet only_control{true, true, false};
-  const AccessSet only_inputs{true, false, true};
-  const AccessSet nothing{false, false, false};
-  for (const auto& [line, level] : cases) {
-    EXPECT_EQ(handle(line, only_read).at("ok").get<bool>(), level == Access::Read) << line;
-    EXPECT_EQ(handle(line, only_control).at("ok").get<bool>(), level != Access::Inputs) << line;
-    EXPECT_EQ(handle(line, only_inputs).at("ok").get<bool>(), level != Access::Control) << line;
-    EXPECT_EQ(code_of(handle(line, nothing)), "forbidden") << line;
-  }
+  });
 }
 
 TEST_F(DispatcherTest, ForbiddenIsCheckedBeforeArguments) {
   // A peer without access learns nothing about argument rules.
-  EXPECT_EQ(code_of(handle(R"({"cmd":"load","percent":"x"})", AccessSet{true, false, false})),
+  EXPECT_EQ(code_of(handle(R"({"cmd":"travel","floor":"x"})", AccessSet{true, false, false})),
             "forbidden");
 }
 
@@ -194,17 +128,6 @@ TEST_F(DispatcherTest, PassesBackendErrorsThrough) {
     EXPECT_EQ(reply.at("error").at("message"), "drive says no");
     EXPECT_EQ(reply.at("id"), 3);
   }
-}
-
-TEST_F(DispatcherTest, ForwardsControlArgumentsToTheBackend) {
-  handle(R"({"cmd":"key","key":3})");
-  handle(R"({"cmd":"drive_reset"})");
-  handle(R"({"cmd":"power","supply":"emergency","saving":2})");
-  handle(R"({"cmd":"power","supply":"mains"})");
-  handle(R"({"cmd":"load","percent":75})");
-  EXPECT_EQ(backend_.requests_seen,
-            (std::vector<std::string>{"key 3", "drive_reset", "power emergency 2", "power mains 0",
-                                      "load 75"}));
 }
 
 TEST_F(DispatcherTest, InputsKeepOmittedFields) {
@@ -393,30 +316,6 @@ TEST_F(DispatcherTest, DroppedResponderBecomesInternal) {
   EXPECT_EQ(code_of(handle(R"({"cmd":"forget"})")), "internal");
 }
 
-TEST_F(DispatcherTest, AnswersLaterForAsynchronousHandlers) {
-  backend_.defer = true;
-  json reply = handle(R"({"cmd":"load","percent":5,"id":"later"})");
-  EXPECT_TRUE(reply.is_null());
-  ASSERT_EQ(backend_.deferred.size(), 1U);
-  int sends = 0;
-  Peer peer;
-  peer.access = {true, true, true};
-  dispatcher_.handle_line(R"({"cmd":"drive_reset","id":2})", peer, session_,
-                          [&](std::string text, bool) {
-                            ++sends;
-                            reply = json::parse(text);
-                          });
-  backend_.deferred[1](Result::ok({{"done", true}}));
-  backend_.deferred[1](Result::ok());  // a second answer is ignored
-  EXPECT_EQ(sends, 1);
-  EXPECT_EQ(reply.at("id"), 2);
-  EXPECT_EQ(reply.at("result").at("done"), true);
-  // A responder dropped unanswered still replies (internal), so no client waits forever.
-  backend_.deferred.clear();
-  EXPECT_EQ(code_of(reply_), "internal");
-  EXPECT_EQ(reply_.at("id"), "later");
-}
-
 TEST_F(DispatcherTest, TooManyRequestsInFlightIsBusy) {
   session_.in_flight = DispatchLimits{}.max_in_flight + 1;
   EXPECT_EQ(code_of(handle(R"({"cmd":"status"})")), "busy");
@@ -537,72 +436,6 @@ TEST_F(OtherDriveKindTest, CommonCommandsStillRun) {
   EXPECT_EQ(r.at("sch001"), (json{{"card", "ok"}}));
   EXPECT_FALSE(r.contains("dcp"));
   EXPECT_FALSE(r.at("link").contains("handshake_problem"));
-}
-
-// A USS lift: the parameter commands reach the backend with their arguments as given (the
-// element index unchanged, USS C 4.2.2), values that fit no word are refused unless the width is
-// dword, and the DCP-only commands are not offered.
-class UssDriveKindTest : public DispatcherTest {
- protected:
-  UssDriveKindTest() {
-    backend_.status_snapshot.drive_kind = drive::Kind::Uss;
-    dispatcher_ = Dispatcher{};
-    add_every_command(dispatcher_, backend_);
-  }
-};
-
-TEST_F(UssDriveKindTest, ParameterCommandsReachTheBackendWithTheirArguments) {
-  struct Case {
-    const char* request;
-    const char* call;
-  };
-  for (
-      const Case& c : {
-          Case{R"({"cmd":"uss_read","pnu":52})", "parameter -1 52 value 0"},
-          Case{R"({"cmd":"uss_read","pnu":7,"target":"text","index":3,"address":5})",
-               "parameter 5 7 text 3"},
-          Case{R"({"cmd":"uss_read","pnu":4,"target":"description","index":255})",
-               "parameter -1 4 description 255"},
-          Case{
-              R"({"cmd":"uss_write","pnu":4,"target":"array","index":2,"value":-1,"width":"dword"})",
-              "parameter -1 4 array 2 write -1 dword"},
-          Case{R"({"cmd":"uss_write","pnu":1000,"value":65535,"eeprom":true})",
-               "parameter -1 1000 value 0 write 65535 eeprom"},
-          Case{R"({"cmd":"uss_mirror"})", "mirror -1"},
-          Case{R"({"cmd":"uss_mirror","address":31})", "mirror 31"},
-          Case{R"({"cmd":"drive_reset"})", "drive_reset"},
-      }) {
-    backend_.requests_seen.clear();
-    const json reply = handle(c.request);
-    EXPECT_TRUE(reply.at("ok").get<bool>()) << c.request << " " << reply.dump();
-    ASSERT_EQ(backend_.requests_seen.size(), 1U) << c.request;
-    EXPECT_EQ(backend_.requests_seen[0], c.call);
-  }
-}
-
-TEST_F(UssDriveKindTest, BadParameterRequestsChangeNothing) {
-  struct Case {
-    const char* request;
-    const char* field;
-  };
-  for (const Case& c :
-       {Case{R"({"cmd":"uss_read"})", "pnu"}, Case{R"({"cmd":"uss_read","pnu":2048})", "pnu"},
-        Case{R"({"cmd":"uss_read","pnu":1,"address":32})", "address"},
-        Case{R"({"cmd":"uss_read","pnu":1,"index":256})", "index"},
-        Case{R"({"cmd":"uss_read","pnu":1,"target":"bits"})", "target"},
-        Case{R"({"cmd":"uss_write","pnu":1})", "value"},
-        Case{R"({"cmd":"uss_write","pnu":1,"value":65536})", "value"},
-        Case{R"({"cmd":"uss_write","pnu":1,"value":-32769})", "value"},
-        Case{R"({"cmd":"uss_write","pnu":1,"value":4294967296,"width":"dword"})", "value"},
-        Case{R"({"cmd":"uss_write","pnu":1,"value":1,"target":"text"})", "target"}}) {
-    const json reply = handle(c.request);
-    EXPECT_EQ(code_of(reply), "bad_request") << c.request;
-    EXPECT_EQ(reply.at("error").at("field"), c.field) << c.request;
-  }
-  EXPECT_TRUE(backend_.requests_seen.empty()) << "a refused request reached the backend";
-  for (const char* request : {R"({"cmd":"key","key":1})", R"({"cmd":"fast_stop"})"}) {
-    EXPECT_EQ(code_of(handle(request)), "not_offered") << request;
-  }
 }
 
 }  // namespace

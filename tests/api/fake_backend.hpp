@@ -1,9 +1,11 @@
-// A scripted Backend for the API tests, the fuzz target and the benchmark: the common commands
-// and every drive kind's own (DCP's and USS's: it implements each kind's command backend), so
-// one fake serves a lift of any kind. A kind with commands of its own adds its interface here.
+// A scripted Backend for the API tests, the fuzz targets and the benchmark: the common commands
+// (lib/api) on a lift of any drive kind. Its status at rest is a DCP lift's (StatusSnapshot's
+// default kind), as JSON; a test sets another kind in status_snapshot. A kind's own commands are
+// known to every dispatcher (the registry adds them) and served by the kind's fake in its own
+// tests, which derives from this one (tests/dcp/api/fake_dcp_backend.hpp,
+// tests/uss/api/fake_uss_backend.hpp); this fake serves none of them.
 #pragma once
 
-#include <array>
 #include <optional>
 #include <string>
 #include <utility>
@@ -12,17 +14,13 @@
 #include "api/backend.hpp"
 #include "api/commands.hpp"
 #include "api/dispatcher.hpp"
-#include "dcp/host/commands.hpp"
 #include "kinds/commands.hpp"
-#include "uss/host/commands.hpp"
 
 namespace liftd::api::testing {
 
 /// Answers from fixed snapshots; control commands succeed, fail with `control_result`, or are
 /// held in `deferred` until the test answers them.
-class FakeBackend : public Backend,
-                    public daemon::DcpCommandBackend,
-                    public daemon::UssCommandBackend {
+class FakeBackend : public Backend {
  public:
   FakeBackend() {
     status_snapshot.drive_state = drive::State::Ready;
@@ -35,7 +33,6 @@ class FakeBackend : public Backend,
     status_snapshot.floor = 1;
     status_snapshot.rt = RtInfo{true, "SCHED_FIFO", 80, true};
     config_json = {{"serial", {{"device", "/dev/ttyS1"}}}};
-    display_snapshot.lines = {"Speed    0.00 m/s", "Menu 1", "", ""};
   }
 
   /// The S0..S7 object of a DCP drive that is ready (S0 only).
@@ -71,32 +68,9 @@ class FakeBackend : public Backend,
     travels_asked = last;
     return Result::ok(travels_result);
   }
-  daemon::DisplaySnapshot display() override { return display_snapshot; }
   nlohmann::json config() override { return config_json; }
-  void key(int button, Responder done) override {
-    answer("key " + std::to_string(button), Result::ok(), std::move(done));
-  }
   void drive_reset(Responder done) override {
     answer("drive_reset", Result::ok(), std::move(done));
-  }
-  void parameter(const daemon::ParameterArgs& a, Responder done) override {
-    answer("parameter " + std::to_string(a.address.value_or(-1)) + " " + std::to_string(a.pnu) +
-               " " + std::string(daemon::kParameterTargets[static_cast<std::size_t>(a.target)]) +
-               " " + std::to_string(a.index) +
-               (a.write ? " write " + std::to_string(a.value) : "") + (a.dword ? " dword" : "") +
-               (a.eeprom ? " eeprom" : ""),
-           Result::ok({{"pnu", a.pnu}}), std::move(done));
-  }
-  void mirror(std::optional<int> address, Responder done) override {
-    answer("mirror " + std::to_string(address.value_or(-1)), Result::ok(), std::move(done));
-  }
-  void power(daemon::PowerSetting setting, Responder done) override {
-    answer(std::string("power ") + (setting.emergency ? "emergency " : "mains ") +
-               std::to_string(setting.saving),
-           Result::ok(daemon::to_json(setting)), std::move(done));
-  }
-  void load(int percent, Responder done) override {
-    answer("load " + std::to_string(percent), Result::ok(), std::move(done));
   }
   void calls(const CallsArgs& args, Responder done) override {
     std::string call = "calls " + args.action;
@@ -104,24 +78,16 @@ class FakeBackend : public Backend,
     if (args.position) call += " @" + std::to_string(*args.position);
     for (const int floor : args.floors) call += " " + std::to_string(floor);
     // No travel control unless the test says what control commands answer.
-    answer(std::move(call),
-           Result::fail(ErrorCode::NotReady, "this daemon has no travel control for its drive"),
-           std::move(done));
-  }
-  // No travel control, as the defaults of the common travel commands.
-  void fast_stop(Responder done) override { no_travel(done); }
-  void fast_start(const std::string&, const TravelArgs&, Responder done) override {
-    no_travel(done);
+    answer(std::move(call), Result::fail(ErrorCode::NotReady, kNoTravelControl), std::move(done));
   }
   void update_inputs(const InputUpdate& update, Responder done) override {
     update.apply_to(inputs_state);
     answer("inputs", Result::ok(to_json(inputs_state)), std::move(done));
   }
 
-  StatusSnapshot status_snapshot;            ///< what status() returns
-  StatsSnapshot stats_snapshot;              ///< what stats() returns
-  std::vector<TraceEntry> trace_entries;     ///< what trace() picks from
-  daemon::DisplaySnapshot display_snapshot;  ///< what display() returns
+  StatusSnapshot status_snapshot;         ///< what status() returns
+  StatsSnapshot stats_snapshot;           ///< what stats() returns
+  std::vector<TraceEntry> trace_entries;  ///< what trace() picks from
   nlohmann::json travels_result = {{"travels", nlohmann::json::array()}, {"dropped_samples", 0}};
   std::size_t travels_asked = 0;           ///< the `last` travels() was called with
   nlohmann::json config_json;              ///< what config() returns
@@ -129,12 +95,15 @@ class FakeBackend : public Backend,
   std::optional<Result> control_result;    ///< set: control commands answer this
   bool defer = false;                      ///< true: hold control responders in `deferred`
   std::vector<Responder> deferred;         ///< held responders
-  std::vector<std::string> requests_seen;  ///< control requests seen, e.g. "load 50"
+  std::vector<std::string> requests_seen;  ///< control requests seen, e.g. "drive_reset"
 
- private:
-  static void no_travel(Responder& done) {
-    done(Result::fail(ErrorCode::NotReady, "this daemon has no travel control for its drive"));
-  }
+ protected:
+  /// How a travel command is refused: this fake has no travel control (as the defaults of the
+  /// common travel commands).
+  static constexpr const char* kNoTravelControl = "this daemon has no travel control for its drive";
+
+  /// A control request: noted in requests_seen as `call`, then answered with control_result if
+  /// the test set one, else `fallback`, or held in `deferred`.
   void answer(std::string call, Result fallback, Responder done) {
     requests_seen.push_back(std::move(call));
     if (defer) {
@@ -154,8 +123,9 @@ class QuietSession : public SessionControl {
   std::size_t requests_in_flight() const override { return 1; }
 };
 
-/// Every drive kind's own commands and `sim` on `dispatcher`, served by `backend`, as the
-/// daemon's registry of drive kinds adds them to a lift's server.
+/// Every drive kind's own commands and `sim` on `dispatcher`, served by `backend` (a kind's own
+/// only by that kind's fake), as the daemon's registry of drive kinds adds them to a lift's
+/// server.
 inline void add_drive_kind_commands(Dispatcher& dispatcher, FakeBackend& backend) {
   kinds::add_drive_kind_commands(dispatcher, backend);
 }

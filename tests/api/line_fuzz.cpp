@@ -9,21 +9,9 @@
 #include "api/commands.hpp"
 #include "api/dispatcher.hpp"
 #include "api/fake_backend.hpp"
+#include "api/handler_fuzz.hpp"
 
 namespace {
-
-class FuzzSession : public liftd::api::SessionControl {
- public:
-  void set_watching(bool enable) override { watching_ = enable; }
-  bool watching() const override { return watching_; }
-  void send_event(std::string line) override {
-    if (line.empty() || line.back() != '\n') std::abort();
-  }
-  std::size_t requests_in_flight() const override { return 1; }
-
- private:
-  bool watching_ = false;
-};
 
 // The first input byte says where to plant what: bit 0 a NUL, bit 1 a repeated "cmd" key.
 std::string shape(const std::uint8_t* data, std::size_t size) {
@@ -39,12 +27,9 @@ std::string shape(const std::uint8_t* data, std::size_t size) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static liftd::api::testing::FakeBackend backend;
-  static liftd::api::Dispatcher dispatcher = [] {
-    liftd::api::Dispatcher d;
-    liftd::api::testing::add_every_command(d, backend);
-    return d;
-  }();
-  static FuzzSession session;
+  static const liftd::api::Dispatcher dispatcher =
+      liftd::api::testing::every_command_dispatcher(backend);
+  static liftd::api::testing::FuzzSession session;
   liftd::api::Peer peer;
   peer.access = {true, true, true};
   const std::string line = shape(data, size);

@@ -448,25 +448,6 @@ TEST_F(ApiServer, ClientThatNeverReadsRepliesIsDropped) {
   EXPECT_EQ(other->call({{"cmd", "version"}, {"id", 5}}).at("id"), 5);
 }
 
-TEST_F(ApiServer, AsyncRepliesKeepTheirIds) {
-  start_server();
-  on_io([this] { backend_.defer = true; });
-  auto client = connect();
-  ASSERT_TRUE(client->send_json({{"cmd", "drive_reset"}, {"id", "first"}}));
-  ASSERT_TRUE(client->send_json({{"cmd", "load"}, {"percent", 40}, {"id", "second"}}));
-  ASSERT_TRUE(eventually([this] { return backend_.deferred.size() == 2; }));
-  // Requests that do not wait on the backend are answered meanwhile.
-  EXPECT_EQ(client->call({{"cmd", "version"}, {"id", "third"}}).at("id"), "third");
-  on_io([this] {
-    backend_.deferred[1](Result::ok());
-    backend_.deferred[0](Result::fail(ErrorCode::NotReady, "link down"));
-  });
-  EXPECT_EQ(client->read_json()->at("id"), "second");
-  const auto first = client->read_json();
-  EXPECT_EQ(first->at("id"), "first");
-  EXPECT_EQ(first->at("error").at("code"), "not_ready");
-}
-
 TEST_F(ApiServer, ResponderOutlivingTheClientIsHarmless) {
   start_server();
   on_io([this] { backend_.defer = true; });

@@ -126,17 +126,19 @@ class Client {
   bool eof_ = false;
 };
 
-/// A temp dir, a fake backend and a server on an io thread.
-class ServerFixture : public ::testing::Test {
+/// A temp dir, a fake backend and a server on an io thread. `Fake`: FakeBackend, or a kind's fake
+/// derived from it that serves the kind's own commands (tests/<kind>/api).
+template <typename Fake>
+class BasicServerFixture : public ::testing::Test {
  protected:
-  ServerFixture() {
+  BasicServerFixture() {
     char tmpl[] = "/tmp/liftd-api-test-XXXXXX";
     dir_ = ::mkdtemp(tmpl);
     std::filesystem::permissions(dir_, std::filesystem::perms::owner_all |
                                            std::filesystem::perms::group_exec |
                                            std::filesystem::perms::others_exec);
   }
-  ~ServerFixture() override {
+  ~BasicServerFixture() override {
     stop_server();
     std::filesystem::remove_all(dir_);
   }
@@ -203,11 +205,14 @@ class ServerFixture : public ::testing::Test {
 
   std::string dir_;
   asio::io_context io_;
-  FakeBackend backend_;
+  Fake backend_;
   std::unique_ptr<Server> server_;
   std::optional<asio::executor_work_guard<asio::io_context::executor_type>> work_;
   std::thread thread_;
 };
+
+/// The server with the shared fake: the common commands served, every kind's known.
+using ServerFixture = BasicServerFixture<FakeBackend>;
 
 /// What a command printed (stdout and stderr) and its exit status (-1: it did not exit).
 struct RunResult {
@@ -230,12 +235,14 @@ inline RunResult run_command(const std::string& command_line) {
 
 #ifdef LIFTCTL_PATH
 /// The in-process server with the liftctl binary pointed at its socket.
-class LiftctlFixture : public ServerFixture {
+template <typename Fake>
+class BasicLiftctlFixture : public BasicServerFixture<Fake> {
  protected:
   std::string liftctl(const std::string& args) const {
-    return std::string(LIFTCTL_PATH) + " --socket " + socket_path() + " " + args;
+    return std::string(LIFTCTL_PATH) + " --socket " + this->socket_path() + " " + args;
   }
 };
+using LiftctlFixture = BasicLiftctlFixture<FakeBackend>;
 #endif
 
 }  // namespace liftd::api::testing

@@ -1,6 +1,7 @@
 // The registry of drive kinds (lib/kinds/lifts.cpp) adds every kind's own API commands to a lift's
-// dispatcher: the lift's kind serves its own, and another kind's command is answered
-// `not_offered` with the message every lift gives.
+// dispatcher: another kind's command is answered `not_offered` with the message every lift gives.
+// The lift's kind serving its own, with the kind's fake backend: TheLiftsOwnKindServesItsCommands
+// in tests/dcp/api/dispatcher_test.cpp and tests/uss/api/dispatcher_test.cpp.
 #include <gtest/gtest.h>
 
 #include <optional>
@@ -66,22 +67,6 @@ TEST_F(DriveCommandsTest, AnotherKindsCommandIsNotOffered) {
   EXPECT_EQ(read.at("error").at("message"),
             "\"uss_read\" is not offered by drive kind \"sch001\" (it has no parameters function)");
   EXPECT_TRUE(backend_.requests_seen.empty()) << "a refused command reached the backend";
-}
-
-TEST_F(DriveCommandsTest, TheLiftsOwnKindServesItsCommands) {
-  make_lift(drive::Kind::Uss);
-  EXPECT_TRUE(handle(R"({"cmd":"uss_mirror","address":3})").at("ok").get<bool>());
-  EXPECT_EQ(handle(R"({"cmd":"fast_stop"})").at("error").at("code"), "not_offered");
-  ASSERT_EQ(backend_.requests_seen.size(), 1U);
-  EXPECT_EQ(backend_.requests_seen[0], "mirror 3");
-
-  backend_.requests_seen.clear();
-  dispatcher_ = api::Dispatcher{};
-  make_lift(drive::Kind::Dcp);
-  EXPECT_TRUE(handle(R"({"cmd":"key","key":3})").at("ok").get<bool>());
-  EXPECT_EQ(handle(R"({"cmd":"uss_mirror"})").at("error").at("code"), "not_offered");
-  ASSERT_EQ(backend_.requests_seen.size(), 1U);
-  EXPECT_EQ(backend_.requests_seen[0], "key 3");
 }
 
 }  // namespace

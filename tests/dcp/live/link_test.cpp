@@ -115,7 +115,7 @@ TEST(LiveLink, HandshakeThousandsOfCleanCyclesAndADcp4TravelLandsWithin2mm) {
     // Frame spacing: DCP 7.2 one frame every 15 ms. What the cycle decides is the schedule: it
     // wakes at absolute times, sends within the window or skips (DCP 7.2), and never drifts.
     // How many single wake-ups the machine made late is the machine's, not the code's: the
-    // benchmarks measure it (tools/bench/api_load_bench, the soak), this test only prints it.
+    // benchmarks measure it (tools/bench/dcp/api_load_bench, the soak), this test only prints it.
     std::vector<MonoTime> sends;
     for (const auto& rec : m.runner.recorder().copy()) {
       if (rec.direction == rt::Direction::Tx) sends.push_back(rec.time);

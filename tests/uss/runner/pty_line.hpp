@@ -4,8 +4,8 @@
 // previous one, A 6.1), and a reply is written one character time after the slave starts it
 // (when its STX would be complete). The master's own pacing (uss::Master + uss::UssRunner: start
 // pause, transmission time, reply delay) then makes the cycle a real line would have.
-// Header only: used by tests/uss/runner and by tools/bench/uss/uss_bench.cpp and api_load_bench.cpp
-// (which build without the tests).
+// Header only: used by tests/uss/runner and by tools/bench/uss/uss_bench.cpp and uss_bus.cpp (the
+// USS bus of api-load-bench), which build without the tests.
 #pragma once
 
 #include <poll.h>

@@ -1,14 +1,14 @@
 // api-load-bench: what API load does to the real-time threads. Runs the real daemon wiring in
 // process (Daemon + DcpLift with the simulated lift on a pty, the cycle thread at its configured
 // priority, the API server), keeps the car travelling between the lowest and the top floor, and
-// beside it a USS bus (uss::UssRunner + uss::Master against simulated slaves on a pty at 38400
-// baud, the bus thread at the cycle's priority) and a reference loop: a bare SCHED_FIFO
-// clock_nanosleep loop with the cycle's period and priority, which stands for what the platform
-// gives any real-time thread. Each window (quiet, then 1, 8 and 32 clients sending `status` as
-// fast as they can) measures all three at once, so the cycle's and the bus's wake-up lateness are
-// read against the reference's under the same load in the same run (the criterion: at most 1.1
-// times the reference's p99, no skipped cycle the reference does not also show, no missing reply,
-// no link fault). Also prints requests per second and request latency per load.
+// beside it a USS bus (tools/bench/uss/uss_bus.*: uss::UssRunner + uss::Master against simulated
+// slaves on a pty at 38400 baud, the bus thread at the cycle's priority) and a reference loop: a
+// bare SCHED_FIFO clock_nanosleep loop with the cycle's period and priority, which stands for what
+// the platform gives any real-time thread. Each window (quiet, then 1, 8 and 32 clients sending
+// `status` as fast as they can) measures all three at once, so the cycle's and the bus's wake-up
+// lateness are read against the reference's under the same load in the same run (the criterion: at
+// most 1.1 times the reference's p99, no skipped cycle the reference does not also show, no missing
+// reply, no link fault). Also prints requests per second and request latency per load.
 // With --board CPU it runs as docs/operations.md sets up a board ("Real-time settings of a
 // board"): the real-time threads (the cycle, the USS bus, the reference loop and link, and the
 // simulated drive and slaves, which stand for hardware outside the board) on that CPU, every
@@ -41,12 +41,12 @@
 #include <thread>
 #include <vector>
 
+#include "bench/uss/uss_bus.hpp"
 #include "common/cpu_set.hpp"
 #include "common/mono_time.hpp"
 #include "daemon/daemon.hpp"
 #include "dcp/host/dcp_lift.hpp"
 #include "host/lift_common.hpp"
-#include "io/pty.hpp"
 #include "log/log.hpp"
 #include "rt/cpu_split.hpp"
 #include "rt/cycle_runner.hpp"
@@ -55,10 +55,6 @@
 #include "service/notify.hpp"
 #include "support/api_client.hpp"
 #include "support/reference_link.hpp"
-#include "uss/master/master.hpp"
-#include "uss/runner/pty_line.hpp"
-#include "uss/runner/uss_runner.hpp"
-#include "uss/sim/uss_slave_sim.hpp"
 
 namespace {
 
@@ -68,7 +64,9 @@ using liftd::MonoTime;
 using liftd::rt::HistogramData;
 using nlohmann::json;
 namespace rt = liftd::rt;
-namespace uss = liftd::uss;
+using liftd::bench::UssBus;
+using liftd::bench::UssBusCounters;
+using liftd::bench::UssBusStats;
 
 /// A connected client that has read the greeting.
 struct Client : liftd::testing::ApiClient {
@@ -211,97 +209,6 @@ class ReferenceLoop {
   rt::RtThread thread_;
 };
 
-/// The user side of the USS bus: drains what the master reports, nothing else.
-class UssHooks final : public uss::UssHooks {
- public:
-  explicit UssHooks(uss::Master& master) : master_(master) {}
-  void after_exchange(MonoTime /*now*/) noexcept override {
-    uss::LinkChange change;
-    while (master_.poll_link_change(change)) {
-    }
-    uss::MirrorResult mirror;
-    while (master_.poll_mirror(mirror)) {
-    }
-  }
-  void on_port(bool /*up*/, MonoTime /*now*/) noexcept override {}
-
- private:
-  uss::Master& master_;
-};
-
-/// A USS bus at 38400 baud (A 6.1) with three simulated slaves answering 1 ms after our BCC
-/// (A 5.2.1.1), as uss-bench runs it: the bus thread at the cycle's priority, the pty line
-/// thread one below.
-class UssBus {
- public:
-  static constexpr std::uint32_t kBaud = 38400;
-
-  UssBus(int priority, bool lock_memory, int cpu)
-      : pty_(make_pty()),
-        slaves_(make_slaves()),
-        bus_(std::make_unique<uss::sim::UssBusSim>(slaves_, kBaud, mono_now())),
-        master_(std::make_unique<uss::Master>(master_config())),
-        hooks_(*master_),
-        line_(pty_.master_fd(), *bus_, kBaud) {
-    uss::UssRunnerConfig rc;
-    rc.device_path = pty_.slave_path();
-    rc.serial = uss::uss_serial_settings(kBaud);
-    rc.thread.priority = priority;
-    rc.thread.lock_memory = lock_memory;
-    rc.thread.cpu = cpu;
-    runner_ = std::make_unique<uss::UssRunner>(rc, *master_, hooks_);
-    line_priority_ = std::max(1, priority - 1);
-    cpu_ = cpu;
-  }
-  ~UssBus() { stop(); }
-  int start() {
-    if (const int err = line_.start(line_priority_, cpu_); err != 0) return err;
-    return runner_->start();
-  }
-  void stop() {
-    runner_->stop();
-    line_.stop();
-  }
-  uss::UssRunnerStats stats() const { return runner_->stats(); }
-  std::chrono::nanoseconds expected_cycle() const { return master_->expected_cycle_time(); }
-
- private:
-  static liftd::io::PtyPair make_pty() {
-    auto created = liftd::io::PtyPair::create(uss::uss_serial_settings(kBaud));
-    if (!created.ok()) throw std::runtime_error(created.error().message());
-    return std::move(created).value();
-  }
-  static std::vector<uss::sim::UssSlaveConfig> make_slaves() {
-    std::vector<uss::sim::UssSlaveConfig> s(3);
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      s[i].address = static_cast<std::uint8_t>(i + 1);
-      s[i].reply_delay = 1ms;
-    }
-    return s;
-  }
-  uss::MasterConfig master_config() const {
-    uss::MasterConfig mc;
-    mc.baud = kBaud;
-    mc.mirror_at_start = false;
-    mc.expected_reply_delay = 1ms;
-    for (const auto& s : slaves_) {
-      mc.slaves.push_back(uss::SlaveConfig{s.address, uss::PkwLength::Four, 2});
-      mc.polling_list.push_back(s.address);
-    }
-    return mc;
-  }
-
-  liftd::io::PtyPair pty_;
-  std::vector<uss::sim::UssSlaveConfig> slaves_;
-  std::unique_ptr<uss::sim::UssBusSim> bus_;
-  std::unique_ptr<uss::Master> master_;
-  UssHooks hooks_;
-  liftd::uss::testing::PtyLine<uss::sim::UssBusSim, uss::sim::UssReply> line_;
-  std::unique_ptr<uss::UssRunner> runner_;
-  int line_priority_ = 1;
-  int cpu_ = -1;
-};
-
 /// The unbound workqueue's CPU mask (sysfs; root only): where the kernel runs the tty's
 /// flip-buffer work, which carries every received byte to the line discipline. Set for the run
 /// and put back when this object goes.
@@ -388,7 +295,7 @@ struct Window {
   int clients = 0;
   HistogramData cycle, reference, uss;
   rt::CycleCounters cycle_counters;  // deltas over the window
-  uss::UssRunnerCounters uss_counters;
+  UssBusCounters uss_counters;
   std::uint64_t reference_skipped = 0;
   std::uint64_t link_exchanges = 0;  // the reference link's
   std::uint64_t link_missing = 0;
@@ -407,8 +314,8 @@ rt::CycleCounters delta(const rt::CycleCounters& a, const rt::CycleCounters& b) 
   d.bad_replies = b.bad_replies - a.bad_replies;
   return d;
 }
-uss::UssRunnerCounters delta(const uss::UssRunnerCounters& a, const uss::UssRunnerCounters& b) {
-  uss::UssRunnerCounters d;
+UssBusCounters delta(const UssBusCounters& a, const UssBusCounters& b) {
+  UssBusCounters d;
   d.exchanges = b.exchanges - a.exchanges;
   d.reply_timeouts = b.reply_timeouts - a.reply_timeouts;
   d.bad_replies = b.bad_replies - a.bad_replies;
@@ -680,7 +587,7 @@ int main(int argc, char** argv) {
     const auto s0 = reference.skipped();
     const auto le0 = reference_link.exchanges();
     const auto lm0 = reference_link.missing();
-    const uss::UssRunnerStats u0 = uss_bus ? uss_bus->stats() : uss::UssRunnerStats{};
+    const UssBusStats u0 = uss_bus ? uss_bus->stats() : UssBusStats{};
     const long long f0 = link_faults(cfg.api.socket);
     if (clients == 0) {
       std::this_thread::sleep_for(phase);
@@ -695,7 +602,7 @@ int main(int argc, char** argv) {
     w.cycle = window(c0.wake_lateness, c1.wake_lateness);
     w.cycle_counters = delta(c0.counters, c1.counters);
     if (uss_bus) {
-      const uss::UssRunnerStats u1 = uss_bus->stats();
+      const UssBusStats u1 = uss_bus->stats();
       w.uss = window(u0.wake_lateness, u1.wake_lateness);
       w.uss_counters = delta(u0.counters, u1.counters);
     }
