@@ -1,26 +1,8 @@
-// The DCP drive kind's entry in the registry of drive kinds (lib/kinds/registry.hpp): what the
-// daemon, the configuration and the API need of the kind. Each part is declared here and defined
-// in the library that builds it, so that a user of one part links that part only.
+// The DCP drive kind's entry in the registry of drive kinds (lib/kinds/registry.hpp); the form of
+// an entry is host::RegistryEntry (lib/host/registry_entry.hpp).
 #pragma once
 
-#include <memory>
-
-#include "drive/drive.hpp"
-
-namespace liftd::config {
-struct Config;
-struct FloorRules;
-struct KindRules;
-}  // namespace liftd::config
-namespace liftd::api {
-class Backend;
-class Dispatcher;
-struct KindSimActions;
-}  // namespace liftd::api
-namespace liftd::daemon {
-class Host;
-class LiftRunner;
-}  // namespace liftd::daemon
+#include "host/registry_entry.hpp"
 
 namespace liftd::dcp {
 
@@ -55,8 +37,10 @@ struct RegistryEntry {
   // ---- liftd::dcp_host (lib/dcp/host/dcp_lift.cpp) ----
   /// The DCP lift (daemon::DcpLift). Throws as its constructor does.
   static std::unique_ptr<daemon::LiftRunner> make_lift(daemon::Host& host,
-                                                       const config::Config& config,
-                                                       bool simulate);
+                                                       const config::Config& config, bool simulate);
 };
+
+static_assert(host::RegistryEntry<RegistryEntry>,
+              "the form of an entry: lib/host/registry_entry.hpp");
 
 }  // namespace liftd::dcp

@@ -23,8 +23,7 @@ struct KindCommandsEntry {
 /// Every drive kind's row, in the order of drive::Kind.
 constexpr auto kKindCommands = rows_of(Registry{}, [](auto entry) {
   using Entry = decltype(entry);
-  return KindCommandsEntry{&Entry::add_commands, &Entry::sim_actions,
-                           Entry::kOffers};
+  return KindCommandsEntry{&Entry::add_commands, &Entry::sim_actions, Entry::kOffers};
 });
 
 }  // namespace

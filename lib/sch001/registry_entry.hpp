@@ -1,25 +1,8 @@
-// The SCH001 drive kind's entry in the registry of drive kinds (lib/kinds/registry.hpp): what the
-// daemon, the configuration and the API need of the kind. Each part is declared here and defined
-// in the library that builds it, so that a user of one part links that part only.
+// The SCH001 drive kind's entry in the registry of drive kinds (lib/kinds/registry.hpp); the form
+// of an entry is host::RegistryEntry (lib/host/registry_entry.hpp).
 #pragma once
 
-#include <memory>
-
-#include "drive/drive.hpp"
-
-namespace liftd::config {
-struct Config;
-struct KindRules;
-}  // namespace liftd::config
-namespace liftd::api {
-class Backend;
-class Dispatcher;
-struct KindSimActions;
-}  // namespace liftd::api
-namespace liftd::daemon {
-class Host;
-class LiftRunner;
-}  // namespace liftd::daemon
+#include "host/registry_entry.hpp"
 
 namespace liftd::sch001 {
 
@@ -42,8 +25,10 @@ struct RegistryEntry {
   // ---- liftd::sch001_host (lib/sch001/host/hydraulic_lift.cpp) ----
   /// The hydraulic lift (daemon::HydraulicLift). Throws as its constructor does.
   static std::unique_ptr<daemon::LiftRunner> make_lift(daemon::Host& host,
-                                                       const config::Config& config,
-                                                       bool simulate);
+                                                       const config::Config& config, bool simulate);
 };
+
+static_assert(host::RegistryEntry<RegistryEntry>,
+              "the form of an entry: lib/host/registry_entry.hpp");
 
 }  // namespace liftd::sch001
