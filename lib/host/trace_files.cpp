@@ -190,4 +190,34 @@ api::Result FlightRecorderFiles::write(std::string_view why) {
   return api::Result::ok({{"file", path}, {"records", records.size()}});
 }
 
+std::vector<api::TraceEntry> trace_exchanges(const std::vector<rt::FrameRecord>& records,
+                                             std::size_t max_entries, const TracePairing& pairing) {
+  std::vector<api::TraceEntry> out;
+  const rt::FrameRecord* before = nullptr;  // the other side's last frame since our last
+  for (const rt::FrameRecord& r : records) {
+    if (r.direction == rt::Direction::Tx) {
+      if (pairing.ours != nullptr && !pairing.ours(r)) continue;
+      api::TraceEntry e;
+      e.at = r.time;
+      e.tx.assign(r.data().begin(), r.data().end());
+      if (pairing.we_answer && before != nullptr) {
+        e.rx.emplace(before->data().begin(), before->data().end());
+      }
+      before = nullptr;
+      out.push_back(std::move(e));
+    } else if (r.direction == rt::Direction::Rx &&
+               (pairing.theirs == nullptr || pairing.theirs(r))) {
+      if (pairing.we_answer) {
+        before = &r;
+      } else if (!out.empty() && !out.back().rx) {
+        out.back().rx.emplace(r.data().begin(), r.data().end());
+      }
+    }
+  }
+  if (out.size() > max_entries) {
+    out.erase(out.begin(), out.end() - static_cast<std::ptrdiff_t>(max_entries));
+  }
+  return out;
+}
+
 }  // namespace liftd::daemon

@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "api/backend.hpp"
 #include "api/result.hpp"
 #include "rt/flight_recorder.hpp"
 
@@ -88,5 +89,23 @@ class FlightRecorderFiles {
   std::string component_;
   DecoderSource decoder_;
 };
+
+/// How a drive's recorded frames pair into the API's `trace` exchanges: which frames of ours
+/// and which frames of the other side count, and on which side of ours the other's frame is.
+struct TracePairing {
+  /// Ours are answered (DCP, USS: the drive's reply follows the master's frame) or we answer
+  /// (SCH001: liftd's frame answers the card's status that came before it).
+  bool we_answer = false;
+  /// Which sent frames are exchanges (nullptr: every one).
+  bool (*ours)(const rt::FrameRecord&) = nullptr;
+  /// Which received frames are the other side's part of one (nullptr: every one).
+  bool (*theirs)(const rt::FrameRecord&) = nullptr;
+};
+
+/// The newest `max_entries` exchanges of `records` (a recorder's copy, oldest first), oldest
+/// first: each frame of ours with the other side's frame it pairs with, if any (the first
+/// after it, or the last before it when `we_answer`).
+std::vector<api::TraceEntry> trace_exchanges(const std::vector<rt::FrameRecord>& records,
+                                             std::size_t max_entries, const TracePairing& pairing);
 
 }  // namespace liftd::daemon

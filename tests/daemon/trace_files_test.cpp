@@ -154,5 +154,72 @@ TEST_F(TraceFilesTest, FlightRecorderFilesSayWhyTheyCouldNotWrite) {
   EXPECT_THAT(r.error().message, HasSubstr("could not write the flight recorder"));
 }
 
+// ---- the API's trace: which frames pair into one exchange ----
+
+rt::FrameRecord frame(rt::Direction direction, std::uint8_t first_byte, std::uint8_t flags = 0) {
+  rt::FrameRecord r;
+  r.time = MonoTime{std::chrono::milliseconds(first_byte)};
+  r.direction = direction;
+  r.flags = flags;
+  r.length = direction == rt::Direction::Event ? 0 : 2;
+  r.bytes = {first_byte, 0xEE, 0x00};  // padded beyond the length, as the recorder stores it
+  return r;
+}
+rt::FrameRecord tx(std::uint8_t b) {
+  return frame(rt::Direction::Tx, b);
+}
+rt::FrameRecord rx(std::uint8_t b, std::uint8_t flags = 0) {
+  return frame(rt::Direction::Rx, b, flags);
+}
+rt::FrameRecord event() {
+  return frame(rt::Direction::Event, 0);
+}
+
+/// Each exchange as "tx/rx" by first bytes, "-" for no rx.
+std::vector<std::string> exchanges(const std::vector<api::TraceEntry>& entries) {
+  std::vector<std::string> out;
+  for (const api::TraceEntry& e : entries) {
+    EXPECT_EQ(e.tx.size(), 2U) << "only the frame's own bytes";
+    out.push_back(std::to_string(e.tx[0]) + "/" + (e.rx ? std::to_string((*e.rx)[0]) : "-"));
+  }
+  return out;
+}
+
+TEST(TraceExchanges, AReplyPairsWithTheFrameBeforeItOnceAndEventsPairWithNothing) {
+  // DCP 7.2 and USS: the slave's reply follows the master's frame; a second frame of theirs
+  // before our next one answers nothing of ours.
+  const std::vector<rt::FrameRecord> records{rx(9), tx(1),   rx(2), event(), rx(3),
+                                             tx(4), event(), tx(5), rx(6)};
+  EXPECT_THAT(exchanges(trace_exchanges(records, 10, {.we_answer = false})),
+              ::testing::ElementsAre("1/2", "4/-", "5/6"));
+}
+
+TEST(TraceExchanges, OurAnswerPairsWithTheirLastFrameBeforeIt) {
+  // SCH001 (card document 3c): liftd answers the card's status that came before.
+  const std::vector<rt::FrameRecord> records{rx(1), rx(2), event(), tx(3), tx(4), rx(5), tx(6)};
+  EXPECT_THAT(exchanges(trace_exchanges(records, 10, {.we_answer = true})),
+              ::testing::ElementsAre("3/2", "4/-", "6/5"));
+}
+
+TEST(TraceExchanges, FramesTheFiltersRefuseTakeNoPart) {
+  static constexpr TracePairing kOddOnes{
+      .we_answer = false,
+      .ours = [](const rt::FrameRecord& r) { return r.bytes[0] % 2 == 1; },
+      .theirs = [](const rt::FrameRecord& r) { return (r.flags & 0x02) != 0; },
+  };
+  const std::vector<rt::FrameRecord> records{tx(1),       rx(2), rx(4, 0x02), tx(6),
+                                             rx(8, 0x02), tx(3), rx(10, 0x06)};
+  EXPECT_THAT(exchanges(trace_exchanges(records, 10, kOddOnes)),
+              ::testing::ElementsAre("1/4", "3/10"))
+      << "rx 8 follows a frame of ours the filter refused: it answers 1, which has its reply";
+}
+
+TEST(TraceExchanges, KeepsTheNewestOldestFirst) {
+  const std::vector<rt::FrameRecord> records{tx(1), rx(2), tx(3), rx(4), tx(5), rx(6)};
+  EXPECT_THAT(exchanges(trace_exchanges(records, 2, {})), ::testing::ElementsAre("3/4", "5/6"));
+  EXPECT_TRUE(trace_exchanges(records, 0, {}).empty());
+  EXPECT_TRUE(trace_exchanges({}, 5, {}).empty());
+}
+
 }  // namespace
 }  // namespace liftd::daemon

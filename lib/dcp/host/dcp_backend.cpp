@@ -111,23 +111,17 @@ api::StatsSnapshot DcpBackend::stats() {
 }
 
 std::vector<api::TraceEntry> DcpBackend::trace(std::size_t max_entries) {
-  const std::vector<rt::FrameRecord> records = runner_.recorder().copy();
-  std::vector<api::TraceEntry> out;
-  for (const rt::FrameRecord& r : records) {
-    if (r.direction == rt::Direction::Tx && r.length == dcp::kFrameSize) {
-      api::TraceEntry e;
-      e.at = r.time;
-      e.tx.assign(r.bytes.begin(), r.bytes.begin() + dcp::kFrameSize);
-      out.push_back(std::move(e));
-    } else if (r.direction == rt::Direction::Rx && !out.empty() && r.length == dcp::kFrameSize &&
-               (r.flags & (rt::record_flag::kReply | rt::record_flag::kBad)) != 0) {
-      out.back().rx.emplace(r.bytes.begin(), r.bytes.begin() + dcp::kFrameSize);
-    }
-  }
-  if (out.size() > max_entries) {
-    out.erase(out.begin(), out.end() - static_cast<std::ptrdiff_t>(max_entries));
-  }
-  return out;
+  // Each master frame with the drive's reply in its cycle (DCP 7.2), a bad one included.
+  static constexpr TracePairing kPairing{
+      .we_answer = false,
+      .ours = [](const rt::FrameRecord& r) { return r.length == dcp::kFrameSize; },
+      .theirs =
+          [](const rt::FrameRecord& r) {
+            return r.length == dcp::kFrameSize &&
+                   (r.flags & (rt::record_flag::kReply | rt::record_flag::kBad)) != 0;
+          },
+  };
+  return trace_exchanges(runner_.recorder().copy(), max_entries, kPairing);
 }
 
 DisplaySnapshot DcpBackend::display() {

@@ -368,26 +368,9 @@ api::StatsSnapshot Sch001Backend::stats() {
 }
 
 std::vector<api::TraceEntry> Sch001Backend::trace(std::size_t max_entries) {
-  // Each of our frames with the card's frame it answered: identifier (2 bytes) and data.
-  const std::vector<rt::FrameRecord> records = runner_.recorder().copy();
-  std::vector<api::TraceEntry> out;
-  const rt::FrameRecord* card_frame = nullptr;
-  for (const rt::FrameRecord& r : records) {
-    if (r.direction == rt::Direction::Rx) {
-      card_frame = &r;
-    } else if (r.direction == rt::Direction::Tx) {
-      api::TraceEntry e;
-      e.at = r.time;
-      e.tx.assign(r.data().begin(), r.data().end());
-      if (card_frame != nullptr) e.rx.emplace(card_frame->data().begin(), card_frame->data().end());
-      out.push_back(std::move(e));
-      card_frame = nullptr;
-    }
-  }
-  if (out.size() > max_entries) {
-    out.erase(out.begin(), out.end() - static_cast<std::ptrdiff_t>(max_entries));
-  }
-  return out;
+  // Each of our frames with the card's frame it answered (card document 3c): identifier (2
+  // bytes) and data.
+  return trace_exchanges(runner_.recorder().copy(), max_entries, {.we_answer = true});
 }
 
 void Sch001Backend::travel(const api::TravelArgs& args, api::Responder done) {

@@ -116,22 +116,7 @@ api::StatsSnapshot UssBackend::stats() {
 
 std::vector<api::TraceEntry> UssBackend::trace(std::size_t max_entries) {
   // Each telegram of ours with the reply to it (none for a broadcast or a silent slave).
-  const std::vector<rt::FrameRecord> records = runner_.recorder().copy();
-  std::vector<api::TraceEntry> out;
-  for (const rt::FrameRecord& r : records) {
-    if (r.direction == rt::Direction::Tx) {
-      api::TraceEntry e;
-      e.at = r.time;
-      e.tx.assign(r.data().begin(), r.data().end());
-      out.push_back(std::move(e));
-    } else if (r.direction == rt::Direction::Rx && !out.empty() && !out.back().rx) {
-      out.back().rx.emplace(r.data().begin(), r.data().end());
-    }
-  }
-  if (out.size() > max_entries) {
-    out.erase(out.begin(), out.end() - static_cast<std::ptrdiff_t>(max_entries));
-  }
-  return out;
+  return trace_exchanges(runner_.recorder().copy(), max_entries, {.we_answer = false});
 }
 
 std::optional<uss::PkwLength> UssBackend::pkw_length(std::uint8_t address) const {
