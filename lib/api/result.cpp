@@ -58,6 +58,12 @@ Result Result::fail(ErrorCode code, std::string message, std::string field) {
   return Result(Error{code, std::move(message), std::move(field)});
 }
 
+nlohmann::json flags_object(std::initializer_list<std::pair<const char*, bool>> flags) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [name, on] : flags) j[name] = on;
+  return j;
+}
+
 std::string dump_compact(const nlohmann::json& value) {
   return value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }

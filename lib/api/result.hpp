@@ -9,6 +9,9 @@
 #include <string_view>
 #include <variant>
 
+#include <initializer_list>
+#include <utility>
+
 #include <nlohmann/json.hpp>
 
 namespace liftd::api {
@@ -76,6 +79,9 @@ using Responder = std::function<void(Result)>;
 /// Serialises one JSON value as a single line without the newline; invalid UTF-8 in strings is
 /// replaced, never thrown.
 std::string dump_compact(const nlohmann::json& value);
+/// A JSON object of named flags in the order given ({"ready": true, ...}): a status byte's bits
+/// in a `status` object.
+nlohmann::json flags_object(std::initializer_list<std::pair<const char*, bool>> flags);
 /// Longest piece of client input echoed in an error message, in bytes.
 inline constexpr std::size_t kMaxEchoBytes = 64;
 

@@ -1,8 +1,10 @@
 // What every lift controller publishes after each step that means the same on every drive kind:
 // the car, the travel's direction and target, the machine inputs, the calls, the faults and the
 // controller's mode. Each kind's ControllerSnapshot derives from it and adds its own drive's facts
-// (its link, its travel kind and phase, its counters); ControllerCore::fill_lift_snapshot writes
-// this part. Plain data, copied whole through a SnapshotBox to the io thread.
+// (its link, its counters; its travel kind and phase through SequencedSnapshot where its travel
+// sequencer reports them as the core expects); ControllerCore::fill_core_snapshot and
+// fill_lift_snapshot write this part. Plain data, copied whole through a SnapshotBox to the io
+// thread.
 #pragma once
 
 #include <array>
@@ -45,6 +47,15 @@ struct CarSnapshot {
     call_count = queue.size() < kMaxSnapshotCalls ? queue.size() : kMaxSnapshotCalls;
     for (std::size_t i = 0; i < call_count; ++i) calls[i] = static_cast<std::uint8_t>(queue.at(i));
   }
+};
+
+/// A CarSnapshot with the step count and the travel sequencer's kind and phase: what
+/// ControllerCore::fill_lift_snapshot writes besides the car.
+template <typename TravelKind, typename Phase>
+struct SequencedSnapshot : CarSnapshot {
+  std::uint64_t steps = 0;
+  TravelKind travel_kind = TravelKind::None;
+  Phase phase = Phase::Idle;
 };
 
 }  // namespace liftd::lift

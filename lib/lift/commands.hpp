@@ -9,7 +9,9 @@
 #include <optional>
 #include <span>
 #include <string_view>
+#include <variant>
 
+#include "lift/calls.hpp"
 #include "lift/cause.hpp"
 #include "lift/inputs.hpp"
 #include "lift/rules.hpp"
@@ -48,6 +50,25 @@ struct TaggedCommand {
   std::uint32_t tag = 0;  ///< echoed in the reply; 0 = no reply wanted
   Body body;
 };
+
+/// The commands every lift takes besides its travel. A kind's controller header names them with
+/// `using namespace lift::shared_commands;` in its namespace and puts them in its command variant
+/// with CommandBodyOf.
+namespace shared_commands {
+using lift::CallCommand;
+using lift::InputsCommand;
+using lift::InspectionCommand;
+using lift::LearnCommand;
+using lift::RelevelCommand;
+using lift::ShutdownCommand;
+using lift::StopCommand;
+}  // namespace shared_commands
+
+/// A kind's command variant: its travel command, the commands every lift takes, then its own.
+template <typename TravelCommand, typename... Own>
+using CommandBodyOf =
+    std::variant<TravelCommand, StopCommand, RelevelCommand, InspectionCommand, CallCommand,
+                 InputsCommand, ShutdownCommand, LearnCommand, Own...>;
 
 // ---- replies (real-time thread -> io thread) ----
 struct CommandReply {

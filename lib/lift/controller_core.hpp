@@ -635,32 +635,34 @@ class ControllerCore {
     });
   }
 
-  /// The fault table as the snapshot shows it: which faults are active, and since when.
-  auto active_faults() const noexcept { return faults_.active_all(); }
-  auto fault_since() const noexcept { return faults_.since_all(); }
-
-  /// The snapshot fields every lift has: the car, the travel, the inputs, the calls, the faults,
-  /// and whether the drive lets a travel start by `in` (the travel's drive_forbidding(), the
-  /// check every travel start makes first: status `drive.state`).
-  void fill_lift_snapshot(typename Types::Snapshot& s, MonoTime now,
-                          const typename Types::Input& in) const noexcept {
-    const Inputs& inputs = in.inputs;
-    s.drive_allows_travel = travel_.drive_forbidding(in) == Cause::None;
+  /// The snapshot fields the core itself holds, alike on every lift: when, the floor the car
+  /// stopped at last, the effective inputs, the calls, the faults, shutting down and learning.
+  void fill_core_snapshot(lift::CarSnapshot& s, MonoTime now, const Inputs& inputs) const noexcept {
     s.at = now;
-    s.steps = steps_;
-    s.position_mm = lift_.position_mm();
     s.floor = lift_.current_floor();
-    s.travel_kind = travel_.kind();
-    s.next_possible_stop = travel_.landing_floor(lift_.floors(), in);
-    s.phase = travel_.phase();
-    s.direction = travel_.direction();
-    s.target_floor = travel_.target();
     s.inputs = inputs;
     s.set_calls(lift_.calls());
     s.faults = faults_.active_all();
     s.fault_since = faults_.since_all();
     s.shutting_down = shutting_down_;
     s.learning = learning();
+  }
+
+  /// The snapshot fields every lift has: the core's (fill_core_snapshot()), the car and its
+  /// travel as the travel sequencer tells them, and whether the drive lets a travel start by
+  /// `in` (the travel's drive_forbidding(), the check every travel start makes first: status
+  /// `drive.state`). A travel sequencer of another form (DCP's) fills the travel's part itself.
+  void fill_lift_snapshot(typename Types::Snapshot& s, MonoTime now,
+                          const typename Types::Input& in) const noexcept {
+    fill_core_snapshot(s, now, in.inputs);
+    s.drive_allows_travel = travel_.drive_forbidding(in) == Cause::None;
+    s.steps = steps_;
+    s.position_mm = lift_.position_mm();
+    s.travel_kind = travel_.kind();
+    s.next_possible_stop = travel_.landing_floor(lift_.floors(), in);
+    s.phase = travel_.phase();
+    s.direction = travel_.direction();
+    s.target_floor = travel_.target();
   }
 
   typename Types::Travel travel_;

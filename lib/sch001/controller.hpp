@@ -50,20 +50,11 @@ struct ControllerConfig {
   const LevelZoneSource* level_zone_source = nullptr;
 };
 
-// ---- commands (io thread -> CAN thread): lib/lift/controller_core.hpp ----
+// ---- commands (io thread -> CAN thread): the shared ones in lib/lift/commands.hpp ----
 /// The card's speeds: the fastest the unit has unless the client limits it.
 using TravelCommand = lift::BasicTravelCommand<Speed>;
-using lift::CallCommand;
-using lift::InputsCommand;
-using lift::InspectionCommand;
-using lift::RelevelCommand;
-/// The service is stopping: no new travel, the running one lands as `stop` does; `force`
-/// drops every signal at once.
-using lift::LearnCommand;
-using lift::ShutdownCommand;
-using lift::StopCommand;
-using CommandBody = std::variant<TravelCommand, StopCommand, RelevelCommand, InspectionCommand,
-                                 CallCommand, InputsCommand, ShutdownCommand, LearnCommand>;
+using namespace lift::shared_commands;
+using CommandBody = lift::CommandBodyOf<TravelCommand>;
 /// A command with the caller's tag (the frame's command bits are `Command` in protocol.hpp).
 using ControllerCommand = lift::TaggedCommand<CommandBody>;
 
@@ -110,8 +101,7 @@ using lift::kMaxSnapshotCalls;
 
 /// The state published after every step: the lift's (lift::CarSnapshot; quiesced: shutting
 /// down, no travel, no signal in the last answer) and the card's.
-struct ControllerSnapshot : lift::CarSnapshot {
-  std::uint64_t steps = 0;
+struct ControllerSnapshot : lift::SequencedSnapshot<TravelKind, Phase> {
   bool endpoint_up = false;     ///< the CAN endpoint is open and working
   bool heard = false;           ///< the card was heard on the current endpoint
   bool ever_heard = false;      ///< the card was heard since start
@@ -130,8 +120,6 @@ struct ControllerSnapshot : lift::CarSnapshot {
   std::uint8_t current_floor_sent = 0;
   std::uint8_t destination_floor_sent = 0;
   bool motor_on = false;
-  TravelKind travel_kind = TravelKind::None;
-  Phase phase = Phase::Idle;
 };
 
 /// The types the shared command handling works on.

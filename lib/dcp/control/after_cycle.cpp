@@ -155,8 +155,8 @@ void DcpController::update_faults(const travel::CycleInput& in, MonoTime now) no
 
 void DcpController::publish(MonoTime now) noexcept {
   ControllerSnapshot s;
+  fill_core_snapshot(s, now, last_input_.inputs);
   s.cycle = cycle_;
-  s.at = now;
   s.link = link_.state();
   s.protocol = link_.protocol();
   s.drive_info = link_.drive_info();
@@ -166,7 +166,6 @@ void DcpController::publish(MonoTime now) noexcept {
   s.decel_distance_mm = travel_.decel_distance_mm();
   s.power_mode = link_.power_mode();
   s.position_mm = last_input_.position_mm;
-  s.floor = lift_.current_floor();
   s.next_possible_stop = lift_.next_possible_stop();
   s.travel_kind = travel_.active_kind();
   s.direction = travel_.direction();
@@ -176,21 +175,15 @@ void DcpController::publish(MonoTime now) noexcept {
   s.contactors_on = last_output_.contactors_on;
   s.command = last_output_.command;
   s.data_word = last_output_.data_word;
-  s.inputs = last_input_.inputs;
-  s.set_calls(lift_.calls());
   for (std::size_t r = 0; r < dcp::kDisplayRows; ++r) {
     const auto row = link_.display().row(r);
     std::copy(row.begin(), row.end(), s.display[r].begin());
   }
   s.display_version = link_.display().version();
   s.link_counters = link_.counters();
-  s.faults = active_faults();
-  s.fault_since = fault_since();
   s.last_travel_measured_mm = measured_mm_;
   s.last_travel_slip_mm = slip_mm_;
   s.handshake_problem = link_.handshake_problem();
-  s.shutting_down = shutting_down_;
-  s.learning = learning();
   s.quiesced = shutting_down_ && travel_.active_kind() == TravelKind::None &&
                !last_input_.status.travel_active &&
                frames_at_rest_ >= static_cast<std::uint32_t>(config_.link.fault_after_bad_frames);

@@ -25,31 +25,25 @@ std::string_view mode_name(dcp::Protocol protocol) {
 // Objects are built key by key, as in api/backend.cpp: status is the request a dispatcher sends
 // most.
 nlohmann::json to_json(const dcp::Status& s) {
-  nlohmann::json j = nlohmann::json::object();
-  for (const auto& [key, bit] : {std::pair{"ready", s.ready},
-                                 {"travel_active", s.travel_active},
-                                 {"advance_warning", s.advance_warning},
-                                 {"general_fault", s.general_fault},
-                                 {"below_levelling", s.below_levelling},
-                                 {"accepted", s.accepted},
-                                 {"brake_open", s.brake_open},
-                                 {"message_error", s.message_error}}) {
-    j[key] = bit;
-  }
-  return j;
+  // S0..S7 (DCP 4.1).
+  return api::flags_object({{"ready", s.ready},
+                            {"travel_active", s.travel_active},
+                            {"advance_warning", s.advance_warning},
+                            {"general_fault", s.general_fault},
+                            {"below_levelling", s.below_levelling},
+                            {"accepted", s.accepted},
+                            {"brake_open", s.brake_open},
+                            {"message_error", s.message_error}});
 }
 
 nlohmann::json to_json(const dcp::ExtendedStatus& e) {
-  nlohmann::json j = nlohmann::json::object();
-  for (const auto& [key, bit] : {std::pair{"below_unlocking_speed", e.below_unlocking_speed},
-                                 {"below_border_speed", e.below_border_speed},
-                                 {"below_overspeed", e.below_overspeed},
-                                 {"emergency_reduced_voltage", e.emergency_reduced_voltage},
-                                 {"emergency_direction_down", e.emergency_direction_down},
-                                 {"motor_temperature_limit", e.motor_temperature_limit},
-                                 {"drive_temperature_limit", e.drive_temperature_limit}}) {
-    j[key] = bit;
-  }
+  nlohmann::json j = api::flags_object({{"below_unlocking_speed", e.below_unlocking_speed},
+                                        {"below_border_speed", e.below_border_speed},
+                                        {"below_overspeed", e.below_overspeed},
+                                        {"emergency_reduced_voltage", e.emergency_reduced_voltage},
+                                        {"emergency_direction_down", e.emergency_direction_down},
+                                        {"motor_temperature_limit", e.motor_temperature_limit},
+                                        {"drive_temperature_limit", e.drive_temperature_limit}});
   j["weight_bits"] = e.weight_bits;
   return j;
 }

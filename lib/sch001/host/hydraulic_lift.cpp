@@ -78,13 +78,8 @@ TravelBitNames Sch001Drive::travel_bit_names() {
 namespace {
 
 nlohmann::json card_json(const sch001::CardStatus& s, bool single_unit) {
-  nlohmann::json j = nlohmann::json::object();
-  j["err"] = s.err;
-  j["rdy"] = s.rdy;
-  j["t1"] = s.t1;
-  j["p1"] = s.p1;
-  j["p2"] = s.p2;
-  j["pnp1"] = s.pnp1;
+  nlohmann::json j = api::flags_object(
+      {{"err", s.err}, {"rdy", s.rdy}, {"t1", s.t1}, {"p1", s.p1}, {"p2", s.p2}, {"pnp1", s.pnp1}});
   // 3b: valid in a single-unit system only.
   j["avv"] = single_unit ? nlohmann::json(s.avv) : nlohmann::json(nullptr);
   j["pnp2"] = single_unit ? nlohmann::json(s.pnp2) : nlohmann::json(nullptr);
@@ -92,18 +87,14 @@ nlohmann::json card_json(const sch001::CardStatus& s, bool single_unit) {
 }
 
 nlohmann::json bits_json(const sch001::CommandBits& b) {
-  nlohmann::json j = nlohmann::json::object();
-  for (const auto& [key, bit] : {std::pair{"up", b.up},
-                                 {"dw", b.dw},
-                                 {"hsp", b.hsp},
-                                 {"msp", b.msp},
-                                 {"sfy", b.sfy},
-                                 {"sp1", b.sp1},
-                                 {"sp2", b.sp2},
-                                 {"sp3", b.sp3}}) {
-    j[key] = bit;
-  }
-  return j;
+  return api::flags_object({{"up", b.up},
+                            {"dw", b.dw},
+                            {"hsp", b.hsp},
+                            {"msp", b.msp},
+                            {"sfy", b.sfy},
+                            {"sp1", b.sp1},
+                            {"sp2", b.sp2},
+                            {"sp3", b.sp3}});
 }
 
 /// "ERR T1" for the journal: the relays that are on, by name; "none" when none.

@@ -65,17 +65,12 @@ struct UssControllerConfig {
   const LevelZoneSource* level_zone_source = nullptr;
 };
 
-// ---- commands (io thread -> USS thread): the shared ones in lib/lift/controller_core.hpp ----
+// ---- commands (io thread -> USS thread): the shared ones in lib/lift/commands.hpp ----
 /// One of V1..V7 with a setpoint.
 using TravelCommand = lift::BasicTravelCommand<SpeedName>;
-using lift::CallCommand;
-using lift::InputsCommand;
-using lift::InspectionCommand;
-using lift::RelevelCommand;
-/// The service is stopping: no new travel, the running one lands as `stop` does, then OFF1;
-/// `force`: OFF2 at once.
-using lift::ShutdownCommand;
-using lift::StopCommand;
+/// The commands every lift takes (shutdown: the running travel lands as `stop` does, then OFF1;
+/// `force`: OFF2 at once).
+using namespace lift::shared_commands;
 /// Acknowledge a drive fault: one rising edge of STW bit 7 (C 5.2.1 table 5.3); also clears a
 /// latched drive-profile supervision. Refused while a run is in progress.
 struct DriveResetCommand {};
@@ -88,10 +83,8 @@ struct ParameterCommand {
 struct MirrorCommand {
   std::uint8_t address = 0;
 };
-using lift::LearnCommand;
-using CommandBody = std::variant<TravelCommand, StopCommand, RelevelCommand, InspectionCommand,
-                                 CallCommand, InputsCommand, ShutdownCommand, DriveResetCommand,
-                                 ParameterCommand, MirrorCommand, LearnCommand>;
+using CommandBody =
+    lift::CommandBodyOf<TravelCommand, DriveResetCommand, ParameterCommand, MirrorCommand>;
 using ControllerCommand = lift::TaggedCommand<CommandBody>;
 
 // ---- replies and events (USS thread -> io thread) ----
@@ -158,8 +151,7 @@ inline constexpr std::size_t kMaxSnapshotSlaves = kMaxSlaveAddress + 1;
 
 /// The state published after every step: the lift's (lift::CarSnapshot; quiesced: shutting
 /// down, no run, OFF1 (or OFF2) sent, brake and contactors off) and the drive's.
-struct ControllerSnapshot : lift::CarSnapshot {
-  std::uint64_t steps = 0;
+struct ControllerSnapshot : lift::SequencedSnapshot<TravelKind, Phase> {
   bool port_up = false;
   std::array<SlaveSnapshot, kMaxSnapshotSlaves> slaves{};  ///< configured ones, by address
   std::size_t slave_count = 0;
@@ -182,8 +174,6 @@ struct ControllerSnapshot : lift::CarSnapshot {
   std::uint64_t cycles = 0;
   std::chrono::nanoseconds expected_cycle_time{0};
   std::chrono::nanoseconds last_cycle_time{0};
-  TravelKind travel_kind = TravelKind::None;
-  Phase phase = Phase::Idle;
   SpeedName speed = SpeedName::V4;
 };
 
