@@ -4,6 +4,10 @@
 
 #include "host/registry_entry.hpp"
 
+namespace liftd::daemon {
+class DcpLift;
+}  // namespace liftd::daemon
+
 namespace liftd::dcp {
 
 struct RegistryEntry {
@@ -34,10 +38,8 @@ struct RegistryEntry {
   /// The `sim` actions the simulated DCP drive takes.
   static const api::KindSimActions& sim_actions() noexcept;
 
-  // ---- liftd::dcp_host (lib/dcp/host/dcp_lift.cpp) ----
-  /// The DCP lift (daemon::DcpLift). Throws as its constructor does.
-  static std::unique_ptr<daemon::LiftRunner> make_lift(daemon::Host& host,
-                                                       const config::Config& config, bool simulate);
+  // ---- liftd::dcp_host (lib/dcp/host/dcp_lift.cpp instantiates host::make_lift<Lift>) ----
+  using Lift = daemon::DcpLift;
 };
 
 static_assert(host::RegistryEntry<RegistryEntry>,

@@ -43,6 +43,7 @@
 #include "host/lift_core.hpp"
 #include "host/motion.hpp"
 #include "host/record_feed.hpp"
+#include "host/registry_entry.hpp"
 #include "host/serial_device_report.hpp"
 #include "host/trace_files.hpp"
 #include "host/travel_log.hpp"
@@ -747,3 +748,13 @@ class ControllerLift : public LiftRunner {
 };
 
 }  // namespace liftd::daemon
+
+namespace liftd::host {
+
+template <class Lift>
+std::unique_ptr<daemon::LiftRunner> make_lift(daemon::Host& host, const config::Config& config,
+                                              bool simulate) {
+  return std::make_unique<Lift>(host, config, simulate);
+}
+
+}  // namespace liftd::host

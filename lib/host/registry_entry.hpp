@@ -44,9 +44,17 @@ concept RegistryEntry =
     std::same_as<decltype(Entry::add_commands), void(api::Dispatcher&, api::Backend&)> &&
     /// The `sim` actions its simulator takes (lib/<kind>/host/sim_actions.cpp).
     std::same_as<decltype(Entry::sim_actions), const api::KindSimActions&() noexcept> &&
-    /// Its lift; throws as the lift's constructor does (lib/<kind>/host/<kind>_lift.cpp).
-    std::same_as < decltype(Entry::make_lift),
-        std::unique_ptr<daemon::LiftRunner>(daemon::Host&, const config::Config&, bool)
-> ;
+    /// Its lift (a daemon::LiftRunner), made by make_lift<Entry::Lift>.
+    requires {
+  typename Entry::Lift;
+};
+
+/// Makes a lift of type `Lift` by its constructor (host, configuration, --simulate); throws as
+/// the constructor does. Declared here only: the lift's own file instantiates it (`template ...
+/// host::make_lift<DcpLift>(...)` in lib/dcp/host/dcp_lift.cpp), so the registry makes every
+/// kind's lift without including its header. The definition is in host/controller_lift.hpp.
+template <class Lift>
+std::unique_ptr<daemon::LiftRunner> make_lift(daemon::Host& host, const config::Config& config,
+                                              bool simulate);
 
 }  // namespace liftd::host

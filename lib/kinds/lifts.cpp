@@ -12,8 +12,8 @@ using namespace daemon;
 namespace {
 
 /// How each drive kind's lift is made, in the order of drive::Kind.
-constexpr auto kMakeLift =
-    rows_of(Registry{}, [](auto entry) { return &decltype(entry)::make_lift; });
+constexpr auto kMakeLift = rows_of(
+    Registry{}, [](auto entry) { return &host::make_lift<typename decltype(entry)::Lift>; });
 
 }  // namespace
 

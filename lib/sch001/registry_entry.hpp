@@ -4,6 +4,10 @@
 
 #include "host/registry_entry.hpp"
 
+namespace liftd::daemon {
+class HydraulicLift;
+}  // namespace liftd::daemon
+
 namespace liftd::sch001 {
 
 struct RegistryEntry {
@@ -22,10 +26,9 @@ struct RegistryEntry {
   /// The `sim` actions the simulated card and hydraulic unit take.
   static const api::KindSimActions& sim_actions() noexcept;
 
-  // ---- liftd::sch001_host (lib/sch001/host/hydraulic_lift.cpp) ----
-  /// The hydraulic lift (daemon::HydraulicLift). Throws as its constructor does.
-  static std::unique_ptr<daemon::LiftRunner> make_lift(daemon::Host& host,
-                                                       const config::Config& config, bool simulate);
+  // ---- liftd::sch001_host (lib/sch001/host/hydraulic_lift.cpp instantiates host::make_lift<Lift>)
+  // ----
+  using Lift = daemon::HydraulicLift;
 };
 
 static_assert(host::RegistryEntry<RegistryEntry>,

@@ -4,6 +4,10 @@
 
 #include "host/registry_entry.hpp"
 
+namespace liftd::daemon {
+class UssLift;
+}  // namespace liftd::daemon
+
 namespace liftd::uss {
 
 struct RegistryEntry {
@@ -26,10 +30,8 @@ struct RegistryEntry {
   /// The `sim` actions the simulated USS bus takes.
   static const api::KindSimActions& sim_actions() noexcept;
 
-  // ---- liftd::uss_host (lib/uss/host/uss_lift.cpp) ----
-  /// The USS lift (daemon::UssLift). Throws as its constructor does.
-  static std::unique_ptr<daemon::LiftRunner> make_lift(daemon::Host& host,
-                                                       const config::Config& config, bool simulate);
+  // ---- liftd::uss_host (lib/uss/host/uss_lift.cpp instantiates host::make_lift<Lift>) ----
+  using Lift = daemon::UssLift;
 };
 
 static_assert(host::RegistryEntry<RegistryEntry>,

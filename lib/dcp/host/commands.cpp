@@ -22,15 +22,19 @@ nlohmann::json to_json(const PowerSetting& p) {
   return {{"supply", p.emergency ? "emergency" : "mains"}, {"saving", p.saving}};
 }
 
+}  // namespace liftd::daemon
+
+namespace liftd::dcp {
+
 using api::Access;
 using api::arg_or;
 using api::Call;
 using api::Responder;
 using api::Result;
+using daemon::DcpCommandBackend;
+using daemon::PowerSetting;
 
-namespace {
-
-void add_dcp_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
+void RegistryEntry::add_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
   DcpCommandBackend* const dcp = dynamic_cast<DcpCommandBackend*>(&backend);
   // The answer on a dispatcher without a drive kind (see api::served_by).
   const std::string kNotDcpRefusal = "this lift's drive does not speak DCP";
@@ -111,15 +115,6 @@ void add_dcp_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
                                                 std::move(done));
                                  }),
                   drive::Capability::FastStart});
-}
-
-}  // namespace
-}  // namespace liftd::daemon
-
-namespace liftd::dcp {
-
-void RegistryEntry::add_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
-  daemon::add_dcp_commands(dispatcher, backend);
 }
 
 }  // namespace liftd::dcp

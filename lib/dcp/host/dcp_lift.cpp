@@ -233,12 +233,6 @@ void DcpLift::handle_event(const control::ControllerEvent& event) {
 
 }  // namespace liftd::daemon
 
-namespace liftd::dcp {
-
-std::unique_ptr<daemon::LiftRunner> RegistryEntry::make_lift(daemon::Host& host,
-                                                             const config::Config& config,
-                                                             bool simulate) {
-  return std::make_unique<daemon::DcpLift>(host, config, simulate);
-}
-
-}  // namespace liftd::dcp
+// The registry makes this kind's lift through this instance (lib/host/registry_entry.hpp).
+template std::unique_ptr<liftd::daemon::LiftRunner> liftd::host::make_lift<liftd::daemon::DcpLift>(
+    liftd::daemon::Host&, const liftd::config::Config&, bool);

@@ -615,12 +615,7 @@ void HydraulicLift::handle_event(const sch001::ControllerEvent& event) {
 
 }  // namespace liftd::daemon
 
-namespace liftd::sch001 {
-
-std::unique_ptr<daemon::LiftRunner> RegistryEntry::make_lift(daemon::Host& host,
-                                                             const config::Config& config,
-                                                             bool simulate) {
-  return std::make_unique<daemon::HydraulicLift>(host, config, simulate);
-}
-
-}  // namespace liftd::sch001
+// The registry makes this kind's lift through this instance (lib/host/registry_entry.hpp).
+template std::unique_ptr<liftd::daemon::LiftRunner>
+liftd::host::make_lift<liftd::daemon::HydraulicLift>(liftd::daemon::Host&,
+                                                     const liftd::config::Config&, bool);

@@ -10,7 +10,17 @@
 #include "uss/registry_entry.hpp"
 #include "uss/telegram.hpp"
 
-namespace liftd::daemon {
+namespace liftd::uss {
+
+using api::Access;
+using api::Call;
+using api::Responder;
+using api::Result;
+using daemon::kParameterTargets;
+using daemon::ParameterArgs;
+using daemon::ParameterTarget;
+using daemon::UssCommandBackend;
+
 namespace {
 
 // C 4.2.2: the element index is one byte of IND; a word or double word of PWE carries the value,
@@ -33,14 +43,7 @@ ParameterArgs parameter_args(const nlohmann::json& request) {
 
 }  // namespace
 
-using api::Access;
-using api::Call;
-using api::Responder;
-using api::Result;
-
-namespace {
-
-void add_uss_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
+void RegistryEntry::add_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
   UssCommandBackend* const uss = dynamic_cast<UssCommandBackend*>(&backend);
   // The answer on a dispatcher without a drive kind (see api::served_by).
   const std::string kNotUssRefusal = "this lift's drive has no parameter channel";
@@ -108,15 +111,6 @@ void add_uss_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
                                    b.mirror(a, std::move(done));
                                  }),
                   drive::Capability::Parameters});
-}
-
-}  // namespace
-}  // namespace liftd::daemon
-
-namespace liftd::uss {
-
-void RegistryEntry::add_commands(api::Dispatcher& dispatcher, api::Backend& backend) {
-  daemon::add_uss_commands(dispatcher, backend);
 }
 
 }  // namespace liftd::uss

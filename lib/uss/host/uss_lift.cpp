@@ -256,12 +256,6 @@ void UssLift::after_events(MonoTime now) {
 
 }  // namespace liftd::daemon
 
-namespace liftd::uss {
-
-std::unique_ptr<daemon::LiftRunner> RegistryEntry::make_lift(daemon::Host& host,
-                                                             const config::Config& config,
-                                                             bool simulate) {
-  return std::make_unique<daemon::UssLift>(host, config, simulate);
-}
-
-}  // namespace liftd::uss
+// The registry makes this kind's lift through this instance (lib/host/registry_entry.hpp).
+template std::unique_ptr<liftd::daemon::LiftRunner> liftd::host::make_lift<liftd::daemon::UssLift>(
+    liftd::daemon::Host&, const liftd::config::Config&, bool);
