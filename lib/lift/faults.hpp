@@ -27,13 +27,16 @@ enum class FaultCode : std::uint8_t {
 std::string_view fault_code_name(FaultCode code) noexcept;
 
 /// The technician's text of a fault of the machine's inputs, alike on every drive kind
-/// (SafetyChain, InputsLost); "internal" for a fault the drive kind words itself.
+/// (SafetyChain, InputsLost, PositionLost: a kind whose travels need no position says so in its
+/// own text); "internal" for a fault the drive kind words itself.
 constexpr std::string_view machine_fault_text(FaultCode code) noexcept {
   switch (code) {
     case FaultCode::SafetyChain:
       return "safety chain open; drive enable is off";
     case FaultCode::InputsLost:
       return "no input update from the I/O provider within inputs.timeout_ms";
+    case FaultCode::PositionLost:
+      return "the car position is unknown or stale: no travel possible";
     default:
       return "internal";
   }

@@ -15,8 +15,6 @@ std::string_view fault_text(FaultCode code) noexcept {
              "command goes out";
     case FaultCode::DriveFault:
       return "the SCH001 card reports ERR: no travel command may go out (card document 3d)";
-    case FaultCode::PositionLost:
-      return "the car position is unknown or stale: no travel possible";
     default:  // the card has no advance warning
       break;
   }

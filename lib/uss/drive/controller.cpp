@@ -18,8 +18,6 @@ std::string_view fault_text(FaultCode code) noexcept {
     case FaultCode::DriveFault:
       return "the drive reports a fault (ZSW bit 3, C 5.2.1) or did not reach the state asked of "
              "it in time; drive_reset acknowledges it (STW bit 7)";
-    case FaultCode::PositionLost:
-      return "the car position is unknown or stale: no travel possible";
     case FaultCode::AdvanceWarning:
       return "the drive reports a warning (ZSW bit 7, C 5.2.1): no new travel until it clears";
     default:
