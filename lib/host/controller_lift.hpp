@@ -73,8 +73,8 @@ struct DriveFacts {
   /// After a service stop forced the travel's end, how long the thread goes on sending the
   /// drive its stopped state before it is stopped.
   std::chrono::nanoseconds shutdown_grace{};
-  /// A fault code's text by the kind's own table.
-  std::string_view (*fault_text)(lift::FaultCode) noexcept = nullptr;
+  /// The texts of its drive's faults (lift::DriveFaultTexts::of gives every fault's).
+  const lift::DriveFaultTexts* fault_texts = nullptr;
 
   /// drive.kind, the journal's component and the daemon's component name ("dcp").
   constexpr std::string_view name() const noexcept {
@@ -353,7 +353,7 @@ class ControllerBackend : public api::Backend {
     out.link = link;
     out.faults = active_faults(
         s.faults, s.fault_since,
-        [](lift::FaultCode code) { return Drive::kFacts.fault_text(code); },
+        [](lift::FaultCode code) { return Drive::kFacts.fault_texts->of(code); },
         [this](MonoTime at) { return wall_time(at); });
     out.drive_state =
         drive::state_of(out.link == api::LinkState::Up, s.travel_kind != TravelKind::None,
@@ -639,7 +639,7 @@ class ControllerLift : public LiftRunner {
         break;
       case Kind::FaultRaised:
       case Kind::FaultCleared:
-        report_fault(*server_, event.fault, Drive::kFacts.fault_text(event.fault),
+        report_fault(*server_, event.fault, Drive::kFacts.fault_texts->of(event.fault),
                      event.kind == Kind::FaultRaised);
         // The frames that led to a link fault are what a technician needs first: the recorder
         // goes to a file at once, on every kind (docs/operations.md "The flight recorder").

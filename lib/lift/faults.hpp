@@ -1,7 +1,8 @@
 // The faults a lift can stand in, whatever its drive: each ends any travel in the safe state
 // (no travel command, drive enable off) and is reported once when it comes and once when it
 // goes. The names are the API's fault codes (docs/api.md "Fault codes"); each drive kind words
-// the technician's explanation in its own terms (fault_text in its controller).
+// the technician's explanation of its drive's faults in its own terms (its kFaultTexts, a
+// DriveFaultTexts).
 #pragma once
 
 #include <array>
@@ -27,8 +28,7 @@ enum class FaultCode : std::uint8_t {
 std::string_view fault_code_name(FaultCode code) noexcept;
 
 /// The technician's text of a fault of the machine's inputs, alike on every drive kind
-/// (SafetyChain, InputsLost, PositionLost: a kind whose travels need no position says so in its
-/// own text); "internal" for a fault the drive kind words itself.
+/// (SafetyChain, InputsLost, PositionLost); "internal" for a fault of the drive.
 constexpr std::string_view machine_fault_text(FaultCode code) noexcept {
   switch (code) {
     case FaultCode::SafetyChain:
@@ -41,6 +41,32 @@ constexpr std::string_view machine_fault_text(FaultCode code) noexcept {
       return "internal";
   }
 }
+
+/// A drive kind's texts of the faults of its drive, in its own terms (its link, its fault and
+/// warning signals); every other fault reads as machine_fault_text() says.
+struct DriveFaultTexts {
+  std::string_view link_fault;
+  std::string_view drive_fault;
+  std::string_view advance_warning;  ///< empty: the drive has no warning signal
+  /// Empty: machine_fault_text's. A kind with travels that need no position (DCP3) says so.
+  std::string_view position_lost;
+
+  /// The technician's one line of explanation of `code` on this kind's lift.
+  constexpr std::string_view of(FaultCode code) const noexcept {
+    switch (code) {
+      case FaultCode::LinkFault:
+        return link_fault;
+      case FaultCode::DriveFault:
+        return drive_fault;
+      case FaultCode::AdvanceWarning:
+        return advance_warning.empty() ? machine_fault_text(code) : advance_warning;
+      case FaultCode::PositionLost:
+        return position_lost.empty() ? machine_fault_text(code) : position_lost;
+      default:
+        return machine_fault_text(code);
+    }
+  }
+};
 
 /// The faults a controller stands in, when each began, and what it still owes the io thread:
 /// every raise and every clear is told once and in order. When telling fails (the event queue is

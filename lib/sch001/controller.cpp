@@ -6,21 +6,6 @@
 
 namespace liftd::sch001 {
 
-std::string_view fault_text(FaultCode code) noexcept {
-  switch (code) {
-    case FaultCode::LinkFault:
-      return "SCH001 link fault: no frame from the card for 10 s (card document 3f), the CAN "
-             "bus or socket failed and the card is not heard again, our answers cannot be sent, "
-             "or another node sends on liftd's identifier (card document 1.6); no travel "
-             "command goes out";
-    case FaultCode::DriveFault:
-      return "the SCH001 card reports ERR: no travel command may go out (card document 3d)";
-    default:  // the card has no advance warning
-      break;
-  }
-  return lift::machine_fault_text(code);
-}
-
 Sch001Controller::Sch001Controller(const ControllerConfig& config, const PositionSource& position,
                                    MonoTime start)
     : ControllerCore(lift::core_config_of(config, start), config.hydraulic),

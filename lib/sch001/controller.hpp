@@ -66,8 +66,17 @@ using lift::ReplyCode;
 /// the DCP lift where the meaning is the same.
 using lift::fault_code_name;
 using lift::FaultCode;
-/// One line of explanation for a technician, in the card's terms.
-std::string_view fault_text(FaultCode code) noexcept;
+/// The technician's texts of the drive's faults, in the card's terms.
+inline constexpr lift::DriveFaultTexts kFaultTexts{
+    .link_fault =
+        "SCH001 link fault: no frame from the card for 10 s (card document 3f), the CAN "
+        "bus or socket failed and the card is not heard again, our answers cannot be sent, "
+        "or another node sends on liftd's identifier (card document 1.6); no travel "
+        "command goes out",
+    .drive_fault = "the SCH001 card reports ERR: no travel command may go out (card document 3d)",
+    .advance_warning = {},  // the card has no warning signal
+    .position_lost = {},
+};
 
 /// What the io thread must hear of, one event each. What can come at the bus's rate (the card's
 /// status changes, error frames, frames on our identifier) is counted in the snapshot instead:

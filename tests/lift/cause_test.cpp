@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "lift/cause.hpp"
+#include "lift/faults.hpp"
 
 namespace liftd::lift {
 namespace {
@@ -82,6 +83,35 @@ TEST(Cause, EveryCauseHasARowInTheApiDocs) {
     const std::string cell = "| `" + std::string(to_string(row.cause)) + "` |";
     EXPECT_NE(docs.find(cell, section), std::string::npos)
         << to_string(row.cause) << " has no row in the abort cause table of docs/api.md";
+  }
+}
+
+// A kind words its drive's faults; the machine's are worded once, and a kind without a text
+// of its own for a fault falls back to the shared one.
+TEST(DriveFaultTexts, TheKindsTextsForItsDriveAndTheSharedOnesForTheRest) {
+  constexpr DriveFaultTexts kWithAll{
+      .link_fault = "L", .drive_fault = "D", .advance_warning = "W", .position_lost = "P"};
+  constexpr DriveFaultTexts kWithout{
+      .link_fault = "L", .drive_fault = "D", .advance_warning = {}, .position_lost = {}};
+  struct Row {
+    FaultCode code;
+    std::string_view with_all;
+    std::string_view without;
+  };
+  const std::array rows{
+      Row{FaultCode::LinkFault, "L", "L"},
+      Row{FaultCode::DriveFault, "D", "D"},
+      Row{FaultCode::AdvanceWarning, "W", "internal"},
+      Row{FaultCode::PositionLost, "P", "the car position is unknown or stale: no travel possible"},
+      Row{FaultCode::SafetyChain, "safety chain open; drive enable is off",
+          "safety chain open; drive enable is off"},
+      Row{FaultCode::InputsLost, "no input update from the I/O provider within inputs.timeout_ms",
+          "no input update from the I/O provider within inputs.timeout_ms"},
+  };
+  ASSERT_EQ(rows.size(), static_cast<std::size_t>(FaultCode::kCount)) << "a row per fault";
+  for (const Row& row : rows) {
+    EXPECT_EQ(kWithAll.of(row.code), row.with_all) << fault_code_name(row.code);
+    EXPECT_EQ(kWithout.of(row.code), row.without) << fault_code_name(row.code);
   }
 }
 

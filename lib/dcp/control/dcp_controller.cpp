@@ -30,23 +30,6 @@ std::string_view abort_text(lift::Cause cause) noexcept {
 
 // ---- names ----
 
-std::string_view fault_text(FaultCode code) noexcept {
-  switch (code) {
-    case FaultCode::LinkFault:
-      return "DCP link fault: replies missing or corrupt (DCP 7.3) or serial port lost; "
-             "drive enable is off";
-    case FaultCode::DriveFault:
-      return "drive reports a general fault (S3); drive enable is off until it clears";
-    case FaultCode::PositionLost:
-      return "absolute car position invalid or stale; no DCP4 travel possible";
-    case FaultCode::AdvanceWarning:
-      return "drive advance warning (S2): no new travel until it clears (DCP 9.1.5)";
-    default:
-      break;
-  }
-  return lift::machine_fault_text(code);
-}
-
 // ---- construction ----
 
 DcpController::DcpController(const ControllerConfig& config, const PositionSource& position)

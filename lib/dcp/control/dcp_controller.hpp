@@ -126,8 +126,15 @@ struct CommandReply {
 /// Faults the controller tracks; each is reported once when it starts and once when it ends.
 using lift::fault_code_name;
 using lift::FaultCode;
-/// One line of explanation for a technician.
-std::string_view fault_text(FaultCode code) noexcept;
+/// The technician's texts of the drive's faults.
+inline constexpr lift::DriveFaultTexts kFaultTexts{
+    .link_fault =
+        "DCP link fault: replies missing or corrupt (DCP 7.3) or serial port lost; "
+        "drive enable is off",
+    .drive_fault = "drive reports a general fault (S3); drive enable is off until it clears",
+    .advance_warning = "drive advance warning (S2): no new travel until it clears (DCP 9.1.5)",
+    .position_lost = "absolute car position invalid or stale; no DCP4 travel possible",
+};
 
 /// Something that happened, drained by the non-RT side for the journal and the watch stream.
 struct ControllerEvent {

@@ -38,7 +38,7 @@ struct DcpDrive : DriveParts<control::DcpController, rt::CycleRunner, SimulatedL
   /// dcp.request_timeout_ms: 3 s catches a cycle that stopped. After a forced end it sends
   /// frames without B0 for more than one DCP 7.3 supervision window (10 x 15 ms).
   static constexpr DriveFacts kFacts{drive::Kind::Dcp, "cycle", std::chrono::seconds(3),
-                                     std::chrono::milliseconds(500), &control::fault_text};
+                                     std::chrono::milliseconds(500), &control::kFaultTexts};
   /// The command bits B0..B7 and status bits S0..S7 (DCP 4.1).
   static TravelBitNames travel_bit_names();
   /// A learning leg crawls (DCP 10.3) within the crawl limit.

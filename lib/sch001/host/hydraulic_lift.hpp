@@ -71,7 +71,7 @@ struct Sch001Drive : DriveParts<sch001::Sch001Controller, rt::CanRunner, Simulat
   /// The CAN thread answers within a tick: 3 s catches a stall. After a forced end it sends the
   /// card three answers without a signal (100 ms apart, card document 3b).
   static constexpr DriveFacts kFacts{drive::Kind::Sch001, "CAN", std::chrono::seconds(3),
-                                     std::chrono::milliseconds(300), &sch001::fault_text};
+                                     std::chrono::milliseconds(300), &sch001::kFaultTexts};
   /// The command byte's bits (3c) and the card status byte's (3b), as status names them.
   static TravelBitNames travel_bit_names();
   /// A learning leg's limit is the motor run-time limiter's plus the slow run's allowance.

@@ -10,22 +10,6 @@
 
 namespace liftd::uss {
 
-std::string_view fault_text(FaultCode code) noexcept {
-  switch (code) {
-    case FaultCode::LinkFault:
-      return "USS link fault: the drive missed uss.link_fault_replies replies in a row (A 5.2.1.1 "
-             "'Teilnehmer sendet nicht'), was never heard, or the serial port failed";
-    case FaultCode::DriveFault:
-      return "the drive reports a fault (ZSW bit 3, C 5.2.1) or did not reach the state asked of "
-             "it in time; drive_reset acknowledges it (STW bit 7)";
-    case FaultCode::AdvanceWarning:
-      return "the drive reports a warning (ZSW bit 7, C 5.2.1): no new travel until it clears";
-    default:
-      break;
-  }
-  return lift::machine_fault_text(code);
-}
-
 UssController::UssController(const UssControllerConfig& config, Master& master,
                              const PositionSource& position, MonoTime start)
     : ControllerCore(lift::core_config_of(config, start), config.travel),

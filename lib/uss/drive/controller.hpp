@@ -101,8 +101,18 @@ struct CommandReply : lift::CommandReply {
 
 using lift::fault_code_name;
 using lift::FaultCode;
-/// One line of explanation for a technician, in USS terms.
-std::string_view fault_text(FaultCode code) noexcept;
+/// The technician's texts of the drive's faults, in USS terms.
+inline constexpr lift::DriveFaultTexts kFaultTexts{
+    .link_fault =
+        "USS link fault: the drive missed uss.link_fault_replies replies in a row (A 5.2.1.1 "
+        "'Teilnehmer sendet nicht'), was never heard, or the serial port failed",
+    .drive_fault =
+        "the drive reports a fault (ZSW bit 3, C 5.2.1) or did not reach the state asked of "
+        "it in time; drive_reset acknowledges it (STW bit 7)",
+    .advance_warning =
+        "the drive reports a warning (ZSW bit 7, C 5.2.1): no new travel until it clears",
+    .position_lost = {},
+};
 
 struct ControllerEvent {
   enum class Kind : std::uint8_t {

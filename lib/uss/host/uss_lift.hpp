@@ -79,7 +79,7 @@ struct UssDrive : DriveParts<uss::UssController, uss::UssRunner, SimulatedUssBus
   /// A parameter request may wait uss.pkw_repeat_limit polls of a long polling list: 30 s only
   /// catches a stalled USS thread. After a forced end, telegrams with OFF2 go out for 300 ms.
   static constexpr DriveFacts kFacts{drive::Kind::Uss, "USS", std::chrono::seconds(30),
-                                     std::chrono::milliseconds(300), &uss::fault_text};
+                                     std::chrono::milliseconds(300), &uss::kFaultTexts};
   /// The control and status words' bits (C 5.1), as status names them.
   static TravelBitNames travel_bit_names();
   /// A learning leg's limit is the run-time limiter's (the longer of the two a leg has) plus the
