@@ -5,8 +5,8 @@
 #include <sstream>
 #include <utility>
 
-#include "dcp/charset.hpp"
 #include "config/schema.hpp"
+#include "dcp/charset.hpp"
 #include "dcp/config/section.hpp"
 
 namespace liftd::dcp {

@@ -45,6 +45,8 @@ const api::KindSimActions kDcpSimActionTable = {drive::Kind::Dcp,     "DCP",
 
 namespace liftd::dcp {
 
-const api::KindSimActions& RegistryEntry::sim_actions() noexcept { return daemon::kDcpSimActionTable; }
+const api::KindSimActions& RegistryEntry::sim_actions() noexcept {
+  return daemon::kDcpSimActionTable;
+}
 
 }  // namespace liftd::dcp

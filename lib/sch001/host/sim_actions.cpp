@@ -19,6 +19,8 @@ const api::KindSimActions kSch001SimActionTable = {
 
 namespace liftd::sch001 {
 
-const api::KindSimActions& RegistryEntry::sim_actions() noexcept { return daemon::kSch001SimActionTable; }
+const api::KindSimActions& RegistryEntry::sim_actions() noexcept {
+  return daemon::kSch001SimActionTable;
+}
 
 }  // namespace liftd::sch001

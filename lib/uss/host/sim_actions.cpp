@@ -11,6 +11,8 @@ const api::KindSimActions kUssSimActionTable = {drive::Kind::Uss, "USS",  api::k
 
 namespace liftd::uss {
 
-const api::KindSimActions& RegistryEntry::sim_actions() noexcept { return daemon::kUssSimActionTable; }
+const api::KindSimActions& RegistryEntry::sim_actions() noexcept {
+  return daemon::kUssSimActionTable;
+}
 
 }  // namespace liftd::uss
