@@ -203,7 +203,8 @@ soak_seconds=${LIFTD_SOAK_SECONDS:-45}
 if [ "$soak_seconds" != 0 ]; then
   # Every drive kind the build registered (LIFTD_DRIVE_KINDS, written to kinds.txt by the
   # configure run): DCP under the fault soak, the others under attack (floods, card reconnects,
-  # fault flaps), each scenario several times. A kind without scenarios fails here, named.
+  # fault flaps), each scenario several times: tools/soak --kind K runs tools/K-soak. A kind
+  # without that file fails here, the file named.
   while read -r kind; do
     echo "=== soak $kind: $soak_seconds s ==="
     timed "soak $kind" tools/soak --kind "$kind" --seconds "$soak_seconds" --seed 1
