@@ -165,6 +165,11 @@ class SimulatorThread {
   const LevelZoneSource& level_zone() const { return zone_; }
   /// The simulated I/O board's inputs now (io thread).
   lift::Inputs inputs(MonoTime now);
+  /// The simulator's state as the `sim` command shows it (io thread).
+  nlohmann::json state_json() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return state_json_locked();
+  }
 
  protected:
   explicit SimulatorThread(const config::Config& config)
@@ -177,6 +182,8 @@ class SimulatorThread {
   bool stopping() const noexcept { return stop_.load(); }
   /// The simulated car is at `position_mm`, `moving` or not (simulator's thread, mutex_ held).
   void car_moved(double position_mm, bool moving, MonoTime now);
+  /// state_json() with mutex_ held: the kind's simulator and the board (board_.add_state).
+  virtual nlohmann::json state_json_locked() const = 0;
 
   mutable std::mutex mutex_;  ///< guards the simulator and board_ (its thread and the io thread)
   SimulatedBoard board_;
@@ -194,11 +201,11 @@ void journal_sim_action(const api::SimRequest& request);
 /// not declare is refused (api::sim_action_refused) and reaches none of the handlers; the
 /// board's actions go to `board`, the kind's other shared actions to `shared(api::SimAction)`
 /// and its own to `own(std::size_t index)`, each returning a refusal or nullopt. An applied
-/// action is journalled. nullopt: applied.
-template <typename Shared, typename Own>
-std::optional<api::Result> apply_sim(const api::KindSimActions& mine,
-                                     const api::SimRequest& request, SimulatedBoard& board,
-                                     MonoTime now, Shared&& shared, Own&& own) {
+/// action is journalled. The result: the refusal, or the simulator's `state()` after the action.
+template <typename Shared, typename Own, typename State>
+api::Result apply_sim(const api::KindSimActions& mine, const api::SimRequest& request,
+                      SimulatedBoard& board, MonoTime now, Shared&& shared, Own&& own,
+                      State&& state) {
   if (!mine.takes(request)) return api::sim_action_refused(request, mine.lift_name);
   std::optional<api::Result> refused;
   if (!request.shared) {
@@ -206,9 +213,9 @@ std::optional<api::Result> apply_sim(const api::KindSimActions& mine,
   } else if (!board.apply(request, now)) {
     refused = shared(*request.shared);
   }
-  if (refused) return refused;
+  if (refused) return std::move(*refused);
   journal_sim_action(request);
-  return std::nullopt;
+  return api::Result::ok(state());
 }
 
 /// The sequencers' inputs from the API's inputs (every drive kind reads the same machine).

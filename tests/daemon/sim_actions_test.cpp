@@ -60,12 +60,10 @@ class RecordingSimBackend : public api::testing::FakeBackend {
       reached.push_back("own " + std::string(kinds::sim_actions_of(drive_kind()).own[index]));
       return std::nullopt;
     };
-    if (auto refused = apply_sim(kinds::sim_actions_of(drive_kind()), request, board_, mono_now(),
-                                 shared, own)) {
-      done(std::move(*refused));
-      return;
-    }
-    done(api::Result::ok({{"applied", std::string(request.name)}}));
+    done(apply_sim(kinds::sim_actions_of(drive_kind()), request, board_, mono_now(), shared, own,
+                   [&request] {
+                     return json{{"applied", std::string(request.name)}};
+                   }));
   }
 
   std::vector<std::string> reached;  ///< "shared NAME" / "own NAME", in order

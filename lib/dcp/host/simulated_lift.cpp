@@ -222,10 +222,8 @@ api::Result SimulatedLift::apply(const api::SimRequest& request, MonoTime now) {
     }
     return std::nullopt;
   };
-  if (auto refused = apply_sim(kDcpSimActionTable, request, board_, now, shared, own)) {
-    return std::move(*refused);
-  }
-  return api::Result::ok(state_json());
+  return apply_sim(kDcpSimActionTable, request, board_, now, shared, own,
+                   [this] { return state_json(); });
 }
 
 nlohmann::json SimulatedLift::state_json() const {

@@ -287,15 +287,8 @@ api::Result SimulatedCard::apply(const api::SimRequest& request, MonoTime now) {
     }
     return std::nullopt;
   };
-  if (auto refused = apply_sim(kSch001SimActionTable, request, board_, now, shared, own)) {
-    return std::move(*refused);
-  }
-  return Result::ok(state_json_locked());
-}
-
-nlohmann::json SimulatedCard::state_json() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return state_json_locked();
+  return apply_sim(kSch001SimActionTable, request, board_, now, shared, own,
+                   [this] { return state_json_locked(); });
 }
 
 nlohmann::json SimulatedCard::state_json_locked() const {

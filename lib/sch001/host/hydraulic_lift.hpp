@@ -50,13 +50,12 @@ class SimulatedCard final : public SimulatorThread {
   void stop();
   /// A `sim` request; the result is state_json() after it.
   api::Result apply(const api::SimRequest& request, MonoTime now);
-  nlohmann::json state_json() const;
   /// Logs what the card saw the controller do against its document (io thread).
   void log_violations();
 
  private:
   void loop();
-  nlohmann::json state_json_locked() const;  ///< state_json() with mutex_ held
+  nlohmann::json state_json_locked() const override;
 
   std::string socket_path_;
   int listener_ = -1;

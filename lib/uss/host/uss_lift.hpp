@@ -54,14 +54,13 @@ class SimulatedUssBus final : public SimulatorThread {
   void stop();
   /// A `sim` request; the result is state_json() after it.
   api::Result apply(const api::SimRequest& request, MonoTime now);
-  nlohmann::json state_json() const;
   /// Journals what the slaves saw the master do against the USS specification (io thread).
   void log_violations();
 
  private:
   void loop();
   void serve(MonoTime now);  ///< with mutex_ held
-  nlohmann::json state_json_locked() const;
+  nlohmann::json state_json_locked() const override;
   uss::sim::UssSlaveSim& drive() { return *bus_->slave(drive_address_); }
   const uss::sim::UssSlaveSim& drive() const { return *bus_->slave(drive_address_); }
 

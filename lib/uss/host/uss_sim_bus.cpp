@@ -234,15 +234,8 @@ api::Result SimulatedUssBus::apply(const api::SimRequest& request, MonoTime now)
   };
   // The USS kind declares no actions of its own, so apply_sim never calls this.
   const auto own = [](std::size_t) -> std::optional<Result> { return std::nullopt; };
-  if (auto refused = apply_sim(kUssSimActionTable, request, board_, now, shared, own)) {
-    return std::move(*refused);
-  }
-  return Result::ok(state_json_locked());
-}
-
-nlohmann::json SimulatedUssBus::state_json() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return state_json_locked();
+  return apply_sim(kUssSimActionTable, request, board_, now, shared, own,
+                   [this] { return state_json_locked(); });
 }
 
 nlohmann::json SimulatedUssBus::state_json_locked() const {
