@@ -1,7 +1,9 @@
 // Judging a real-time test on a shared machine: a try whose failures came while a witness saw
 // the machine stall (a reference link at the cycle's priority missing exchanges, or the cycle's
 // own records far apart) cannot say anything about the code, so it is run again; a failure of
-// the code comes back on a try without a stall and is reported. The last try is always judged.
+// the code comes back on a try without a stall and is reported. When the machine stalled in
+// every try (a machine loaded on purpose: tools/test.sh --under-load), the test is skipped with
+// every failure printed: no try could judge the code.
 #pragma once
 
 #include <gtest/gtest-spi.h>
@@ -53,7 +55,7 @@ void judged_unless_machine_stalled(Body body) {
     for (int i = 0; i < results.size(); ++i) {
       failed = failed || results.GetTestPartResult(i).failed();
     }
-    if (failed && verdict.stalled && attempt < kTries) {
+    if (failed && verdict.stalled) {
       std::printf("[ stalled  ] try %d: %s; not judged:\n", attempt, verdict.what.c_str());
       for (int i = 0; i < results.size(); ++i) {
         const auto& r = results.GetTestPartResult(i);
@@ -62,7 +64,9 @@ void judged_unless_machine_stalled(Body body) {
                       r.message());
         }
       }
-      continue;
+      if (attempt < kTries) continue;
+      GTEST_SKIP() << "the machine stalled in each of " << kTries
+                   << " tries: not judged (the failures are printed above)";
     }
     for (int i = 0; i < results.size(); ++i) {
       const auto& r = results.GetTestPartResult(i);
